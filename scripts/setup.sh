@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Idempotent set-up for a fresh Debian machine (also used by CI):
+#   1. a virtual environment in .venv
+#   2. the pinned CPU build of PyTorch, installed BEFORE the package, so pip never resolves
+#      a bare `torch` (which would pull several GB of CUDA packages)
+#   3. vrneural itself, editable, with the train/dev/metrics extras
+#   4. Mesa's lavapipe CPU Vulkan driver, only when wgpu finds no adapter
+# Re-running is cheap: steps 2-3 are skipped while pyproject.toml is unchanged.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"   # quiets Mesa's harmless warning
+PY="${PYTHON:-python3}"
+TORCH_SPEC="${VRNEURAL_TORCH:-torch==2.13.0}"
+
+if [ ! -x .venv/bin/python ]; then
+    echo "[setup] creating .venv"
+    "$PY" -m venv .venv
+fi
+stamp=.venv/.vrneural-setup
+want="$(sha256sum pyproject.toml | cut -c1-16) $TORCH_SPEC"
+if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+    echo "[setup] installing $TORCH_SPEC (CPU) and vrneural[train,dev,metrics] into .venv"
+    .venv/bin/python -m pip install -q --disable-pip-version-check "$TORCH_SPEC"
+    .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[train,dev,metrics]"
+    echo "$want" > "$stamp"
+fi
+
+if ! .venv/bin/python -c "from vrneural.gpu.device import _adapter; _adapter()" >/dev/null 2>&1; then
+    echo "[setup] wgpu finds no adapter: installing Mesa's lavapipe (mesa-vulkan-drivers)"
+    SUDO=""
+    [ "$(id -u)" = 0 ] || SUDO="sudo"
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq mesa-vulkan-drivers >/dev/null
+fi

@@ -1,0 +1,58 @@
+"""`vrneural` entry point and `vrneural info`."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from vrneural.cli import COMMANDS, main
+
+
+def _run(*args, timeout=300):
+    return subprocess.run(
+        [sys.executable, "-m", "vrneural", *args], capture_output=True, text=True, timeout=timeout
+    )
+
+
+def test_help_lists_only_registered_commands(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--help"])
+    assert e.value.code == 0
+    out = capsys.readouterr().out
+    for name in COMMANDS:
+        assert name in out
+
+
+def test_unknown_command_exits_2():
+    r = _run("frobnicate")
+    assert r.returncode == 2 and "invalid choice" in r.stderr
+
+
+def test_bad_texels_is_one_line_error():
+    r = _run("info", "--texels", "5")
+    assert r.returncode == 2
+    assert r.stderr.strip().count("\n") == 0 and "--texels" in r.stderr
+
+
+@pytest.mark.gpu
+def test_info_json():
+    r = _run("info", "--json", "--texels", "65536")
+    assert r.returncode == 0, r.stderr
+    info = json.loads(r.stdout)
+    assert info["adapter"]["name"]
+    assert {"shader-f16", "timestamp-query", "subgroup"} <= set(info["adapter"]["features"])
+    assert info["adapter"]["limits"]["max_texture_dimension_2d"] > 0
+    precisions = [t["precision"] for t in info["mlp_throughput"]]
+    assert precisions[0] == "f32"
+    for t in info["mlp_throughput"]:
+        assert t["evals_per_s"] > 0 and t["gflops"] > 0
+    assert info["versions"]["wgpu"] and info["versions"]["numpy"]
+
+
+@pytest.mark.gpu
+def test_info_human():
+    r = _run("info", "--texels", "65536")
+    assert r.returncode == 0, r.stderr
+    for word in ("adapter", "features", "limits", "MLP f32", "versions"):
+        assert word in r.stdout

@@ -1,0 +1,5 @@
+import sys
+
+from vrneural.cli import main
+
+sys.exit(main())

@@ -1,0 +1,75 @@
+"""Stage configs are dataclasses whose fields carry a one-line ``help`` (it becomes `--help`).
+
+The CLI only parses arguments into a config (:func:`add_config_args`, :func:`config_from_args`)
+and calls the stage; the resolved config is written beside every output
+(:func:`write_config`), so any result can be reproduced.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import types
+import typing
+from pathlib import Path
+
+from vrneural.formats.atomic import write_json
+
+
+def opt(default, help: str, **kw):
+    """A config field with a default and a one-line help text."""
+    if isinstance(default, (list, dict, set)):
+        return dataclasses.field(
+            default_factory=lambda: type(default)(default), metadata={"help": help, **kw}
+        )
+    return dataclasses.field(default=default, metadata={"help": help, **kw})
+
+
+def add_config_args(
+    parser: argparse.ArgumentParser, cls, skip: tuple[str, ...] = (), prefix: str = ""
+) -> None:
+    """Add one ``--field-name`` option per dataclass field of ``cls`` (bools become flags)."""
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
+        if f.name in skip or f.metadata.get("cli") is False:
+            continue
+        flag = "--" + prefix + f.name.replace("_", "-")
+        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
+        tp = hints[f.name]
+        help_ = f.metadata.get("help", "") + f" (default: {default})"
+        if tp is bool:
+            parser.add_argument(
+                flag,
+                dest=f.name,
+                action=argparse.BooleanOptionalAction,
+                default=default,
+                help=help_,
+            )
+            continue
+        if typing.get_origin(tp) in (typing.Union, types.UnionType):  # X | None -> X
+            tp = next(a for a in typing.get_args(tp) if a is not type(None))
+        kw = {"type": tp if tp in (int, float, str) else str}
+        if "choices" in f.metadata:
+            kw["choices"] = f.metadata["choices"]
+        parser.add_argument(flag, dest=f.name, default=default, help=help_, **kw)
+
+
+def config_from_args(cls, args: argparse.Namespace, **overrides):
+    """Build ``cls`` from parsed args (fields absent from ``args`` keep their defaults)."""
+    kw = {f.name: getattr(args, f.name) for f in dataclasses.fields(cls) if hasattr(args, f.name)}
+    kw.update(overrides)
+    return cls(**kw)
+
+
+def config_dict(cfg) -> dict:
+    """A JSON-ready dict of a config, with its type name."""
+    d = dataclasses.asdict(cfg)
+    return {"config": type(cfg).__name__, **json.loads(json.dumps(d, default=str))}
+
+
+def write_config(output: str | Path, cfg, extra: dict | None = None) -> Path:
+    """Write ``<output>.config.json`` beside an output file (or ``config.json`` in a dir)."""
+    out = Path(output)
+    path = out / "config.json" if out.is_dir() else out.with_name(out.name + ".config.json")
+    return write_json(path, {**config_dict(cfg), **(extra or {})})

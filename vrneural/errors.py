@@ -1,0 +1,32 @@
+"""User-facing errors.
+
+A :class:`VrnError` is a problem with the user's input (a file, a field, a value). The CLI prints
+its message on one line and exits with code 2; it never shows a traceback for one.
+"""
+
+from __future__ import annotations
+
+import math
+
+
+class VrnError(Exception):
+    """An input problem reported to the user as one line, exit code 2."""
+
+    exit_code = 2
+
+
+def check_range(name: str, value: float, lo: float | None = None, hi: float | None = None) -> None:
+    """Raise :class:`VrnError` unless ``lo <= value <= hi`` (bounds optional) and finite."""
+    bad = isinstance(value, float) and not math.isfinite(value)
+    bad = bad or (lo is not None and value < lo) or (hi is not None and value > hi)
+    if bad:
+        lo_s = "-inf" if lo is None else f"{lo:g}"
+        hi_s = "inf" if hi is None else f"{hi:g}"
+        raise VrnError(f"{name} = {value!r} is out of range; allowed [{lo_s}, {hi_s}]")
+
+
+def check_choice(name: str, value: object, allowed: tuple | list | set) -> None:
+    """Raise :class:`VrnError` unless ``value`` is one of ``allowed``."""
+    if value not in allowed:
+        opts = ", ".join(str(a) for a in sorted(allowed, key=str))
+        raise VrnError(f"{name} = {value!r} is not allowed; choose one of: {opts}")

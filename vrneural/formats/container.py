@@ -1,0 +1,195 @@
+"""A small versioned container for named numpy arrays plus a JSON header. No pickle.
+
+Layout (little endian)::
+
+    0   magic         8 bytes, names the format (e.g. b"VRNBTF\\0\\0", b"VRNM\\0\\0\\0\\0")
+    8   version       uint32, the format's version
+    12  header_crc    uint32, CRC32 of the header bytes
+    16  header_len    uint64
+    24  header        UTF-8 JSON; header["arrays"][name] = {dtype, shape, offset, nbytes[, crc32]}
+    ..  arrays        raw C-order data, each starting on a 64-byte boundary
+
+Arrays are memory-mapped on read, so a 22 GB BTF can be read one slice at a time. The reader
+validates magic, version, header checksum, declared shapes against sizes, and the file length
+(truncation), and raises :class:`~vrneural.errors.VrnError` with the file name on any mismatch.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import struct
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from vrneural.errors import VrnError
+
+_PREFIX = struct.Struct("<8sIIQ")
+_ALIGN = 64
+_DTYPES = {"float16", "float32", "float64", "uint8", "uint16", "uint32", "int32", "int64"}
+
+
+def _layout(header: dict, specs: dict[str, tuple[tuple[int, ...], str]]) -> tuple[bytes, dict, int]:
+    """Serialise the header and assign array offsets. Returns (header bytes, table, file size).
+
+    The header is padded with spaces (valid JSON whitespace) to a reserved length that leaves
+    room for the offsets, so offsets can be computed before the final header text is known.
+    """
+    for dtype in (d for _, d in specs.values()):
+        if dtype not in _DTYPES:
+            raise ValueError(f"unsupported dtype {dtype}")
+    draft = json.dumps(dict(header, arrays={k: {} for k in specs}), sort_keys=True)
+    hlen = _align(len(draft) + 160 * (len(specs) + 1))
+    off = _align(_PREFIX.size + hlen)
+    table: dict[str, dict] = {}
+    for name, (shape, dtype) in specs.items():
+        nbytes = int(np.prod(shape, dtype=np.int64)) * np.dtype(dtype).itemsize
+        table[name] = {
+            "dtype": dtype,
+            "shape": [int(s) for s in shape],
+            "offset": off,
+            "nbytes": nbytes,
+        }
+        off = _align(off + nbytes)
+    raw = json.dumps(dict(header, arrays=table, file_size=off), sort_keys=True).encode()
+    assert len(raw) <= hlen, "header reservation too small"
+    return raw + b" " * (hlen - len(raw)), table, off
+
+
+def _align(n: int) -> int:
+    return (n + _ALIGN - 1) // _ALIGN * _ALIGN
+
+
+class ContainerWriter:
+    """Create a container whose arrays are filled later (streaming), then :meth:`finalize`.
+
+    Data goes to ``<path>.partial``; only :meth:`finalize` renames it to ``path``. With
+    ``resume=True`` an existing partial file with an identical header is reopened, so an
+    interrupted long write (a 22 GB BTF) can continue where it stopped.
+    """
+
+    def __init__(
+        self,
+        path,
+        magic: bytes,
+        version: int,
+        header: dict,
+        specs: dict[str, tuple[tuple[int, ...], str]],
+        resume: bool = False,
+    ):
+        self.path = Path(path)
+        self.partial = self.path.with_name(self.path.name + ".partial")
+        self.magic = magic.ljust(8, b"\0")
+        hbytes, self.table, self.file_size = _layout(header, specs)
+        hlen = len(hbytes)
+        prefix = _PREFIX.pack(self.magic, version, zlib.crc32(hbytes), hlen)
+        self.resumed = False
+        if resume and self.partial.exists():
+            with open(self.partial, "rb") as f:
+                old = f.read(len(prefix) + hlen)
+            if old == prefix + hbytes and self.partial.stat().st_size == self.file_size:
+                self.resumed = True
+        if not self.resumed:
+            with open(self.partial, "wb") as f:
+                f.write(prefix + hbytes)
+                f.truncate(self.file_size)
+
+    def array(self, name: str) -> np.memmap:
+        """A writable memory map of array ``name``."""
+        a = self.table[name]
+        return np.memmap(
+            self.partial, dtype=a["dtype"], mode="r+", offset=a["offset"], shape=tuple(a["shape"])
+        )
+
+    def finalize(self) -> Path:
+        """Flush and move the finished file into place (atomic rename)."""
+        with open(self.partial, "rb+") as f:
+            os.fsync(f.fileno())
+        os.replace(self.partial, self.path)
+        return self.path
+
+
+def write_container(
+    path, magic: bytes, version: int, header: dict, arrays: dict[str, np.ndarray]
+) -> Path:
+    """Write whole arrays at once (atomically), with a CRC32 per array."""
+    arrays = {k: np.ascontiguousarray(v) for k, v in arrays.items()}
+    crcs = {k: zlib.crc32(v.tobytes()) for k, v in arrays.items()}
+    header = dict(header, array_crc32=crcs)
+    w = ContainerWriter(
+        path, magic, version, header, {k: (v.shape, str(v.dtype)) for k, v in arrays.items()}
+    )
+    try:
+        with open(w.partial, "rb+") as f:
+            for k, v in arrays.items():
+                f.seek(w.table[k]["offset"])
+                f.write(v.tobytes())
+        return w.finalize()
+    finally:
+        if w.partial.exists():
+            w.partial.unlink()
+
+
+def read_container(
+    path, magic: bytes, versions: tuple[int, ...], what: str = "file", verify_crc: bool = True
+) -> tuple[dict, dict[str, np.ndarray], int]:
+    """Open and validate a container. Returns ``(header, arrays, version)``.
+
+    Arrays are read-only memory maps. ``what`` names the format in error messages.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise VrnError(f"{p}: no such file")
+    if p.is_dir():
+        raise VrnError(f"{p}: is a directory, expected a {what}")
+    size = p.stat().st_size
+    magic = magic.ljust(8, b"\0")
+    with open(p, "rb") as f:
+        pre = f.read(_PREFIX.size)
+        if len(pre) < _PREFIX.size:
+            raise VrnError(f"{p}: truncated ({size} bytes), not a {what}")
+        got_magic, version, crc, hlen = _PREFIX.unpack(pre)
+        if got_magic != magic:
+            raise VrnError(f"{p}: wrong magic {got_magic!r}, not a {what} (expected {magic!r})")
+        if version not in versions:
+            raise VrnError(
+                f"{p}: {what} version {version} is not supported "
+                f"(this vrneural reads {', '.join(map(str, versions))})"
+            )
+        if hlen > size:
+            raise VrnError(f"{p}: truncated header ({size} bytes, header claims {hlen})")
+        hbytes = f.read(hlen)
+    if len(hbytes) != hlen or zlib.crc32(hbytes) != crc:
+        raise VrnError(f"{p}: corrupt header (checksum mismatch)")
+    try:
+        header = json.loads(hbytes)
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        raise VrnError(f"{p}: corrupt header (not JSON)") from None
+    need = int(header.get("file_size", -1))
+    if size < need:
+        raise VrnError(f"{p}: truncated: {size} bytes, expected {need}")
+    arrays: dict[str, np.ndarray] = {}
+    crcs = header.get("array_crc32", {}) if verify_crc else {}
+    for name, a in header.get("arrays", {}).items():
+        shape = tuple(a["shape"])
+        if (
+            a["dtype"] not in _DTYPES
+            or a["nbytes"] != int(np.prod(shape, dtype=np.int64)) * np.dtype(a["dtype"]).itemsize
+        ):
+            raise VrnError(
+                f"{p}: array '{name}' has shape {list(shape)} / dtype {a['dtype']} "
+                f"inconsistent with its size {a['nbytes']}"
+            )
+        if a["offset"] + a["nbytes"] > size:
+            raise VrnError(f"{p}: truncated inside array '{name}'")
+        arr = (
+            np.memmap(p, dtype=a["dtype"], mode="r", offset=a["offset"], shape=shape)
+            if a["nbytes"]
+            else np.zeros(shape, a["dtype"])
+        )
+        if name in crcs and zlib.crc32(np.ascontiguousarray(arr).tobytes()) != crcs[name]:
+            raise VrnError(f"{p}: array '{name}' is corrupt (checksum mismatch)")
+        arrays[name] = arr
+    return header, arrays, version

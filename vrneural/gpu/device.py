@@ -1,0 +1,102 @@
+"""One default device per process, with features and limits requested in one place."""
+
+from __future__ import annotations
+
+import functools
+import os
+from dataclasses import asdict, dataclass, field
+
+from vrneural.errors import VrnError
+
+#: Features we use when the adapter has them. Requested here and nowhere else.
+WANTED_FEATURES = ("shader-f16", "timestamp-query", "timestamp-query-inside-passes", "subgroup")
+#: Limits we raise to the adapter's maximum (large radiance textures, big triangle buffers).
+WANTED_LIMITS = (
+    "max-texture-dimension-2d",
+    "max-storage-buffer-binding-size",
+    "max-buffer-size",
+    "max-compute-workgroup-storage-size",
+    "max-storage-textures-per-shader-stage",
+)
+
+
+def _quiet_env() -> None:
+    # lavapipe (and other Mesa drivers) warn about XDG_RUNTIME_DIR when it is unset; harmless.
+    if "XDG_RUNTIME_DIR" not in os.environ:
+        os.environ["XDG_RUNTIME_DIR"] = "/tmp"
+
+
+@functools.cache
+def _adapter():
+    _quiet_env()
+    import wgpu
+
+    try:
+        adapter = wgpu.gpu.request_adapter_sync(power_preference="high-performance")
+    except Exception as e:  # wgpu raises a plain RuntimeError when no driver exists
+        adapter = None
+        err = str(e).splitlines()[0] if str(e) else type(e).__name__
+    else:
+        err = ""
+    if adapter is None:
+        raise VrnError(
+            "no GPU adapter found (wgpu: " + (err or "none") + "); on Debian install Mesa's "
+            "CPU Vulkan driver: apt-get install -y mesa-vulkan-drivers"
+        )
+    return adapter
+
+
+@functools.cache
+def get_device():
+    """The process-wide ``GPUDevice`` with every wanted feature the adapter offers."""
+    adapter = _adapter()
+    feats = [f for f in WANTED_FEATURES if f in adapter.features]
+    limits = {k: adapter.limits[k] for k in WANTED_LIMITS if k in adapter.limits}
+    return adapter.request_device_sync(required_features=feats, required_limits=limits)
+
+
+def has_feature(name: str) -> bool:
+    """Whether the default device was created with feature ``name``."""
+    return name in get_device().features
+
+
+@dataclass
+class AdapterSummary:
+    """What a user needs to know about the adapter, for `vrneural info` and every result file."""
+
+    name: str
+    vendor: str
+    backend: str
+    adapter_type: str
+    driver: str
+    is_cpu: bool
+    features: dict[str, bool] = field(default_factory=dict)
+    limits: dict[str, int] = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@functools.cache
+def adapter_summary() -> AdapterSummary:
+    """Summarise the default adapter (name, backend, type, driver, key features and limits)."""
+    a = _adapter()
+    info = a.info
+    dev = get_device()
+    name = info.get("device", "") or info.get("description", "")
+    keys = ("shader-f16", "timestamp-query", "subgroup")
+    return AdapterSummary(
+        name=name,
+        vendor=info.get("vendor", ""),
+        backend=info.get("backend_type", ""),
+        adapter_type=info.get("adapter_type", ""),
+        driver=info.get("description", ""),
+        is_cpu=info.get("adapter_type", "") == "CPU" or "llvmpipe" in name.lower(),
+        features={k: k in dev.features for k in keys},
+        limits={
+            "max_texture_dimension_2d": int(dev.limits["max-texture-dimension-2d"]),
+            "max_storage_buffer_binding_size": int(dev.limits["max-storage-buffer-binding-size"]),
+            "max_buffer_size": int(dev.limits["max-buffer-size"]),
+            "max_compute_workgroup_size_x": int(dev.limits["max-compute-workgroup-size-x"]),
+        },
+    )

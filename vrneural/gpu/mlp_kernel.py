@@ -1,0 +1,103 @@
+"""GPU twin of :func:`vrneural.mlp.mlp_forward`: a batched MLP evaluator generated from
+``shaders/mlp_eval.wgsl`` with weights as constants (or, for comparison, in a storage buffer)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vrneural.gpu.device import get_device
+from vrneural.gpu.pipelines import compute_pipeline
+from vrneural.gpu.readback import read_texture, upload_buffer
+from vrneural.gpu.shaders import render_wgsl
+from vrneural.gpu.timing import GpuTimer
+from vrneural.mlp import Layer, pack_weights
+
+_ACT_CODE = {"relu": 0, "leaky_relu": 1, "none": 2}
+MAX_GROUPS_X = 32768
+
+
+def mlp_wgsl(layers: list[Layer], precision: str = "f32", buffer_weights: bool = False) -> str:
+    """Generate the evaluator's WGSL for ``layers``."""
+    dims = [layers[0].n_in] + [lay.n_out for lay in layers]
+    return render_wgsl(
+        "mlp_eval",
+        layers=layers,
+        n_in=dims[0],
+        n_out=dims[-1],
+        T="f16" if precision == "f16" else "f32",
+        buffer_weights=buffer_weights,
+        dims=dims,
+        acts=[_ACT_CODE[lay.act] for lay in layers],
+        max_width=max(dims),
+    )
+
+
+class MlpKernel:
+    """A compiled evaluator for one network; call :meth:`run` on ``[N, in]`` inputs."""
+
+    def __init__(self, layers: list[Layer], precision: str = "f32", buffer_weights: bool = False):
+        import wgpu
+
+        self.layers = layers
+        self.precision = precision
+        self.buffer_weights = buffer_weights
+        self.code = mlp_wgsl(layers, precision, buffer_weights)
+        self.dev = get_device()
+        self._wbuf = (
+            upload_buffer(pack_weights(layers), wgpu.BufferUsage.STORAGE)
+            if buffer_weights
+            else None
+        )
+
+    def run(self, x: np.ndarray, repeats: int = 1, timer: GpuTimer | None = None) -> np.ndarray:
+        """Evaluate on ``x: [N, in]``; returns ``[N, min(out, 4)]`` float32.
+
+        ``repeats`` > 1 dispatches the same work several times in one submission (for timing);
+        pass a :class:`GpuTimer` to collect per-dispatch milliseconds under the name ``"mlp"``.
+        """
+        import wgpu
+
+        x = np.ascontiguousarray(x, dtype=np.float32)
+        n = x.shape[0]
+        width = min(n, 4096)
+        height = math.ceil(n / width)
+        groups = math.ceil(n / 64)
+        gx = min(groups, MAX_GROUPS_X)
+        gy = math.ceil(groups / gx)
+        pipe = compute_pipeline(
+            self.code, constants={"N": n, "WIDTH": width, "STRIDE": gx * 64}, label="mlp_eval"
+        )
+        inp = upload_buffer(x, wgpu.BufferUsage.STORAGE)
+        out = self.dev.create_texture(
+            size=(width, height, 1),
+            format="rgba32float",
+            usage=wgpu.TextureUsage.STORAGE_BINDING | wgpu.TextureUsage.COPY_SRC,
+        )
+        entries = [
+            {"binding": 0, "resource": {"buffer": inp}},
+            {"binding": 1, "resource": out.create_view()},
+        ]
+        if self._wbuf is not None:
+            entries.append({"binding": 2, "resource": {"buffer": self._wbuf}})
+        bg = self.dev.create_bind_group(layout=pipe.get_bind_group_layout(0), entries=entries)
+        enc = self.dev.create_command_encoder()
+        for _ in range(repeats):
+            cp = enc.begin_compute_pass(timestamp_writes=timer.writes("mlp") if timer else None)
+            cp.set_pipeline(pipe)
+            cp.set_bind_group(0, bg)
+            cp.dispatch_workgroups(gx, gy, 1)
+            cp.end()
+        if timer:
+            timer.resolve(enc)
+        self.dev.queue.submit([enc.finish()])
+        y = read_texture(out).reshape(-1, 4)[:n]
+        return y[:, : min(self.layers[-1].n_out, 4)]
+
+
+def mlp_forward(
+    x: np.ndarray, layers: list[Layer], precision: str = "f32", buffer_weights: bool = False
+) -> np.ndarray:
+    """GPU evaluation of the MLP on ``x: [N, in]`` -> ``[N, min(out, 4)]`` float32."""
+    return MlpKernel(layers, precision, buffer_weights).run(x)

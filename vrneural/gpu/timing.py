@@ -1,0 +1,87 @@
+"""GPU timestamps per pass, converted to milliseconds on any adapter.
+
+wgpu-native resolves raw ticks; ``wgpuQueueGetTimestampPeriod`` gives nanoseconds per tick
+(1.0 on most Vulkan drivers, other values elsewhere). We multiply by it, so figures are ms.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from vrneural.gpu.device import get_device
+
+
+@functools.cache
+def timestamp_period_ns() -> float:
+    """Nanoseconds per timestamp tick for the default device's queue."""
+    dev = get_device()
+    try:
+        from wgpu.backends.wgpu_native._api import libf
+
+        period = float(libf.wgpuQueueGetTimestampPeriod(dev.queue._internal))
+    except Exception:  # another backend, or the symbol moved: WebGPU says ticks are ns
+        period = 1.0
+    return period if period > 0 else 1.0
+
+
+class GpuTimer:
+    """Collect begin/end timestamps of named passes within command encoders.
+
+    Usage::
+
+        timer = GpuTimer(max_passes=16)
+        pass_ = encoder.begin_compute_pass(timestamp_writes=timer.writes("shade"))
+        ...
+        timer.resolve(encoder)   # once per submission, after the passes
+        queue.submit([encoder.finish()])
+        ms = timer.read()        # {"shade": 0.42, ...}; sums repeats of a name
+
+    When the device lacks ``timestamp-query`` it is disabled: ``writes`` returns None and
+    ``read`` returns an empty dict, so callers need no special cases.
+    """
+
+    def __init__(self, max_passes: int = 32):
+        import wgpu
+
+        self.dev = get_device()
+        self.enabled = "timestamp-query" in self.dev.features
+        self.max = max_passes
+        self.names: list[str] = []
+        if self.enabled:
+            self.qs = self.dev.create_query_set(type="timestamp", count=2 * max_passes)
+            self.resolve_buf = self.dev.create_buffer(
+                size=16 * max_passes,
+                usage=wgpu.BufferUsage.QUERY_RESOLVE | wgpu.BufferUsage.COPY_SRC,
+            )
+
+    def writes(self, name: str) -> dict | None:
+        """``timestamp_writes`` for the next pass, or None when timing is off or full."""
+        if not self.enabled or len(self.names) >= self.max:
+            return None
+        i = len(self.names)
+        self.names.append(name)
+        return {
+            "query_set": self.qs,
+            "beginning_of_pass_write_index": 2 * i,
+            "end_of_pass_write_index": 2 * i + 1,
+        }
+
+    def resolve(self, encoder) -> None:
+        if self.enabled and self.names:
+            encoder.resolve_query_set(self.qs, 0, 2 * len(self.names), self.resolve_buf, 0)
+
+    def read(self) -> dict[str, float]:
+        """Milliseconds per pass name (summed over repeats); resets for the next use."""
+        if not self.enabled or not self.names:
+            self.names = []
+            return {}
+        raw = np.frombuffer(self.dev.queue.read_buffer(self.resolve_buf), dtype=np.uint64)
+        ticks = raw[: 2 * len(self.names)].astype(np.int64)
+        dt = (ticks[1::2] - ticks[0::2]).clip(min=0) * timestamp_period_ns() * 1e-6
+        out: dict[str, float] = {}
+        for n, t in zip(self.names, dt, strict=True):
+            out[n] = out.get(n, 0.0) + float(t)
+        self.names = []
+        return out

@@ -1,0 +1,69 @@
+// Batched small-MLP evaluator: one thread per texel, inputs from a storage buffer, the first
+// (up to) four outputs written to an rgba32float storage texture. Weights are either WGSL
+// constants in fully unrolled code (buffer_weights = false) or read from a storage buffer in
+// loops (buffer_weights = true; the slow baseline the codegen is measured against).
+{% import 'mlp.wgsl' as m %}
+{% if T == 'f16' %}
+enable f16;
+{% endif %}
+
+@group(0) @binding(0) var<storage, read> inputs: array<f32>;   // [N, N_IN]
+@group(0) @binding(1) var out_tex: texture_storage_2d<rgba32float, write>;
+{% if buffer_weights %}
+@group(0) @binding(2) var<storage, read> weights: array<f32>;  // per layer W[out, in], b[out]
+{% endif %}
+
+override N: u32;        // number of evaluations
+override WIDTH: u32;    // output texture width
+override STRIDE: u32;   // threads per dispatch row (workgroups in x * 64)
+
+{% if buffer_weights %}
+const N_LAYERS: u32 = {{ layers|length }}u;
+const MAXW: u32 = {{ max_width }}u;
+const DIMS = array<u32, {{ layers|length + 1 }}>({{ dims|join('u, ') }}u);
+const ACTS = array<u32, {{ layers|length }}>({{ acts|join('u, ') }}u);  // 0 relu, 1 leaky, 2 none
+{% endif %}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x + gid.y * STRIDE;
+    if (i >= N) { return; }
+    let base = i * {{ n_in }}u;
+{% if not buffer_weights %}
+{% for k in range(n_in) %}
+    let x0_{{ k }} = {{ T }}(inputs[base + {{ k }}u]);
+{% endfor %}
+{% set ins = [] %}
+{% for k in range(n_in) %}{% set _ = ins.append('x0_' ~ k) %}{% endfor %}
+{{ m.mlp_body('x', ins, layers, T) }}
+{% set L = layers|length %}
+{% set outs = [] %}
+{% for k in range(4) %}
+{% set _ = outs.append(('f32(x' ~ L ~ '_' ~ k ~ ')') if k < n_out else '0.0') %}
+{% endfor %}
+    let y = vec4<f32>({{ outs|join(', ') }});
+{% else %}
+    var a: array<{{ T }}, MAXW>;
+    var b: array<{{ T }}, MAXW>;
+    for (var k = 0u; k < DIMS[0]; k++) { a[k] = {{ T }}(inputs[base + k]); }
+    var off = 0u;
+    for (var l = 0u; l < N_LAYERS; l++) {
+        let n_in = DIMS[l];
+        let n_out = DIMS[l + 1u];
+        for (var o = 0u; o < n_out; o++) {
+            var s = {{ T }}(weights[off + n_out * n_in + o]);
+            for (var k = 0u; k < n_in; k++) {
+                s += {{ T }}(weights[off + o * n_in + k]) * a[k];
+            }
+            if (ACTS[l] == 0u) { s = max(s, {{ T }}(0)); }
+            else if (ACTS[l] == 1u) { s = max(s, {{ T }}(0.01) * s); }
+            b[o] = s;
+        }
+        off += n_out * n_in + n_out;
+        for (var o = 0u; o < n_out; o++) { a[o] = b[o]; }
+    }
+    var y = vec4<f32>(0.0);
+    for (var k = 0u; k < min({{ n_out }}u, 4u); k++) { y[k] = f32(a[k]); }
+{% endif %}
+    textureStore(out_tex, vec2<u32>(i % WIDTH, i / WIDTH), y);
+}
