@@ -1,0 +1,156 @@
+"""The BTF file (``.btf``): ``values[light, view, y, x, rgb]`` float16, memory-mapped.
+
+Container: :mod:`vrneural.formats.container` with magic ``b"VRNBTF"``. Arrays:
+
+- ``values``      ``[L, V, H, W, 3]`` float16, BTF value (ARCHITECTURE.md section 2: outgoing
+  radiance per unit irradiance measured perpendicular to ``wi``; cos(theta_i) is inside)
+- ``light_dirs``  ``[L, 3]`` float32 unit vectors, local frame, pointing away from the surface
+- ``view_dirs``   ``[V, 3]`` float32 unit vectors
+
+Header: ``name``, ``convention`` ("cos_inside"), ``generator`` (config dict or import source),
+``seed``, ``texel_size_mm`` (optional), plus anything the writer adds. The texel ``(x, y)`` has its
+centre at material UV ``((x + 0.5) / W, (y + 0.5) / H)``; tiles repeat (wrap) in both axes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from vrneural.errors import VrnError
+from vrneural.formats.container import ContainerWriter, read_container, write_container
+
+BTF_MAGIC = b"VRNBTF"
+BTF_VERSION = 1
+CONVENTION = "cos_inside"
+
+
+@dataclass
+class Btf:
+    """An opened BTF. ``values`` is a read-only memory map; nothing is loaded until indexed."""
+
+    path: Path | None
+    values: np.ndarray  # [L, V, H, W, 3] float16
+    light_dirs: np.ndarray  # [L, 3] float32
+    view_dirs: np.ndarray  # [V, 3] float32
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def shape(self) -> tuple[int, int, int, int]:
+        """``(L, V, H, W)``."""
+        return tuple(self.values.shape[:4])  # type: ignore[return-value]
+
+    @property
+    def resolution(self) -> tuple[int, int]:
+        """``(H, W)`` texels."""
+        return int(self.values.shape[2]), int(self.values.shape[3])
+
+    def slice(self, light: int, view: int) -> np.ndarray:
+        """One ``(light, view)`` slice ``[H, W, 3]`` as float32 (reads only that slice)."""
+        return np.asarray(self.values[light, view], dtype=np.float32)
+
+
+def _validate(path, values, light_dirs, view_dirs) -> None:
+    if values.ndim != 5 or values.shape[4] != 3:
+        raise VrnError(f"{path}: values has shape {list(values.shape)}, expected [L, V, H, W, 3]")
+    L, V = values.shape[:2]
+    if light_dirs.shape != (L, 3):
+        raise VrnError(f"{path}: light_dirs has shape {list(light_dirs.shape)}, expected [{L}, 3]")
+    if view_dirs.shape != (V, 3):
+        raise VrnError(f"{path}: view_dirs has shape {list(view_dirs.shape)}, expected [{V}, 3]")
+    for name, d in (("light_dirs", light_dirs), ("view_dirs", view_dirs)):
+        n = np.linalg.norm(np.asarray(d, np.float64), axis=1)
+        if not np.all(np.isfinite(n)) or np.abs(n - 1).max(initial=0) > 1e-3:
+            raise VrnError(f"{path}: {name} are not unit vectors")
+
+
+def read_btf(path) -> Btf:
+    """Open and validate a ``.btf`` file (magic, version, truncation, shapes)."""
+    header, arrays, _ = read_container(
+        path, BTF_MAGIC, (BTF_VERSION,), what="BTF file", verify_crc=False
+    )
+    missing = {"values", "light_dirs", "view_dirs"} - set(arrays)
+    if missing:
+        raise VrnError(f"{path}: BTF file lacks array(s) {sorted(missing)}")
+    values = arrays["values"]
+    if values.dtype != np.float16:
+        raise VrnError(f"{path}: values are {values.dtype}, expected float16")
+    _validate(path, values, arrays["light_dirs"], arrays["view_dirs"])
+    meta = {k: v for k, v in header.items() if k not in ("arrays", "file_size", "array_crc32")}
+    return Btf(
+        Path(path), values, np.asarray(arrays["light_dirs"]), np.asarray(arrays["view_dirs"]), meta
+    )
+
+
+def write_btf(
+    path, values: np.ndarray, light_dirs: np.ndarray, view_dirs: np.ndarray, meta: dict
+) -> Path:
+    """Write an in-memory BTF atomically (values become float16, clamped to its range)."""
+    values = np.asarray(values)
+    light_dirs = np.asarray(light_dirs, np.float32)
+    view_dirs = np.asarray(view_dirs, np.float32)
+    _validate(path, values, light_dirs, view_dirs)
+    if not np.isfinite(values).all():
+        raise VrnError(f"{path}: BTF values contain NaN or Inf")
+    v16 = np.clip(values, 0, 65504).astype(np.float16)
+    header = {"convention": CONVENTION, **meta}
+    return write_container(
+        path,
+        BTF_MAGIC,
+        BTF_VERSION,
+        header,
+        {"values": v16, "light_dirs": light_dirs, "view_dirs": view_dirs},
+    )
+
+
+class BtfWriter:
+    """Stream a large BTF to disk one ``(light, view)`` slice at a time; resumable.
+
+    Data goes to ``<path>.partial``; :meth:`finalize` renames it into place. With
+    ``resume=True`` an identical unfinished write is reopened (see ``done`` for finished views).
+    The caller marks progress with :meth:`mark_done` (per view index; kept in a sidecar file).
+    """
+
+    def __init__(
+        self,
+        path,
+        light_dirs: np.ndarray,
+        view_dirs: np.ndarray,
+        resolution: tuple[int, int],
+        meta: dict,
+        resume: bool = False,
+    ):
+        L, V = len(light_dirs), len(view_dirs)
+        H, W = resolution
+        header = {"convention": CONVENTION, **meta}
+        specs = {
+            "values": ((L, V, H, W, 3), "float16"),
+            "light_dirs": ((L, 3), "float32"),
+            "view_dirs": ((V, 3), "float32"),
+        }
+        self._w = ContainerWriter(path, BTF_MAGIC, BTF_VERSION, header, specs, resume=resume)
+        self.progress_file = self._w.partial.with_name(self._w.partial.name + ".done")
+        if not self._w.resumed:
+            self._w.array("light_dirs")[:] = light_dirs
+            self._w.array("view_dirs")[:] = view_dirs
+            self.progress_file.unlink(missing_ok=True)
+        self.values = self._w.array("values")
+        self.done: set[int] = set()
+        if self._w.resumed and self.progress_file.exists():
+            self.done = {int(t) for t in self.progress_file.read_text().split()}
+
+    def mark_done(self, view: int) -> None:
+        """Flush data and record view index ``view`` as complete."""
+        self.values.flush()
+        with open(self.progress_file, "a") as f:
+            f.write(f"{view}\n")
+        self.done.add(view)
+
+    def finalize(self) -> Path:
+        self.values.flush()
+        del self.values
+        p = self._w.finalize()
+        self.progress_file.unlink(missing_ok=True)
+        return p

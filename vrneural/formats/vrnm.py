@@ -1,0 +1,81 @@
+"""The runtime pack (``.vrnm``): one neural material, readable with numpy alone. No pickle.
+
+Container (:mod:`vrneural.formats.container`), magic ``b"VRNM"``, version 1. Header::
+
+    {"arch": "coarse_fine" | "single", "output": "linear" | "log1p",
+     "networks": {name: [{"n_in": int, "n_out": int, "act": str}, ...]},
+     "textures": {name: [H, W, C]},
+     "meta": {"name": ..., "provenance": {...}, "metrics": {...}, "ranges": {...}}}
+
+Arrays: ``net.<name>.<i>.weight`` ``[out, in]`` float32, ``net.<name>.<i>.bias`` ``[out]``
+float32, ``tex.<name>`` ``[H, W, C]`` float16, each with a CRC32. Writing refuses NaN/Inf.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from vrneural.errors import VrnError
+from vrneural.formats.container import read_container, write_container
+from vrneural.material import NeuralMaterial
+from vrneural.mlp import Layer
+
+VRNM_MAGIC = b"VRNM"
+VRNM_VERSION = 1
+
+
+def write_vrnm(path, mat: NeuralMaterial) -> Path:
+    """Write ``mat`` atomically. Raises :class:`VrnError` on non-finite weights or textures."""
+    arrays: dict[str, np.ndarray] = {}
+    nets = {}
+    for name, layers in mat.networks.items():
+        nets[name] = [{"n_in": lay.n_in, "n_out": lay.n_out, "act": lay.act} for lay in layers]
+        for i, lay in enumerate(layers):
+            arrays[f"net.{name}.{i}.weight"] = np.asarray(lay.weight, np.float32)
+            arrays[f"net.{name}.{i}.bias"] = np.asarray(lay.bias, np.float32)
+    for name, t in mat.textures.items():
+        if not np.isfinite(np.asarray(t, np.float32)).all():
+            raise VrnError(f"{path}: neural texture '{name}' contains NaN/Inf (f16 overflow?)")
+        arrays[f"tex.{name}"] = np.asarray(t, np.float16)
+    for k, a in arrays.items():
+        if not np.isfinite(a).all():
+            raise VrnError(f"{path}: refusing to write non-finite values in '{k}'")
+    header = {
+        "arch": mat.arch,
+        "output": mat.output,
+        "networks": nets,
+        "textures": {k: list(t.shape) for k, t in mat.textures.items()},
+        "meta": mat.meta,
+    }
+    return write_container(path, VRNM_MAGIC, VRNM_VERSION, header, arrays)
+
+
+def read_vrnm(path) -> NeuralMaterial:
+    """Read and validate a ``.vrnm`` pack into a :class:`NeuralMaterial`."""
+    header, arrays, _ = read_container(path, VRNM_MAGIC, (VRNM_VERSION,), what="runtime pack")
+    try:
+        nets = {}
+        for name, specs in header["networks"].items():
+            layers = []
+            for i, s in enumerate(specs):
+                w = np.array(arrays[f"net.{name}.{i}.weight"], np.float32)
+                b = np.array(arrays[f"net.{name}.{i}.bias"], np.float32)
+                if w.shape != (s["n_out"], s["n_in"]):
+                    raise VrnError(
+                        f"{path}: net.{name}.{i}.weight has shape {list(w.shape)}, "
+                        f"header says [{s['n_out']}, {s['n_in']}]"
+                    )
+                layers.append(Layer(w, b, s["act"]))
+            nets[name] = layers
+        texs = {name: np.array(arrays[f"tex.{name}"], np.float16) for name in header["textures"]}
+        mat = NeuralMaterial(header["arch"], nets, texs, header["output"], header.get("meta", {}))
+    except KeyError as e:
+        raise VrnError(f"{path}: runtime pack lacks {e}") from None
+    except ValueError as e:
+        raise VrnError(f"{path}: invalid runtime pack: {e}") from None
+    for k, a in arrays.items():
+        if not np.isfinite(np.asarray(a, np.float32)).all():
+            raise VrnError(f"{path}: '{k}' contains NaN/Inf")
+    return mat

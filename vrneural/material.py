@@ -1,0 +1,203 @@
+"""Neural materials as plain data, and their numpy evaluation (the reference every other
+implementation, torch or WGSL, must match).
+
+A material maps ``(u, wi, wo)`` to a BTF value (RGB, ARCHITECTURE.md section 2 convention).
+
+Architectures (``arch``):
+
+``"coarse_fine"`` (the paper's student, Eq. 3-4)
+    ``z_c = M_c([wi, wo, h, U_c(u_c)])`` once per 2x2 texel block at the block's mean material
+    UV ``u_c``; then ``y_k = out(M_f([z_c, U_f(u_k)]))`` for each of the block's 4 texels.
+    networks ``"coarse"`` and ``"fine"``; textures ``"coarse"`` (U_c) and ``"fine"`` (U_f).
+``"single"`` (the single-level baselines: 8-wide ablation, NeuMIP-sized)
+    ``y_k = out(M([wi, wo, h, U(u_k)]))`` per texel. network ``"mlp"``; texture ``"features"``.
+
+Shared definitions:
+
+- directions are unit vectors in the local frame; ``h = normalize(wi + wo)``, or ``(0, 0, 1)``
+  when ``|wi + wo|^2 < 1e-12`` (see :func:`half_vector`);
+- neural textures ``[H, W, C]`` float16 are sampled bilinearly with wrap-around addressing,
+  texel ``(x, y)`` centred at UV ``((x + 0.5) / W, (y + 0.5) / H)`` (:func:`sample_bilinear_wrap`);
+- ``output`` transform of the last layer's raw value ``r``: ``"linear"``: ``max(r, 0)``;
+  ``"log1p"``: ``expm1(max(r, 0))`` (the network predicts ``log(1 + y)``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from vrneural.mlp import Layer, mlp_forward, random_mlp
+
+ARCHS = {
+    "coarse_fine": (("coarse", "fine"), ("coarse", "fine")),
+    "single": (("mlp",), ("features",)),
+}
+OUTPUTS = ("linear", "log1p")
+DIR_INPUTS = 9  # wi, wo, h
+HALF_EPS2 = 1e-12
+
+
+@dataclass
+class NeuralMaterial:
+    """Weights, neural textures and metadata of one material (what a ``.vrnm`` file holds)."""
+
+    arch: str
+    networks: dict[str, list[Layer]]
+    textures: dict[str, np.ndarray]  # name -> [H, W, C] float16
+    output: str = "linear"
+    meta: dict = field(default_factory=dict)  # name, provenance, metrics, ranges
+
+    def __post_init__(self):
+        if self.arch not in ARCHS:
+            raise ValueError(f"arch {self.arch!r} not in {sorted(ARCHS)}")
+        if self.output not in OUTPUTS:
+            raise ValueError(f"output {self.output!r} not in {OUTPUTS}")
+        nets, texs = ARCHS[self.arch]
+        if set(self.networks) != set(nets) or set(self.textures) != set(texs):
+            raise ValueError(f"{self.arch} needs networks {nets} and textures {texs}")
+        self.textures = {k: np.asarray(v, np.float16) for k, v in self.textures.items()}
+        first = self.networks[nets[0]][0].n_in
+        if first != DIR_INPUTS + self.textures[texs[0]].shape[2]:
+            raise ValueError(
+                f"first layer takes {first} inputs, expected 9 + "
+                f"{self.textures[texs[0]].shape[2]} texture channels"
+            )
+        if self.arch == "coarse_fine":
+            z = self.networks["coarse"][-1].n_out
+            if self.networks["fine"][0].n_in != z + self.textures["fine"].shape[2]:
+                raise ValueError("fine network input != latent size + fine texture channels")
+        if self.networks[nets[-1]][-1].n_out != 3:
+            raise ValueError("the last network must output 3 values (RGB)")
+
+    @property
+    def macs_per_texel(self) -> float:
+        """Multiply-adds per shaded texel (the coarse net counts a quarter: once per block)."""
+        from vrneural.mlp import macs
+
+        if self.arch == "coarse_fine":
+            return macs(self.networks["coarse"]) / 4 + macs(self.networks["fine"])
+        return float(macs(self.networks["mlp"]))
+
+    @property
+    def weight_bytes(self) -> int:
+        return sum(
+            4 * (lay.weight.size + lay.bias.size) for net in self.networks.values() for lay in net
+        )
+
+    @property
+    def texture_bytes(self) -> int:
+        return sum(t.nbytes for t in self.textures.values())
+
+
+def half_vector(wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
+    """``normalize(wi + wo)`` ``[..., 3]``; ``(0, 0, 1)`` where ``|wi + wo|^2 < 1e-12``."""
+    s = np.asarray(wi, np.float32) + np.asarray(wo, np.float32)
+    n2 = (s * s).sum(-1, keepdims=True)
+    ok = n2 >= HALF_EPS2
+    h = np.where(ok, s / np.sqrt(np.where(ok, n2, 1.0)), np.array([0, 0, 1], np.float32))
+    return h.astype(np.float32)
+
+
+def sample_bilinear_wrap(tex: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """Bilinear, wrap-around lookup of ``tex: [H, W, C]`` at ``uv: [..., 2]`` -> ``[..., C]``."""
+    t = np.asarray(tex, np.float32)
+    H, W = t.shape[:2]
+    x = np.asarray(uv[..., 0], np.float64) * W - 0.5
+    y = np.asarray(uv[..., 1], np.float64) * H - 0.5
+    x0 = np.floor(x)
+    y0 = np.floor(y)
+    fx = (x - x0)[..., None].astype(np.float32)
+    fy = (y - y0)[..., None].astype(np.float32)
+    xi0 = x0.astype(np.int64) % W
+    yi0 = y0.astype(np.int64) % H
+    xi1 = (xi0 + 1) % W
+    yi1 = (yi0 + 1) % H
+    top = t[yi0, xi0] * (1 - fx) + t[yi0, xi1] * fx
+    bot = t[yi1, xi0] * (1 - fx) + t[yi1, xi1] * fx
+    return top * (1 - fy) + bot * fy
+
+
+def apply_output(raw: np.ndarray, output: str) -> np.ndarray:
+    r = np.maximum(raw, 0)
+    return np.expm1(r) if output == "log1p" else r
+
+
+def material_forward(
+    mat: NeuralMaterial, wi: np.ndarray, wo: np.ndarray, uv: np.ndarray, precision: str = "f32"
+) -> np.ndarray:
+    """BTF values of a material, evaluated the way the shader does.
+
+    ``wi, wo: [N, 3]`` unit vectors (one angular condition per block); ``uv: [N, 4, 2]`` the
+    material UVs of the block's 4 texels. Returns ``[N, 4, 3]`` float32. For ``"single"`` each
+    texel is independent (the 4 share only the directions).
+    """
+    wi = np.asarray(wi, np.float32)
+    wo = np.asarray(wo, np.float32)
+    uv = np.asarray(uv, np.float32)
+    n = wi.shape[0]
+    dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)  # [N, 9]
+    if mat.arch == "coarse_fine":
+        uc = uv.mean(axis=1)
+        fc = sample_bilinear_wrap(mat.textures["coarse"], uc)
+        z = mlp_forward(np.concatenate([dirs, fc], -1), mat.networks["coarse"], precision)
+        ff = sample_bilinear_wrap(mat.textures["fine"], uv.reshape(-1, 2))  # [N*4, Cf]
+        zk = np.repeat(z, 4, axis=0)
+        raw = mlp_forward(np.concatenate([zk, ff], -1), mat.networks["fine"], precision)
+    else:
+        f = sample_bilinear_wrap(mat.textures["features"], uv.reshape(-1, 2))
+        raw = mlp_forward(
+            np.concatenate([np.repeat(dirs, 4, axis=0), f], -1), mat.networks["mlp"], precision
+        )
+    return apply_output(raw, mat.output).reshape(n, 4, 3).astype(np.float32)
+
+
+def random_material(
+    seed: int = 0,
+    arch: str = "coarse_fine",
+    width: int = 8,
+    channels: int = 8,
+    tex_res: int = 16,
+    layers: int = 3,
+    output: str = "linear",
+) -> NeuralMaterial:
+    """A material with seeded random weights and textures (for tests before training exists)."""
+    rng = np.random.default_rng(seed)
+    if arch == "coarse_fine":
+        nets = {
+            "coarse": random_mlp([DIR_INPUTS + channels] + [width] * layers, seed, last_act="relu"),
+            "fine": random_mlp([width + channels, width, 3], seed + 1),
+        }
+        texs = {
+            k: rng.standard_normal((tex_res, tex_res, channels)).astype(np.float16) * 0.5
+            for k in ("coarse", "fine")
+        }
+    else:
+        nets = {"mlp": random_mlp([DIR_INPUTS + channels] + [width] * layers + [3], seed)}
+        texs = {"features": rng.standard_normal((tex_res, tex_res, channels)).astype(np.float16)}
+    return NeuralMaterial(arch, nets, texs, output, {"name": f"random-{seed}"})
+
+
+def lambertian_material(albedo=(0.8, 0.5, 0.2), tex_res: int = 4) -> NeuralMaterial:
+    """An exact coarse-to-fine encoding of a flat homogeneous Lambertian patch.
+
+    BTF = albedo / pi * max(wi.z, 0): the coarse net passes ``relu(wi.z)`` through, the fine net
+    scales it per channel. Textures are zero (the material is homogeneous).
+    """
+    c = 1
+    z = 8
+    w0 = np.zeros((z, DIR_INPUTS + c), np.float32)
+    w0[0, 2] = 1.0  # wi.z
+    coarse = [Layer(w0, np.zeros(z, np.float32), "relu")]
+    w1 = np.zeros((3, z + c), np.float32)
+    w1[:, 0] = np.asarray(albedo, np.float32) / np.pi
+    fine = [Layer(w1, np.zeros(3, np.float32), "none")]
+    tex = {k: np.zeros((tex_res, tex_res, c), np.float16) for k in ("coarse", "fine")}
+    return NeuralMaterial(
+        "coarse_fine",
+        {"coarse": coarse, "fine": fine},
+        tex,
+        "linear",
+        {"name": "lambertian", "albedo": list(map(float, albedo))},
+    )
