@@ -131,6 +131,7 @@ class BtfWriter:
             "view_dirs": ((V, 3), "float32"),
         }
         self._w = ContainerWriter(path, BTF_MAGIC, BTF_VERSION, header, specs, resume=resume)
+        self.partial = self._w.partial  #: the file being written (``<path>.partial``)
         self.progress_file = self._w.partial.with_name(self._w.partial.name + ".done")
         if not self._w.resumed:
             self._w.array("light_dirs")[:] = light_dirs

@@ -14,7 +14,7 @@ from vrneural import __version__
 from vrneural.errors import VrnError
 
 #: Subcommand modules, in `--help` order. Only commands that work are listed.
-COMMANDS = ["info"]
+COMMANDS = ["info", "btf", "teach", "distill", "export", "run", "bench", "atlas"]
 
 
 def build_parser() -> argparse.ArgumentParser:

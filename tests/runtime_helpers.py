@@ -1,0 +1,47 @@
+"""Hand-made meshes and atlases for the runtime tests (independent of vrneural.atlas)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vrneural.atlas.types import EMPTY, Atlas, Mesh
+
+
+def quad_mesh(size: float = 1.0, tilt: float = 0.0) -> Mesh:
+    """A square ``size`` m wide in the xy plane (centred, normal +z, optionally rotated about x
+    by ``tilt`` radians), material uv = (x, y) / size + 0.5, tangent +x."""
+    s = size / 2
+    p = np.array([[-s, -s, 0], [s, -s, 0], [-s, s, 0], [s, s, 0]], np.float32)
+    c, si = np.cos(tilt), np.sin(tilt)
+    rot = np.array([[1, 0, 0], [0, c, -si], [0, si, c]], np.float32)
+    n = np.tile(rot @ np.float32([0, 0, 1]), (4, 1)).astype(np.float32)
+    t = np.zeros((4, 4), np.float32)
+    t[:, :3] = rot @ np.float32([1, 0, 0])
+    t[:, 3] = 1.0
+    uv = (p[:, :2] / size + 0.5).astype(np.float32)
+    return Mesh(
+        "quad",
+        (p @ rot.T).astype(np.float32),
+        np.array([[0, 1, 2], [1, 3, 2]], np.uint32),
+        n,
+        t,
+        uv,
+    )
+
+
+def quad_atlas(
+    res: int = 32, lo: float = 0.125, hi: float = 0.875, size: float = 1.0, tilt: float = 0.0
+) -> Atlas:
+    """The quad mapped to atlas square ``[lo, hi]^2``; texels outside are EMPTY (a 1-texel
+    gutter keeps the nearest triangle)."""
+    m = quad_mesh(size, tilt)
+    uva = (lo + (hi - lo) * m.uv).astype(np.float32)
+    c = (np.arange(res) + 0.5) / res
+    u, v = np.meshgrid(c, c)  # [y, x]
+    a = (u - lo) / (hi - lo)
+    b = (v - lo) / (hi - lo)
+    ids = np.where(a + b < 1.0, 0, 1).astype(np.uint32)
+    g = 1.0 / (res * (hi - lo))
+    inside = (a > -g) & (a < 1 + g) & (b > -g) & (b < 1 + g)
+    ids[~inside] = EMPTY
+    return Atlas(m, uva, ids, res, 1)

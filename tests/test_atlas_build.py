@@ -1,0 +1,86 @@
+"""Acceptance of the atlas stage at 1200^2 for every built-in mesh: coverage of every
+triangle, the bilinear gutter property, the split mesh, conventions and stats."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from atlas_helpers import gutter_failures, linf_distance, texels_per_triangle, uv_area
+
+from vrneural.atlas import BUILTIN_MESHES, EMPTY, build_atlas, builtin_mesh, texel_barycentrics
+
+R = 1200
+
+
+@pytest.fixture(scope="module")
+def atlases(tmp_path_factory):
+    """All built-in meshes at 1200^2 with padding 2, built once (no cache: a fresh build)."""
+    return {
+        n: (builtin_mesh(n), build_atlas(builtin_mesh(n), R, 2, cache=False))
+        for n in BUILTIN_MESHES
+    }
+
+
+@pytest.mark.parametrize("name", BUILTIN_MESHES)
+def test_every_triangle_owns_a_texel(atlases, name):
+    _, atlas = atlases[name]
+    nonzero = uv_area(atlas) != 0
+    assert nonzero.all(), "built-in meshes have no degenerate UV triangles"
+    # "own": a texel with this ID whose square touches the triangle (centre within L-inf 0.5)
+    dist = linf_distance(atlas)
+    owned = atlas.tri_ids[(dist <= 0.5 + 1e-9)]
+    counts = np.bincount(owned, minlength=len(atlas.mesh.faces))
+    assert np.count_nonzero(counts[nonzero] == 0) == 0
+    assert atlas.stats["triangles_without_texels"] == 0
+    assert texels_per_triangle(atlas).min() >= 1
+
+
+@pytest.mark.parametrize("name", BUILTIN_MESHES)
+def test_gutter_bilinear_taps_are_valid(atlases, name, rng):
+    _, atlas = atlases[name]
+    assert gutter_failures(atlas, rng, per_tri=4) == 0
+
+
+@pytest.mark.parametrize("name", BUILTIN_MESHES)
+def test_ids_stay_within_padding_and_centres_inside_are_exact(atlases, name):
+    _, atlas = atlases[name]
+    dist = linf_distance(atlas)
+    filled = atlas.tri_ids != EMPTY
+    assert np.nanmax(dist) <= atlas.padding + 1e-9
+    # a texel centre strictly inside a triangle must carry exactly that triangle's ID
+    bary = texel_barycentrics(atlas)
+    inside = filled & (bary.min(axis=-1) > 1e-4)
+    assert inside.sum() > 0.25 * R * R * atlas.stats["coverage_pct"] / 100
+    assert np.all(dist[inside] == 0.0)
+
+
+@pytest.mark.parametrize("name", BUILTIN_MESHES)
+def test_split_mesh_and_conventions(atlases, name):
+    mesh, atlas = atlases[name]
+    m = atlas.mesh
+    assert atlas.tri_ids.shape == (R, R) and atlas.tri_ids.dtype == np.uint32
+    assert atlas.uv_atlas.dtype == np.float32 and atlas.uv_atlas.shape == (len(m.positions), 2)
+    assert atlas.uv_atlas.min() >= 0.0 and atlas.uv_atlas.max() <= 1.0
+    assert m.faces.shape == mesh.faces.shape and m.faces.dtype == np.uint32
+    # faces keep input order: the same corners, vertex attributes copied
+    for attr in ("positions", "normals", "tangents", "uv"):
+        np.testing.assert_array_equal(getattr(m, attr)[m.faces], getattr(mesh, attr)[mesh.faces])
+    s = atlas.stats
+    assert s["charts"] >= 1 and s["triangles"] == len(mesh.faces)
+    assert 10.0 < s["coverage_pct"] <= s["filled_pct"] <= 100.0
+    assert s["texels_per_triangle_min"] >= 1
+    assert s["overlap_texels"] == 0
+
+
+def test_barycentrics_reproduce_texel_centres(atlases):
+    """Interpolating the triangle's atlas UVs with texel_barycentrics gives the texel centre,
+    inside triangles and extrapolated in the gutter (float32 output: 1e-6 abs in UV)."""
+    _, atlas = atlases["torus"]
+    bary = texel_barycentrics(atlas).astype(np.float64)
+    ys, xs = np.nonzero(atlas.tri_ids != EMPTY)
+    tri = atlas.mesh.faces[atlas.tri_ids[ys, xs]].astype(np.int64)
+    uvt = atlas.uv_atlas.astype(np.float64)[tri]  # [N, 3, 2]
+    got = np.einsum("nk,nkd->nd", bary[ys, xs], uvt)
+    want = np.stack([(xs + 0.5) / R, (ys + 0.5) / R], 1)
+    assert np.abs(got - want).max() < 1e-6
+    assert np.all(bary[atlas.tri_ids == EMPTY] == 0)

@@ -1,0 +1,99 @@
+"""`vrneural atlas`: outputs, stats, and one-line errors with exit code 2."""
+
+from __future__ import annotations
+
+import json
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+import trimesh
+
+from vrneural.cli import main
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("VRNEURAL_CACHE", str(tmp_path / "cache"))
+
+
+def test_builtin_to_png_with_json(tmp_path, capsys):
+    out = tmp_path / "a.png"
+    assert main(["atlas", "torus", "--res", "128", "-o", str(out), "--json"]) == 0
+    stats = json.loads(capsys.readouterr().out)
+    for key in (
+        "coverage_pct",
+        "charts",
+        "triangles",
+        "texels_per_triangle_min",
+        "texels_per_triangle_median",
+        "triangles_without_texels",
+        "total_s",
+    ):
+        assert key in stats
+    assert stats["triangles"] == 9216 and stats["cache"] == "miss"
+    img = iio.imread(out)
+    assert img.shape == (128, 128, 3) and img.dtype == np.uint8
+    empty = (img == 0).all(axis=-1)
+    assert 0.05 < empty.mean() < 0.95  # charts and black background
+    assert 100 - stats["filled_pct"] == pytest.approx(100 * empty.mean(), abs=0.01)
+    assert (tmp_path / "a.png.config.json").exists()
+
+
+def test_text_output_and_force(tmp_path, capsys):
+    out = tmp_path / "p.png"
+    assert main(["atlas", "plane", "--res", "64", "-o", str(out), "--color", "chart"]) == 0
+    text = capsys.readouterr().out
+    assert "coverage" in text and "texels/tri min" in text and "tris w/o texels" in text
+    assert main(["atlas", "plane", "--res", "64", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "output exists; pass --force" in err
+    assert main(["atlas", "plane", "--res", "64", "-o", str(out), "--force", "--no-cache"]) == 0
+    assert "off" in capsys.readouterr().out
+
+
+def test_mesh_file_with_two_meshes(tmp_path, capsys):
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.box(extents=(0.2, 0.3, 0.1)), node_name="a")
+    scene.add_geometry(trimesh.creation.icosphere(1, 0.1), node_name="b")
+    scene.export(tmp_path / "s.glb")
+    assert (
+        main(
+            [
+                "atlas",
+                str(tmp_path / "s.glb"),
+                "--res",
+                "64",
+                "-o",
+                str(tmp_path / "o.png"),
+                "--json",
+            ]
+        )
+        == 0
+    )
+    stats = json.loads(capsys.readouterr().out)
+    assert len(stats) == 2
+    assert (tmp_path / "o-0.png").exists() and (tmp_path / "o-1.png").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "out_name", "message"),
+    [
+        (["{tmp}/missing.obj"], "a.png", "missing.obj: no such file"),
+        (["{tmp}/nan.obj"], "a.png", "nan.obj: 1 vertices have NaN/Inf positions"),
+        (["sphere", "--res", "0"], "a.png", "--res = 0 is out of range; allowed [8, 8192]"),
+        (["sphere", "--res", "-5"], "a.png", "--res = -5 is out of range"),
+        (["sphere", "--res", "100000"], "a.png", "--res = 100000 is out of range"),
+        (["sphere", "--padding", "-1"], "a.png", "--padding = -1 is out of range"),
+        (["sphere"], "a.txt", "output must be a .png file"),
+        (["teapot"], "a.png", "teapot: no such file, and not a built-in mesh (sphere, torus"),
+    ],
+)
+def test_errors_are_one_line_exit_2(tmp_path, capsys, args, out_name, message):
+    (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n")
+    out = tmp_path / out_name
+    args = [a.format(tmp=tmp_path) for a in args]
+    assert main(["atlas", *args, "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err and "Traceback" not in err
+    assert not out.exists()

@@ -1,0 +1,143 @@
+"""Meshes: built-ins, validation, normals and tangents, box UVs, loading OBJ/PLY/GLB."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from vrneural.atlas import BUILTIN_MESHES, MeshWarning, builtin_mesh, load_mesh, make_mesh
+from vrneural.atlas.geometry import box_uv, vertex_tangents
+from vrneural.errors import VrnError
+
+
+def _check_frame(m):
+    assert m.positions.dtype == np.float32 and m.faces.dtype == np.uint32
+    assert np.isfinite(m.positions).all() and np.isfinite(m.tangents).all()
+    np.testing.assert_allclose(np.linalg.norm(m.normals, axis=1), 1.0, atol=1e-5)
+    np.testing.assert_allclose(np.linalg.norm(m.tangents[:, :3], axis=1), 1.0, atol=1e-5)
+    assert np.abs(np.sum(m.normals * m.tangents[:, :3], axis=1)).max() < 1e-4
+    assert set(np.unique(m.tangents[:, 3])) <= {-1.0, 1.0}
+
+
+@pytest.mark.parametrize("name", BUILTIN_MESHES)
+def test_builtin_meshes(name):
+    m = builtin_mesh(name)
+    _check_frame(m)
+    ext = np.ptp(m.positions, axis=0).max()
+    assert 0.2 <= ext <= 1.0, "objects are 0.2-1 m"
+    assert m.uv.shape == (len(m.positions), 2) and np.ptp(m.uv, axis=0).min() > 0.5
+    if name == "highpoly":
+        assert 95_000 <= len(m.faces) <= 110_000
+    # outward/up-facing winding: face normals agree with the vertex normals
+    p = m.positions[m.faces].astype(np.float64)
+    fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    vn = m.normals[m.faces].mean(axis=1)
+    assert np.mean(np.sum(fn * vn, axis=1) > 0) > 0.99
+
+
+def test_builtin_tangents_follow_material_u():
+    """On the plane (uv = xz / tile) the tangent is +x and the bitangent +z, i.e. w * (n x t)."""
+    m = builtin_mesh("plane")
+    np.testing.assert_allclose(
+        m.tangents[:, :3], np.tile([1, 0, 0], (len(m.positions), 1)), atol=1e-6
+    )
+    b = m.tangents[:, 3:4] * np.cross(m.normals, m.tangents[:, :3])
+    np.testing.assert_allclose(b, np.tile([0, 0, 1], (len(m.positions), 1)), atol=1e-6)
+    with pytest.raises(VrnError, match="not allowed"):
+        builtin_mesh("teapot")
+
+
+def test_mirrored_uv_flips_the_bitangent_sign():
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    faces = np.array([[0, 1, 2]])
+    n = np.tile([0.0, 0.0, 1.0], (3, 1))
+    t = vertex_tangents(pos, faces, np.array([[0, 0], [1, 0], [0, 1]], float), n)
+    assert np.all(t[:, 3] == 1) and np.allclose(t[:, :3], [1, 0, 0])
+    t = vertex_tangents(pos, faces, np.array([[0, 0], [1, 0], [0, -1]], float), n)
+    assert np.all(t[:, 3] == -1) and np.allclose(t[:, :3], [1, 0, 0])
+
+
+def test_validation_errors_and_degenerate_warning():
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], float)
+    with pytest.raises(VrnError, match="no faces"):
+        make_mesh("m", pos, np.zeros((0, 3), int))
+    bad = pos.copy()
+    bad[2, 1] = np.nan
+    with pytest.raises(VrnError, match=r"1 vertices have NaN/Inf positions \(first at vertex 2\)"):
+        make_mesh("m", bad, [[0, 1, 2]])
+    bad[2, 1] = np.inf
+    with pytest.raises(VrnError, match="NaN/Inf"):
+        make_mesh("m", bad, [[0, 1, 2]])
+    with pytest.raises(VrnError, match="out of range"):
+        make_mesh("m", pos, [[0, 1, 7]])
+    faces = [[0, 1, 2], [0, 0, 1], [0, 1, 3]]  # repeated index; collinear
+    with pytest.warns(MeshWarning, match="skipped 2 degenerate triangles of 3"):
+        m = make_mesh("m", pos, faces, uv=pos[:, :2])
+    assert len(m.faces) == 1
+    with pytest.raises(VrnError, match="all 1 triangles are degenerate"), pytest.warns(MeshWarning):
+        make_mesh("m", pos, [[0, 1, 3]])
+
+
+def test_box_uv_splits_vertices_and_is_planar():
+    box = trimesh.creation.box(extents=(0.4, 0.2, 0.1))
+    pos, faces, uv, _ = box_uv(np.asarray(box.vertices), np.asarray(box.faces), None)
+    assert len(pos) == 24  # 8 corners x 3 projections
+    # each face keeps its 3D shape in UV (planar projection along its own axis): equal areas
+    p = pos[faces]
+    a3 = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    e1, e2 = uv[faces[:, 1]] - uv[faces[:, 0]], uv[faces[:, 2]] - uv[faces[:, 0]]
+    a2 = np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    np.testing.assert_allclose(a2 * 0.4**2, a3, rtol=1e-9)
+
+
+def test_load_obj_ply_glb_and_scenes(tmp_path):
+    src = builtin_mesh("torus")
+    tm = trimesh.Trimesh(
+        src.positions, src.faces, process=False, visual=trimesh.visual.TextureVisuals(uv=src.uv)
+    )
+    tm.export(tmp_path / "t.obj")
+    tm.export(tmp_path / "t.glb")
+    trimesh.Trimesh(src.positions, src.faces, process=False).export(tmp_path / "t.ply")
+    for ext in ("obj", "glb"):
+        (m,) = load_mesh(tmp_path / f"t.{ext}")
+        _check_frame(m)
+        assert len(m.faces) == len(src.faces)
+        # material UVs kept (OBJ may re-index vertices; compare per corner)
+        np.testing.assert_allclose(m.uv[m.faces], src.uv[src.faces], atol=1e-5)
+        np.testing.assert_allclose(m.positions[m.faces], src.positions[src.faces], atol=1e-6)
+    (m,) = load_mesh(tmp_path / "t.ply")  # no UVs in the file: box projection
+    _check_frame(m)
+    assert len(m.faces) == len(src.faces) and len(m.positions) > len(src.positions)
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.box(extents=(0.2, 0.2, 0.2)), node_name="box")
+    scene.add_geometry(
+        trimesh.creation.icosphere(2, 0.1),
+        node_name="ball",
+        transform=trimesh.transformations.translation_matrix([1, 0, 0]),
+    )
+    scene.export(tmp_path / "s.glb")
+    meshes = load_mesh(tmp_path / "s.glb")
+    assert sorted(m.name for m in meshes) == ["s.glb:ball", "s.glb:box"]
+    ball = next(m for m in meshes if m.name.endswith("ball"))
+    np.testing.assert_allclose(ball.positions.mean(axis=0), [1, 0, 0], atol=1e-2)
+
+
+def test_load_errors(tmp_path):
+    with pytest.raises(VrnError, match="no such file"):
+        load_mesh(tmp_path / "missing.obj")
+    (tmp_path / "x.xyz").write_text("1 2 3\n")
+    with pytest.raises(VrnError, match="unsupported mesh type"):
+        load_mesh(tmp_path / "x.xyz")
+    (tmp_path / "pts.ply").write_text(
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+    )
+    with pytest.raises(VrnError, match="no triangle faces"):
+        load_mesh(tmp_path / "pts.ply")
+    (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n")
+    with pytest.raises(VrnError, match="NaN/Inf"):
+        load_mesh(tmp_path / "nan.obj")
+    (tmp_path / "junk.glb").write_bytes(b"not a glb file at all")
+    with pytest.raises(VrnError, match="cannot read mesh"):
+        load_mesh(tmp_path / "junk.glb")

@@ -1,0 +1,184 @@
+"""`vrneural btf ...`: happy paths and one-line errors (exit 2) that never touch existing files."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from vrneural.btf import read_btf
+from vrneural.cli import main
+
+
+def _vrn(*args, timeout=300):
+    return subprocess.run(
+        [sys.executable, "-m", "vrneural", *args], capture_output=True, text=True, timeout=timeout
+    )
+
+
+@pytest.fixture(scope="module")
+def small_btf(tmp_path_factory):
+    out = tmp_path_factory.mktemp("btf") / "leather.btf"
+    r = _vrn(
+        "btf",
+        "synth",
+        "--preset",
+        "leather",
+        "--res",
+        "8",
+        "--dirs",
+        "6",
+        "--seed",
+        "0",
+        "-o",
+        str(out),
+        "--no-progress",
+    )
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def test_synth_writes_btf_and_config(small_btf):
+    b = read_btf(small_btf)
+    assert b.shape == (6, 6, 8, 8)
+    cfg = json.loads(small_btf.with_name("leather.btf.config.json").read_text())
+    assert cfg["config"] == "BtfConfig" and cfg["preset"] == "leather" and cfg["res"] == 8
+
+
+def test_info_text_and_json(small_btf, capsys):
+    assert main(["btf", "info", str(small_btf)]) == 0
+    out = capsys.readouterr().out
+    assert "6 lights x 6 views x 8x8" in out and "leather" in out
+    assert main(["btf", "info", str(small_btf), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    v = np.asarray(read_btf(small_btf).values, np.float32)
+    assert info["shape"] == {"lights": 6, "views": 6, "height": 8, "width": 8, "channels": 3}
+    assert info["value_max"] == pytest.approx(float(v.max()))
+    assert info["value_min"] == pytest.approx(float(v.min()))
+    assert info["meta"]["name"] == "leather" and info["size_bytes"] > v.nbytes // 2
+
+
+def test_show_writes_png(small_btf, tmp_path, capsys):
+    import imageio.v3 as iio
+
+    out = tmp_path / "sheet.png"
+    assert main(["btf", "show", str(small_btf), "-o", str(out), "--texel", "1", "2"]) == 0
+    img = iio.imread(out)
+    assert img.ndim == 3 and img.shape[0] > 500 and img.std() > 5
+
+
+def _one_line_error(r, *needles):
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    err = r.stderr.strip()
+    assert err.count("\n") == 0 and "Traceback" not in err, err
+    for n in needles:
+        assert n in err, err
+
+
+class _Result:
+    def __init__(self, returncode, stderr):
+        self.returncode, self.stderr = returncode, stderr
+
+
+@pytest.fixture
+def vrn_inproc(capsys):
+    """Run `vrneural ...` in this process (fast); same error path as the real entry point."""
+
+    def run(*args):
+        capsys.readouterr()
+        rc = main(list(args))
+        return _Result(rc, capsys.readouterr().err)
+
+    return run
+
+
+def _snapshot(p):
+    return p.read_bytes(), p.stat().st_mtime_ns
+
+
+def test_errors_in_a_real_process(small_btf, tmp_path):
+    existing = tmp_path / "exists.btf"
+    existing.write_bytes(b"precious")
+    _one_line_error(
+        _vrn("btf", "synth", "--preset", "velvet", "-o", str(existing), "--force"),
+        "--preset",
+        "velvet",
+        "leather",
+    )
+    _one_line_error(_vrn("btf", "info", str(tmp_path / "missing.btf")), "no such file")
+    assert existing.read_bytes() == b"precious"
+
+
+def test_bad_inputs_are_one_line_errors_and_touch_nothing(small_btf, tmp_path, vrn_inproc):
+    vrn = vrn_inproc
+    existing = tmp_path / "exists.btf"
+    existing.write_bytes(b"precious")
+    before = _snapshot(existing)
+    synth = ["btf", "synth", "--res", "4", "--dirs", "3", "--no-progress"]
+    _one_line_error(
+        vrn(*synth, "--preset", "velvet", "-o", str(existing), "--force"),
+        "--preset",
+        "velvet",
+        "leather",
+    )
+    _one_line_error(vrn(*synth[:2], "--res", "0", "-o", str(existing), "--force"), "--res", "0")
+    _one_line_error(vrn(*synth[:2], "--res", "-3", "-o", str(existing), "--force"), "--res")
+    _one_line_error(vrn(*synth, "--dirs", "0", "-o", str(existing), "--force"), "--dirs")
+    _one_line_error(vrn(*synth, "-o", str(existing)), "exists", "--force")
+    _one_line_error(vrn(*synth, "-o", str(existing), "--resume"), "exists", "--force")
+    assert _snapshot(existing) == before
+    assert not (tmp_path / "exists.btf.partial").exists()
+
+    out_png = tmp_path / "sheet.png"
+    out_png.write_bytes(b"old png")
+    png_before = _snapshot(out_png)
+    _one_line_error(vrn("btf", "info", str(tmp_path / "missing.btf")), "no such file")
+    _one_line_error(
+        vrn("btf", "show", str(tmp_path / "missing.btf"), "-o", str(out_png), "--force"),
+        "no such file",
+    )
+    _one_line_error(vrn("btf", "show", str(small_btf), "-o", str(out_png)), "exists")
+    _one_line_error(
+        vrn("btf", "show", str(small_btf), "-o", str(out_png), "--force", "--texel", "8", "0"),
+        "--texel X",
+    )
+    wrong = tmp_path / "wrong.btf"
+    wrong.write_bytes(b"VRNM\0\0\0\0" + small_btf.read_bytes()[8:])
+    _one_line_error(vrn("btf", "info", str(wrong)), "wrong magic")
+    _one_line_error(vrn("btf", "show", str(wrong), "-o", str(out_png), "--force"), "wrong magic")
+    trunc = tmp_path / "trunc.btf"
+    trunc.write_bytes(small_btf.read_bytes()[:-100])
+    _one_line_error(vrn("btf", "info", str(trunc)), "truncated")
+    _one_line_error(vrn("btf", "show", str(trunc), "-o", str(out_png), "--force"), "truncated")
+    assert _snapshot(out_png) == png_before
+    _one_line_error(
+        vrn("btf", "import", str(tmp_path / "missing_ubo.btf"), "-o", str(tmp_path / "x.btf")),
+        "no such file",
+    )
+    _one_line_error(
+        vrn("btf", "import", str(small_btf), "-o", str(existing), "--force"), "not a UBO2014"
+    )
+    assert _snapshot(existing) == before
+    assert not (tmp_path / "x.btf").exists()
+
+
+def test_synth_existing_output_with_force_is_replaced(small_btf, tmp_path):
+    out = tmp_path / "f.btf"
+    out.write_bytes(b"old")
+    r = _vrn(
+        "btf",
+        "synth",
+        "--preset",
+        "metal",
+        "--res",
+        "4",
+        "--dirs",
+        "3",
+        "-o",
+        str(out),
+        "--force",
+        "--no-progress",
+    )
+    assert r.returncode == 0, r.stderr
+    assert read_btf(out).meta["name"] == "metal"

@@ -1,0 +1,121 @@
+"""The .btf file: round trip, one-slice reads, validation errors, streaming writer + resume."""
+
+import struct
+
+import numpy as np
+import pytest
+
+from vrneural.btf import BtfWriter, direction_set, read_btf, write_btf
+from vrneural.btf.dirs import UBO_RING_COUNTS, UBO_THETA_DEG
+from vrneural.errors import VrnError
+
+
+def _small(rng, L=3, V=4, H=5, W=6):
+    vals = rng.random((L, V, H, W, 3)).astype(np.float32) * 2.0
+    return vals, direction_set(L), direction_set(V)
+
+
+def test_round_trip_and_one_slice(tmp_path, rng):
+    vals, ld, vd = _small(rng)
+    p = write_btf(tmp_path / "a.btf", vals, ld, vd, {"name": "t", "seed": 7})
+    b = read_btf(p)
+    assert b.shape == (3, 4, 5, 6) and b.resolution == (5, 6)
+    np.testing.assert_array_equal(b.values, vals.astype(np.float16))
+    np.testing.assert_allclose(b.light_dirs, ld)
+    assert b.meta["name"] == "t" and b.meta["seed"] == 7 and b.meta["convention"] == "cos_inside"
+    s = b.slice(2, 1)
+    assert s.dtype == np.float32 and s.shape == (5, 6, 3)
+    np.testing.assert_array_equal(s, vals[2, 1].astype(np.float16).astype(np.float32))
+    assert isinstance(b.values, np.memmap)  # nothing loaded until indexed
+
+
+def test_values_are_clamped_into_float16(tmp_path, rng):
+    vals, ld, vd = _small(rng)
+    vals[0, 0, 0, 0] = (-1.0, 1e6, 0.5)
+    b = read_btf(write_btf(tmp_path / "c.btf", vals, ld, vd, {}))
+    assert list(b.values[0, 0, 0, 0].astype(float)) == [0.0, 65504.0, 0.5]
+    vals[0, 0, 0, 0, 0] = np.nan
+    with pytest.raises(VrnError, match="NaN"):
+        write_btf(tmp_path / "d.btf", vals, ld, vd, {})
+
+
+def test_bad_magic(tmp_path, rng):
+    p = write_btf(tmp_path / "a.btf", *_small(rng), {})
+    data = bytearray(p.read_bytes())
+    data[:6] = b"NOTBTF"
+    p.write_bytes(bytes(data))
+    with pytest.raises(VrnError, match="wrong magic"):
+        read_btf(p)
+
+
+def test_bad_version(tmp_path, rng):
+    p = write_btf(tmp_path / "a.btf", *_small(rng), {})
+    data = bytearray(p.read_bytes())
+    data[8:12] = struct.pack("<I", 99)
+    p.write_bytes(bytes(data))
+    with pytest.raises(VrnError, match="version 99"):
+        read_btf(p)
+
+
+@pytest.mark.parametrize("keep", [4, 100, -10])
+def test_truncated(tmp_path, rng, keep):
+    p = write_btf(tmp_path / "a.btf", *_small(rng), {})
+    data = p.read_bytes()
+    p.write_bytes(data[:keep])
+    with pytest.raises(VrnError, match="truncated"):
+        read_btf(p)
+
+
+def test_shape_mismatch(tmp_path, rng):
+    vals, ld, vd = _small(rng)
+    with pytest.raises(VrnError, match="light_dirs has shape"):
+        write_btf(tmp_path / "a.btf", vals, ld[:2], vd, {})
+    with pytest.raises(VrnError, match="expected \\[L, V, H, W, 3\\]"):
+        write_btf(tmp_path / "b.btf", vals[..., :2], ld, vd, {})
+    with pytest.raises(VrnError, match="not unit vectors"):
+        write_btf(tmp_path / "c.btf", vals, ld * 2, vd, {})
+
+
+def test_missing_file_and_directory(tmp_path):
+    with pytest.raises(VrnError, match="no such file"):
+        read_btf(tmp_path / "nope.btf")
+    with pytest.raises(VrnError, match="directory"):
+        read_btf(tmp_path)
+
+
+def test_writer_streams_and_resumes(tmp_path, rng):
+    vals, ld, vd = _small(rng)
+    out = tmp_path / "s.btf"
+    w = BtfWriter(out, ld, vd, (5, 6), {"name": "s"})
+    w.values[:, 0] = vals[:, 0]
+    w.mark_done(0)
+    w.values.flush()
+    del w  # "interrupted": only the partial file and its done-list exist
+    assert not out.exists() and (tmp_path / "s.btf.partial").exists()
+    w = BtfWriter(out, ld, vd, (5, 6), {"name": "s"}, resume=True)
+    assert w.done == {0}
+    for v in range(1, 4):
+        w.values[:, v] = vals[:, v]
+        w.mark_done(v)
+    w.finalize()
+    assert not (tmp_path / "s.btf.partial").exists()
+    np.testing.assert_array_equal(read_btf(out).values, vals.astype(np.float16))
+    # a different header does not resume: it starts over
+    w = BtfWriter(out.with_name("t.btf"), ld, vd, (5, 6), {"name": "s"})
+    w.mark_done(0)
+    del w
+    w = BtfWriter(out.with_name("t.btf"), ld, vd, (5, 6), {"name": "other"}, resume=True)
+    assert w.done == set()
+
+
+def test_direction_sets():
+    d = direction_set(151)
+    assert d.shape == (151, 3)
+    np.testing.assert_allclose(np.linalg.norm(d, axis=1), 1, atol=1e-6)
+    theta = np.round(np.degrees(np.arccos(np.clip(d[:, 2], -1, 1))), 3)
+    for t, n in zip(UBO_THETA_DEG, UBO_RING_COUNTS, strict=True):
+        assert np.sum(np.isclose(theta, t, atol=1e-3)) == n
+    q = direction_set(40)
+    assert q.shape == (40, 3) and q[:, 2].min() >= np.cos(np.radians(75)) - 1e-6
+    with pytest.raises(VrnError):
+        direction_set(0)

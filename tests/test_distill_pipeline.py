@@ -1,0 +1,102 @@
+"""teach -> distill -> export -> reload: the pack's numpy forward equals the torch student."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+from distill_helpers import FAST, run_cli, trained  # noqa: F401 (fixture)
+
+from vrneural.btf.format import read_btf
+from vrneural.distill.checkpoint import load_checkpoint
+from vrneural.distill.data import SliceData, to_blocks
+from vrneural.distill.distill import model_from_checkpoint
+from vrneural.formats.vrnm import read_vrnm
+from vrneural.material import material_forward
+
+
+def _compare(ck_path, pack_path, jitter_seed=None):
+    ck = load_checkpoint(ck_path)
+    model = model_from_checkpoint(ck)
+    mat = read_vrnm(pack_path)
+    data = SliceData(read_btf(ck["btf"]["path"]), ck["split"]["test"])
+    gen = None if jitter_seed is None else torch.Generator().manual_seed(jitter_seed)
+    worst = 0.0
+    for pair in range(0, data.values.shape[0] * data.n_view, 3):
+        wi, wo = data.dirs(pair)
+        uv = data.uv(gen, shard=False)
+        n = uv.shape[0]
+        ref = material_forward(
+            mat, np.tile(wi.numpy(), (n, 1)), np.tile(wo.numpy(), (n, 1)), uv.numpy()
+        )
+        with torch.no_grad():
+            got = model.predict(wi, wo, uv).numpy()
+        worst = max(worst, float(np.abs(ref - got).max()))
+    return worst, mat, ck
+
+
+@pytest.mark.parametrize("which", ["student", "teacher"])
+def test_pack_equals_torch(trained, which):  # noqa: F811
+    ck = trained[which]
+    for seed in (None, 7):  # texel centres, then jittered lookups
+        worst, mat, _ = _compare(ck, ck.with_suffix(".vrnm"), seed)
+        assert worst <= 1e-5, worst
+    assert mat.arch == ("coarse_fine" if which == "student" else "single")
+
+
+def test_pack_meta_and_config(trained):  # noqa: F811
+    mat = read_vrnm(trained["student"].with_suffix(".vrnm"))
+    meta = mat.meta
+    assert (
+        meta["provenance"]["btf"]["sha256"] == load_checkpoint(trained["teacher"])["btf"]["sha256"]
+    )
+    assert meta["provenance"]["epochs"] == 2
+    assert np.isfinite(meta["metrics"]["test_l1"])
+    assert meta["metrics"]["pack_vs_torch_max_abs"] <= 1e-5
+    r = meta["ranges"]
+    assert {"weight.coarse.0", "texture.fine", "act.coarse.1", "act.fine.1"} <= set(r)
+    assert all(0 < v["max_abs"] < 65504 for v in r.values())
+    cfg = json.loads((trained["dir"] / "student.pt.config.json").read_text())
+    assert cfg["config"] == "DistillConfig" and cfg["sigma"] == 0.1 and cfg["epochs"] == 2
+    assert len(cfg["history"]) == 2
+
+
+def test_export_cli_rewrites_the_same_pack(trained, tmp_path):  # noqa: F811
+    out = tmp_path / "again.vrnm"
+    code, err = run_cli("export", trained["student"], "-o", out)
+    assert code == 0, err
+    a, b = read_vrnm(out), read_vrnm(trained["student"].with_suffix(".vrnm"))
+    for k in a.textures:
+        assert np.array_equal(a.textures[k], b.textures[k])
+    for k in a.networks:
+        for la, lb in zip(a.networks[k], b.networks[k], strict=True):
+            assert np.array_equal(la.weight, lb.weight) and np.array_equal(la.bias, lb.bias)
+
+
+def test_baselines_train_and_export(trained, tmp_path):  # noqa: F811
+    for method, extra in (("neumip", ["--no-distill"]), ("single8", [])):
+        out = tmp_path / f"{method}.pt"
+        code, err = run_cli(
+            "distill",
+            trained["teacher"],
+            "-o",
+            out,
+            "--method",
+            method,
+            "--epochs",
+            1,
+            *extra,
+            *FAST,
+        )
+        assert code == 0, err
+        worst, mat, ck = _compare(out, out.with_suffix(".vrnm"))
+        assert worst <= 1e-5
+        assert mat.output == ("log1p" if method == "neumip" else "linear")
+        assert ck["config"]["distill"] == (method != "neumip")
+
+
+def test_blocks_are_2x2():
+    a = torch.arange(16).reshape(4, 4)
+    assert to_blocks(a)[1].tolist() == [2, 3, 6, 7]

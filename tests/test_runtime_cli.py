@@ -1,0 +1,80 @@
+"""`vrneural run` user errors: one line, exit code 2; and a tiny end-to-end run."""
+
+import json
+
+import pytest
+
+from vrneural.cli import main
+
+SCENE = """
+[[objects]]
+mesh = "plane"
+[objects.material]
+procedural = "lambertian"
+scale = {scale}
+[[lights]]
+position = [0, 1, 0]
+intensity = 1.0
+"""
+
+
+def _err(capsys, argv):
+    rc = main(["run", *argv])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2
+    assert len(err) == 1 and err[0].startswith("vrneural run: error:")
+    return err[0]
+
+
+def test_missing_scene_file(capsys, tmp_path):
+    msg = _err(capsys, [str(tmp_path / "nope.toml"), "--out", str(tmp_path / "o")])
+    assert "nope.toml" in msg and "not found" in msg
+
+
+def test_bad_scene_field_is_named_by_path(capsys, tmp_path):
+    p = tmp_path / "scene.toml"
+    p.write_text(SCENE.format(scale=-1))
+    msg = _err(capsys, [str(p), "--out", str(tmp_path / "o")])
+    assert "scene.toml: objects[0].material.scale = -1" in msg and "out of range" in msg
+
+
+def test_missing_pack_file(capsys, tmp_path):
+    p = tmp_path / "scene.toml"
+    p.write_text(SCENE.format(scale=1).replace('procedural = "lambertian"', 'pack = "x.vrnm"'))
+    msg = _err(capsys, [str(p), "--out", str(tmp_path / "o")])
+    assert "objects[0].material.pack" in msg and "not found" in msg
+
+
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        (["--eyes", "3"], "--eyes = 3"),
+        (["--reuse", "-1"], "--reuse = -1"),
+        (["--texture-res", "99999"], "--texture-res = 99999"),
+        (["--eye-res", "12xfoo"], "--eye-res"),
+        (["--reference", "missing.vrnm"], "missing.vrnm"),
+    ],
+)
+def test_bad_flags(capsys, tmp_path, argv, needle):
+    msg = _err(capsys, ["--profile", "tiny", "--out", str(tmp_path / "o"), *argv])
+    assert needle in msg
+
+
+def test_existing_output_needs_force(capsys, tmp_path):
+    (tmp_path / "o").mkdir()
+    msg = _err(capsys, ["--profile", "tiny", "--out", str(tmp_path / "o")])
+    assert "--force" in msg
+
+
+@pytest.mark.gpu
+def test_tiny_run_writes_summary_and_frames(capsys, tmp_path):
+    out = tmp_path / "o"
+    rc = main(["run", "--profile", "tiny", "--frames", "6", "--out", str(out), "--quiet"])
+    assert rc == 0
+    sm = json.loads((out / "summary.json").read_text())
+    assert sm["frames"] == 6 and sm["resolved"]["reuse"] == 4
+    assert len(sm["per_frame"]["blocks_shaded"]) == 6
+    assert sm["frame_wall_ms"]["p99"] >= sm["frame_wall_ms"]["median"] > 0
+    assert {"texture", "forward"} <= set(sm["gpu_ms"])
+    assert (out / "frame0000_eye1.png").is_file() and (out / "frame0005_eye0.exr").is_file()
+    assert "frame ms" in capsys.readouterr().out

@@ -1,0 +1,125 @@
+"""Texture-space pass: generated WGSL vs its numpy twin, analytic Lambertian, counters."""
+
+import numpy as np
+import pytest
+from runtime_helpers import quad_atlas
+
+from vrneural.material import lambertian_material, random_material
+from vrneural.runtime import reference
+
+EYE = np.float32([0.3, 0.2, 1.5])
+LP = np.float32([[0.5, 0.5, 1.0], [-1.0, 0.0, 0.5]])
+LC = np.float32([[1.0, 0.5, 0.2], [2.0, 2.0, 2.0]])
+TILING = (2.0, 2.0, 0.1, 0.0)
+
+
+def _f16(x):
+    return x.astype(np.float16).astype(np.float32)
+
+
+def test_twin_lambertian_plane_is_analytic():
+    at = quad_atlas(16)
+    mat = lambertian_material((0.8, 0.5, 0.2))
+    lp = np.float32([[0.1, -0.2, 0.7]])
+    rad, cnt = reference.shade_texture_space(at, mat, np.eye(4), EYE, lp, np.float32([[3, 3, 3]]))
+    ys, xs = np.nonzero(rad[..., 3] > 0)
+    # texel -> block centre in atlas uv -> plane position (the quad spans atlas [1/8, 7/8])
+    cu = (2 * (xs // 2) + 1) / 16
+    cv = (2 * (ys // 2) + 1) / 16
+    p = np.stack([(cu - 0.125) / 0.75 - 0.5, (cv - 0.125) / 0.75 - 0.5, 0 * cu], -1)
+    lv = lp[0] - p
+    d2 = (lv**2).sum(-1)
+    want = np.float32([0.8, 0.5, 0.2]) / np.pi * (lv[:, 2] / np.sqrt(d2) * 3 / d2)[:, None]
+    np.testing.assert_allclose(rad[ys, xs, :3], want, rtol=2e-5, atol=1e-6)
+    assert cnt[0] == len(xs) // 4 and cnt[1] == 0
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("arch", ["coarse_fine", "single"])
+@pytest.mark.parametrize("precision", ["f32", "f16"])
+@pytest.mark.parametrize("buffer_weights", [False, True], ids=["constants", "buffer"])
+def test_gpu_matches_twin(arch, precision, buffer_weights):
+    from vrneural.runtime import texture_pass
+
+    if buffer_weights and precision == "f16":
+        pytest.skip("the buffer variant is the f32 reference path")
+    at = quad_atlas(32)
+    mat = random_material(3, arch, output="log1p" if arch == "single" else "linear")
+    model = np.eye(4, dtype=np.float32)
+    model[:3, 3] = [0.05, -0.02, 0.0]
+    args = (at, mat, model, EYE, LP, LC, TILING, precision)
+    got, cg = texture_pass.shade_texture_space(*args, buffer_weights=buffer_weights)
+    want, cw = reference.shade_texture_space(*args)
+    np.testing.assert_array_equal(cg, cw)
+    assert np.isfinite(got).all()
+    np.testing.assert_array_equal(got[..., 3], want[..., 3])  # same texels written
+    err = np.abs(got[..., :3] - _f16(want[..., :3]))
+    scale = np.abs(want[..., :3]) + 1e-2
+    if precision == "f32":
+        # Same f32 math in another order, then both rounded to f16 (rgba16float): llvmpipe
+        # measured <= 1 f16 ulp (2^-10 relative). Allow 2 ulps.
+        assert (err / scale).max() <= 2 * 2.0**-10
+    else:
+        # GPU accumulates in f16, the twin rounds per layer and sums lights in f32: llvmpipe
+        # measured 0.11 relative at the smallest values (|y| ~ 1e-2), 0.04 on the single net.
+        assert (err / scale).max() <= 0.25
+        assert np.median(err / scale) <= 0.01
+
+
+@pytest.mark.gpu
+def test_gpu_back_facing_blocks_are_not_shaded():
+    from vrneural.runtime import texture_pass
+
+    at = quad_atlas(32)
+    mat = random_material(1)
+    behind = np.float32([0.0, 0.0, -1.0])  # the quad faces +z
+    rad, cnt = texture_pass.shade_texture_space(at, mat, np.eye(4), behind, LP, LC)
+    blocks = reference.count_non_empty_blocks(at.tri_ids)
+    assert cnt[0] == 0 and cnt[1] == blocks and cnt[2] == cnt[3] == 0
+    assert not rad.any()
+    # tilted so the eye sees it at a grazing angle from the front: everything shaded
+    rad, cnt = texture_pass.shade_texture_space(at, mat, np.eye(4), EYE, LP, LC)
+    assert cnt[0] == blocks and cnt[1] == 0
+
+
+@pytest.mark.gpu
+def test_gpu_lights_below_horizon_cost_nothing():
+    from vrneural.runtime import texture_pass
+
+    at = quad_atlas(32)
+    mat = lambertian_material()
+    under = np.float32([[0.0, 0.0, -0.5]])
+    rad, cnt = texture_pass.shade_texture_space(at, mat, np.eye(4), EYE, under, LC[:1])
+    assert cnt[0] > 0 and cnt[2] == cnt[3] == 0
+    assert (rad[..., :3] == 0).all() and (rad[..., 3] == 1).sum() == 4 * cnt[0]
+
+
+def test_twin_barycentrics_match_the_atlas_convention():
+    atlas_mod = pytest.importorskip("vrneural.atlas")
+    at = atlas_mod.build_atlas(atlas_mod.builtin_mesh("plane"), 64, cache=False)
+    want = atlas_mod.texel_barycentrics(at)
+    ys, xs = np.nonzero(at.tri_ids != atlas_mod.EMPTY)
+    f = at.mesh.faces[at.tri_ids[ys, xs]].astype(np.int64)
+    uva = at.uv_atlas
+    p = (np.stack([xs, ys], -1) + 0.5).astype(np.float32) / 64
+    got = reference.barycentric_2d(p, uva[f[:, 0]], uva[f[:, 1]], uva[f[:, 2]])
+    np.testing.assert_allclose(got, want[ys, xs], atol=1e-4)
+
+
+@pytest.mark.gpu
+def test_gpu_matches_twin_on_a_transformed_sphere():
+    atlas_mod = pytest.importorskip("vrneural.atlas")
+    from vrneural.runtime import texture_pass
+    from vrneural.runtime.scene import model_matrix
+
+    at = atlas_mod.build_atlas(atlas_mod.builtin_mesh("sphere"), 128, cache=False)
+    mat = random_material(7)
+    model = model_matrix((0.1, 0.9, -0.2), (20, 40, 0), 1.7)
+    eye = np.float32([0.3, 1.2, 1.0])
+    args = (at, mat, model, eye, LP + np.float32([0, 1, 0]), LC, (0.5, 0.5, 0.0, 0.0))
+    got, cg = texture_pass.shade_texture_space(*args)
+    want, cw = reference.shade_texture_space(*args)
+    np.testing.assert_array_equal(cg, cw)
+    assert cg[0] > 0 and cg[1] > 0  # some blocks shaded, some back-facing
+    err = np.abs(got[..., :3] - _f16(want[..., :3])) / (np.abs(want[..., :3]) + 1e-2)
+    assert err.max() <= 2 * 2.0**-10  # f32 on both sides, f16 storage (see test above)

@@ -1,0 +1,122 @@
+"""Atlas benchmark: wall time of xatlas, rasterization, sliver fixes and dilation.
+
+``python -m vrneural.atlas.benchmark [--mesh highpoly] [--res 1200] [--repeats 3]
+[-o atlas_bench.json]`` builds the atlas ``repeats`` times without the cache and writes JSON
+(per-run stage times, the median per stage, the atlas stats, the machine) plus a PNG bar
+chart beside it. Times are wall-clock seconds on the CPU that runs it (the atlas stage does not
+use the GPU); on a shared machine, compare medians from one run only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+STAGES = ("xatlas_s", "raster_s", "sliver_s", "dilate_s", "total_s")
+
+
+def run_benchmark(mesh_name: str, resolution: int, padding: int, repeats: int) -> dict:
+    """Build ``repeats`` uncached atlases; returns the JSON-ready result."""
+    from vrneural.atlas import build_atlas, builtin_mesh
+
+    t = time.perf_counter()
+    mesh = builtin_mesh(mesh_name)
+    mesh_s = time.perf_counter() - t
+    runs = []
+    for _ in range(repeats):
+        cpu = time.process_time()
+        atlas = build_atlas(mesh, resolution, padding, cache=False, progress=True)
+        runs.append({k: atlas.stats[k] for k in STAGES} | {"cpu_s": time.process_time() - cpu})
+    median = {k: float(np.median([r[k] for r in runs])) for k in (*STAGES, "cpu_s")}
+    keep = (
+        "charts",
+        "coverage_pct",
+        "filled_pct",
+        "texels_per_triangle_min",
+        "texels_per_triangle_median",
+        "triangles_without_texels",
+        "xatlas_packs",
+    )
+    return {
+        "mesh": mesh_name,
+        "triangles": len(mesh.faces),
+        "resolution": resolution,
+        "padding": padding,
+        "mesh_build_s": mesh_s,
+        "median": median,
+        "runs": runs,
+        "stats": {k: atlas.stats[k] for k in keep},
+        "machine": {
+            "cpu_count": os.cpu_count(),
+            "load_avg_1m": os.getloadavg()[0],
+            "python": platform.python_version(),
+            "processor": platform.processor() or platform.machine(),
+        },
+    }
+
+
+def plot(result: dict, path: Path) -> None:
+    """A horizontal stacked bar of the median stage times (PNG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from vrneural.formats.atomic import atomic_path
+
+    fig, ax = plt.subplots(figsize=(7, 1.8))
+    left = 0.0
+    for k in STAGES[:-1]:
+        v = result["median"][k]
+        ax.barh([0], [v], left=left, label=f"{k[:-2]} {v:.2f} s")
+        left += v
+    ax.set_yticks([])
+    ax.set_xlabel("seconds (median)")
+    ax.set_title(f"atlas {result['mesh']} ({result['triangles']} tris) at {result['resolution']}^2")
+    ax.legend(ncol=4, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.45))
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=120)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    from vrneural.atlas import BUILTIN_MESHES
+    from vrneural.formats.atomic import check_output, write_json
+
+    p = argparse.ArgumentParser(prog="python -m vrneural.atlas.benchmark", description=__doc__)
+    p.add_argument("--mesh", default="highpoly", choices=BUILTIN_MESHES)
+    p.add_argument("--res", type=int, default=1200)
+    p.add_argument("--padding", type=int, default=2)
+    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("-o", "--output", default="atlas_bench.json")
+    p.add_argument("--force", action="store_true")
+    a = p.parse_args(argv)
+    out = check_output(a.output, a.force)
+    result = run_benchmark(a.mesh, a.res, a.padding, max(1, a.repeats))
+    write_json(out, result)
+    plot(result, out.with_suffix(".png"))
+    m = result["median"]
+    print(
+        f"{a.mesh} ({result['triangles']} tris) {a.res}^2: xatlas {m['xatlas_s']:.2f} s, raster "
+        f"{m['raster_s']:.2f} s, slivers {m['sliver_s']:.3f} s, dilate {m['dilate_s']:.2f} s, "
+        f"total {m['total_s']:.2f} s (median of {len(result['runs'])}) -> {out}"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    import sys
+
+    from vrneural.errors import VrnError
+
+    try:
+        sys.exit(main())
+    except VrnError as e:
+        print(f"atlas benchmark: error: {e}", file=sys.stderr)
+        sys.exit(2)

@@ -1,0 +1,179 @@
+"""Built-in test meshes (procedural, deterministic), in metres, y up, with material UVs.
+
+Material UV is arc length on the surface divided by :data:`TILE_M` (one BTF tile per
+0.25 m before the per-object tiling scale), so texels are roughly isotropic on every mesh.
+
+========== ============================================================== ==========
+name       shape                                                          triangles
+========== ============================================================== ==========
+sphere     UV sphere, radius 0.25 m, 64 x 32 segments (no pole fans:     4 096
+           each pole triangle has its own pole vertex)
+torus      ring radius 0.3 m, tube radius 0.1 m, 96 x 48 segments        9 216
+plane      1 x 1 m square in the xz plane facing +y, 16 x 16 quads        512
+cloth      0.8 m square of 128 x 128 quads draped over a hidden          32 768
+           0.15 m sphere: smooth drape plus 9 radial folds growing
+           toward the hem; UV = the undeformed fabric coordinates
+highpoly   (2, 3) torus knot, tube radius 0.035 m, 800 x 63 segments,    100 800
+           with fine sinusoidal ridges (the 100k-triangle benchmark mesh)
+========== ============================================================== ==========
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vrneural.atlas.geometry import make_mesh
+from vrneural.atlas.types import Mesh
+from vrneural.errors import check_choice
+
+TILE_M = 0.25
+BUILTIN_MESHES = ("sphere", "torus", "plane", "cloth", "highpoly")
+
+
+def builtin_mesh(name: str) -> Mesh:
+    """The built-in mesh ``name`` (one of :data:`BUILTIN_MESHES`)."""
+    check_choice("mesh", name, BUILTIN_MESHES)
+    pos, faces, uv = _BUILDERS[name]()
+    return make_mesh(name, pos, faces, uv=uv)
+
+
+def grid_faces(nu: int, nv: int) -> np.ndarray:
+    """[2 nu nv, 3] faces of a (nu+1) x (nv+1) vertex grid (u fastest), CCW seen from +normal."""
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="xy")
+    a = (j * (nu + 1) + i).reshape(-1)
+    b, c, d = a + 1, a + nu + 1, a + nu + 2
+    return np.concatenate([np.stack([a, c, b], 1), np.stack([b, c, d], 1)])
+
+
+def _grid(nu: int, nv: int) -> tuple[np.ndarray, np.ndarray]:
+    """Parameters s, t in [0, 1] of a (nu+1) x (nv+1) grid, flattened u-fastest."""
+    s, t = np.meshgrid(np.linspace(0, 1, nu + 1), np.linspace(0, 1, nv + 1), indexing="xy")
+    return s.reshape(-1), t.reshape(-1)
+
+
+def _sphere(r: float = 0.25, nu: int = 64, nv: int = 32):
+    s, t = _grid(nu, nv)
+    phi, theta = 2 * np.pi * s, np.pi * t
+    pos = np.stack(
+        [r * np.sin(theta) * np.cos(phi), r * np.cos(theta), -r * np.sin(theta) * np.sin(phi)], 1
+    )
+    uv = np.stack([s * 2 * np.pi * r, t * np.pi * r], 1) / TILE_M
+    faces = grid_faces(nu, nv)
+    # drop the zero-area half of each pole quad (two vertices at the same pole point)
+    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
+    area = np.linalg.norm(np.cross(p1 - p0, p2 - p0), axis=1)
+    faces = faces[area > 1e-12]
+    return pos, _orient_outward(pos, faces), uv
+
+
+def _orient_outward(pos: np.ndarray, faces: np.ndarray, center=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """Flip faces whose normal points toward ``center`` (closed, star-shaped surfaces)."""
+    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
+    n = np.cross(p1 - p0, p2 - p0)
+    inward = np.sum(n * ((p0 + p1 + p2) / 3 - np.asarray(center)), axis=1) < 0
+    faces = faces.copy()
+    faces[inward] = faces[inward][:, [0, 2, 1]]
+    return faces
+
+
+def _torus(R: float = 0.3, r: float = 0.1, nu: int = 96, nv: int = 48):
+    s, t = _grid(nu, nv)
+    phi, theta = 2 * np.pi * s, 2 * np.pi * t
+    ring = R + r * np.cos(theta)
+    pos = np.stack([ring * np.cos(phi), r * np.sin(theta), -ring * np.sin(phi)], 1)
+    uv = np.stack([s * 2 * np.pi * R, t * 2 * np.pi * r], 1) / TILE_M
+    faces = grid_faces(nu, nv)
+    # outward = away from the tube centre line
+    c = np.stack([R * np.cos(phi), 0 * phi, -R * np.sin(phi)], 1)
+    fc = faces[:, 0]
+    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
+    inward = np.sum(np.cross(p1 - p0, p2 - p0) * (p0 - c[fc]), axis=1) < 0
+    faces[inward] = faces[inward][:, [0, 2, 1]]
+    return pos, faces, uv
+
+
+def _plane(size: float = 1.0, n: int = 16):
+    s, t = _grid(n, n)
+    pos = np.stack([(s - 0.5) * size, 0 * s, (t - 0.5) * size], 1)
+    uv = np.stack([s, t], 1) * size / TILE_M
+    return pos, _face_up(pos, grid_faces(n, n)), uv
+
+
+def _face_up(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Orient height-field faces so their normals have y > 0."""
+    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
+    down = np.cross(p1 - p0, p2 - p0)[:, 1] < 0
+    faces = faces.copy()
+    faces[down] = faces[down][:, [0, 2, 1]]
+    return faces
+
+
+def _cloth(size: float = 0.8, n: int = 128, r0: float = 0.15, folds: int = 9):
+    """A square cloth draped over a sphere of radius r0: the smooth part follows the cap, the
+    hanging part falls off; folds are radial sinusoids whose amplitude grows toward the hem,
+    and the hem is pulled inward (gathered) so the folds look like hanging fabric."""
+    s, t = _grid(n, n)
+    x0, z0 = (s - 0.5) * size, (t - 0.5) * size
+    rho = np.hypot(x0, z0)
+    ang = np.arctan2(z0, x0)
+    on_cap = np.minimum(rho / r0, 1.0)
+    cap = r0 * np.sqrt(1.0 - on_cap**2) * (rho < r0)
+    hang = np.maximum(rho - r0, 0.0)
+    # the part beyond the cap hangs down at a steepening slope (smooth at rho = r0)
+    y = cap - 0.9 * hang**2 / (hang + 0.05) + r0
+    fold_amp = 0.04 * (hang / (size / 2)) ** 1.2
+    rr = rho - 0.45 * hang + fold_amp * np.sin(folds * ang + 3.0 * hang / size)
+    y = y + 0.5 * fold_amp * np.cos(folds * ang)
+    pos = np.stack([rr * np.cos(ang), y, rr * np.sin(ang)], 1)
+    uv = np.stack([s, t], 1) * size / TILE_M
+    return pos, _face_up_by_param(pos, grid_faces(n, n)), uv
+
+
+def _face_up_by_param(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Orient the cloth so the side facing away from the drape centre line is the front."""
+    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
+    n = np.cross(p1 - p0, p2 - p0)
+    c = (p0 + p1 + p2) / 3
+    out = c - np.array([0.0, -1.0, 0.0])  # from a point below the cloth
+    inward = np.sum(n * out, axis=1) < 0
+    faces = faces.copy()
+    faces[inward] = faces[inward][:, [0, 2, 1]]
+    return faces
+
+
+def _knot(nu: int = 800, nv: int = 63, p: int = 2, q: int = 3, r: float = 0.035):
+    s, t = _grid(nu, nv)
+    a = 2 * np.pi * s
+    scale = 0.1
+
+    def curve(a):
+        rad = 2.0 + np.cos(q * a)
+        return scale * np.stack([rad * np.cos(p * a), -np.sin(q * a), rad * np.sin(p * a)], -1)
+
+    c = curve(a)
+    tan = curve(a + 1e-4) - curve(a - 1e-4)
+    tan /= np.linalg.norm(tan, axis=1, keepdims=True)
+    ref = np.broadcast_to([0.0, 1.0, 0.0], tan.shape)
+    nrm = np.cross(tan, ref)
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    bin_ = np.cross(tan, nrm)
+    theta = 2 * np.pi * t
+    ridge = 1.0 + 0.06 * np.sin(40 * a) * np.cos(7 * theta)
+    off = (np.cos(theta)[:, None] * nrm + np.sin(theta)[:, None] * bin_) * (r * ridge)[:, None]
+    pos = c + off
+    length = np.sum(np.linalg.norm(np.diff(curve(np.linspace(0, 2 * np.pi, 4001)), axis=0), axis=1))
+    uv = np.stack([s * length, t * 2 * np.pi * r], 1) / TILE_M
+    faces = grid_faces(nu, nv)
+    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
+    inward = np.sum(np.cross(p1 - p0, p2 - p0) * (p0 - c[faces[:, 0]]), axis=1) < 0
+    faces[inward] = faces[inward][:, [0, 2, 1]]
+    return pos, faces, uv
+
+
+_BUILDERS = {
+    "sphere": _sphere,
+    "torus": _torus,
+    "plane": _plane,
+    "cloth": _cloth,
+    "highpoly": _knot,
+}

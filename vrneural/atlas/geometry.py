@@ -1,0 +1,203 @@
+"""Mesh validation and the per-vertex shading frame: normals, material-UV tangents, box UVs.
+
+Everything here is numpy only. :func:`make_mesh` is the one way a :class:`Mesh` is assembled
+(loaded files and built-in meshes both go through it), so the conventions of
+:mod:`vrneural.atlas.types` hold for every mesh:
+
+- NaN/Inf positions, no faces, or face indices out of range -> :class:`VrnError` (one line).
+- Degenerate triangles (a repeated index or zero 3D area) are *skipped* with a counted
+  :class:`MeshWarning`; ``make_mesh(..., drop_degenerate=False)`` keeps them instead.
+- Normals: kept when given and finite, else area-weighted face normals accumulated over all
+  vertices at the same position (so UV seams do not crease the shading).
+- Tangents: MikkTSpace-like. Each triangle's tangent/bitangent come from its material-UV
+  derivatives, normalised and weighted by the corner angle, accumulated per vertex,
+  Gram-Schmidt orthogonalised against the normal; ``w = sign(dot(cross(n, t), b))``.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from vrneural.atlas.types import Mesh
+from vrneural.errors import VrnError
+
+#: Relative 3D area below which a triangle counts as degenerate (times the mean edge^2).
+DEGENERATE_REL_AREA = 1e-12
+
+
+class MeshWarning(UserWarning):
+    """A recoverable mesh problem (e.g. skipped degenerate triangles), with a count."""
+
+
+def make_mesh(
+    name: str,
+    positions: np.ndarray,
+    faces: np.ndarray,
+    uv: np.ndarray | None = None,
+    normals: np.ndarray | None = None,
+    drop_degenerate: bool = True,
+) -> Mesh:
+    """Validate arrays and build a :class:`Mesh` with normals and tangents.
+
+    positions: [V, 3] metres; faces: [F, 3] int; uv: [V, 2] material UV or None (then
+    :func:`box_uv` generates it, splitting vertices); normals: [V, 3] or None.
+    """
+    pos = np.asarray(positions, dtype=np.float64)
+    fac = np.asarray(faces)
+    if pos.ndim != 2 or pos.shape[1] != 3:
+        raise VrnError(f"{name}: positions have shape {list(pos.shape)}, expected [V, 3]")
+    if fac.size == 0:
+        raise VrnError(f"{name}: mesh has no faces (only triangle meshes are supported)")
+    if fac.ndim != 2 or fac.shape[1] != 3:
+        raise VrnError(f"{name}: faces have shape {list(fac.shape)}, expected [F, 3] triangles")
+    bad = ~np.isfinite(pos).all(axis=1)
+    if bad.any():
+        raise VrnError(
+            f"{name}: {int(bad.sum())} vertices have NaN/Inf positions "
+            f"(first at vertex {int(np.argmax(bad))})"
+        )
+    if fac.min() < 0 or fac.max() >= len(pos):
+        raise VrnError(
+            f"{name}: face indices out of range [{int(fac.min())}, {int(fac.max())}]; "
+            f"allowed [0, {len(pos) - 1}]"
+        )
+    fac = fac.astype(np.int64)
+    if uv is not None:
+        uv = np.asarray(uv, dtype=np.float64)
+        if uv.shape != (len(pos), 2) or not np.isfinite(uv).all():
+            uv = None  # unusable material UVs: regenerate (documented in load_mesh)
+    if normals is not None:
+        normals = np.asarray(normals, dtype=np.float64)
+        if normals.shape != (len(pos), 3) or not np.isfinite(normals).all():
+            normals = None
+    degen = degenerate_faces(pos, fac)
+    if degen.any() and drop_degenerate:
+        warnings.warn(
+            f"{name}: skipped {int(degen.sum())} degenerate triangles of {len(fac)}",
+            MeshWarning,
+            stacklevel=2,
+        )
+        fac = fac[~degen]
+        if len(fac) == 0:
+            raise VrnError(f"{name}: all {int(degen.sum())} triangles are degenerate")
+    if uv is None:
+        pos, fac, uv, normals = box_uv(pos, fac, normals)
+    if normals is None:
+        normals = vertex_normals(pos, fac)
+    else:
+        normals = _normalize(normals, fallback=vertex_normals(pos, fac))
+    tangents = vertex_tangents(pos, fac, uv, normals)
+    return Mesh(
+        name=name,
+        positions=pos.astype(np.float32),
+        faces=fac.astype(np.uint32),
+        normals=normals.astype(np.float32),
+        tangents=tangents.astype(np.float32),
+        uv=uv.astype(np.float32),
+    )
+
+
+def degenerate_faces(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """[F] bool: a repeated vertex index or a 3D area below the relative threshold."""
+    rep = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])
+    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
+    area2 = np.linalg.norm(np.cross(p1 - p0, p2 - p0), axis=1)
+    edge2 = (
+        np.sum((p1 - p0) ** 2, axis=1) + np.sum((p2 - p1) ** 2, axis=1) + np.sum((p0 - p2) ** 2, 1)
+    )
+    return rep | (area2 <= DEGENERATE_REL_AREA * np.maximum(edge2, 1e-300))
+
+
+def _normalize(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v, axis=1, keepdims=True)
+    ok = n[:, 0] > 1e-20
+    out = fallback.copy()
+    out[ok] = v[ok] / n[ok]
+    return out
+
+
+def vertex_normals(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """[V, 3] unit normals: area-weighted face normals summed over coincident positions."""
+    fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
+    _, weld = np.unique(pos, axis=0, return_inverse=True)
+    weld = weld.reshape(-1)
+    acc = np.zeros((weld.max() + 1, 3))
+    for k in range(3):
+        np.add.at(acc, weld[faces[:, k]], fn)
+    up = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (len(pos), 3))
+    return _normalize(acc[weld], fallback=np.array(up))
+
+
+def _corner_angles(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """[F, 3] interior angle at each corner (radians)."""
+    out = np.zeros(faces.shape)
+    for k in range(3):
+        a = pos[faces[:, (k + 1) % 3]] - pos[faces[:, k]]
+        b = pos[faces[:, (k + 2) % 3]] - pos[faces[:, k]]
+        na = np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1)
+        cos = np.sum(a * b, axis=1) / np.maximum(na, 1e-300)
+        out[:, k] = np.arccos(np.clip(cos, -1.0, 1.0))
+    return out
+
+
+def vertex_tangents(
+    pos: np.ndarray, faces: np.ndarray, uv: np.ndarray, normals: np.ndarray
+) -> np.ndarray:
+    """[V, 4]: unit tangent along +u of ``uv`` orthogonal to the normal, and bitangent sign."""
+    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
+    t0, t1, t2 = (uv[faces[:, k]] for k in range(3))
+    e1, e2 = p1 - p0, p2 - p0
+    d1, d2 = t1 - t0, t2 - t0
+    r = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
+    ok = np.abs(r) > 1e-20
+    rs = np.where(ok, r, 1.0)[:, None]
+    ft = (e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) / rs
+    fb = (e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) / rs
+    ft, fb = ft * ok[:, None], fb * ok[:, None]
+    ft /= np.maximum(np.linalg.norm(ft, axis=1, keepdims=True), 1e-300)
+    fb /= np.maximum(np.linalg.norm(fb, axis=1, keepdims=True), 1e-300)
+    ang = _corner_angles(pos, faces)
+    acc_t = np.zeros((len(pos), 3))
+    acc_b = np.zeros((len(pos), 3))
+    for k in range(3):
+        np.add.at(acc_t, faces[:, k], ft * ang[:, k : k + 1])
+        np.add.at(acc_b, faces[:, k], fb * ang[:, k : k + 1])
+    n = normals
+    t = acc_t - n * np.sum(acc_t * n, axis=1, keepdims=True)
+    t = _normalize(t, fallback=_any_perpendicular(n))
+    w = np.where(np.sum(np.cross(n, t) * acc_b, axis=1) < 0.0, -1.0, 1.0)
+    return np.concatenate([t, w[:, None]], axis=1)
+
+
+def _any_perpendicular(n: np.ndarray) -> np.ndarray:
+    """[V, 3] a unit vector perpendicular to each ``n`` (for vertices without UV derivatives)."""
+    axis = np.where((np.abs(n[:, 0]) < 0.9)[:, None], [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    t = axis - n * np.sum(axis * n, axis=1, keepdims=True)
+    return t / np.linalg.norm(t, axis=1, keepdims=True)
+
+
+def box_uv(
+    pos: np.ndarray, faces: np.ndarray, normals: np.ndarray | None, scale: float | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """Generate material UVs by box (cube) projection; vertices split between projections.
+
+    Each face is projected along the axis its normal is most aligned with (x -> (z, y),
+    y -> (x, z), z -> (x, y)), so every face gets an undistorted planar UV. ``uv = coord /
+    scale`` with ``scale`` = the largest bounding-box extent by default, so the whole object
+    spans about one BTF tile. Returns (positions, faces, uv, normals) with split vertices.
+    """
+    fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
+    axis = np.argmax(np.abs(fn), axis=1)
+    ext = np.ptp(pos, axis=0)
+    s = float(scale or max(float(ext.max()), 1e-9))
+    # one output vertex per distinct (input vertex, projection axis)
+    key = faces * 3 + axis[:, None]
+    uniq, inv = np.unique(key.reshape(-1), return_inverse=True)
+    src, ax = uniq // 3, uniq % 3
+    p = pos[src]
+    rel = (p - pos.min(axis=0)) / s
+    pick = np.array([[2, 1], [0, 2], [0, 1]])[ax]
+    uv = np.take_along_axis(rel, pick, axis=1)
+    return p, inv.reshape(-1, 3), uv, None if normals is None else normals[src]

@@ -1,0 +1,52 @@
+"""PNG visualisation of a triangle-ID texture and chart labelling."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vrneural.atlas.types import EMPTY, Atlas
+
+
+def chart_ids(atlas: Atlas) -> np.ndarray:
+    """[F] int: connected component of each face over shared (split) vertices = xatlas chart."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    faces = atlas.mesh.faces.astype(np.int64)
+    F, V = len(faces), len(atlas.mesh.positions)
+    rows = np.repeat(np.arange(F), 3)
+    g = coo_matrix((np.ones(3 * F), (rows, F + faces.reshape(-1))), shape=(F + V, F + V))
+    _, labels = connected_components(g, directed=False)
+    return labels[:F]
+
+
+def _hash_colors(keys: np.ndarray) -> np.ndarray:
+    """[N, 3] uint8 pseudo-random bright colours from integer keys (deterministic)."""
+    h = keys.astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15)
+    h ^= h >> np.uint64(29)
+    rgb = np.stack([(h >> np.uint64(s)) & np.uint64(0xFF) for s in (8, 24, 40)], axis=-1)
+    return (64 + rgb.astype(np.uint16) * 191 // 255).astype(np.uint8)
+
+
+def atlas_image(atlas: Atlas, by: str = "triangle", gutter: np.ndarray | None = None) -> np.ndarray:
+    """[R, R, 3] uint8: a colour per triangle (``by="triangle"``) or per chart (``"chart"``),
+    black where empty; texels in ``gutter`` ([R, R] bool) at half brightness. Row 0 is the
+    top row of the image, i.e. atlas v = 0 at the top (the texture's memory order)."""
+    ids = atlas.tri_ids
+    valid = ids != EMPTY
+    key = ids.astype(np.int64)
+    if by == "chart":
+        key = np.where(valid, chart_ids(atlas)[np.where(valid, ids, 0)], 0)
+    img = _hash_colors(key)
+    img[~valid] = 0
+    if gutter is not None:
+        img[gutter & valid] //= 2
+    return img
+
+
+def gutter_mask(atlas: Atlas) -> np.ndarray:
+    """[R, R] bool: texels whose centre is outside their triangle (gutter and sliver texels)."""
+    from vrneural.atlas.raster import texel_barycentrics
+
+    bary = texel_barycentrics(atlas)
+    return (atlas.tri_ids != EMPTY) & (bary.min(axis=-1) < -1e-6)

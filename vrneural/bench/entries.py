@@ -1,0 +1,106 @@
+"""CLI entries of the timing and trade-off benchmarks for :data:`vrneural.cli.bench.BENCHMARKS`.
+
+Each entry is ``name -> register(sub)``; a handler imports its bench module (and with it torch or
+wgpu) only when run. ``bench all`` runs every one of them into ``OUT/<name>``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+from pathlib import Path
+
+from vrneural.config import add_config_args, config_from_args
+
+#: name -> (module, config class, run function, help)
+SPECS = {
+    "frames": (
+        "frames",
+        "FramesConfig",
+        "run_frames",
+        "paper Table 2: frame time over texture resolution x update interval N",
+    ),
+    "lights": (
+        "lights",
+        "LightsConfig",
+        "run_lights",
+        "paper Fig. 10: frame time with 1 to 8 point lights",
+    ),
+    "materials": (
+        "materials",
+        "MaterialsConfig",
+        "run_materials",
+        "paper Table 3: 1 to 4 materials, 3 lights, 1024^2, N = 7",
+    ),
+    "kernels": (
+        "kernels",
+        "KernelsConfig",
+        "run_kernels",
+        "MLP kernels: constants vs buffer vs torch vs NeuMIP-sized, f32 vs f16",
+    ),
+    "tradeoff": (
+        "tradeoff",
+        "TradeoffConfig",
+        "run_tradeoff",
+        "speed/accuracy: each knob vs the per-pixel teacher (FLIP, PSNR, SSIM)",
+    ),
+}
+
+
+def _load(name: str):
+    mod, cls, fn, _ = SPECS[name]
+    m = importlib.import_module(f"vrneural.bench.{mod}")
+    return getattr(m, cls), getattr(m, fn)
+
+
+def _summary(name: str, doc: dict, out: str) -> None:
+    files = sorted(p.name for p in Path(out).iterdir() if p.is_file())
+    print(f"bench {name}: {out}/ {', '.join(files)} ({doc['total_seconds']:.0f} s)")
+
+
+def _entry(name: str):
+    def register(sub) -> None:
+        cls, _ = _load(name)
+        help_ = SPECS[name][3]
+        p = sub.add_parser(name, help=help_, description=help_ + ". " + (cls.__doc__ or ""))
+        p.add_argument("--out", default=f"bench-{name}", help="output directory")
+        add_config_args(p, cls)
+        p.set_defaults(func=lambda args: _run(name, args))
+
+    return register
+
+
+def _run(name: str, args) -> int:
+    cls, fn = _load(name)
+    doc = fn(config_from_args(cls, args, out=args.out))
+    _summary(name, doc, args.out)
+    return 0
+
+
+def _register_all(sub) -> None:
+    p = sub.add_parser(
+        "all",
+        help="run frames, lights, materials, kernels and tradeoff into OUT/<name>",
+        description="Every timing and trade-off benchmark (not `quality`, which trains its own "
+        "baselines; run it separately). --quick: each at its CI size.",
+    )
+    p.add_argument("--out", default="bench-all", help="output directory (one folder per bench)")
+    p.add_argument("--quick", action="store_true", help="CI-sized runs")
+    p.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bars")
+    p.set_defaults(func=_run_all)
+
+
+def _run_all(args) -> int:
+    t0 = time.perf_counter()
+    for name in SPECS:
+        cls, fn = _load(name)
+        out = str(Path(args.out) / name)
+        doc = fn(cls(out=out, quick=args.quick, force=args.force, progress=args.progress))
+        _summary(name, doc, out)
+    print(f"bench all: {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+ENTRIES = {name: _entry(name) for name in SPECS if name in ("frames",)}
+ENTRIES["all"] = _register_all

@@ -1,0 +1,185 @@
+"""`vrneural bench frames`: the paper's Table 2 on this adapter.
+
+Frame time of the built-in scene (a neural sphere and a neural tile on a plain floor, one point
+light, both eyes at the quest3 eye resolution) over radiance-texture resolution x update interval
+N, for the burst and staggered schedules, plus per-pixel screen-space shading of the same
+student. Shown as FPS (from the mean frame time) and ms (median, p99).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+
+from vrneural.bench import report as rp
+from vrneural.bench import timing
+from vrneural.config import opt
+
+
+@dataclass
+class FramesConfig:
+    """`vrneural bench frames`."""
+
+    out: str = opt("bench-frames", "output directory", cli=False)
+    texture_res: str = opt("800,1200,1600,2000", "radiance texture sides (comma-separated)")
+    reuse: str = opt("0,1,2,4,6", "update intervals N (comma-separated)")
+    schedules: str = opt("burst,staggered", "reuse schedules (comma-separated)")
+    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
+    eyes: int = opt(2, "eyes (1 or 2)")
+    lights: int = opt(1, "point lights")
+    cycles: int = opt(1, "update cycles measured per configuration (N + 1 frames each)")
+    min_frames: int = opt(3, "at least this many measured frames per configuration")
+    screen: bool = opt(True, "also measure per-pixel screen-space shading")
+    quick: bool = opt(False, "CI-sized: textures 128,256; N 0,2,4; eyes 258x276; >= 2 frames")
+    progress: bool = opt(True, "show progress bars")
+    force: bool = opt(False, "overwrite an existing output directory")
+
+    def resolved(self) -> FramesConfig:
+        if not self.quick:
+            return self
+        return dataclasses.replace(
+            self, texture_res="128,256", reuse="0,2,4", eye_res="258x276", min_frames=2
+        )
+
+
+def run_frames(cfg: FramesConfig) -> dict:
+    from vrneural.errors import check_range
+    from vrneural.runtime.config import parse_res
+    from vrneural.runtime.profiles import get_profile
+    from vrneural.runtime.scene import builtin_scene
+    from vrneural.runtime.schedule import SCHEDULES
+
+    c = cfg.resolved()
+    texs = rp.int_list("--texture-res", c.texture_res, 2, 8192, even=True)
+    reuses = rp.int_list("--reuse", c.reuse, 0, 64)
+    scheds = rp.choice_list("--schedules", c.schedules, SCHEDULES)
+    eye_res = parse_res(c.eye_res)
+    check_range("--eyes", c.eyes, 1, 2)
+    check_range("--lights", c.lights, 1, 8)
+    check_range("--cycles", c.cycles, 1, 100)
+    check_range("--min-frames", c.min_frames, 1, 1000)
+    root = rp.prepare_out(cfg.out, cfg.force)
+    t0 = time.perf_counter()
+    prof = get_profile("quest3")
+    doc = rp.header("frames", c)
+    scene = builtin_scene(c.lights)
+    kw = dict(eye_res=eye_res, eyes=c.eyes, n_lights=c.lights, fps=prof.fps, fov_y=prof.fov_y)
+    per_res = sum(timing.frames_for(n, c.cycles, c.min_frames) for n in reuses) * len(scheds)
+    total = per_res * len(texs) + (c.min_frames if c.screen else 0)
+    bar = timing.progress(total, "bench frames", c.progress)
+    for res in texs:
+        r = timing.make_renderer(scene, texture_res=res, **kw)
+        for sched in scheds:
+            for n in reuses:
+                rec = timing.base_record(r)
+                rec.update(timing.measure(r, n, sched, c.cycles, c.min_frames, bar.update))
+                rec["schedule"], rec["reuse"] = sched, n
+                doc["records"].append(rec)
+        del r
+    if c.screen:
+        r = timing.make_renderer(scene, mode="screen", texture_res=texs[0], **kw)
+        rec = timing.base_record(r)
+        rec.update(timing.measure(r, 0, "burst", 1, c.min_frames, bar.update))
+        doc["records"].append(rec)
+    bar.close()
+    md = markdown(doc)
+    plot(doc, root / "frames.png")
+    md += ["", "![frame time](frames.png)"]
+    return rp.finish(root, doc, md, t0)
+
+
+def _cell(rec: dict) -> str:
+    f = rec["frame_ms"]
+    return f"{rec['fps']:.1f} FPS ({f['median']:.1f} / {f['p99']:.1f} ms)"
+
+
+def markdown(doc: dict) -> list[str]:
+    recs = doc["records"]
+    c = doc["config"]
+    tex = [r for r in recs if r["mode"] == "texture"]
+    texs = sorted({r["texture_res"] for r in tex})
+    md = [
+        "# Frames: frame time over texture resolution x update interval (paper Table 2)",
+        "",
+        rp.adapter_line(doc),
+        f"Built-in scene (2 neural objects + plain floor), {c['lights']} light(s), {c['eyes']} "
+        f"eye(s) at {c['eye_res']}; >= {c['min_frames']} frames and {c['cycles']} update "
+        "cycle(s) per configuration (frame 0 of each renderer excluded)."
+        + (" **Quick run: reduced grid.**" if c["quick"] else ""),
+        "Cells: FPS from the mean frame time (median / p99 frame ms, wall clock incl. GPU wait).",
+    ]
+    for sched in dict.fromkeys(r["schedule"] for r in tex):
+        md += ["", f"## Schedule: {sched}", ""]
+        rows = []
+        for n in sorted({r["reuse"] for r in tex}):
+            row = [n]
+            for t in texs:
+                m = [
+                    r
+                    for r in tex
+                    if r["schedule"] == sched and r["reuse"] == n and r["texture_res"] == t
+                ]
+                row.append(_cell(m[0]) if m else "-")
+            rows.append(row)
+        md += rp.table(["N \\ texture"] + [f"{t}^2" for t in texs], rows)
+    scr = [r for r in recs if r["mode"] == "screen"]
+    if scr:
+        md += [
+            "",
+            f"Screen space (per pixel, every frame): {_cell(scr[0])}; shading "
+            f"{scr[0]['shading_ms_per_frame']:.1f} ms/frame.",
+        ]
+    md += ["", "## Neural shading GPU ms per displayed frame (amortised) and forward ms", ""]
+    rows = [
+        [
+            r["schedule"],
+            r["texture_res"],
+            r["reuse"],
+            r["shading_ms_per_frame"],
+            r["shading_ms_max"],
+            r["forward_ms"],
+            r["mlp_evals_per_frame"],
+        ]
+        for r in tex
+    ]
+    md += rp.table(
+        [
+            "schedule",
+            "texture",
+            "N",
+            "shading ms/frame",
+            "shading ms max",
+            "forward ms",
+            "MLP evals/frame",
+        ],
+        rows,
+    )
+    return md
+
+
+def plot(doc: dict, path) -> None:
+    recs = doc["records"]
+    tex = [r for r in recs if r["mode"] == "texture"]
+    scheds = list(dict.fromkeys(r["schedule"] for r in tex))
+    fig, axes = rp.figure(5.0 * len(scheds), 3.8, len(scheds), sharey=True)
+    scr = [r for r in recs if r["mode"] == "screen"]
+    for ax, sched in zip(axes, scheds, strict=True):
+        for t in sorted({r["texture_res"] for r in tex}):
+            rr = sorted(
+                (r for r in tex if r["schedule"] == sched and r["texture_res"] == t),
+                key=lambda r: r["reuse"],
+            )
+            x = [r["reuse"] for r in rr]
+            ax.plot(x, [r["frame_ms"]["median"] for r in rr], "o-", label=f"{t}^2 median")
+            ax.plot(x, [r["frame_ms"]["p99"] for r in rr], "x:", color=ax.lines[-1].get_color())
+        if scr:
+            ax.axhline(scr[0]["frame_ms"]["median"], color="k", ls="--", label="screen space")
+        ax.set_title(f"{sched} (o median, x p99)")
+        ax.set_xlabel("update interval N")
+        ax.set_yscale("log")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("frame ms (wall)")
+    axes[-1].legend(fontsize=7)
+    fig.suptitle(f"bench frames on {doc['adapter']['name']}", fontsize=9)
+    rp.save_png(fig, path)

@@ -1,0 +1,245 @@
+"""`vrneural bench quality`: the paper's Table 1 (and Fig. 7/8/11/12/13 analogs) on synthetic BTFs.
+
+For each preset: synthesise a BTF, train the teacher, then the five methods at one fixed budget
+(the same epochs for every network, all from the same seed and data split):
+
+- ``lafortune``: diffuse + 4 Lafortune lobes per texel, Levenberg-Marquardt (analytic baseline);
+- ``neumip``: 7-channel texture, 4 x 25 MLP, log(1+y) output, ground truth only;
+- ``single8``: one 8-wide 4-layer MLP, distilled (the Fig. 13 ablation);
+- ``student_nodistill``: the coarse-to-fine student on ground truth only (the Fig. 11 ablation);
+- ``student``: the coarse-to-fine student distilled from the teacher (paper Eq. 5).
+
+Whole-BTF L1 is the mean absolute error over every (light, view) pair, texel and channel in
+linear BTF units (train and held-out pairs); test L1 uses the held-out pairs only.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import platform
+import time
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+
+from vrneural.config import config_dict, opt
+from vrneural.errors import VrnError, check_range
+
+METHODS = ("lafortune", "neumip", "single8", "student_nodistill", "student")
+LABELS = {
+    "teacher": "Teacher (NeuMIP Max, 128)",
+    "lafortune": "Lafortune (4 lobes)",
+    "neumip": "NeuMIP (4x25)",
+    "single8": "Single-level 8-wide",
+    "student_nodistill": "Ours w/o distillation",
+    "student": "Ours (coarse-to-fine, distilled)",
+}
+
+
+@dataclass
+class QualityConfig:
+    """`vrneural bench quality`."""
+
+    presets: str = opt("leather,fabric,wood", "comma-separated synthetic BTF presets")
+    out: str = opt("bench-quality", "output directory", cli=False)
+    res: int = opt(32, "BTF texels per side")
+    dirs: int = opt(30, "light and view directions (dirs^2 slices)")
+    teacher_epochs: int = opt(12, "teacher epochs")
+    epochs: int = opt(12, "epochs of every student and baseline network")
+    lafortune_iters: int = opt(30, "Levenberg-Marquardt iterations of the Lafortune fit")
+    seed: int = opt(0, "seed of synthesis, initialisation and data order")
+    quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps")
+    progress: bool = opt(True, "show progress bars")
+    force: bool = opt(False, "overwrite an existing output directory")
+
+    def resolved(self) -> QualityConfig:
+        if not self.quick:
+            return self
+        return dataclasses.replace(
+            self, res=16, dirs=8, teacher_epochs=2, epochs=2, lafortune_iters=5
+        )
+
+
+def versions() -> dict:
+    out = {"python": platform.python_version(), "machine": platform.machine()}
+    for name in ("vrneural", "torch", "numpy", "matplotlib"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = None
+    return out
+
+
+def make_btf(preset: str, cfg: QualityConfig, path: Path) -> Path:
+    """Synthesise (or reuse an identical, already synthesised) BTF."""
+    try:
+        from vrneural.btf.synth import BtfConfig, synthesize
+    except ImportError as e:
+        raise VrnError(f"BTF synthesis is unavailable ({e})") from None
+    bcfg = BtfConfig(preset=preset, res=cfg.res, dirs=cfg.dirs, seed=cfg.seed)
+    stamp = path.with_name(path.name + ".synth.json")
+    want = json.dumps(config_dict(bcfg), sort_keys=True)
+    if path.exists() and stamp.exists() and stamp.read_text() == want:
+        return path
+    path.unlink(missing_ok=True)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    synthesize(bcfg, path, progress=cfg.progress)
+    stamp.write_text(want)
+    return path
+
+
+def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
+    """Train and evaluate every method on one preset; returns its records."""
+    from vrneural.btf.format import read_btf
+    from vrneural.distill.config import DistillConfig, TeachConfig
+    from vrneural.distill.data import SliceData
+    from vrneural.distill.distill import model_from_checkpoint, run_distill
+    from vrneural.distill.evaluate import mean_l1, predict_slice
+    from vrneural.distill.teach import run_teach
+
+    d = root / preset
+    d.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    btf_path = make_btf(preset, cfg, root / "btf" / f"{preset}.btf")
+    synth_s = time.perf_counter() - t0
+    common = dict(seed=cfg.seed, progress=cfg.progress, force=True, max_test_slices=0)
+    t0 = time.perf_counter()
+    tck = run_teach(
+        TeachConfig(
+            btf=str(btf_path), output=str(d / "teacher.pt"), epochs=cfg.teacher_epochs, **common
+        )
+    )
+    records = {"teacher": {"train_seconds": time.perf_counter() - t0, "ck": tck}}
+    log(f"{preset}: teacher  {records['teacher']['train_seconds']:.0f} s")
+    runs = {
+        "neumip": dict(method="neumip", distill=False),
+        "single8": dict(method="single8"),
+        "student_nodistill": dict(method="student", distill=False),
+        "student": dict(method="student"),
+    }
+    for name, kw in runs.items():
+        t0 = time.perf_counter()
+        ck = run_distill(
+            DistillConfig(
+                teacher=str(d / "teacher.pt"),
+                output=str(d / f"{name}.pt"),
+                epochs=cfg.epochs,
+                **kw,
+                **common,
+            )
+        )
+        records[name] = {"train_seconds": time.perf_counter() - t0, "ck": ck}
+        log(f"{preset}: {name}  {records[name]['train_seconds']:.0f} s")
+    btf = read_btf(btf_path)
+    data = SliceData(btf, tck["split"]["test"])
+    every = list(range(len(data.train) + len(data.test)))
+    slices = _slice_pairs(data)
+    out: dict = {"btf": tck["btf"], "synth_seconds": synth_s, "methods": {}, "slices": {}}
+    gt = [data.target(p, shard=False) for p in slices]
+    out["slices"]["ground truth"] = [_img(g, data.res) for g in gt]
+    for name, r in records.items():
+        ck = r["ck"]
+        model = model_from_checkpoint(ck)
+        mat = model.to_material()
+        out["methods"][name] = {
+            "whole_l1": mean_l1(model, data, every),
+            "test_l1": mean_l1(model, data, data.test),
+            "train_seconds": r["train_seconds"],
+            "epochs": ck["epoch"],
+            "curve": [h["test_l1"] for h in ck["history"]],
+            "weight_bytes": mat.weight_bytes,
+            "texture_bytes": mat.texture_bytes,
+            "storage_bytes": mat.weight_bytes + mat.texture_bytes,
+            "macs_per_texel": mat.macs_per_texel,
+        }
+        out["slices"][name] = [predict_slice(model, data, p).numpy() for p in slices]
+    t0 = time.perf_counter()
+    out["methods"]["lafortune"] = _lafortune(data, every, slices, cfg, out)
+    out["methods"]["lafortune"]["train_seconds"] = time.perf_counter() - t0
+    log(f"{preset}: lafortune  {out['methods']['lafortune']['train_seconds']:.0f} s")
+    out["slice_pairs"] = slices
+    return out
+
+
+def _img(blocks, res):
+    from vrneural.distill.data import from_blocks
+
+    return from_blocks(blocks, res).numpy()
+
+
+def _slice_pairs(data) -> list[int]:
+    """Two held-out pairs to show: the brightest (highlight) and the median one."""
+    means = sorted((float(data.target(p, shard=False).mean()), p) for p in data.test)
+    return [means[-1][1], means[len(means) // 2][1]]
+
+
+def _lafortune(data, every, slices, cfg: QualityConfig, out: dict) -> dict:
+    import torch
+
+    from vrneural.distill.lafortune import N_PARAMS, fit_lafortune, predict_lafortune
+
+    L = data.values.shape[0]
+    H, W = data.res
+    flat = data.values.reshape(L * data.n_view, H * W, 3)
+    wi = torch.stack([data.dirs(p)[0] for p in data.train])
+    wo = torch.stack([data.dirs(p)[1] for p in data.train])
+    y = flat[data.train].float().transpose(0, 1)  # [T, M, 3]
+    params = fit_lafortune(y, wi, wo, iters=cfg.lafortune_iters)
+
+    def l1(pairs):
+        e = [
+            float((predict_lafortune(params, *data.dirs(p)) - flat[p].float()).abs().mean())
+            for p in pairs
+        ]
+        return sum(e) / len(e)
+
+    out["slices"]["lafortune"] = [
+        predict_lafortune(params, *data.dirs(p)).reshape(H, W, 3).numpy() for p in slices
+    ]
+    return {
+        "whole_l1": l1(every),
+        "test_l1": l1(data.test),
+        "epochs": None,
+        "curve": [],
+        "weight_bytes": 0,
+        "texture_bytes": 4 * N_PARAMS * H * W,
+        "storage_bytes": 4 * N_PARAMS * H * W,
+        "macs_per_texel": None,
+    }
+
+
+def run_quality(cfg: QualityConfig) -> dict:
+    """Run the benchmark; writes results.json, results.md, curves.png, slices.png in ``out``."""
+    from vrneural.bench.quality_report import write_report
+    from vrneural.formats.atomic import write_json
+
+    cfg = cfg.resolved()
+    presets = [p.strip() for p in cfg.presets.split(",") if p.strip()]
+    if not presets:
+        raise VrnError("--presets is empty")
+    for k in ("res", "dirs", "teacher_epochs", "epochs"):
+        check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 1, 10_000)
+    if cfg.res % 2:
+        raise VrnError(f"--res = {cfg.res} must be even (2x2 texel blocks)")
+    root = Path(cfg.out)
+    if (root / "results.json").exists() and not cfg.force:
+        raise VrnError(f"{root / 'results.json'}: output exists; pass --force to overwrite")
+    root.mkdir(parents=True, exist_ok=True)
+    results, slices, t_all = {}, {}, time.perf_counter()
+    for preset in presets:
+        r = bench_material(preset, cfg, root, print)
+        slices[preset] = (r.pop("slices"), r["slice_pairs"])
+        results[preset] = r
+    doc = {
+        "benchmark": "quality",
+        "config": config_dict(cfg),
+        "versions": versions(),
+        "machine": {"cpu_count": __import__("os").cpu_count(), "torch_threads": 1},
+        "total_seconds": time.perf_counter() - t_all,
+        "labels": LABELS,
+        "results": results,
+    }
+    write_json(root / "results.json", doc)
+    write_report(doc, slices, root)
+    return doc

@@ -1,0 +1,141 @@
+"""Shared output of the timing and trade-off benchmarks: ``results.json`` (adapter, package
+versions, resolved config, one record per configuration), ``results.md`` (tables) and PNG plots,
+all written atomically into ``--out DIR`` (refused when it exists, unless ``--force``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+
+from vrneural.config import config_dict
+from vrneural.formats.atomic import atomic_path, check_output, write_json
+
+
+def prepare_out(out: str | Path, force: bool) -> Path:
+    """Validate and (re)create the output directory. Cached packs under ``packs/`` survive a
+    ``--force`` rerun (they are keyed by their training config)."""
+    p = check_output(out, force)
+    if p.exists() and not p.is_dir():
+        p.unlink()
+    if p.is_dir():
+        for child in p.iterdir():
+            if child.name != "packs":
+                shutil.rmtree(child) if child.is_dir() else child.unlink()
+    p.mkdir(parents=True, exist_ok=True)
+    return p
+
+
+def stats(x) -> dict:
+    """``{median, p95, p99, mean, max}`` of a sequence of numbers (ms)."""
+    a = np.asarray(x, np.float64)
+    if not len(a):
+        return {"median": 0.0, "p95": 0.0, "p99": 0.0, "mean": 0.0, "max": 0.0}
+    return {
+        "median": float(np.median(a)),
+        "p95": float(np.percentile(a, 95)),
+        "p99": float(np.percentile(a, 99)),
+        "mean": float(a.mean()),
+        "max": float(a.max()),
+    }
+
+
+def header(bench: str, cfg) -> dict:
+    """The common head of every ``results.json``: bench name, adapter, versions, config."""
+    from vrneural.cli.info import versions
+    from vrneural.gpu.device import adapter_summary
+
+    resolved = cfg.resolved() if hasattr(cfg, "resolved") else cfg
+    return {
+        "bench": bench,
+        "adapter": adapter_summary().to_dict(),
+        "versions": versions(),
+        "config": config_dict(resolved),
+        "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "records": [],
+    }
+
+
+def adapter_line(doc: dict) -> str:
+    a = doc["adapter"]
+    cpu = " (CPU adapter: absolute times are not GPU times; read ratios)" if a["is_cpu"] else ""
+    return f"Adapter: **{a['name']}**, {a['backend']}{cpu}."
+
+
+def table(headers: list[str], rows: list[list]) -> list[str]:
+    """Markdown table lines; floats printed with 3 significant digits."""
+
+    def cell(v):
+        if isinstance(v, float):
+            return f"{v:.3g}" if abs(v) < 1e4 else f"{v:.0f}"
+        return str(v)
+
+    out = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
+    out += ["| " + " | ".join(cell(v) for v in r) + " |" for r in rows]
+    return out
+
+
+def save_png(fig, path: Path) -> Path:
+    """Save a matplotlib figure as PNG atomically (dpi 100 keeps plots well under 300 KB)."""
+    import matplotlib.pyplot as plt
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=100, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def figure(w: float = 6.4, h: float = 4.0, ncols: int = 1, sharey: bool = False):
+    """A matplotlib (Agg) figure and its ``ncols`` axes, as a list."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, ncols, figsize=(w, h), squeeze=False, sharey=sharey)
+    return fig, list(axes[0])
+
+
+def finish(root: Path, doc: dict, md: list[str], t0: float) -> dict:
+    """Stamp the run time and write ``results.json`` and ``results.md``."""
+    doc["total_seconds"] = time.perf_counter() - t0
+    md = [*md, "", f"Run time {doc['total_seconds']:.0f} s. Raw records: results.json."]
+    write_json(root / "results.json", doc)
+    with atomic_path(root / "results.md") as tmp:
+        tmp.write_text("\n".join(md) + "\n")
+    return doc
+
+
+def replace(cfg, **kw):
+    return dataclasses.replace(cfg, **kw)
+
+
+def int_list(field: str, text: str, lo: int, hi: int, even: bool = False) -> list[int]:
+    """Parse a comma-separated list of integers in ``[lo, hi]`` (one-line VrnError if not)."""
+    from vrneural.errors import VrnError
+
+    try:
+        vals = [int(t) for t in str(text).split(",") if t.strip()]
+    except ValueError:
+        raise VrnError(f"{field} = {text!r} must be comma-separated integers") from None
+    if not vals:
+        raise VrnError(f"{field} is empty")
+    for v in vals:
+        if not lo <= v <= hi:
+            raise VrnError(f"{field}: {v} is out of range [{lo}, {hi}]")
+        if even and v % 2:
+            raise VrnError(f"{field}: {v} must be even (2x2 blocks)")
+    return vals
+
+
+def choice_list(field: str, text: str, allowed) -> list[str]:
+    from vrneural.errors import check_choice
+
+    vals = [t.strip() for t in str(text).split(",") if t.strip()]
+    for v in vals:
+        check_choice(field, v, allowed)
+    return vals

@@ -1,0 +1,122 @@
+"""The frame-timing loop shared by `bench frames`, `bench lights` and `bench materials`.
+
+One :class:`~vrneural.runtime.renderer.Renderer` per (scene, texture resolution, lights) is
+reused across update intervals and schedules (``reuse`` and ``schedule`` are read from its
+settings every frame), so pipelines and atlases are built once. Frame 0 of a renderer (shader
+compilation and every object's first full update) is never measured. A configuration is measured
+over ``cycles * (N + 1)`` frames (at least ``min_frames``), so every radiance-texture block is
+updated exactly ``cycles`` times in it under either schedule.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vrneural.bench.report import stats
+
+
+def make_renderer(
+    scene,
+    *,
+    mode="texture",
+    texture_res=1200,
+    eye_res=(2064, 2208),
+    reuse=4,
+    schedule="staggered",
+    n_lights=1,
+    precision="f32",
+    eyes=2,
+    reference=None,
+    fps=90.0,
+    fov_y=96.0,
+):
+    """A renderer for ``scene`` with the given settings, its frame 0 already rendered."""
+    from vrneural.runtime.renderer import Renderer, Settings
+
+    s = Settings(
+        eyes=eyes,
+        reuse=reuse,
+        texture_res=texture_res,
+        eye_res=tuple(eye_res),
+        frames=1,
+        fps=fps,
+        fov_y=fov_y,
+        n_lights=n_lights,
+        mode=mode,
+        schedule=schedule,
+        precision=precision,
+        reference=reference,
+    )
+    r = Renderer(scene, s)
+    r.frame(0)  # compile + first full update: not measured
+    r.next_frame = 1
+    return r
+
+
+def frames_for(reuse: int, cycles: int, min_frames: int) -> int:
+    n1 = reuse + 1
+    return n1 * max(cycles, -(-min_frames // n1))
+
+
+def measure(r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=None) -> dict:
+    """Render one configuration's frames on renderer ``r``; returns the record's timing fields.
+
+    ``frame_ms``: wall time per displayed frame (CPU encode + GPU wait; on a CPU adapter this is
+    all the work). ``gpu_ms``: sum of the timestamped passes per frame. ``shading_ms_per_frame``:
+    mean neural-shading GPU ms per displayed frame (texture-space updates, or the screen-space
+    pass), i.e. amortised over the N + 1 frames that share one update. ``forward_ms``: median GPU
+    ms of the forward (raster) passes of both eyes.
+    """
+    r.s.reuse, r.s.schedule = reuse, schedule
+    n = frames_for(reuse, cycles, min_frames)
+    f0 = r.next_frame
+    f0 += (-f0) % (reuse + 1)  # start on a cycle boundary: same phases for every run
+    walls, gpu, shade, fwd, evals, blocks = [], [], [], [], [], []
+    for f in range(f0, f0 + n):
+        st = r.frame(f)
+        walls.append(st.wall_ms)
+        gpu.append(sum(st.gpu_ms.values()))
+        shade.append(st.gpu_ms.get("texture", 0.0) + st.gpu_ms.get("screen", 0.0))
+        fwd.append(st.gpu_ms.get("forward", 0.0))
+        evals.append(st.mlp_coarse + st.mlp_fine)
+        blocks.append(st.blocks_shaded if r.s.mode == "texture" else st.pixels_shaded)
+        if tick:
+            tick()
+    r.next_frame = f0 + n
+    fs = stats(walls)
+    return {
+        "frames": n,
+        "first_frame": f0,
+        "frame_ms": fs,
+        "fps": 1e3 / fs["mean"],
+        "gpu_ms": stats(gpu),
+        "shading_ms_per_frame": float(np.mean(shade)),
+        "shading_ms_max": float(np.max(shade)),
+        "forward_ms": float(np.median(fwd)),
+        "mlp_evals_per_frame": float(np.mean(evals)),
+        "mlp_evals_max": int(np.max(evals)),
+        "shaded_per_frame": float(np.mean(blocks)),
+    }
+
+
+def base_record(r, **extra) -> dict:
+    s = r.s
+    return {
+        "mode": s.mode,
+        "schedule": s.schedule if s.mode == "texture" else "-",
+        "texture_res": s.texture_res if s.mode == "texture" else None,
+        "reuse": s.reuse if s.mode == "texture" else 0,
+        "lights": len(r.lights),
+        "materials": len({id(n.desc.material.neural) for n in r.neural}),
+        "neural_objects": len(r.neural),
+        "eyes": s.eyes,
+        "eye_res": list(s.eye_res),
+        "precision": s.precision,
+        **extra,
+    }
+
+
+def progress(total: int, desc: str, enabled: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="frame", disable=not enabled)

@@ -1,0 +1,136 @@
+"""The microfacet BRDF used at every heightfield hit (numpy, vectorised, float32).
+
+``f(wi, wo) = F D G2 / (4 cos_i cos_o)                            anisotropic GGX specular
+            + (1 - F(cos_i)) (1 - F(cos_o)) [ (1 - max(sheen)) albedo / pi   Lambert diffuse
+                                              + sheen D_charlie V_ashikhmin ]  sheen``
+
+with Schlick Fresnel ``F(c) = f0 + (1 - f0)(1 - c)^5`` (per RGB channel; see :func:`schlick`
+for f0 < 0.04), the anisotropic GGX
+distribution ``D`` with roughness ``alpha_t`` along the tangent and ``alpha_b`` across it, and
+the height-correlated Smith masking-shadowing ``G2 = 1 / (1 + Lambda(wi) + Lambda(wo))``.
+Every term is symmetric in ``(wi, wo)``, so ``f`` is reciprocal. Directions are in the shading
+frame (x = tangent, y = bitangent, z = normal), given as separate component arrays so that
+callers broadcast ``[lights, 1]`` against ``[1, samples]`` without building ``[..., 3]`` stacks.
+
+The BTF value (ARCHITECTURE.md section 2) is ``f * cos_i``: :func:`btf_value`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+INV_PI = np.float32(1.0 / np.pi)
+EPS = np.float32(1e-6)
+
+
+def schlick(f0: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Schlick Fresnel ``f0 + s (1 - f0) (1 - c)^5``; ``c`` is clamped to [0, 1].
+
+    ``s = min(1, max(f0) / 0.04)`` is 1 for every real interface (dielectrics have f0 >= 0.04)
+    and fades the grazing rise out as f0 -> 0 (an index of refraction -> 1 has no Fresnel
+    reflection at all), so ``f0 = 0`` gives a pure Lambertian BRDF.
+    """
+    m = 1.0 - np.clip(c, 0.0, 1.0)
+    m2 = m * m
+    s = np.minimum(1.0, np.max(f0, axis=-1, keepdims=True) / 0.04)
+    return f0 + s * (1.0 - f0) * (m2 * m2 * m)
+
+
+def ggx_d(hx, hy, hz, at, ab) -> np.ndarray:
+    """Anisotropic GGX normal distribution ``D(h)`` (1/sr) for a unit half vector ``h``."""
+    t = (hx / at) ** 2 + (hy / ab) ** 2 + hz * hz
+    return INV_PI / (at * ab * t * t)
+
+
+def smith_lambda(x, y, z, at, ab) -> np.ndarray:
+    """Smith ``Lambda(w)`` of the anisotropic GGX for a unit direction ``w`` with ``z > 0``."""
+    z2 = np.maximum(z * z, EPS)
+    return 0.5 * (np.sqrt(1.0 + ((at * x) ** 2 + (ab * y) ** 2) / z2) - 1.0)
+
+
+def charlie_d(cos_h, rough) -> np.ndarray:
+    """Estevez-Kulla "Charlie" sheen distribution ``(2 + 1/r) sin(theta_h)^(1/r) / (2 pi)``."""
+    inv = 1.0 / rough
+    sin2 = np.maximum(1.0 - cos_h * cos_h, 0.0)
+    return (2.0 + inv) * sin2 ** (0.5 * inv) * (0.5 * INV_PI)
+
+
+def ashikhmin_v(ci, co) -> np.ndarray:
+    """Ashikhmin's sheen visibility ``1 / (4 (ci + co - ci co))`` (symmetric in ci, co)."""
+    return 0.25 / np.maximum(ci + co - ci * co, EPS)
+
+
+def brdf(wi, wo, p: dict) -> np.ndarray:
+    """BRDF ``f`` (1/sr) ``[*S, 3]``.
+
+    ``wi``, ``wo``: tuples ``(x, y, z)`` of arrays broadcasting to shape S, unit vectors in the
+    shading frame. ``p``: parameters broadcasting to S: ``albedo``/``f0``/``sheen`` ``[..., 3]``
+    given as channel-last arrays, ``alpha_t``, ``alpha_b``, ``sheen_rough`` scalars per sample.
+    Returns 0 where either direction is below the shading horizon.
+
+    Written so that only a handful of operations run on ``[*S, 3]`` arrays (the cost when S is
+    lights x samples): per-sample colour constants are folded first, scalars are combined before
+    they meet colour. Same formulas as :func:`schlick` etc.
+    """
+    ix, iy, iz = wi
+    ox, oy, oz = wo
+    ci = np.maximum(iz, 0.0)
+    co = np.maximum(oz, 0.0)
+    hx, hy, hz = ix + ox, iy + oy, iz + oz
+    hl = np.sqrt(hx * hx + hy * hy + hz * hz)
+    ok = hl > 1e-6
+    inv = 1.0 / np.where(ok, hl, 1.0)
+    hx, hy, hz = (
+        np.where(ok, hx * inv, 0.0),
+        np.where(ok, hy * inv, 0.0),
+        np.where(ok, hz * inv, 1.0),
+    )
+    c_hi = np.clip(ix * hx + iy * hy + iz * hz, 0.0, 1.0)
+    at, ab = p["alpha_t"], p["alpha_b"]
+    d = ggx_d(hx, hy, hz, at, ab)
+    g2 = 1.0 / (1.0 + smith_lambda(ix, iy, iz, at, ab) + smith_lambda(ox, oy, oz, at, ab))
+    spec = d * g2 / (4.0 * np.maximum(ci * co, EPS))  # [*S]
+    f0, sheen = p["f0"], p["sheen"]
+    if np.any(sheen > 0):
+        sh = charlie_d(hz, p["sheen_rough"]) * ashikhmin_v(ci, co)  # [*S]
+    else:  # no sheen anywhere: skip the (costly) pow
+        sh = np.zeros_like(spec)
+
+    def m5(c):  # (1 - c)^5 (the Schlick weight), scalar per sample
+        m = 1.0 - np.clip(c, 0.0, 1.0)
+        m2 = m * m
+        return m2 * m2 * m
+
+    k = np.minimum(1.0, f0.max(-1, keepdims=True) / 0.04) * (1.0 - f0)  # F = f0 + k m5
+    one_f0 = 1.0 - f0
+    diffuse = (1.0 - sheen.max(-1, keepdims=True)) * p["albedo"] * INV_PI
+    above = ((iz > 0) & (oz > 0)).astype(np.float32)
+    spec = spec * above
+    f = (f0 + k * m5(c_hi)[..., None]) * spec[..., None]
+    wd = (one_f0 - k * m5(ci)[..., None]) * (one_f0 - k * m5(co)[..., None])
+    f += wd * (diffuse + sheen * (sh * above)[..., None])
+    return f.astype(np.float32, copy=False)
+
+
+def btf_value(wi, wo, p: dict) -> np.ndarray:
+    """BTF value of a flat patch with this BRDF: ``f(wi, wo) * cos_i`` ``[*S, 3]``."""
+    return brdf(wi, wo, p) * np.maximum(wi[2], 0.0)[..., None]
+
+
+def lambert_btf(albedo, wi_z) -> np.ndarray:
+    """Analytic flat Lambertian BTF ``albedo / pi * wi.z`` (the convention's reference)."""
+    return np.asarray(albedo, np.float64) / np.pi * max(float(wi_z), 0.0)
+
+
+def params(
+    albedo=(0.5, 0.5, 0.5), f0=(0.0, 0.0, 0.0), alpha=(0.3, 0.3), sheen=(0, 0, 0), sheen_rough=0.5
+) -> dict:
+    """A homogeneous parameter dict for :func:`brdf` (scalars / RGB triples)."""
+    return {
+        "albedo": np.asarray(albedo, np.float32),
+        "f0": np.asarray(f0, np.float32),
+        "alpha_t": np.float32(alpha[0]),
+        "alpha_b": np.float32(alpha[1]),
+        "sheen": np.asarray(sheen, np.float32),
+        "sheen_rough": np.float32(sheen_rough),
+    }

@@ -1,0 +1,124 @@
+"""`synthesize(config)`: render a preset into a ``.btf`` file, streaming, resumable, seeded.
+
+Memory stays bounded by one view (``[L, H, W, 3]`` float32) plus the tile's maps and the
+shadow-height maps ``[L, N, N]``; slices go straight into the memory-mapped ``.partial`` file
+through :class:`~vrneural.btf.format.BtfWriter`, and each finished view is recorded in its
+sidecar, so an interrupted run continues with ``resume=True`` (the CLI's ``--resume``).
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from vrneural.btf.dirs import direction_set
+from vrneural.btf.format import BtfWriter
+from vrneural.btf.presets import PRESETS
+from vrneural.config import config_dict, opt
+from vrneural.errors import VrnError, check_choice, check_range
+
+GENERATOR = "vrneural.btf.synth v1"
+
+
+@dataclass
+class BtfConfig:
+    """Synthetic BTF generation (`vrneural btf synth`)."""
+
+    preset: str = opt("leather", "material preset: " + ", ".join(sorted(PRESETS)))
+    res: int = opt(64, "texels per side (the tile is res x res)")
+    dirs: int = opt(151, "light and view directions (151 = UBO2014 layout, else quasi-uniform)")
+    seed: int = opt(0, "random seed (same seed, same bytes)")
+    spp: int = opt(4, "jittered sub-samples per texel (a square number is stratified)")
+    grid: int = opt(0, "heightfield grid size N per side (0 = 2 x res, at least 64, at most 512)")
+
+    def validate(self) -> None:
+        check_choice("--preset", self.preset, sorted(PRESETS))
+        check_range("--res", self.res, 1, 4096)
+        check_range("--dirs", self.dirs, 1, 100_000)
+        check_range("--spp", self.spp, 1, 256)
+        check_range("--seed", self.seed, 0, 2**63 - 1)
+        if self.grid != 0:
+            check_range("--grid", self.grid, 8, 4096)
+
+    @property
+    def grid_size(self) -> int:
+        return self.grid or int(min(512, max(64, 2 * self.res)))
+
+
+def build_maps(cfg: BtfConfig):
+    """The preset's tile at the configured grid size (seeded)."""
+    rng = np.random.default_rng([cfg.seed, 1])
+    return PRESETS[cfg.preset](rng, cfg.grid_size)
+
+
+def subsamples(cfg: BtfConfig) -> np.ndarray:
+    """Jittered sub-sample offsets ``[res, res, spp, 2]`` in texels, within ``[-0.5, 0.5)``.
+
+    A square ``spp`` is stratified (one jittered sample per cell of a k x k grid)."""
+    rng = np.random.default_rng([cfg.seed, 2])
+    k = round(np.sqrt(cfg.spp))
+    if k * k == cfg.spp:
+        cells = (np.stack(np.meshgrid(np.arange(k), np.arange(k)), -1).reshape(-1, 2) + 0.0) / k
+        jit = rng.random((cfg.res, cfg.res, cfg.spp, 2)) / k
+        return (cells + jit - 0.5).astype(np.float64)
+    return rng.random((cfg.res, cfg.res, cfg.spp, 2)) - 0.5
+
+
+def synthesize(cfg: BtfConfig, out, resume: bool = False, progress: bool = True) -> Path:
+    """Render ``cfg`` into ``out`` (a ``.btf``). Returns the path of the finished file.
+
+    Views are rendered one at a time (all lights per view); values are clamped into
+    ``[0, 65504]`` (float16) and checked finite before they are written.
+    """
+    from tqdm import tqdm
+
+    cfg.validate()
+    from vrneural.btf.render import make_scene, render_view
+
+    dirs = direction_set(cfg.dirs)
+    meta = {
+        "name": cfg.preset,
+        "generator": {**config_dict(cfg), "tool": GENERATOR},
+        "seed": cfg.seed,
+    }
+    out = Path(out)
+    w = BtfWriter(out, dirs, dirs, (cfg.res, cfg.res), meta, resume=resume)
+    todo = [v for v in range(len(dirs)) if v not in w.done]
+    if resume and w.done:
+        print(f"{out}: resuming, {len(w.done)}/{len(dirs)} views already done", file=sys.stderr)
+    maps = build_maps(cfg)
+    with tqdm(total=len(dirs), desc="shadow maps", unit="light", disable=not progress) as bar:
+        scene = make_scene(maps, dirs, bar)
+    del maps
+    samples = subsamples(cfg)
+    done_views = len(w.done)
+    bar = tqdm(
+        total=len(dirs),
+        initial=done_views,
+        desc=f"{cfg.preset} views",
+        unit="view",
+        disable=not progress,
+    )
+    try:
+        for v in todo:
+            vals = render_view(scene, dirs[v], samples, (cfg.res, cfg.res))
+            if not np.isfinite(vals).all():
+                raise VrnError(f"internal error: non-finite BTF values at view {v}")
+            w.values[:, v] = np.clip(vals, 0.0, 65504.0).astype(np.float16)
+            w.mark_done(v)
+            done_views += 1
+            bar.update(1)
+    except KeyboardInterrupt:
+        bar.close()
+        w.values.flush()
+        print(
+            f"\n{out}: interrupted after {done_views}/{len(dirs)} views; partial data kept in "
+            f"{w.partial}; rerun the same command with --resume to continue",
+            file=sys.stderr,
+        )
+        raise
+    bar.close()
+    return w.finalize()

@@ -1,0 +1,124 @@
+"""`vrneural atlas MESH --res 1200 -o atlas.png`: unwrap, rasterize IDs, write a PNG, stats."""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+STAT_LINES = (
+    ("coverage_pct", "coverage", "{:.2f} % of texels inside triangles"),
+    ("filled_pct", "with gutter", "{:.2f} % of texels have an ID"),
+    ("charts", "charts", "{}"),
+    ("triangles", "triangles", "{}"),
+    ("texels_per_triangle_min", "texels/tri min", "{}"),
+    ("texels_per_triangle_median", "texels/tri median", "{:g}"),
+    ("triangles_without_texels", "tris w/o texels", "{}"),
+    ("zero_area_triangles", "zero-area tris", "{}"),
+    ("cache", "cache", "{}"),
+    ("total_s", "time", "{:.2f} s"),
+)
+
+
+def register(sub) -> None:
+    from vrneural.atlas.build import AtlasConfig
+    from vrneural.config import add_config_args
+
+    p = sub.add_parser(
+        "atlas",
+        help="unwrap a mesh (xatlas), rasterize its triangle-ID texture, write a PNG + stats",
+        description="Build the atlas of MESH (a file: OBJ/PLY/GLB/GLTF, or a built-in name: "
+        "sphere, torus, plane, cloth, highpoly) at R x R texels with a gutter, write a PNG of "
+        "the triangle-ID texture (a colour per triangle or chart, gutter at half brightness, "
+        "black = empty; row 0 = atlas v 0 at the top) and print coverage, charts and "
+        "texels-per-triangle stats. A file with several meshes gives OUT-<k>.png per mesh.",
+    )
+    p.add_argument("mesh", metavar="MESH", help="mesh file or built-in mesh name")
+    p.add_argument("-o", "--output", required=True, help="output PNG path")
+    add_config_args(p, AtlasConfig)
+    p.add_argument(
+        "--color",
+        choices=("triangle", "chart"),
+        default="triangle",
+        help="colour per triangle or per chart (default: triangle)",
+    )
+    p.add_argument("--json", action="store_true", help="print the stats as JSON")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output")
+    p.set_defaults(func=run)
+
+
+def _meshes(spec: str):
+    from vrneural.atlas import BUILTIN_MESHES, builtin_mesh, load_mesh
+
+    from vrneural.errors import VrnError
+
+    if spec in BUILTIN_MESHES and not Path(spec).exists():
+        return [builtin_mesh(spec)]
+    if not Path(spec).exists() and not Path(spec).suffix:
+        raise VrnError(
+            f"{spec}: no such file, and not a built-in mesh ({', '.join(BUILTIN_MESHES)})"
+        )
+    return load_mesh(spec)
+
+
+def run(args) -> int:
+    from vrneural.atlas.build import MAX_RESOLUTION, MIN_RESOLUTION, AtlasConfig, build_atlas
+    from vrneural.config import config_from_args
+    from vrneural.errors import VrnError, check_range
+    from vrneural.formats.atomic import check_output
+
+    cfg = config_from_args(AtlasConfig, args)
+    check_range("--res", cfg.res, MIN_RESOLUTION, MAX_RESOLUTION)
+    check_range("--padding", cfg.padding, 0, 64)
+    out = Path(args.output)
+    if out.suffix.lower() != ".png":
+        raise VrnError(f"{out}: output must be a .png file")
+    check_output(out, args.force)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        meshes = _meshes(args.mesh)
+        outs = (
+            [out]
+            if len(meshes) == 1
+            else [out.with_name(f"{out.stem}-{k}{out.suffix}") for k in range(len(meshes))]
+        )
+        for o in outs[1:] if len(outs) > 1 else []:
+            check_output(o, args.force)
+        results = []
+        for mesh, o in zip(meshes, outs, strict=True):
+            atlas = build_atlas(mesh, cfg.res, cfg.padding, cache=cfg.cache, progress=True)
+            _write_png(o, atlas, args.color)
+            results.append({"output": str(o), **atlas.stats})
+    notes = [str(w.message) for w in caught]
+    _write_sidecar(out, cfg, results, notes)
+    if args.json:
+        print(json.dumps(results[0] if len(results) == 1 else results, indent=2))
+    else:
+        for r in results:
+            print(f"{r['mesh']} -> {r['output']} ({r['resolution']}^2, padding {r['padding']})")
+            for key, label, fmt in STAT_LINES:
+                print(f"  {label:18s} {fmt.format(r[key])}")
+            print(
+                f"  {'times':18s} xatlas {r.get('xatlas_s', 0):.2f} s, raster "
+                f"{r.get('raster_s', 0):.2f} s, dilate {r.get('dilate_s', 0):.2f} s"
+            )
+    for n in notes:
+        print(f"warning: {n}")
+    return 0
+
+
+def _write_png(path: Path, atlas, color: str) -> None:
+    import imageio.v3 as iio
+
+    from vrneural.atlas.visualize import atlas_image, gutter_mask
+    from vrneural.formats.atomic import atomic_path
+
+    img = atlas_image(atlas, by=color, gutter=gutter_mask(atlas))
+    with atomic_path(path) as tmp:
+        iio.imwrite(tmp, img, extension=".png")
+
+
+def _write_sidecar(out: Path, cfg, results: list[dict], notes: list[str]) -> None:
+    from vrneural.config import write_config
+
+    write_config(out, cfg, extra={"stats": results, "warnings": notes})

@@ -1,0 +1,151 @@
+"""`vrneural btf`: synthesize, inspect, show and import tabulated BTFs.
+
+    vrneural btf synth --preset leather --res 64 --dirs 151 --seed 0 -o leather.btf [--force]
+    vrneural btf info FILE [--json]
+    vrneural btf show FILE -o sheet.png [--texel X Y] [--force]
+    vrneural btf import UBO.btf -o out.btf [--force] [--resume]
+
+Every input is validated before any output is touched; an existing output is never replaced
+without ``--force``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+
+def register(sub) -> None:
+    from vrneural.btf.synth import BtfConfig
+    from vrneural.config import add_config_args
+
+    p = sub.add_parser(
+        "btf",
+        help="synthesize, inspect, show and import tabulated BTFs",
+        description="Tabulated BTFs (values[light, view, y, x, rgb], float16): synthetic "
+        "presets, UBO2014 import, summaries and contact sheets.",
+    )
+    bsub = p.add_subparsers(dest="btf_command", required=True, metavar="SUBCOMMAND")
+
+    s = bsub.add_parser(
+        "synth",
+        help="render a synthetic preset into a .btf (streaming, resumable)",
+        description="Render a procedural heightfield material (presets: carpet, fabric, "
+        "leather, metal, stone, wood) into a .btf file, one view at a time.",
+    )
+    add_config_args(s, BtfConfig)
+    s.add_argument("-o", "--output", required=True, help="output .btf file")
+    s.add_argument("--force", action="store_true", help="overwrite an existing output")
+    s.add_argument(
+        "--resume", action="store_true", help="continue an interrupted run (<output>.partial)"
+    )
+    s.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    s.set_defaults(func=run_synth)
+
+    i = bsub.add_parser("info", help="shape, directions, value range, size and metadata")
+    i.add_argument("file", help="a .btf file")
+    i.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    i.set_defaults(func=run_info)
+
+    sh = bsub.add_parser("show", help="write a contact sheet PNG")
+    sh.add_argument("file", help="a .btf file")
+    sh.add_argument("-o", "--output", required=True, help="output .png")
+    sh.add_argument(
+        "--texel",
+        type=int,
+        nargs=2,
+        metavar=("X", "Y"),
+        help="texel whose unfolded BRDF is shown (default: the centre)",
+    )
+    sh.add_argument("--force", action="store_true", help="overwrite an existing output")
+    sh.set_defaults(func=run_show)
+
+    im = bsub.add_parser("import", help="convert a UBO2014 .btf (needs btf-extractor)")
+    im.add_argument("file", help="a UBO2014 .btf file")
+    im.add_argument("-o", "--output", required=True, help="output .btf file (our format)")
+    im.add_argument("--force", action="store_true", help="overwrite an existing output")
+    im.add_argument("--resume", action="store_true", help="continue an interrupted import")
+    im.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    im.set_defaults(func=run_import)
+
+
+def _same_file(a, b) -> bool:
+    return Path(a).resolve() == Path(b).resolve()
+
+
+def run_synth(args) -> int:
+    from vrneural.btf.synth import BtfConfig, synthesize
+    from vrneural.config import config_from_args, write_config
+    from vrneural.errors import VrnError
+    from vrneural.formats.atomic import check_output
+
+    cfg = config_from_args(BtfConfig, args)
+    cfg.validate()
+    if not args.output.endswith(".btf"):
+        raise VrnError(f"{args.output}: output must end in .btf")
+    out = check_output(args.output, args.force)
+    path = synthesize(cfg, out, resume=args.resume, progress=not args.no_progress)
+    write_config(path, cfg)
+    print(path)
+    return 0
+
+
+def run_info(args) -> int:
+    from vrneural.btf.format import read_btf
+    from vrneural.btf.sheet import summary
+
+    s = summary(read_btf(args.file))
+    if args.json:
+        print(json.dumps(s, indent=2, default=str))
+        return 0
+    sh = s["shape"]
+    print(f"file      {s['path']}  ({s['size_bytes'] / 2**20:.1f} MiB)")
+    print(
+        f"shape     {sh['lights']} lights x {sh['views']} views x {sh['height']}x{sh['width']} "
+        f"texels x 3, float16"
+    )
+    print(
+        f"dirs      theta {s['light_theta_deg'][0]:.1f}..{s['light_theta_deg'][1]:.1f} deg, "
+        f"lights {'==' if s['same_light_and_view_dirs'] else '!='} views"
+    )
+    tag = " (sampled slices)" if s["value_range_sampled"] else ""
+    print(
+        f"values    min {s['value_min']:.4g}  max {s['value_max']:.4g}  "
+        f"mean {s['value_mean']:.4g}{tag}"
+    )
+    m = s["meta"]
+    print(f"meta      name={m.get('name')} convention={m.get('convention')} seed={m.get('seed')}")
+    print(f"generator {json.dumps(m.get('generator'))}")
+    return 0
+
+
+def run_show(args) -> int:
+    from vrneural.btf.format import read_btf
+    from vrneural.btf.sheet import contact_sheet
+    from vrneural.errors import VrnError, check_range
+    from vrneural.formats.atomic import check_output
+
+    if not args.output.lower().endswith(".png"):
+        raise VrnError(f"{args.output}: output must end in .png")
+    btf = read_btf(args.file)
+    if args.texel:
+        _, _, H, W = btf.shape
+        check_range("--texel X", args.texel[0], 0, W - 1)
+        check_range("--texel Y", args.texel[1], 0, H - 1)
+    out = check_output(args.output, args.force)
+    print(contact_sheet(btf, out, tuple(args.texel) if args.texel else None))
+    return 0
+
+
+def run_import(args) -> int:
+    from vrneural.btf.ubo2014 import import_ubo, load_extractor, parse_header
+    from vrneural.errors import VrnError
+    from vrneural.formats.atomic import check_output
+
+    load_extractor()
+    parse_header(args.file)
+    if _same_file(args.file, args.output):
+        raise VrnError(f"{args.output}: output would overwrite the input")
+    out = check_output(args.output, args.force)
+    print(import_ubo(args.file, out, resume=args.resume, progress=not args.no_progress))
+    return 0

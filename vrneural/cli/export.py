@@ -1,0 +1,56 @@
+"""`vrneural export student.pt -o material.vrnm`: write the runtime pack of a checkpoint."""
+
+from __future__ import annotations
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "export",
+        help="write the runtime pack (.vrnm) of a trained checkpoint",
+        description="Convert a teacher or student checkpoint into a .vrnm runtime pack "
+        "(float32 weights, float16 textures; no pickle). Refuses NaN/Inf; reports weight, "
+        "texture and activation ranges over the training data against the float16 range and "
+        "stores them, the provenance and the metrics in the pack's meta.",
+    )
+    p.add_argument("checkpoint", help="checkpoint (.pt) from `vrneural teach` or `distill`")
+    p.add_argument("-o", "--output", required=True, help="output pack (.vrnm)")
+    p.add_argument("--btf", default="", help="BTF for the activation ranges (default: recorded)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output")
+    p.add_argument("--json", action="store_true", help="print the ranges as JSON")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    import json
+    from pathlib import Path
+
+    from vrneural.distill.checkpoint import load_checkpoint
+    from vrneural.distill.export import export_checkpoint, ranges_table
+    from vrneural.formats.atomic import check_output, write_json
+
+    check_output(args.output, args.force)
+    ck = load_checkpoint(args.checkpoint)
+    out, meta = export_checkpoint(
+        ck, args.output, force=args.force, source=args.checkpoint, btf=args.btf or None
+    )
+    write_json(
+        Path(f"{out}.config.json"),
+        {
+            "config": "export",
+            "checkpoint": str(args.checkpoint),
+            "btf": args.btf or None,
+            "training_config": ck["config"],
+            "metrics": meta["metrics"],
+        },
+    )
+    if args.json:
+        print(json.dumps(meta["ranges"], indent=2))
+    else:
+        print(ranges_table(meta["ranges"]))
+        m = meta["metrics"]
+        print(
+            f"{out}: {meta['method']}  weights {m['weight_bytes']} B  textures "
+            f"{m['texture_bytes']} B  {m['macs_per_texel']:g} MACs/texel  test L1 "
+            f"{m['test_l1']:.5f}  numpy-vs-torch {m['pack_vs_torch_max_abs']:.2e}"
+        )
+    return 0

@@ -1,0 +1,35 @@
+"""`vrneural run`: render a scene with texture-space neural shading and reuse (or a screen-space
+comparison mode), offscreen; write PNG/EXR frames or a stereo video and summary.json."""
+
+from __future__ import annotations
+
+import sys
+
+
+def register(sub) -> None:
+    from vrneural.config import add_config_args
+    from vrneural.runtime.config import RunConfig
+
+    p = sub.add_parser(
+        "run",
+        help="render a scene (texture-space neural shading with reuse), write frames + summary",
+        description="Render SCENE (TOML; a built-in scene when omitted) offscreen on any "
+        "adapter: per-eye radiance textures shaded by the generated student, reused for N "
+        "frames, a stereo forward pass; writes OUT/summary.json, PNG + EXR frames, a video.",
+    )
+    p.add_argument("scene", nargs="?", default=None, help="scene file (TOML)")
+    add_config_args(p, RunConfig, skip=("scene",))
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=main)
+
+
+def main(args) -> int:
+    from vrneural.config import config_from_args
+    from vrneural.runtime.config import RunConfig
+    from vrneural.runtime.run import human_summary, run
+
+    cfg = config_from_args(RunConfig, args, scene=args.scene)
+    sm = run(cfg, progress=not args.quiet)
+    print(human_summary(sm))
+    print(f"wrote {cfg.out}/summary.json", file=sys.stderr)
+    return 0

@@ -1,0 +1,53 @@
+"""`vrneural teach material.btf -o teacher.pt`: train the 128-wide teacher ("NeuMIP Max")."""
+
+from __future__ import annotations
+
+from vrneural.config import add_config_args, config_from_args
+
+
+def register(sub) -> None:
+    from vrneural.distill.config import TeachConfig
+
+    p = sub.add_parser(
+        "teach",
+        help="train the teacher network on a BTF",
+        description="Train the 128-wide teacher (neural texture + MLP, arch 'single') on a "
+        "BTF. Writes the checkpoint, <output>.config.json and (unless --no-export) the "
+        "teacher's .vrnm beside it (the runtime's per-pixel reference). Ctrl-C saves; "
+        "--resume continues exactly.",
+    )
+    p.add_argument("btf", help="input BTF file (.btf)")
+    p.add_argument("-o", "--output", default="teacher.pt", help="output checkpoint (.pt)")
+    add_config_args(p, TeachConfig)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from vrneural.distill.config import TeachConfig
+    from vrneural.distill.teach import run_teach
+
+    cfg = config_from_args(TeachConfig, args)
+    return _report(lambda: run_teach(cfg), cfg.output)
+
+
+def _report(fn, output: str) -> int:
+    """Run a training stage; report the result or the interruption (exit 130)."""
+    import sys
+
+    from vrneural.distill.train import Interrupted
+
+    try:
+        ck = fn()
+    except Interrupted as e:
+        print(
+            f"interrupted at {e}; checkpoint saved to {output}; continue with --resume",
+            file=sys.stderr,
+        )
+        return 130
+    h = ck["history"][-1] if ck["history"] else {}
+    test = h.get("test_l1", float("nan"))
+    print(
+        f"{output}: {ck['method']} epochs {ck['epoch']}  test L1 {test:.5f}"
+        f"  train {ck.get('train_seconds', 0):.1f} s"
+    )
+    return 0

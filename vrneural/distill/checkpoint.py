@@ -1,0 +1,89 @@
+"""Checkpoints: plain dicts of tensors, numbers, strings and lists, saved atomically and only
+ever loaded with ``torch.load(..., weights_only=True)``.
+
+Layout (``format`` = ``"vrneural-checkpoint"``, ``version`` = 1)::
+
+    kind        "teacher" | "student"         method  "teacher" | "student" | "single8" | "neumip"
+    spec        model spec (models.make_spec)  state   model state_dict
+    aux         extra trainable modules (T1, T2) state_dict
+    optimizer / scheduler                      state dicts
+    epoch, step completed epochs; steps done in the running epoch (resume point)
+    gen_state   jitter generator state (ByteTensor)
+    history     [{"epoch", "train_loss", "test_l1", "lr", "seconds"}]
+    config      resolved config dict           btf  btf_fingerprint()
+    split       {"train": [...], "test": [...]} pair indices
+    teacher     (students) {"path", "sha256"} of the teacher checkpoint
+    finished    bool
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import pickle
+import re
+import zipfile
+from pathlib import Path
+
+import torch
+
+from vrneural.errors import VrnError
+
+FORMAT = "vrneural-checkpoint"
+VERSION = 1
+
+
+def save_checkpoint(path, payload: dict) -> None:
+    """``torch.save`` to a temporary sibling, then ``os.replace`` (atomic)."""
+    p = Path(path)
+    tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
+    try:
+        torch.save({"format": FORMAT, "version": VERSION, **payload}, tmp)
+        os.replace(tmp, p)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def load_checkpoint(path, kind: str | None = None) -> dict:
+    """Load and validate a checkpoint; any problem is a one-line :class:`VrnError`.
+
+    Refuses files that need arbitrary unpickling (``weights_only=True``), corrupt or foreign
+    files, other formats/versions, and (with ``kind``) checkpoints of another kind.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise VrnError(f"{p}: no such checkpoint")
+    if p.is_dir():
+        raise VrnError(f"{p}: is a directory, expected a checkpoint (.pt)")
+    try:
+        ck = torch.load(p, map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as e:
+        m = re.search(r"GLOBAL ([\w.]+)", str(e))
+        if m is None:
+            raise VrnError(f"{p}: corrupt or not a torch checkpoint (unreadable pickle)") from None
+        raise VrnError(
+            f"{p}: refusing to load: it needs unpickling of arbitrary objects ({m.group(1)}), "
+            "which weights_only=True forbids"
+        ) from None
+    except (RuntimeError, EOFError, OSError, zipfile.BadZipFile, ValueError) as e:
+        msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        raise VrnError(f"{p}: corrupt or not a torch checkpoint ({msg[:120]})") from None
+    if not isinstance(ck, dict) or ck.get("format") != FORMAT:
+        raise VrnError(f"{p}: not a vrneural checkpoint (no format '{FORMAT}')")
+    if ck.get("version") != VERSION:
+        raise VrnError(f"{p}: checkpoint version {ck.get('version')!r} unsupported (reads 1)")
+    if kind is not None and ck.get("kind") != kind:
+        raise VrnError(f"{p}: is a {ck.get('kind')!r} checkpoint, expected a {kind!r} checkpoint")
+    for key in ("spec", "net", "config", "btf", "split", "epoch", "history"):
+        if key not in ck:
+            raise VrnError(f"{p}: checkpoint lacks '{key}'")
+    return ck
+
+
+def file_sha256(path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()

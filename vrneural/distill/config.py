@@ -1,0 +1,67 @@
+"""Stage configs for training (``vrneural teach``) and distillation (``vrneural distill``).
+
+One field, one ``--flag``; the resolved config is stored in every checkpoint and written as
+JSON beside every output. Model-size fields are explained in README section "Training".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from vrneural.config import opt
+
+SPACES = ("linear", "log")
+METHODS = ("student", "single8", "neumip")
+
+
+@dataclass
+class TrainConfig:
+    """Fields shared by every trainer (optimizer, schedule, data split, workflow)."""
+
+    epochs: int = opt(20, "training epochs (one epoch = every training (wi, wo) slice once)")
+    seed: int = opt(0, "seed of initialisation, data order and texture-lookup jitter")
+    lr: float = opt(5e-4, "initial Adam learning rate")
+    lr_min: float = opt(1e-7, "ReduceLROnPlateau floor")
+    lr_factor: float = opt(0.5, "ReduceLROnPlateau decay factor")
+    lr_threshold: float = opt(1e-4, "halve lr when the test L1 improves by less than this")
+    lr_threshold_mode: str = opt("abs", "threshold mode (abs: absolute L1)", choices=("abs", "rel"))
+    lr_patience: int = opt(0, "epochs without improvement before halving")
+    tex_lr_scale: float = opt(10.0, "learning-rate multiplier for neural textures")
+    test_fraction: float = opt(0.1, "fraction of (wi, wo) pairs held out as test directions")
+    split_seed: int = opt(0, "seed of the train/test direction split (shared teacher/student)")
+    max_test_slices: int = opt(64, "test slices used for the per-epoch test L1 (0 = all)")
+    jitter: bool = opt(True, "stratified (jittered within the texel) neural-texture lookups")
+    space: str = opt("linear", "output and loss space: linear, or log (log(1+y))", choices=SPACES)
+    threads: int = opt(1, "torch CPU threads (1 was 6-60x faster than 2 on the shared 2-core box)")
+    progress: bool = opt(True, "show a tqdm progress bar")
+    force: bool = opt(False, "overwrite existing outputs")
+    resume: bool = opt(False, "continue the checkpoint at -o (exactly reproduces a straight run)")
+
+
+@dataclass
+class TeachConfig(TrainConfig):
+    """``vrneural teach``: the 128-wide teacher ("NeuMIP Max"), arch ``single``."""
+
+    btf: str = opt("", "input BTF file", cli=False)
+    output: str = opt("teacher.pt", "output checkpoint", cli=False)
+    width: int = opt(128, "hidden width of the teacher MLP")
+    layers: int = opt(4, "linear layers of the teacher MLP (layers - 1 hidden)")
+    channels: int = opt(8, "neural-texture channels (full BTF resolution)")
+    export: bool = opt(True, "also write <output>.vrnm (arch single: the per-pixel reference)")
+
+
+@dataclass
+class DistillConfig(TrainConfig):
+    """``vrneural distill``: a small model trained from a teacher (and the ground truth)."""
+
+    teacher: str = opt("", "teacher checkpoint (from vrneural teach)", cli=False)
+    output: str = opt("student.pt", "output checkpoint", cli=False)
+    btf: str = opt("", "BTF file (default: the path recorded in the teacher)")
+    method: str = opt("student", "student (coarse_fine), single8 or neumip", choices=METHODS)
+    distill: bool = opt(True, "use the teacher (Eq. 5); --no-distill: ground truth only")
+    sigma: float = opt(0.1, "weight of L1(y_s, y_t)")
+    lambda1: float = opt(0.1, "weight of L2(z_s1, T1 z_t1)")
+    lambda2: float = opt(0.1, "weight of L2(z_s2, T2 z_t2)")
+    coarse_channels: int = opt(8, "student U_c channels (one texel per 2x2 block)")
+    fine_channels: int = opt(8, "student U_f channels (full BTF resolution)")
+    export: bool = opt(True, "also write <output>.vrnm (the runtime pack)")

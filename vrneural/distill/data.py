@@ -1,0 +1,117 @@
+"""BTF slices -> training batches.
+
+One batch is one ``(wi, wo)`` slice: all texels of the BTF at one light/view pair, grouped in
+2x2 blocks (``uv: [N, 4, 2]``, ``N = H W / 4``; block ``(by, bx)`` holds texels
+``(2by, 2bx), (2by, 2bx+1), (2by+1, 2bx), (2by+1, 2bx+1)``). Texture lookups are stratified:
+each texel's UV is jittered uniformly within the texel. A deterministic split holds out
+``test_fraction`` of the pairs as test directions. Under DDP each rank takes an equal contiguous
+share of the blocks, so the averaged gradient equals the full-slice gradient.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from vrneural.btf.format import Btf, read_btf
+from vrneural.errors import VrnError
+
+
+def btf_fingerprint(btf: Btf) -> dict:
+    """Identity of a BTF: name, shape and a SHA-256 of its header and per-array checksums.
+
+    The container stores a CRC32 per array in its header, so hashing the header covers the
+    values without reading gigabytes.
+    """
+    p = Path(btf.path)
+    with open(p, "rb") as f:
+        f.seek(16)
+        hlen = int.from_bytes(f.read(8), "little")
+        head = f.read(hlen)
+    L, V, H, W = btf.shape
+    return {
+        "path": str(p.resolve()),
+        "name": str(btf.meta.get("name", p.stem)),
+        "sha256": hashlib.sha256(head).hexdigest(),
+        "shape": [L, V, H, W],
+    }
+
+
+def split_pairs(n_light: int, n_view: int, fraction: float, seed: int) -> tuple[list, list]:
+    """Deterministic train/test split of the ``L * V`` pair indices (``p = l * V + v``)."""
+    n = n_light * n_view
+    perm = np.random.default_rng(seed).permutation(n)
+    n_test = max(1, round(n * fraction)) if fraction > 0 else 0
+    if n - n_test < 1:
+        raise VrnError(f"test fraction {fraction} leaves no training directions ({n} pairs)")
+    return sorted(perm[n_test:].tolist()), sorted(perm[:n_test].tolist())
+
+
+class SliceData:
+    """All slices of a BTF in memory (float16) plus block UVs; see the module docstring."""
+
+    def __init__(self, btf: Btf, test: list[int], rank: int = 0, world: int = 1):
+        L, V, H, W = btf.shape
+        if H % 2 or W % 2:
+            raise VrnError(f"{btf.path}: resolution {H}x{W} must be even (2x2 blocks)")
+        nb = H * W // 4
+        if nb % world:
+            raise VrnError(f"{nb} texel blocks cannot be split evenly over {world} processes")
+        self.btf = btf
+        self.res = (H, W)
+        self.n_view = V
+        self.values = torch.from_numpy(np.array(btf.values))  # [L, V, H, W, 3] f16
+        self.light = torch.from_numpy(np.array(btf.light_dirs, np.float32))
+        self.view = torch.from_numpy(np.array(btf.view_dirs, np.float32))
+        test_set = set(test)
+        self.test = sorted(test_set)
+        self.train = [p for p in range(L * V) if p not in test_set]
+        ys, xs = torch.meshgrid(torch.arange(H), torch.arange(W), indexing="ij")
+        self.block_index = to_blocks(ys * W + xs)  # [N, 4] flat texel index
+        centre = torch.stack([(xs + 0.5) / W, (ys + 0.5) / H], -1).float()  # [H, W, 2]
+        self.centres = to_blocks(centre)  # [N, 4, 2]
+        share = nb // world
+        self.shard = slice(rank * share, (rank + 1) * share)
+
+    def dirs(self, pair: int) -> tuple[torch.Tensor, torch.Tensor]:
+        return self.light[pair // self.n_view], self.view[pair % self.n_view]
+
+    def target(self, pair: int, shard: bool = True) -> torch.Tensor:
+        """Ground truth ``[N, 4, 3]`` float32 of one slice (this rank's blocks)."""
+        v = self.values[pair // self.n_view, pair % self.n_view].float()
+        y = to_blocks(v)
+        return y[self.shard] if shard else y
+
+    def uv(self, gen: torch.Generator | None, shard: bool = True) -> torch.Tensor:
+        """Block UVs ``[N, 4, 2]``: texel centres, jittered within the texel when ``gen`` is set.
+
+        The jitter is drawn for the whole slice on every rank (same stream), then sharded.
+        """
+        uv = self.centres
+        if gen is not None:
+            H, W = self.res
+            j = torch.rand(uv.shape, generator=gen) - 0.5
+            uv = uv + j * torch.tensor([1.0 / W, 1.0 / H])
+        return uv[self.shard] if shard else uv
+
+
+def to_blocks(a: torch.Tensor) -> torch.Tensor:
+    """``[H, W, ...]`` -> ``[H W / 4, 4, ...]`` 2x2 blocks in row-major block order."""
+    H, W = a.shape[:2]
+    rest = a.shape[2:]
+    b = a.reshape(H // 2, 2, W // 2, 2, *rest).transpose(1, 2)
+    return b.reshape(H * W // 4, 4, *rest)
+
+
+def from_blocks(b: torch.Tensor, res: tuple[int, int]) -> torch.Tensor:
+    """Inverse of :func:`to_blocks`."""
+    H, W = res
+    rest = b.shape[2:]
+    return b.reshape(H // 2, W // 2, 2, 2, *rest).transpose(1, 2).reshape(H, W, *rest)
+
+
+def open_btf(path: str) -> Btf:
+    return read_btf(path)

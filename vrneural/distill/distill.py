@@ -1,0 +1,149 @@
+"""``vrneural distill``: train a small model from a teacher (paper Eq. 5) or from ground truth.
+
+``L = L1(y_s, y_gt) + sigma L1(y_s, y_t) + lambda1 L2(z_s1, T1 z_t1) + lambda2 L2(z_s2, T2 z_t2)``
+with learnable linear maps ``T: teacher width -> student width`` (no bias). The L1 terms are
+taken in the student's output space (linear, or log(1+y)); the latents are the student's two
+hidden vectors of :func:`~vrneural.distill.models.make_spec` (for the coarse-to-fine student:
+``z_c`` and the fine hidden layer) against the teacher's last two hidden layers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import torch
+from torch import nn
+
+from vrneural.btf.format import read_btf
+from vrneural.distill.checkpoint import file_sha256, load_checkpoint
+from vrneural.distill.config import DistillConfig
+from vrneural.distill.data import SliceData, btf_fingerprint
+from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
+from vrneural.distill.models import NeuralModel, apply_output, make_spec
+from vrneural.distill.teach import check_train_config, finish_outputs, outputs_of, prepare_outputs
+from vrneural.distill.train import dist_setup, fit
+from vrneural.errors import VrnError, check_range
+
+
+def model_from_checkpoint(ck: dict) -> NeuralModel:
+    """The trained :class:`NeuralModel` of a checkpoint (frozen, eval mode)."""
+    model = NeuralModel(ck["spec"])
+    state = {k[len("model.") :]: v for k, v in ck["net"].items() if k.startswith("model.")}
+    try:
+        model.load_state_dict(state)
+    except RuntimeError as e:
+        raise VrnError(f"checkpoint weights do not match its spec: {str(e)[:120]}") from None
+    model.eval()
+    for p in model.parameters():
+        p.requires_grad_(False)
+    return model
+
+
+class DistillNet(nn.Module):
+    """Student + T maps; ``forward`` returns the Eq. 5 loss of one slice (this rank's share)."""
+
+    def __init__(self, model, teacher, data: SliceData, cfg: DistillConfig):
+        super().__init__()
+        self.model = model
+        self.data = data
+        self.cfg = cfg
+        self.space = cfg.space
+        self.teacher = [teacher]  # a list: not a submodule (frozen, not synchronised by DDP)
+        if cfg.distill:
+            dt = [teacher.spec["hidden"][i] for i in teacher.latent_layers]
+            ds = _latent_widths(model.spec)
+            self.T1 = nn.Linear(dt[0], ds[0], bias=False)
+            self.T2 = nn.Linear(dt[1], ds[1], bias=False)
+
+    def forward(self, wi, wo, uv, pair):
+        raw, zs = self.model(wi, wo, uv)
+        gt = space_l1(raw, self.data.target(pair), self.space)
+        if not self.cfg.distill:
+            return gt, {"gt": gt.detach()}
+        teacher = self.teacher[0]
+        with torch.no_grad():
+            raw_t, zt = teacher(wi, wo, uv)
+            yt = to_space(apply_output(raw_t, teacher.output), self.space)
+        out = (raw - yt).abs().mean()
+        l1 = ((zs[0] - self.T1(zt[0])) ** 2).mean()
+        l2 = ((zs[1] - self.T2(zt[1])) ** 2).mean()
+        c = self.cfg
+        loss = gt + c.sigma * out + c.lambda1 * l1 + c.lambda2 * l2
+        return loss, {"gt": gt.detach(), "teacher": out.detach()}
+
+
+def _latent_widths(spec: dict) -> list[int]:
+    if spec["arch"] == "single":
+        return [spec["hidden"][i] for i in spec["latent_layers"]]
+    return [spec["coarse_hidden"][-1], spec["fine_hidden"][0]]
+
+
+def run_distill(cfg: DistillConfig, on_step=None) -> dict:
+    """Train (or resume) a student/baseline; returns the final checkpoint dict."""
+    check_train_config(cfg)
+    for k in ("sigma", "lambda1", "lambda2"):
+        check_range(f"--{k}", getattr(cfg, k), 0.0, 100.0)
+    if cfg.method == "neumip":
+        cfg = dataclasses.replace(cfg, space="log")  # NeuMIP as the paper modified it
+    outs = outputs_of(cfg.output, cfg.export)
+    resume = prepare_outputs(cfg, outs)
+    if resume is not None:
+        if resume.get("kind") != "student":
+            raise VrnError(f"{cfg.output}: is not a student checkpoint; cannot --resume distill")
+        old = dict(resume["config"])
+        old.update(epochs=cfg.epochs, resume=True, progress=cfg.progress)
+        if cfg.btf:
+            old["btf"] = cfg.btf
+        cfg = DistillConfig(**old)
+    tck = load_checkpoint(cfg.teacher, kind="teacher")
+    tsha = file_sha256(cfg.teacher)
+    if resume is not None and resume["teacher"]["sha256"] != tsha:
+        raise VrnError(f"{cfg.teacher}: teacher differs from the one {cfg.output} was trained with")
+    btf_path = cfg.btf or tck["btf"]["path"]
+    btf = read_btf(btf_path)
+    fp = btf_fingerprint(btf)
+    want = tck["btf"]
+    for key in ("name", "shape", "sha256"):
+        if fp[key] != want[key]:
+            raise VrnError(
+                f"{btf_path}: BTF does not match the teacher {cfg.teacher}: {key} is "
+                f"{fp[key]!s:.24}, the teacher was trained on {want[key]!s:.24}"
+            )
+    rank, world = dist_setup()
+    teacher = model_from_checkpoint(tck)
+    data = SliceData(btf, tck["split"]["test"], rank, world)
+    H, W = btf.resolution
+    spec = make_spec(
+        cfg.method,
+        (H, W),
+        cfg.space,
+        coarse_channels=cfg.coarse_channels,
+        fine_channels=cfg.fine_channels,
+    )
+    model = NeuralModel(spec, cfg.seed)
+    net = DistillNet(model, teacher, data, cfg)
+    pairs = test_pairs(data, cfg.max_test_slices)
+    payload = {
+        "kind": "student",
+        "method": cfg.method,
+        "spec": spec,
+        "config": dataclasses.asdict(cfg),
+        "btf": fp,
+        "split": tck["split"],
+        "teacher": {"path": str(cfg.teacher), "sha256": tsha, "spec": tck["spec"]},
+        "versions": {"torch": str(torch.__version__)},
+    }
+    ck = fit(
+        net,
+        lambda: mean_l1(model, data, pairs),
+        data,
+        cfg,
+        cfg.output,
+        payload,
+        resume,
+        tex_params=list(model.tex.parameters()),
+        on_step=on_step,
+    )
+    if rank == 0:
+        finish_outputs(ck, cfg, data)
+    return ck

@@ -1,0 +1,171 @@
+"""Checkpoint -> runtime pack (``.vrnm``), with f16 range report, provenance and metrics.
+
+The ranges follow the NVIDIA real-time neural appearance paper's Fig. 7: per layer the largest
+``|value|`` (weights, biases, pre-activations over the training data) against the float16
+maximum 65504, and the fraction of non-zero values below the float16 normal minimum 6.1e-5
+(which an f16 shader would flush or store as subnormals).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from vrneural.distill.data import SliceData
+from vrneural.errors import VrnError
+from vrneural.material import NeuralMaterial, half_vector, material_forward, sample_bilinear_wrap
+
+F16_MAX = 65504.0
+F16_NORMAL_MIN = 6.103515625e-05
+RANGE_PAIRS = 16  # training slices used for activation ranges
+
+
+def value_range(a: np.ndarray) -> dict:
+    """``max_abs``, ``headroom`` (65504 / max_abs) and ``frac_below_f16_normal`` of ``a``."""
+    a = np.abs(np.asarray(a, np.float64)).ravel()
+    nz = a[a > 0]
+    m = float(a.max(initial=0.0))
+    return {
+        "max_abs": m,
+        "headroom": float(F16_MAX / m) if m > 0 else None,
+        "frac_below_f16_normal": float((nz < F16_NORMAL_MIN).mean()) if nz.size else 0.0,
+        "frac_zero": float(1 - nz.size / max(a.size, 1)),
+    }
+
+
+def _run_layers(x: np.ndarray, layers, tag: str, out: dict) -> np.ndarray:
+    for i, lay in enumerate(layers):
+        pre = x @ lay.weight.T + lay.bias
+        out[f"act.{tag}.{i}"] = value_range(pre)
+        x = np.maximum(pre, 0) if lay.act == "relu" else pre
+    return x
+
+
+def activation_ranges(mat: NeuralMaterial, wi: np.ndarray, wo: np.ndarray, uv: np.ndarray):
+    """Ranges of every layer's input and pre-activation for ``wi, wo: [N, 3]``, ``uv: [N, 4, 2]``
+    (the computation of :func:`~vrneural.material.material_forward`, float32)."""
+    out: dict = {}
+    dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)
+    if mat.arch == "coarse_fine":
+        fc = sample_bilinear_wrap(mat.textures["coarse"], uv.mean(1))
+        z = _run_layers(np.concatenate([dirs, fc], -1), mat.networks["coarse"], "coarse", out)
+        ff = sample_bilinear_wrap(mat.textures["fine"], uv.reshape(-1, 2))
+        _run_layers(np.concatenate([np.repeat(z, 4, 0), ff], -1), mat.networks["fine"], "fine", out)
+    else:
+        f = sample_bilinear_wrap(mat.textures["features"], uv.reshape(-1, 2))
+        x = np.concatenate([np.repeat(dirs, 4, 0), f], -1)
+        _run_layers(x, mat.networks["mlp"], "mlp", out)
+    return out
+
+
+def material_ranges(mat: NeuralMaterial, data: SliceData, pairs: list[int]) -> dict:
+    """Weights, textures and activations (over ``pairs`` of the training data) vs f16."""
+    r: dict = {}
+    for name, layers in mat.networks.items():
+        for i, lay in enumerate(layers):
+            r[f"weight.{name}.{i}"] = value_range(np.concatenate([lay.weight.ravel(), lay.bias]))
+    for name, t in mat.textures.items():
+        r[f"texture.{name}"] = value_range(np.asarray(t, np.float32))
+    uv = data.uv(None, shard=False).numpy()
+    n = uv.shape[0]
+    wi = np.concatenate([np.repeat(data.dirs(p)[0].numpy()[None], n, 0) for p in pairs])
+    wo = np.concatenate([np.repeat(data.dirs(p)[1].numpy()[None], n, 0) for p in pairs])
+    r.update(activation_ranges(mat, wi, wo, np.concatenate([uv] * len(pairs))))
+    return r
+
+
+def pack_material(ck: dict, data: SliceData, source: str | None = None):
+    """Build the :class:`NeuralMaterial` of a checkpoint with meta (ranges, provenance,
+    metrics) and check the numpy forward against torch. Returns ``(mat, max_abs_diff)``."""
+    from vrneural import __version__
+    from vrneural.distill.distill import model_from_checkpoint
+
+    model = model_from_checkpoint(ck)
+    for k, v in model.state_dict().items():
+        if not torch.isfinite(v).all():
+            raise VrnError(f"{source or 'checkpoint'}: refusing to export: '{k}' has NaN/Inf")
+    mat = model.to_material()
+    for k, t in mat.textures.items():
+        if not np.isfinite(t.astype(np.float32)).all():
+            raise VrnError(f"{source}: refusing to export: texture '{k}' overflows float16")
+    train = ck["split"]["train"]
+    step = max(1, len(train) // RANGE_PAIRS)
+    pairs = train[::step][:RANGE_PAIRS]
+    ranges = material_ranges(mat, data, pairs)
+    uv = data.uv(None, shard=False)
+    diff = 0.0
+    for p in pairs[:2]:
+        wi, wo = data.dirs(p)
+        n = uv.shape[0]
+        ref = material_forward(
+            mat, np.repeat(wi.numpy()[None], n, 0), np.repeat(wo.numpy()[None], n, 0), uv.numpy()
+        )
+        got = model.predict(wi, wo, uv).numpy()
+        diff = max(diff, float(np.abs(ref - got).max()))
+    hist = ck["history"]
+    cfg = ck["config"]
+    mat.meta = {
+        "name": ck["btf"]["name"],
+        "method": ck["method"],
+        "provenance": {
+            "btf": ck["btf"],
+            "checkpoint": str(source) if source else None,
+            "teacher": ck.get("teacher", {}).get("sha256"),
+            "seed": cfg["seed"],
+            "split_seed": cfg["split_seed"],
+            "epochs": ck["epoch"],
+            "config": cfg,
+            "vrneural": __version__,
+            "torch": str(torch.__version__),
+        },
+        "metrics": {
+            "test_l1": hist[-1]["test_l1"] if hist else None,
+            "test_l1_curve": [h["test_l1"] for h in hist],
+            "train_seconds": ck.get("train_seconds"),
+            "pack_vs_torch_max_abs": diff,
+            "weight_bytes": mat.weight_bytes,
+            "texture_bytes": mat.texture_bytes,
+            "macs_per_texel": mat.macs_per_texel,
+        },
+        "ranges": ranges,
+    }
+    return mat, diff
+
+
+def export_checkpoint(
+    ck: dict,
+    out,
+    data: SliceData | None = None,
+    force: bool = False,
+    source: str | None = None,
+    btf: str | None = None,
+) -> tuple[Path, dict]:
+    """Write the ``.vrnm`` of a loaded checkpoint. Returns ``(path, meta)``."""
+    from vrneural.btf.format import read_btf
+    from vrneural.distill.data import btf_fingerprint
+    from vrneural.formats.atomic import check_output
+    from vrneural.formats.vrnm import write_vrnm
+
+    out = check_output(out, force)
+    if data is None:
+        b = read_btf(btf or ck["btf"]["path"])
+        if btf_fingerprint(b)["sha256"] != ck["btf"]["sha256"]:
+            raise VrnError(f"{b.path}: BTF does not match the one {source} was trained on")
+        data = SliceData(b, ck["split"]["test"])
+    mat, _ = pack_material(ck, data, source)
+    write_vrnm(out, mat)
+    return out, mat.meta
+
+
+def ranges_table(ranges: dict) -> str:
+    """A text table of :func:`material_ranges` (one row per tensor)."""
+    rows = [f"{'tensor':<22} {'max|v|':>10} {'65504/max':>10} {'<6.1e-5':>8} {'zero':>6}"]
+    for k, r in ranges.items():
+        head = "-" if r["headroom"] is None else f"{r['headroom']:.3g}"
+        rows.append(
+            f"{k:<22} {r['max_abs']:>10.4g} {head:>10} {r['frac_below_f16_normal']:>8.2%} "
+            f"{r['frac_zero']:>6.1%}"
+        )
+    return "\n".join(rows)

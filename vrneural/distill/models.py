@@ -1,0 +1,212 @@
+"""Torch twins of :mod:`vrneural.material`: the same function, trainable.
+
+Every model maps one angular condition ``(wi, wo)`` and the material UVs of 2x2 texel blocks
+``uv: [N, 4, 2]`` to BTF values ``[N, 4, 3]`` exactly as :func:`vrneural.material.material_forward`
+does for the exported pack:
+
+- ``single``: ``y_k = out(M([wi, wo, h, U(u_k)]))`` per texel;
+- ``coarse_fine``: ``z_c = M_c([wi, wo, h, U_c(u_c)])`` at the block mean ``u_c``, then
+  ``y_k = out(M_f([z_c, U_f(u_k)]))``.
+
+Neural textures are float32 parameters rounded to float16 in the forward pass (straight-through
+gradient), so the trained model *is* the f16 pack. A model is described by a plain ``spec`` dict
+(stored in checkpoints; no pickled classes).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import torch
+from torch import nn
+
+from vrneural.material import DIR_INPUTS, HALF_EPS2, NeuralMaterial
+from vrneural.mlp import Layer
+
+
+def half_vector(wi: torch.Tensor, wo: torch.Tensor) -> torch.Tensor:
+    """``normalize(wi + wo)`` ``[..., 3]``; ``(0, 0, 1)`` where ``|wi + wo|^2 < 1e-12``."""
+    s = wi + wo
+    n2 = (s * s).sum(-1, keepdim=True)
+    ok = n2 >= HALF_EPS2
+    up = torch.tensor([0.0, 0.0, 1.0], dtype=s.dtype)
+    return torch.where(ok, s / torch.sqrt(torch.where(ok, n2, torch.ones_like(n2))), up)
+
+
+def sample_bilinear_wrap(tex: torch.Tensor, uv: torch.Tensor) -> torch.Tensor:
+    """Bilinear wrap lookup of ``tex: [H, W, C]`` at ``uv: [..., 2]`` -> ``[..., C]``.
+
+    The formula of :func:`vrneural.material.sample_bilinear_wrap` (texel centres at
+    ``(x + 0.5) / W``; coordinates in float64, weights in float32); differentiable in ``tex``.
+    """
+    H, W = tex.shape[:2]
+    x = uv[..., 0].double() * W - 0.5
+    y = uv[..., 1].double() * H - 0.5
+    x0 = torch.floor(x)
+    y0 = torch.floor(y)
+    fx = (x - x0).float()[..., None]
+    fy = (y - y0).float()[..., None]
+    xi0 = x0.long() % W
+    yi0 = y0.long() % H
+    xi1 = (xi0 + 1) % W
+    yi1 = (yi0 + 1) % H
+    top = tex[yi0, xi0] * (1 - fx) + tex[yi0, xi1] * fx
+    bot = tex[yi1, xi0] * (1 - fx) + tex[yi1, xi1] * fx
+    return top * (1 - fy) + bot * fy
+
+
+def f16_round(t: torch.Tensor) -> torch.Tensor:
+    """Round to float16 in the forward pass, identity gradient (straight-through)."""
+    return t + (t.detach().half().float() - t.detach())
+
+
+class MLP(nn.Module):
+    """ReLU MLP ``sizes[0] -> ... -> sizes[-1]``; the last layer uses ``last_act``.
+
+    ``forward`` returns the output and the list of every layer's post-activation value.
+    """
+
+    def __init__(self, sizes: list[int], last_act: str = "none"):
+        super().__init__()
+        self.layers = nn.ModuleList(nn.Linear(a, b) for a, b in itertools.pairwise(sizes))
+        self.acts = ["relu"] * (len(sizes) - 2) + [last_act]
+
+    def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, list[torch.Tensor]]:
+        hs = []
+        for lin, act in zip(self.layers, self.acts, strict=True):
+            x = lin(x)
+            if act == "relu":
+                x = torch.relu(x)
+            hs.append(x)
+        return x, hs
+
+    def to_layers(self) -> list[Layer]:
+        return [
+            Layer(
+                lin.weight.detach().numpy().astype(np.float32).copy(),
+                lin.bias.detach().numpy().astype(np.float32).copy(),
+                act,
+            )
+            for lin, act in zip(self.layers, self.acts, strict=True)
+        ]
+
+
+def apply_output(raw: torch.Tensor, output: str) -> torch.Tensor:
+    """The pack's output transform: ``max(r, 0)`` or ``expm1(max(r, 0))``."""
+    r = torch.relu(raw)
+    return torch.expm1(r) if output == "log1p" else r
+
+
+class NeuralModel(nn.Module):
+    """A ``single`` or ``coarse_fine`` neural material built from ``spec`` (see :func:`make_spec`).
+
+    ``forward(wi [3], wo [3], uv [N, 4, 2])`` returns ``raw [N, 4, 3]`` (before the output
+    transform) and ``latents``: the two hidden vectors distillation matches (``[N, 4, D]`` each).
+    """
+
+    def __init__(self, spec: dict, seed: int = 0):
+        super().__init__()
+        self.spec = dict(spec)
+        torch.manual_seed(seed)
+        g = torch.Generator().manual_seed(seed + 1)
+        self.arch = spec["arch"]
+        self.output = spec["output"]
+
+        def tex(res, c):
+            return nn.Parameter(torch.randn(res[0], res[1], c, generator=g) * spec["tex_init"])
+
+        if self.arch == "single":
+            c = spec["channels"]
+            self.mlp = MLP([DIR_INPUTS + c, *spec["hidden"], 3])
+            self.tex = nn.ParameterDict({"features": tex(spec["tex_res"], c)})
+        elif self.arch == "coarse_fine":
+            cc, cf = spec["coarse_channels"], spec["fine_channels"]
+            self.coarse = MLP([DIR_INPUTS + cc, *spec["coarse_hidden"]], last_act="relu")
+            self.fine = MLP([spec["coarse_hidden"][-1] + cf, *spec["fine_hidden"], 3])
+            self.tex = nn.ParameterDict(
+                {"coarse": tex(spec["coarse_res"], cc), "fine": tex(spec["fine_res"], cf)}
+            )
+        else:
+            raise ValueError(f"unknown arch {self.arch!r}")
+        self.latent_layers = spec["latent_layers"]
+
+    def forward(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor):
+        n = uv.shape[0]
+        dirs = torch.cat([wi, wo, half_vector(wi, wo)])  # [9]
+        if self.arch == "single":
+            f = sample_bilinear_wrap(f16_round(self.tex["features"]), uv)  # [N, 4, C]
+            x = torch.cat([dirs.expand(n, 4, DIR_INPUTS), f], -1)
+            raw, hs = self.mlp(x)
+        else:
+            fc = sample_bilinear_wrap(f16_round(self.tex["coarse"]), uv.mean(1))  # [N, Cc]
+            z, hc = self.coarse(torch.cat([dirs.expand(n, DIR_INPUTS), fc], -1))  # [N, Z]
+            ff = sample_bilinear_wrap(f16_round(self.tex["fine"]), uv)  # [N, 4, Cf]
+            zk = z[:, None].expand(n, 4, z.shape[-1])
+            raw, hf = self.fine(torch.cat([zk, ff], -1))
+            hs = [h[:, None].expand(n, 4, h.shape[-1]) for h in hc] + hf
+        return raw, [hs[i] for i in self.latent_layers]
+
+    def predict(self, wi, wo, uv) -> torch.Tensor:
+        """BTF values ``[N, 4, 3]`` (output transform applied)."""
+        return apply_output(self(wi, wo, uv)[0], self.output)
+
+    def to_material(self, meta: dict | None = None) -> NeuralMaterial:
+        """The runtime form (weights float32, textures float16)."""
+        texs = {k: v.detach().half().numpy() for k, v in self.tex.items()}
+        if self.arch == "single":
+            nets = {"mlp": self.mlp.to_layers()}
+        else:
+            nets = {"coarse": self.coarse.to_layers(), "fine": self.fine.to_layers()}
+        return NeuralMaterial(self.arch, nets, texs, self.output, meta or {})
+
+
+def make_spec(method: str, res: tuple[int, int], space: str = "linear", **kw) -> dict:
+    """Architecture of each method, as a plain dict. ``res = (H, W)`` of the BTF.
+
+    teacher: 4 linear layers, 128 wide, 8-channel full-res texture (``single``);
+    neumip: 4 x 25, 7 channels, log(1+y) output (``single``); single8: 4 x 8, 8 channels;
+    student: M_c 2 x 8 (the second layer's output is z_c), M_f 8 -> 3, U_c 8 ch at half
+    resolution (one texel per 2x2 block), U_f 8 ch at full resolution (``coarse_fine``).
+    """
+    out = "log1p" if space == "log" else "linear"
+    H, W = res
+    if method == "teacher":
+        width, layers = kw.get("width", 128), kw.get("layers", 4)
+        hidden = [width] * (layers - 1)
+        return dict(
+            arch="single",
+            output=out,
+            channels=kw.get("channels", 8),
+            tex_res=[H, W],
+            hidden=hidden,
+            latent_layers=[len(hidden) - 2, len(hidden) - 1],
+            tex_init=0.1,
+        )
+    if method in ("neumip", "single8"):
+        width, c = (25, 7) if method == "neumip" else (8, 8)
+        if method == "neumip":
+            out = "log1p"
+        return dict(
+            arch="single",
+            output=out,
+            channels=c,
+            tex_res=[H, W],
+            hidden=[width] * 3,
+            latent_layers=[1, 2],
+            tex_init=0.1,
+        )
+    if method == "student":
+        return dict(
+            arch="coarse_fine",
+            output=out,
+            coarse_channels=kw.get("coarse_channels", 8),
+            coarse_res=[H // 2, W // 2],
+            fine_channels=kw.get("fine_channels", 8),
+            fine_res=[H, W],
+            coarse_hidden=[8, 8],
+            fine_hidden=[8],
+            latent_layers=[1, 2],
+            tex_init=0.1,
+        )
+    raise ValueError(f"unknown method {method!r}")

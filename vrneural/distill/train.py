@@ -1,0 +1,203 @@
+"""The shared trainer loop: one ``(wi, wo)`` slice per step, Adam + ReduceLROnPlateau on the
+held-out test L1, an atomic checkpoint every epoch, Ctrl-C saves, exact resume, DDP.
+
+Determinism: the data order and the jitter of epoch ``e`` come from generators seeded with
+``(seed, e)``; the jitter generator's state is checkpointed, so resuming (also mid-epoch)
+replays the uninterrupted run bit for bit on CPU. Under ``torchrun`` every rank draws the same
+jitter for the whole slice and trains on its equal share of the 2x2 blocks; DDP averages the
+gradients, which equals the full-slice gradient (the loss is a mean over equal shares).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import time
+
+import torch
+import torch.distributed as dist
+from torch import nn
+
+from vrneural.distill.checkpoint import save_checkpoint
+from vrneural.distill.data import SliceData
+
+
+def dist_setup() -> tuple[int, int]:
+    """``(rank, world)``; initialises a gloo (CPU) process group under ``torchrun``."""
+    world = int(os.environ.get("WORLD_SIZE", "1"))
+    if world > 1 and not dist.is_initialized():
+        dist.init_process_group("gloo")
+    if dist.is_initialized():
+        return dist.get_rank(), dist.get_world_size()
+    return 0, 1
+
+
+def _seed(seed: int, epoch: int, salt: int) -> int:
+    return (seed * 1_000_003 + epoch * 7_919 + salt) % (2**63)
+
+
+class Stop:
+    """Ctrl-C sets a flag; the loop saves a checkpoint at the next step and exits."""
+
+    def __init__(self):
+        self.flag = False
+        self._old = None
+
+    def __enter__(self):
+        if threading_main():
+            self._old = signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def _handle(self, *_):
+        self.flag = True
+
+    def __exit__(self, *exc):
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+
+
+def threading_main() -> bool:
+    import threading
+
+    return threading.current_thread() is threading.main_thread()
+
+
+class Interrupted(KeyboardInterrupt):
+    """Raised after the checkpoint of an interrupted run is saved (a KeyboardInterrupt, so
+    callers that do not know it still exit with code 130)."""
+
+
+def fit(
+    net: nn.Module,
+    test_l1,
+    data: SliceData,
+    cfg,
+    out: str,
+    payload: dict,
+    resume: dict | None = None,
+    tex_params: list | None = None,
+    on_step=None,
+) -> dict:
+    """Train ``net`` (``net(wi, wo, uv, pair) -> (loss, parts)``) and return the final payload.
+
+    ``on_step(epoch, step)`` is called after every step (tests use it to send Ctrl-C).
+    ``test_l1()`` evaluates the held-out L1 (linear space); ``payload`` holds the fixed
+    checkpoint fields (kind, spec, config, btf, split, ...); ``resume`` a loaded checkpoint.
+    """
+    torch.set_num_threads(max(1, int(cfg.threads)))
+    rank, world = (dist.get_rank(), dist.get_world_size()) if dist.is_initialized() else (0, 1)
+    tex_ids = {id(p) for p in tex_params or []}
+    rest = [p for p in net.parameters() if p.requires_grad and id(p) not in tex_ids]
+    groups = [{"params": rest, "lr": cfg.lr}]
+    if tex_params:
+        groups.append({"params": list(tex_params), "lr": cfg.lr * cfg.tex_lr_scale})
+    opt = torch.optim.Adam(groups, betas=(0.9, 0.999), eps=1e-8)
+    sched = torch.optim.lr_scheduler.ReduceLROnPlateau(
+        opt,
+        mode="min",
+        factor=cfg.lr_factor,
+        patience=cfg.lr_patience,
+        threshold=cfg.lr_threshold,
+        threshold_mode=cfg.lr_threshold_mode,
+        min_lr=[cfg.lr_min, cfg.lr_min * cfg.tex_lr_scale][: len(groups)],
+    )
+    epoch, step, loss_sum, history, seconds = 0, 0, 0.0, [], 0.0
+    gen = torch.Generator()
+    if resume is not None:
+        net.load_state_dict(resume["net"])
+        opt.load_state_dict(resume["optimizer"])
+        sched.load_state_dict(resume["scheduler"])
+        epoch, step = int(resume["epoch"]), int(resume["step"])
+        loss_sum, history = float(resume["loss_sum"]), list(resume["history"])
+        seconds = float(resume.get("train_seconds", 0.0))
+        if step:
+            gen.set_state(resume["gen_state"])
+    model = nn.parallel.DistributedDataParallel(net) if world > 1 else net
+
+    def save(finished: bool) -> dict:
+        ck = {
+            **payload,
+            "net": net.state_dict(),
+            "optimizer": opt.state_dict(),
+            "scheduler": sched.state_dict(),
+            "epoch": epoch,
+            "step": step,
+            "loss_sum": loss_sum,
+            "gen_state": gen.get_state(),
+            "history": history,
+            "train_seconds": seconds,
+            "finished": finished,
+        }
+        if rank == 0:
+            save_checkpoint(out, ck)
+        return ck
+
+    n = len(data.train)
+    bar = None
+    if rank == 0 and cfg.progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=(cfg.epochs - epoch) * n - step, unit="slice", dynamic_ncols=True)
+    last_test = history[-1]["test_l1"] if history else float("nan")
+    with Stop() as stop, bar or contextlib.nullcontext():
+        while epoch < cfg.epochs:
+            order = torch.randperm(
+                n, generator=torch.Generator().manual_seed(_seed(cfg.seed, epoch, 1))
+            )
+            if step == 0:
+                gen.manual_seed(_seed(cfg.seed, epoch, 2))
+            t0 = time.perf_counter()
+            net.train()
+            while step < n:
+                pair = data.train[int(order[step])]
+                wi, wo = data.dirs(pair)
+                uv = data.uv(gen if cfg.jitter else None)
+                loss, _ = model(wi, wo, uv, pair)
+                opt.zero_grad(set_to_none=True)
+                loss.backward()
+                opt.step()
+                loss_sum += float(loss.detach())
+                step += 1
+                if bar is not None:
+                    bar.update(1)
+                    if step % 25 == 0:
+                        bar.set_postfix(
+                            ep=epoch + 1, loss=f"{loss_sum / step:.4g}", test_l1=f"{last_test:.4g}"
+                        )
+                if on_step is not None:
+                    on_step(epoch, step)
+                if _stopping(stop.flag, world):
+                    seconds += time.perf_counter() - t0
+                    save(False)
+                    raise Interrupted(f"epoch {epoch + 1} step {step}/{n}")
+            net.eval()
+            with torch.no_grad():
+                last_test = float(test_l1())
+            sched.step(last_test)
+            seconds += time.perf_counter() - t0
+            history.append(
+                {
+                    "epoch": epoch + 1,
+                    "train_loss": loss_sum / n,
+                    "test_l1": last_test,
+                    "lr": opt.param_groups[0]["lr"],
+                    "seconds": time.perf_counter() - t0,
+                }
+            )
+            epoch, step, loss_sum = epoch + 1, 0, 0.0
+            if bar is not None:
+                bar.set_postfix(
+                    ep=epoch, loss=f"{history[-1]['train_loss']:.4g}", test_l1=f"{last_test:.4g}"
+                )
+            save(epoch >= cfg.epochs)
+    return save(epoch >= cfg.epochs)
+
+
+def _stopping(flag: bool, world: int) -> bool:
+    """All ranks agree to stop when any rank saw Ctrl-C."""
+    if world == 1:
+        return flag
+    t = torch.tensor([1.0 if flag else 0.0])
+    dist.all_reduce(t)
+    return bool(t.item() > 0)

@@ -1,0 +1,1 @@
+"""Runtime: generated WGSL shading in texture space with reuse, stereo forward pass."""

@@ -1,0 +1,154 @@
+"""Head motion, stereo eyes and projection.
+
+Conventions: right-handed world, y up, metres; a camera looks down its -z axis; clip space is
+WebGPU's (x, y in [-1, 1], y up, depth in [0, 1]). Matrices are float64 ``[4, 4]`` acting on
+column vectors. A head pose is (position ``[3]``, unit quaternion ``[x, y, z, w]``); the eyes sit
+at ``-ipd/2`` and ``+ipd/2`` along the head's x axis.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from vrneural.errors import VrnError
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation ``[3, 3]`` of unit quaternion ``q = [x, y, z, w]``."""
+    x, y, z, w = np.asarray(q, np.float64) / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def look_rotation(forward: np.ndarray, up=(0.0, 1.0, 0.0)) -> np.ndarray:
+    """Camera-to-world rotation ``[3, 3]`` whose -z axis is ``forward``."""
+    f = np.asarray(forward, np.float64)
+    f = f / np.linalg.norm(f)
+    r = np.cross(f, up)
+    r = r / np.linalg.norm(r)
+    u = np.cross(r, f)
+    return np.stack([r, u, -f], 1)
+
+
+def perspective(fov_y_deg: float, aspect: float, near: float = 0.05, far: float = 100.0):
+    """WebGPU perspective projection ``[4, 4]`` (depth 0 at near, 1 at far)."""
+    f = 1.0 / np.tan(np.radians(fov_y_deg) / 2)
+    p = np.zeros((4, 4))
+    p[0, 0] = f / aspect
+    p[1, 1] = f
+    p[2, 2] = far / (near - far)
+    p[2, 3] = near * far / (near - far)
+    p[3, 2] = -1.0
+    return p
+
+
+@dataclass
+class Eye:
+    """One eye at one frame: world position, view and projection matrices."""
+
+    position: np.ndarray  # [3] metres
+    view: np.ndarray  # [4, 4] world -> camera
+    proj: np.ndarray  # [4, 4] camera -> clip
+
+    @property
+    def view_proj(self) -> np.ndarray:
+        return self.proj @ self.view
+
+
+def eyes_from_pose(pos, rot, ipd: float, n_eyes: int, fov_y: float, aspect: float) -> list[Eye]:
+    """Eye(s) of a head at ``pos [3]`` with rotation ``rot [3, 3]`` (one eye: the head centre)."""
+    offsets = [-ipd / 2, ipd / 2] if n_eyes == 2 else [0.0]
+    out = []
+    for o in offsets:
+        p = np.asarray(pos, np.float64) + rot[:, 0] * o
+        view = np.eye(4)
+        view[:3, :3] = rot.T
+        view[:3, 3] = -rot.T @ p
+        out.append(Eye(p, view, perspective(fov_y, aspect)))
+    return out
+
+
+class HeadPath:
+    """Head pose as a function of time ``t`` (s): ``pose(t) -> (position [3], rotation [3,3])``."""
+
+    def pose(self, t: float):
+        raise NotImplementedError
+
+
+@dataclass
+class OrbitPath(HeadPath):
+    """Built-in smooth, slow path: the head sways on a small ellipse (amplitude ``sway`` m,
+    period ``period`` s) around ``centre`` while looking at ``target``."""
+
+    centre: tuple = (0.0, 1.25, 1.05)
+    target: tuple = (0.1, 0.8, 0.0)
+    sway: float = 0.12
+    period: float = 8.0
+
+    def pose(self, t: float):
+        a = 2 * np.pi * t / self.period
+        p = np.asarray(self.centre) + self.sway * np.array([np.sin(a), 0.3 * np.sin(2 * a), 0])
+        return p, look_rotation(np.asarray(self.target) - p)
+
+
+class PoseLogPath(HeadPath):
+    """A recorded pose log: CSV rows ``t, x, y, z, qx, qy, qz, qw`` (header optional), times
+    increasing; positions interpolated linearly, rotations by normalised lerp."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise VrnError(f"{self.path}: head-motion pose log not found")
+        rows = []
+        with open(self.path, newline="") as f:
+            for i, row in enumerate(csv.reader(f)):
+                if not row or row[0].strip().startswith("#"):
+                    continue
+                try:
+                    vals = [float(v) for v in row]
+                except ValueError:
+                    if i == 0:
+                        continue  # header
+                    raise VrnError(f"{self.path}:{i + 1}: non-numeric value in {row}") from None
+                if len(vals) != 8:
+                    raise VrnError(f"{self.path}:{i + 1}: expected 8 columns, got {len(vals)}")
+                rows.append(vals)
+        a = np.asarray(rows, np.float64)
+        if len(a) < 1 or not np.isfinite(a).all():
+            raise VrnError(f"{self.path}: pose log is empty or has non-finite values")
+        if (np.diff(a[:, 0]) <= 0).any():
+            raise VrnError(f"{self.path}: pose log times must increase")
+        if (np.linalg.norm(a[:, 4:8], axis=1) < 1e-6).any():
+            raise VrnError(f"{self.path}: pose log has a zero quaternion")
+        self.t, self.p, self.q = a[:, 0], a[:, 1:4], a[:, 4:8]
+
+    def pose(self, t: float):
+        t = float(np.clip(t, self.t[0], self.t[-1]))
+        i = int(np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 1))
+        j = min(i + 1, len(self.t) - 1)
+        s = 0.0 if j == i else (t - self.t[i]) / (self.t[j] - self.t[i])
+        q1 = self.q[j] if np.dot(self.q[i], self.q[j]) >= 0 else -self.q[j]
+        q = (1 - s) * self.q[i] + s * q1
+        return (1 - s) * self.p[i] + s * self.p[j], quat_to_matrix(q)
+
+
+def frustum_planes(view_proj: np.ndarray) -> np.ndarray:
+    """The 6 planes ``[6, 4]`` (normals inward, normalised) of a WebGPU clip volume."""
+    m = view_proj
+    planes = np.stack([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[2], m[3] - m[2]])
+    return planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+
+
+def sphere_in_frustum(centre, radius: float, view_proj: np.ndarray) -> bool:
+    """Whether a bounding sphere touches the view frustum (conservative)."""
+    d = frustum_planes(view_proj) @ np.append(np.asarray(centre, np.float64), 1.0)
+    return bool((d >= -radius).all())

@@ -1,0 +1,99 @@
+"""``RunConfig``: what `vrneural run` takes (each field's help is its --help line), and its
+resolution against a device profile, the scene and the adapter."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from vrneural.config import opt
+from vrneural.errors import VrnError, check_range
+from vrneural.runtime.profiles import get_profile
+from vrneural.runtime.renderer import MODES, Settings
+from vrneural.runtime.schedule import SCHEDULES
+
+
+@dataclass
+class RunConfig:
+    scene: str | None = opt(None, "scene file (TOML); the built-in scene when omitted", cli=False)
+    eyes: int = opt(2, "number of eyes (1 or 2)")
+    reuse: int | None = opt(None, "N: frames reusing one update (profile default: 4)")
+    profile: str | None = opt(None, "device profile: quest3 (default), quest2, preview, tiny")
+    texture_res: int | None = opt(None, "radiance texture side per eye per object")
+    eye_res: str | None = opt(None, "pixels per eye, WIDTHxHEIGHT (profile default)")
+    frames: int = opt(90, "display frames to render")
+    lights: int | None = opt(None, "point lights (the first N of the scene; profile default)")
+    mode: str = opt("texture", "texture | screen | reference", choices=MODES)
+    schedule: str = opt("staggered", "reuse schedule: staggered | burst", choices=SCHEDULES)
+    precision: str = opt("auto", "auto | f16 | f32", choices=("auto", "f16", "f32"))
+    reference: str | None = opt(None, "teacher pack (.vrnm) for --mode reference")
+    out: str = opt("out/run", "output directory")
+    video: bool = opt(False, "write a side-by-side stereo video (needs imageio-ffmpeg)")
+    video_scale: int = opt(4, "video downscale factor (integer)")
+    save_frames: str = opt("first,last", "frames saved as PNG + EXR: 'first,last', 'all', '0,45'")
+    force: bool = opt(False, "overwrite an existing output directory")
+
+
+def parse_res(s: str, field: str = "--eye-res") -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in s.lower().split("x"))
+    except ValueError:
+        raise VrnError(f"{field} = {s!r} must be WIDTHxHEIGHT, e.g. 2064x2208") from None
+    if not (16 <= w <= 16384 and 16 <= h <= 16384):
+        raise VrnError(f"{field} = {s!r} is out of range; each side in [16, 16384]")
+    return w, h
+
+
+def resolve(cfg: RunConfig, scene, adapter) -> Settings:
+    """Profile < scene < CLI; validates ranges against the adapter (``AdapterSummary``)."""
+    from vrneural.runtime.codegen import resolve_precision
+
+    prof = get_profile(cfg.profile or scene.profile or "quest3")
+    if cfg.eyes not in (1, 2):
+        raise VrnError(f"--eyes = {cfg.eyes} is not allowed; choose 1 or 2")
+    reuse = prof.reuse if cfg.reuse is None else cfg.reuse
+    check_range("--reuse", reuse, 0, 1000)
+    check_range("--frames", cfg.frames, 1, 1_000_000)
+    tex = prof.texture_res if cfg.texture_res is None else cfg.texture_res
+    max_tex = adapter.limits["max_texture_dimension_2d"]
+    check_range("--texture-res", tex, 2, max_tex)
+    for i, o in enumerate(scene.objects):
+        if o.texture_res and o.texture_res > max_tex:
+            raise VrnError(
+                f"objects[{i}].texture_res = {o.texture_res} is above the adapter maximum {max_tex}"
+            )
+    if tex % 2:
+        raise VrnError(f"--texture-res = {tex} must be even (2x2 blocks)")
+    eye_res = parse_res(cfg.eye_res) if cfg.eye_res else prof.eye_res
+    if max(eye_res) > max_tex:
+        raise VrnError(f"--eye-res = {eye_res} is above the adapter maximum {max_tex}")
+    n_lights = prof.lights if cfg.lights is None else cfg.lights
+    check_range("--lights", n_lights, 1, 64)
+    if n_lights > len(scene.lights):
+        raise VrnError(f"--lights = {n_lights} but the scene has {len(scene.lights)} lights")
+    precision = resolve_precision(
+        cfg.precision, adapter.is_cpu, adapter.features.get("shader-f16", False)
+    )
+    ref = None
+    if cfg.reference:
+        from pathlib import Path
+
+        from vrneural.formats.vrnm import read_vrnm
+
+        if not Path(cfg.reference).is_file():
+            raise VrnError(f"--reference = {cfg.reference!r}: file not found")
+        ref = read_vrnm(cfg.reference)
+    return Settings(
+        eyes=cfg.eyes,
+        reuse=int(reuse),
+        texture_res=int(tex),
+        eye_res=tuple(eye_res),
+        frames=int(cfg.frames),
+        fps=prof.fps,
+        fov_y=prof.fov_y,
+        ipd=scene.ipd if scene.ipd is not None else prof.ipd,
+        n_lights=int(n_lights),
+        mode=cfg.mode,
+        schedule=cfg.schedule,
+        precision=precision,
+        reference=ref,
+    )

@@ -1,0 +1,253 @@
+"""Forward (raster) pass per eye, ``shaders/forward.wgsl``: meshes with a depth test, neural
+objects bilinearly sampling their eye's radiance texture, plain objects shaded by
+Lambert + Blinn-Phong under the same point lights. Also the visibility pass of the screen-space
+modes (plain colour + an rg32uint ``(object id + 1, triangle)`` target).
+
+Vertex buffers hold triangles expanded to 3 vertices each: ``position.xyz, normal.xyz,
+atlas_uv.xy, triangle (u32)`` (36 bytes).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from vrneural.gpu.device import get_device
+from vrneural.gpu.readback import upload_buffer
+from vrneural.gpu.shaders import render_wgsl
+from vrneural.runtime.reference import normal_matrix
+
+COLOUR_FORMAT = "rgba16float"
+DEPTH_FORMAT = "depth32float"
+VIS_FORMAT = "rg32uint"
+OBJECT_BYTES = 160
+FRAME_BYTES = 96
+
+
+def expanded_vertices(mesh, uv_atlas: np.ndarray | None) -> np.ndarray:
+    """``[3F, 9]`` 32-bit rows (8 float32 + 1 uint32 triangle index), as raw float32 view."""
+    f = mesh.faces.astype(np.int64).ravel()
+    n = len(f)
+    rows = np.zeros((n, 9), np.float32)
+    rows[:, 0:3] = mesh.positions[f]
+    rows[:, 3:6] = mesh.normals[f]
+    if uv_atlas is not None:
+        rows[:, 6:8] = uv_atlas[f]
+    rows.view(np.uint32)[:, 8] = np.repeat(np.arange(n // 3, dtype=np.uint32), 3)
+    return rows
+
+
+def pack_object(model, albedo=(0, 0, 0), specular=0.0, shininess=1.0, obj_id=0) -> bytes:
+    a = np.zeros(40, np.float32)
+    a[0:16] = np.asarray(model, np.float32).T.ravel()
+    a[16:32] = normal_matrix(np.asarray(model, np.float32)).T.ravel()
+    a[32:35] = albedo
+    a[36:39] = (specular, shininess, obj_id)
+    return a.tobytes()
+
+
+def pack_frame(view_proj, eye, n_lights: int) -> bytes:
+    a = np.zeros(20, np.float32)
+    a[0:16] = np.asarray(view_proj, np.float32).T.ravel()
+    a[16:19] = eye
+    return a.tobytes() + np.array([n_lights, 0, 0, 0], np.uint32).tobytes()
+
+
+@functools.cache
+def _module(n_lights: int):
+    return get_device().create_shader_module(
+        code=render_wgsl("forward", n_lights=n_lights), label="forward"
+    )
+
+
+@functools.cache
+def _layouts():
+    """Explicit bind-group layouts: (frame group, neural object group, plain object group)."""
+    import wgpu
+
+    dev = get_device()
+    vf = wgpu.ShaderStage.VERTEX | wgpu.ShaderStage.FRAGMENT
+    fr = wgpu.ShaderStage.FRAGMENT
+    ub = {"type": wgpu.BufferBindingType.uniform}
+    frame = dev.create_bind_group_layout(
+        entries=[
+            {"binding": 0, "visibility": vf, "buffer": ub},
+            {"binding": 1, "visibility": fr, "buffer": ub},
+        ]
+    )
+    obj0 = {"binding": 0, "visibility": vf, "buffer": ub}
+    neural = dev.create_bind_group_layout(
+        entries=[
+            obj0,
+            {"binding": 1, "visibility": fr, "texture": {"sample_type": "float"}},
+            {"binding": 2, "visibility": fr, "sampler": {"type": "filtering"}},
+        ]
+    )
+    plain = dev.create_bind_group_layout(entries=[obj0])
+    return frame, neural, plain
+
+
+@functools.cache
+def render_pipeline(n_lights: int, fragment: str, vis: bool):
+    """Cached render pipeline for entry point ``fragment`` (``vis``: colour + visibility)."""
+    import wgpu
+
+    mod = _module(n_lights)
+    frame_l, neural_l, plain_l = _layouts()
+    obj_l = neural_l if fragment == "fs_neural" else plain_l
+    layout = get_device().create_pipeline_layout(bind_group_layouts=[frame_l, obj_l])
+    targets = [{"format": COLOUR_FORMAT}]
+    if vis:
+        targets.append({"format": VIS_FORMAT})
+    return get_device().create_render_pipeline(
+        layout=layout,
+        vertex={
+            "module": mod,
+            "entry_point": "vs_main",
+            "buffers": [
+                {
+                    "array_stride": 36,
+                    "attributes": [
+                        {"format": "float32x3", "offset": 0, "shader_location": 0},
+                        {"format": "float32x3", "offset": 12, "shader_location": 1},
+                        {"format": "float32x2", "offset": 24, "shader_location": 2},
+                        {"format": "uint32", "offset": 32, "shader_location": 3},
+                    ],
+                }
+            ],
+        },
+        primitive={"topology": "triangle-list", "cull_mode": "none"},
+        depth_stencil={
+            "format": DEPTH_FORMAT,
+            "depth_write_enabled": True,
+            "depth_compare": wgpu.CompareFunction.less,
+        },
+        fragment={"module": mod, "entry_point": fragment, "targets": targets},
+        label=fragment,
+    )
+
+
+class EyeTargets:
+    """Per-eye colour (HDR), depth and (screen modes) visibility textures and frame uniforms."""
+
+    def __init__(self, width: int, height: int, n_lights: int, vis: bool = False):
+        import wgpu
+
+        dev = get_device()
+        tu = wgpu.TextureUsage
+        self.size = (width, height)
+        self.colour = dev.create_texture(
+            size=(width, height, 1),
+            format=COLOUR_FORMAT,
+            usage=tu.RENDER_ATTACHMENT | tu.COPY_SRC | tu.STORAGE_BINDING | tu.TEXTURE_BINDING,
+        )
+        self.depth = dev.create_texture(
+            size=(width, height, 1), format=DEPTH_FORMAT, usage=tu.RENDER_ATTACHMENT
+        )
+        self.vis = (
+            dev.create_texture(
+                size=(width, height, 1),
+                format=VIS_FORMAT,
+                usage=tu.RENDER_ATTACHMENT | tu.TEXTURE_BINDING,
+            )
+            if vis
+            else None
+        )
+        u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
+        self.frame = dev.create_buffer(size=FRAME_BYTES, usage=u)
+        self.lights = dev.create_buffer(size=32 * max(1, n_lights), usage=u)
+        self.n_lights = max(1, n_lights)
+
+    def update(self, view_proj, eye_pos, light_pos, light_rgb) -> None:
+        from vrneural.runtime.texture_pass import pack_lights
+
+        q = get_device().queue
+        q.write_buffer(self.frame, 0, pack_frame(view_proj, eye_pos, len(light_pos)))
+        q.write_buffer(self.lights, 0, pack_lights(light_pos, light_rgb, self.n_lights))
+
+
+class DrawObject:
+    """One object's vertex buffer and object uniform (shared by eyes)."""
+
+    def __init__(self, mesh, uv_atlas, model, obj_id: int, plain=None):
+        import wgpu
+
+        self.n_vertices = 3 * len(mesh.faces)
+        self.vbuf = upload_buffer(expanded_vertices(mesh, uv_atlas), wgpu.BufferUsage.VERTEX)
+        albedo, spec, shin = plain if plain is not None else ((0, 0, 0), 0.0, 1.0)
+        self.ubuf = upload_buffer(
+            np.frombuffer(pack_object(model, albedo, spec, shin, obj_id), np.uint8),
+            wgpu.BufferUsage.UNIFORM,
+        )
+        self.binds: dict = {}
+
+    def bind_group(self, radiance_view=None, key=None):
+        """Group 1 (object uniform, radiance texture + sampler when given), cached per ``key``."""
+        if key in self.binds:
+            return self.binds[key]
+        layout = _layouts()[1 if radiance_view is not None else 2]
+        entries = [{"binding": 0, "resource": {"buffer": self.ubuf}}]
+        if radiance_view is not None:
+            entries += [
+                {"binding": 1, "resource": radiance_view},
+                {"binding": 2, "resource": _sampler()},
+            ]
+        bg = get_device().create_bind_group(layout=layout, entries=entries)
+        self.binds[key] = bg
+        return bg
+
+
+@functools.cache
+def _sampler():
+    return get_device().create_sampler(
+        mag_filter="linear",
+        min_filter="linear",
+        address_mode_u="clamp-to-edge",
+        address_mode_v="clamp-to-edge",
+    )
+
+
+def frame_bind_group(eye: EyeTargets):
+    """Group 0 (frame uniforms + lights) of ``eye``, shared by every forward pipeline."""
+    if getattr(eye, "_bind", None) is not None:
+        return eye._bind
+    eye._bind = get_device().create_bind_group(
+        layout=_layouts()[0],
+        entries=[
+            {"binding": 0, "resource": {"buffer": eye.frame}},
+            {"binding": 1, "resource": {"buffer": eye.lights}},
+        ],
+    )
+    return eye._bind
+
+
+def begin_pass(encoder, eye: EyeTargets, timestamp_writes=None):
+    """A render pass clearing colour to black, depth to 1 (and visibility to 0)."""
+    att = [
+        {
+            "view": eye.colour.create_view(),
+            "load_op": "clear",
+            "store_op": "store",
+            "clear_value": (0, 0, 0, 0),
+        }
+    ]
+    if eye.vis is not None:
+        att.append(
+            {
+                "view": eye.vis.create_view(),
+                "load_op": "clear",
+                "store_op": "store",
+                "clear_value": (0, 0, 0, 0),
+            }
+        )
+    return encoder.begin_render_pass(
+        color_attachments=att,
+        depth_stencil_attachment={
+            "view": eye.depth.create_view(),
+            "depth_load_op": "clear",
+            "depth_store_op": "store",
+            "depth_clear_value": 1.0,
+        },
+        timestamp_writes=timestamp_writes,
+    )

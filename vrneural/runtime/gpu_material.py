@@ -1,0 +1,116 @@
+"""GPU resources of a neural material and of an atlased mesh.
+
+- Neural textures ``[H, W, C]`` float16 become ``rgba16float`` 2D array textures with
+  ``ceil(C / 4)`` layers (channels packed 4 per layer, zero-padded), read by ``textureLoad``.
+- Weights: constants in the generated code, or (buffer variant) one float32 storage buffer in
+  :func:`vrneural.runtime.codegen.packed_weights` layout.
+- An atlas becomes three storage buffers: ``verts`` (4 vec4 per vertex: ``pos.xyz, atlas_u``;
+  ``normal.xyz, atlas_v``; ``tangent.xyzw``; ``material_uv.xy, 0, 0``), ``faces`` ``[F*3]`` u32
+  and ``tri_ids`` ``[R*R]`` u32.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vrneural.atlas.types import Atlas, Mesh
+from vrneural.gpu.device import get_device
+from vrneural.gpu.readback import upload_buffer
+from vrneural.material import ARCHS, NeuralMaterial
+from vrneural.runtime.codegen import packed_weights
+from vrneural.runtime.reference import count_non_empty_blocks
+
+
+def upload_feature_texture(tex: np.ndarray, label: str = ""):
+    """``tex: [H, W, C]`` float16 -> a ``texture_2d_array`` (rgba16float, ceil(C/4) layers)."""
+    import wgpu
+
+    h, w, c = tex.shape
+    layers = (c + 3) // 4
+    data = np.zeros((layers, h, w, 4), np.float16)
+    for i in range(layers):
+        part = tex[:, :, 4 * i : 4 * i + 4]
+        data[i, :, :, : part.shape[2]] = part
+    dev = get_device()
+    t = dev.create_texture(
+        size=(w, h, layers),
+        format="rgba16float",
+        usage=wgpu.TextureUsage.TEXTURE_BINDING | wgpu.TextureUsage.COPY_DST,
+        label=label,
+    )
+    dev.queue.write_texture(
+        {"texture": t},
+        np.ascontiguousarray(data),
+        {"bytes_per_row": w * 8, "rows_per_image": h},
+        (w, h, layers),
+    )
+    return t
+
+
+class GpuMaterial:
+    """Textures (and optionally the weight buffer) of one material on the device."""
+
+    def __init__(self, mat: NeuralMaterial, buffer_weights: bool = False):
+        import wgpu
+
+        self.mat = mat
+        self.buffer_weights = buffer_weights
+        names = ARCHS[mat.arch][1]
+        self.textures = [upload_feature_texture(mat.textures[n], f"neural.{n}") for n in names]
+        self.views = [t.create_view(dimension="2d-array") for t in self.textures]
+        self.weights = (
+            upload_buffer(packed_weights(mat), wgpu.BufferUsage.STORAGE, "weights")
+            if buffer_weights
+            else None
+        )
+
+    def entries(self, first_binding: int) -> list[dict]:
+        """Bind-group entries matching ``neural_material.wgsl:bindings(mat, first_binding)``."""
+        out = [{"binding": first_binding + i, "resource": v} for i, v in enumerate(self.views)]
+        if self.weights is not None:
+            out.append({"binding": first_binding + 2, "resource": {"buffer": self.weights}})
+        return out
+
+
+def vertex_table(mesh: Mesh, uv_atlas: np.ndarray) -> np.ndarray:
+    """The ``verts`` storage layout: ``[V, 4, 4]`` float32 (see module docstring)."""
+    v = mesh.positions.shape[0]
+    t = np.zeros((v, 4, 4), np.float32)
+    t[:, 0, :3] = mesh.positions
+    t[:, 0, 3] = uv_atlas[:, 0]
+    t[:, 1, :3] = mesh.normals
+    t[:, 1, 3] = uv_atlas[:, 1]
+    t[:, 2, :] = mesh.tangents
+    t[:, 3, :2] = mesh.uv
+    return t
+
+
+class GpuAtlas:
+    """Storage buffers of one atlas (shared by both eyes)."""
+
+    def __init__(self, atlas: Atlas):
+        import wgpu
+
+        if atlas.resolution % 2:
+            raise ValueError(f"atlas resolution {atlas.resolution} must be even (2x2 blocks)")
+        self.atlas = atlas
+        self.resolution = atlas.resolution
+        s = wgpu.BufferUsage.STORAGE
+        self.verts = upload_buffer(vertex_table(atlas.mesh, atlas.uv_atlas), s, "verts")
+        self.faces = upload_buffer(np.asarray(atlas.mesh.faces, np.uint32).ravel(), s, "faces")
+        self.tri_ids = upload_buffer(np.asarray(atlas.tri_ids, np.uint32).ravel(), s, "tri_ids")
+        self.non_empty_blocks = int(count_non_empty_blocks(atlas.tri_ids))
+
+
+def new_radiance_texture(resolution: int, label: str = "radiance"):
+    """An ``rgba16float`` radiance texture (storage-written, sampled, copyable), zeroed."""
+    import wgpu
+
+    return get_device().create_texture(
+        size=(resolution, resolution, 1),
+        format="rgba16float",
+        usage=wgpu.TextureUsage.STORAGE_BINDING
+        | wgpu.TextureUsage.TEXTURE_BINDING
+        | wgpu.TextureUsage.COPY_SRC,
+        label=label,
+    )

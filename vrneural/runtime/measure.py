@@ -1,0 +1,337 @@
+"""Runtime performance targets, measured in one run on the adapter at hand; writes JSON.
+
+    python -m vrneural.runtime.measure out/runtime_measure.json [--quick]
+
+1. ``texture_vs_screen``: neural shading GPU ms per displayed frame on the built-in scene, both
+   eyes: texture space (full update at ``texture_res``^2 per eye per object, divided by N + 1)
+   vs the same student per pixel in screen space at ``eye_res`` (target >= 12x).
+2. ``constants_vs_buffer``: the texture-space kernel with unrolled constant weights vs the same
+   kernel reading weights from a storage buffer (target >= 10x).
+3. ``vs_torch``: the texture-space kernel vs PyTorch CPU evaluating only the networks (coarse per
+   block, fine per texel, f32) on the same blocks (target >= 3x).
+4. ``schedules``: frame-time distribution (p99 / median; target <= 1.2 for staggered) and the
+   quality of burst vs staggered: mean |displayed - every-frame-updated| per frame.
+GPU times are medians over repeats, from timestamps (one compute pass per measured step).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from vrneural.formats.atomic import write_json
+
+
+def _median_ms(fn, repeats: int) -> float:
+    fn()  # warm-up / compile
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        ts.append((time.perf_counter() - t0) * 1e3)
+    return float(np.median(ts))
+
+
+def _renderer(mode, texture_res, eye_res, reuse=0, schedule="burst", frames=1, eyes=2):
+    from vrneural.runtime.renderer import Renderer, Settings
+    from vrneural.runtime.scene import builtin_scene
+
+    s = Settings(
+        eyes=eyes,
+        reuse=reuse,
+        texture_res=texture_res,
+        eye_res=eye_res,
+        frames=frames,
+        n_lights=3,
+        mode=mode,
+        schedule=schedule,
+    )
+    return Renderer(builtin_scene(3), s)
+
+
+def texture_vs_screen(texture_res=1200, eye_res=(2064, 2208), reuse=4, frames=3) -> dict:
+    tex = _renderer("texture", texture_res, eye_res)
+    scr = _renderer("screen", texture_res, eye_res)
+    t_ms, s_ms, t_stats, s_stats = [], [], [], []
+    for f in range(frames + 1):  # frame 0 compiles
+        a = tex.frame(f)
+        b = scr.frame(f)
+        if f:
+            t_ms.append(a.gpu_ms["texture"])
+            s_ms.append(b.gpu_ms["screen"])
+            t_stats.append(a)
+            s_stats.append(b)
+    upd = float(np.median(t_ms))
+    per_frame_tex = upd / (reuse + 1)
+    scr_ms = float(np.median(s_ms))
+    return {
+        "texture_res": texture_res,
+        "eye_res": list(eye_res),
+        "reuse": reuse,
+        "texture_update_ms": upd,
+        "texture_ms_per_displayed_frame": per_frame_tex,
+        "screen_ms_per_frame": scr_ms,
+        "ratio": scr_ms / per_frame_tex,
+        "target": 12.0,
+        "texture_blocks_shaded_per_update": t_stats[-1].blocks_shaded,
+        "texture_mlp_evals_per_update": t_stats[-1].mlp_coarse + t_stats[-1].mlp_fine,
+        "screen_pixels_shaded_per_frame": s_stats[-1].pixels_shaded,
+        "screen_mlp_evals_per_frame": s_stats[-1].mlp_coarse + s_stats[-1].mlp_fine,
+        "screen_coverage": s_stats[-1].pixels_shaded / (2 * eye_res[0] * eye_res[1]),
+    }
+
+
+def _plane_case(res: int, n_lights: int = 1):
+    from vrneural.material import random_material
+    from vrneural.runtime.assets import get_atlas, get_mesh
+
+    atlas = get_atlas(get_mesh("plane"), res)
+    mat = random_material(5)
+    model = np.eye(4)
+    eye = np.float32([0.1, 1.0, 0.3])
+    lp = np.float32([[0.3, 0.8, -0.2], [-0.4, 0.6, 0.1], [0.0, 1.2, 0.5]])[:n_lights]
+    return atlas, mat, model, eye, lp, np.ones((n_lights, 3), np.float32)
+
+
+def _gpu_pass_ms(atlas, mat, model, eye, lp, lc, buffer_weights, repeats) -> tuple[float, list]:
+    from vrneural.gpu.device import get_device
+    from vrneural.gpu.timing import GpuTimer
+    from vrneural.runtime.gpu_material import GpuAtlas
+    from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
+
+    tp = TextureSpacePass(mat, "f32", len(lp), buffer_weights)
+    cnt = CounterBuffer(1)
+    tgt = TextureTarget(tp, GpuAtlas(atlas), cnt)
+    tgt.update(model, eye, (1, 1, 0, 0), lp, lc)
+    timer = GpuTimer(4)
+    ms = []
+    for i in range(repeats + 1):
+        cnt.clear()
+        enc = get_device().create_command_encoder()
+        tgt.encode(enc, timestamp_writes=timer.writes("t"))
+        timer.resolve(enc)
+        t0 = time.perf_counter()
+        get_device().queue.submit([enc.finish()])
+        g = timer.read().get("t")
+        wall = (time.perf_counter() - t0) * 1e3
+        if i:
+            ms.append(g if g else wall)
+    return float(np.median(ms)), cnt.read()[0].tolist()
+
+
+def constants_vs_buffer(res=512, repeats=3) -> dict:
+    case = _plane_case(res)
+    c_ms, cnt = _gpu_pass_ms(*case, False, repeats)
+    b_ms, cnt_b = _gpu_pass_ms(*case, True, max(1, repeats - 1))
+    assert cnt == cnt_b
+    return {
+        "texture_res": res,
+        "constants_ms": c_ms,
+        "buffer_ms": b_ms,
+        "ratio": b_ms / c_ms,
+        "counters": cnt,
+        "target": 10.0,
+    }
+
+
+def vs_torch(res=512, repeats=3, n_lights=3) -> dict:
+    """The whole texture-space pass (geometry, sampling, lights, stores) vs PyTorch CPU running
+    only the networks on the same number of evaluations the pass's counters report (inputs
+    precomputed and excluded from torch's time)."""
+    import torch
+
+    from vrneural.material import half_vector, sample_bilinear_wrap
+
+    case = _plane_case(res, n_lights)
+    mat = case[1]
+    g_ms, cnt = _gpu_pass_ms(*case, False, repeats)
+    n = int(cnt[2])  # coarse evaluations (blocks x lit lights); fine: 4 n
+    rng = np.random.default_rng(0)
+    wi = rng.normal(size=(n, 3)).astype(np.float32)
+    wi[:, 2] = np.abs(wi[:, 2])
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    wo = wi[::-1].copy()
+    uv = rng.random((n, 4, 2)).astype(np.float32)
+    dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)
+    xc = np.concatenate([dirs, sample_bilinear_wrap(mat.textures["coarse"], uv.mean(1))], -1)
+    ff = sample_bilinear_wrap(mat.textures["fine"], uv.reshape(-1, 2))
+
+    coarse, fine = _torch_net(mat.networks["coarse"]), _torch_net(mat.networks["fine"])
+    txc, tff = torch.from_numpy(xc), torch.from_numpy(ff)
+
+    def run_torch():
+        with torch.no_grad():
+            z = coarse(txc)
+            y = fine(torch.cat([z.repeat_interleave(4, 0), tff], 1)).clamp_min(0)
+        return y
+
+    t_ms = _median_ms(run_torch, repeats)
+    return {
+        "texture_res": res,
+        "lights": n_lights,
+        "coarse_evals": n,
+        "fine_evals": int(cnt[3]),
+        "gpu_pass_ms": g_ms,
+        "torch_networks_ms": t_ms,
+        "torch_threads": torch.get_num_threads(),
+        "ratio": t_ms / g_ms,
+        "target": 3.0,
+    }
+
+
+def _torch_net(layers):
+    import torch
+
+    mods = []
+    for lay in layers:
+        lin = torch.nn.Linear(lay.n_in, lay.n_out)
+        lin.weight.data = torch.from_numpy(lay.weight)
+        lin.bias.data = torch.from_numpy(lay.bias)
+        mods.append(lin)
+        if lay.act == "relu":
+            mods.append(torch.nn.ReLU())
+        elif lay.act == "leaky_relu":
+            mods.append(torch.nn.LeakyReLU(0.01))
+    return torch.nn.Sequential(*mods).eval()
+
+
+def mlp_only(n_blocks=65536, repeats=3) -> dict:
+    """The student's two networks alone on the same inputs (coarse on ``n_blocks`` rows, fine on
+    ``4 n_blocks``): generated constant-weight kernel vs storage-buffer kernel vs PyTorch CPU."""
+    import torch
+
+    from vrneural.gpu.mlp_kernel import MlpKernel
+    from vrneural.gpu.timing import GpuTimer
+    from vrneural.material import random_material
+
+    mat = random_material(5)
+    rng = np.random.default_rng(0)
+    xc = rng.standard_normal((n_blocks, mat.networks["coarse"][0].n_in)).astype(np.float32)
+    xf = rng.standard_normal((4 * n_blocks, mat.networks["fine"][0].n_in)).astype(np.float32)
+    out = {"blocks": n_blocks}
+    for name, bw in (("constants", False), ("buffer", True)):
+        kc = MlpKernel(mat.networks["coarse"], "f32", bw)
+        kf = MlpKernel(mat.networks["fine"], "f32", bw)
+        kc.run(xc[:256])
+        kf.run(xf[:256])
+        ms = []
+        for _ in range(repeats):
+            timer = GpuTimer(4)
+            kc.run(xc, timer=timer)
+            a = timer.read()["mlp"]
+            kf.run(xf, timer=timer)
+            ms.append(a + timer.read()["mlp"])
+        out[f"{name}_ms"] = float(np.median(ms))
+    tc, tf = _torch_net(mat.networks["coarse"]), _torch_net(mat.networks["fine"])
+    txc, txf = torch.from_numpy(xc), torch.from_numpy(xf)
+
+    def run_torch():
+        with torch.no_grad():
+            tc(txc)
+            tf(txf)
+
+    out["torch_ms"] = _median_ms(run_torch, repeats)
+    out["torch_threads"] = torch.get_num_threads()
+    out["constants_vs_buffer"] = out["buffer_ms"] / out["constants_ms"]
+    out["constants_vs_torch"] = out["torch_ms"] / out["constants_ms"]
+    return out
+
+
+def schedules(texture_res=1200, eye_res=(256, 256), reuse=4, frames=41) -> dict:
+    """Frame-time distribution of burst and staggered, and their displayed-frame error vs
+    rendering with an update every frame (N = 0), on the built-in scene."""
+    out = {}
+    ref = _renderer("texture", texture_res, eye_res, 0, "burst")
+    runs = {k: _renderer("texture", texture_res, eye_res, reuse, k) for k in ("burst", "staggered")}
+    walls = {k: [] for k in runs}
+    texms = {k: [] for k in runs}
+    work = {k: [] for k in runs}
+    err = {k: [] for k in runs}
+    for f in range(frames):
+        ref.frame(f)
+        want = np.concatenate(ref.read_eyes(), 1)[..., :3]
+        for k, r in runs.items():
+            st = r.frame(f)
+            if f:
+                walls[k].append(st.wall_ms)
+                texms[k].append(st.gpu_ms.get("texture", 0.0))
+                work[k].append(st.mlp_coarse + st.mlp_fine)
+            got = np.concatenate(r.read_eyes(), 1)[..., :3]
+            if f >= reuse + 1:  # after the first complete staggered cycle
+                err[k].append(float(np.abs(got - want).mean()))
+    for k in runs:
+        w = np.asarray(walls[k])
+        out[k] = {
+            "frame_wall_ms": {
+                "median": float(np.median(w)),
+                "p95": float(np.percentile(w, 95)),
+                "p99": float(np.percentile(w, 99)),
+            },
+            "p99_over_median": float(np.percentile(w, 99) / np.median(w)),
+            "texture_gpu_ms": {
+                "median": float(np.median(texms[k])),
+                "max": float(np.max(texms[k])),
+            },
+            "mean_abs_error_vs_every_frame": float(np.mean(err[k])),
+            # the work per frame from the counters (MLP evaluations), immune to CPU contention
+            "mlp_evals_per_frame": {
+                "median": float(np.median(work[k])),
+                "p99": float(np.percentile(work[k], 99)),
+            },
+            "work_p99_over_median": float(
+                np.percentile(work[k], 99) / max(np.median(work[k]), 1.0)
+            ),
+        }
+    out["config"] = {
+        "texture_res": texture_res,
+        "eye_res": list(eye_res),
+        "reuse": reuse,
+        "frames": frames,
+        "mean_displayed_radiance": float(want.mean()),
+    }
+    out["target_staggered_p99_over_median"] = 1.2
+    return out
+
+
+def measure_all(quick: bool = False) -> dict:
+    from vrneural.gpu.device import adapter_summary
+
+    res = {"adapter": adapter_summary().to_dict(), "quick": quick}
+    t0 = time.perf_counter()
+    if quick:
+        res["texture_vs_screen"] = texture_vs_screen(256, (400, 440), frames=2)
+        res["constants_vs_buffer"] = constants_vs_buffer(128, 2)
+        res["vs_torch"] = vs_torch(128, 2)
+        res["mlp_only"] = mlp_only(4096, 2)
+        res["schedules"] = schedules(64, (96, 96), frames=16)
+    else:
+        res["texture_vs_screen"] = texture_vs_screen()
+        res["constants_vs_buffer"] = constants_vs_buffer()
+        res["vs_torch"] = vs_torch()
+        res["mlp_only"] = mlp_only()
+        res["schedules"] = schedules()
+    res["seconds"] = time.perf_counter() - t0
+    return res
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("out", help="output JSON")
+    p.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
+    p.add_argument("--only", default="", help="comma-separated subset of measurements")
+    a = p.parse_args(argv)
+    if a.only:
+        res = {k: globals()[k]() for k in a.only.split(",")}
+    else:
+        res = measure_all(a.quick)
+    write_json(a.out, res)
+    import json
+
+    print(json.dumps(res, indent=1)[:4000])
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,172 @@
+"""numpy twins of the runtime's shading kernels: the readable specification of
+``shaders/texture_space.wgsl`` (:func:`shade_texture_space`) and of the per-pixel evaluation
+shared with ``shaders/screen_space.wgsl`` (:func:`shade_points`).
+
+Units: positions metres (world), light radiance ``colour * intensity`` in W/sr; a point light
+contributes ``L = BTF(u, wi, wo) * I / d^2`` (ARCHITECTURE.md section 2). Output radiance is
+clamped to ``[0, 65504]`` (the f16 range) and is never NaN. This module never imports wgpu.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vrneural.atlas.types import EMPTY, Atlas
+from vrneural.material import NeuralMaterial, material_forward
+
+F16_MAX = 65504.0
+
+
+def barycentric_2d(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Barycentrics ``[N, 3]`` of points ``p: [N, 2]`` in triangles ``a, b, c: [N, 2]`` (f32);
+    extrapolated outside; ``1/3`` each for degenerate triangles (``|det| < 1e-20``)."""
+    f = np.float32
+    v0, v1, v2 = (b - a).astype(f), (c - a).astype(f), (p - a).astype(f)
+    den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+    ok = np.abs(den) >= 1e-20
+    d = np.where(ok, den, f(1))
+    l1 = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / d
+    l2 = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / d
+    out = np.stack([1 - l1 - l2, l1, l2], -1).astype(f)
+    out[~ok] = f(1 / 3)
+    return out
+
+
+def safe_normalize(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    n2 = (v * v).sum(-1, keepdims=True)
+    ok = n2 >= 1e-20
+    return np.where(ok, v / np.sqrt(np.where(ok, n2, 1)), fallback).astype(np.float32)
+
+
+def ortho(n: np.ndarray) -> np.ndarray:
+    """A unit vector orthogonal to each unit ``n: [N, 3]`` (same rule as the shader)."""
+    ax = np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]).astype(np.float32)
+    c = np.cross(n, ax)
+    return (c / np.linalg.norm(c, axis=-1, keepdims=True)).astype(np.float32)
+
+
+def normal_matrix(model: np.ndarray) -> np.ndarray:
+    """Inverse transpose of the upper-left 3x3 of ``model: [4, 4]``, as ``[4, 4]``."""
+    out = np.eye(4, dtype=np.float32)
+    out[:3, :3] = np.linalg.inv(model[:3, :3].astype(np.float64)).T
+    return out
+
+
+def surface_frames(atlas: Atlas, tri: np.ndarray, p: np.ndarray, model: np.ndarray):
+    """World position, normal, tangent, bitangent ``[N, 3]`` each, of triangles ``tri: [N]`` at
+    atlas points ``p: [N, 2]`` (barycentric interpolation, Gram-Schmidt tangent)."""
+    m = atlas.mesh
+    f = m.faces[tri].astype(np.int64)  # [N, 3]
+    uva = atlas.uv_atlas.astype(np.float32)
+    lam = barycentric_2d(p, uva[f[:, 0]], uva[f[:, 1]], uva[f[:, 2]])[..., None]  # [N, 3, 1]
+
+    def interp(a):
+        return (lam * a[f].astype(np.float32)).sum(1)
+
+    model = model.astype(np.float32)
+    pos = interp(m.positions) @ model[:3, :3].T + model[:3, 3]
+    n = safe_normalize(interp(m.normals) @ normal_matrix(model)[:3, :3].T, np.float32([0, 0, 1]))
+    tan = interp(m.tangents)
+    tw = tan[:, :3] @ model[:3, :3].T
+    t = safe_normalize(tw - n * (n * tw).sum(-1, keepdims=True), ortho(n))
+    b = np.where(tan[:, 3:] >= 0, 1.0, -1.0).astype(np.float32) * np.cross(n, t)
+    return pos, n, t, b
+
+
+def material_uvs(atlas: Atlas, tri: np.ndarray, p: np.ndarray, tiling) -> np.ndarray:
+    """Tiled material UV ``[N, 2]`` of triangles ``tri`` at atlas points ``p``."""
+    f = atlas.mesh.faces[tri].astype(np.int64)
+    uva = atlas.uv_atlas.astype(np.float32)
+    lam = barycentric_2d(p, uva[f[:, 0]], uva[f[:, 1]], uva[f[:, 2]])[..., None]
+    uv = (lam * atlas.mesh.uv[f].astype(np.float32)).sum(1)
+    t = np.asarray(tiling, np.float32)
+    return uv * t[:2] + t[2:]
+
+
+def count_non_empty_blocks(tri_ids: np.ndarray) -> int:
+    """2x2 blocks of ``tri_ids: [R, R]`` with at least one triangle."""
+    r = tri_ids.shape[0]
+    b = (tri_ids != np.uint32(0xFFFFFFFF)).reshape(r // 2, 2, r // 2, 2)
+    return int(b.any(axis=(1, 3)).sum())
+
+
+def shade_points(mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f32"):
+    """Radiance ``[N, 4, 3]`` of ``N`` points (frames ``[N, 3]``) whose 4 texels have material
+    UVs ``uvs: [N, 4, 2]``, lit by point lights ``light_pos, light_rgb: [L, 3]`` (W/sr), seen
+    from ``eye: [3]``. Returns (radiance, front ``[N]`` bool, coarse evals, fine evals)."""
+    f32 = np.float32
+    wo_w = safe_normalize(np.asarray(eye, f32) - pos, n)
+    wo = np.stack([(wo_w * t).sum(-1), (wo_w * b).sum(-1), (wo_w * n).sum(-1)], -1)
+    front = wo[:, 2] > 0
+    acc = np.zeros((pos.shape[0], 4, 3), f32)
+    n_coarse = 0
+    for lp, lc in zip(np.asarray(light_pos, f32), np.asarray(light_rgb, f32), strict=True):
+        lv = lp - pos
+        d2 = np.maximum((lv * lv).sum(-1, keepdims=True), f32(1e-12))
+        wiw = lv / np.sqrt(d2)
+        wi = np.stack([(wiw * t).sum(-1), (wiw * b).sum(-1), (wiw * n).sum(-1)], -1)
+        lit = front & (wi[:, 2] > 0)
+        if lit.any():
+            y = material_forward(mat, wi[lit], wo[lit], uvs[lit], precision)
+            acc[lit] += y * (lc / d2[lit])[:, None, :]
+        n_coarse += int(lit.sum())
+    acc = np.nan_to_num(np.clip(acc, 0, F16_MAX), nan=0.0)
+    return acc, front, n_coarse, 4 * n_coarse
+
+
+def texture_blocks(atlas: Atlas, model: np.ndarray, tiling=(1.0, 1.0, 0.0, 0.0), phase=0, period=1):
+    """Geometry of the non-empty 2x2 blocks in rows ``phase::period``: texel coordinates
+    ``tx, ty: [N, 4]``, the block-centre frame ``pos, n, t, b: [N, 3]`` (world) through the first
+    non-empty texel's triangle, and the texels' material UVs ``uvs: [N, 4, 2]`` (empty texels use
+    that triangle too)."""
+    R = atlas.resolution
+    nb = R // 2
+    ids = atlas.tri_ids.reshape(nb, 2, nb, 2).transpose(0, 2, 1, 3).reshape(nb, nb, 4)
+    rows = np.zeros(nb, bool)
+    rows[phase::period] = True
+    ne = (ids != EMPTY).any(-1) & rows[:, None]
+    by, bx = np.nonzero(ne)
+    blk = ids[by, bx]  # [N, 4]
+    first = np.argmax(blk != EMPTY, axis=1)
+    tc = blk[np.arange(len(blk)), first].astype(np.int64)
+    centre = np.stack([2 * bx + 1, 2 * by + 1], -1).astype(np.float32) / np.float32(R)
+    pos, n, t, b = surface_frames(atlas, tc, centre, model)
+    tri = np.where(blk != EMPTY, blk, tc[:, None]).astype(np.int64)  # [N, 4]
+    tx = 2 * bx[:, None] + np.array([0, 1, 0, 1])  # [N, 4]
+    ty = 2 * by[:, None] + np.array([0, 0, 1, 1])
+    p = (np.stack([tx, ty], -1).astype(np.float32) + np.float32(0.5)) / np.float32(R)
+    uvs = material_uvs(atlas, tri.ravel(), p.reshape(-1, 2), tiling).reshape(-1, 4, 2)
+    return {"tx": tx, "ty": ty, "pos": pos, "n": n, "t": t, "b": b, "uvs": uvs}
+
+
+def shade_texture_space(
+    atlas: Atlas,
+    mat: NeuralMaterial,
+    model: np.ndarray,
+    eye: np.ndarray,
+    light_pos: np.ndarray,
+    light_rgb: np.ndarray,
+    tiling=(1.0, 1.0, 0.0, 0.0),
+    precision: str = "f32",
+    phase: int = 0,
+    period: int = 1,
+    previous: np.ndarray | None = None,
+):
+    """Twin of the texture-space pass. Returns ``(radiance [R, R, 4] float32, counters [4])``.
+
+    Only block rows ``by % period == phase`` are processed; texels not written keep
+    ``previous`` (zeros by default). Counters: blocks shaded, back-facing blocks skipped, coarse
+    MLP evaluations, fine MLP evaluations (``single``: 0 and per-texel evaluations).
+    """
+    R = atlas.resolution
+    out = np.zeros((R, R, 4), np.float32) if previous is None else previous.copy()
+    g = texture_blocks(atlas, model, tiling, phase, period)
+    tx, ty, pos, n, t, b, uvs = (g[k] for k in ("tx", "ty", "pos", "n", "t", "b", "uvs"))
+    rad, front, nc, nf = shade_points(mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision)
+    w = front
+    out[ty[w], tx[w], :3] = rad[w]
+    out[ty[w], tx[w], 3] = 1.0
+    if mat.arch == "single":
+        nc, nf = 0, nf
+    counters = np.array([int(w.sum()), int((~front).sum()), nc, nf], np.int64)
+    return out, counters

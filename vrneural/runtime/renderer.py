@@ -1,0 +1,240 @@
+"""The frame loop: per frame, the scheduled texture-space updates of visible neural objects
+(per eye), then the forward pass per eye (or, in the screen-space modes, the visibility pass and
+the per-pixel compute pass). Records counters, per-pass GPU ms (timestamps) and frame wall ms.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from vrneural.gpu.device import get_device
+from vrneural.gpu.readback import read_texture
+from vrneural.gpu.timing import GpuTimer
+from vrneural.runtime import forward as fw
+from vrneural.runtime.assets import get_atlas, get_mesh
+from vrneural.runtime.camera import OrbitPath, PoseLogPath, eyes_from_pose, sphere_in_frustum
+from vrneural.runtime.gpu_material import GpuAtlas
+from vrneural.runtime.lights import light_arrays
+from vrneural.runtime.schedule import frame_slice
+from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget, screen_rect
+from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
+
+MODES = ("texture", "screen", "reference")
+
+
+@dataclass
+class Settings:
+    """Resolved run settings (profile + scene + CLI)."""
+
+    eyes: int = 2
+    reuse: int = 4
+    texture_res: int = 1200
+    eye_res: tuple = (2064, 2208)
+    frames: int = 90
+    fps: float = 90.0
+    fov_y: float = 96.0
+    ipd: float = 0.063
+    n_lights: int = 3
+    mode: str = "texture"
+    schedule: str = "staggered"
+    precision: str = "f32"  # resolved (f32 | f16)
+    reference: object = None  # NeuralMaterial used by every object in reference mode
+
+
+@dataclass
+class FrameStats:
+    frame: int
+    wall_ms: float
+    gpu_ms: dict
+    updated_objects: int
+    culled_objects: int
+    blocks_shaded: int
+    blocks_backfacing: int
+    mlp_coarse: int
+    mlp_fine: int
+    pixels_shaded: int = 0
+
+
+@dataclass
+class _Neural:
+    idx: int
+    desc: object
+    atlas: object
+    gatlas: GpuAtlas
+    centre: np.ndarray  # object-space bounding sphere
+    radius: float
+    targets: list = field(default_factory=list)  # per eye: TextureTarget | ScreenTarget
+    fresh: bool = False  # its radiance textures hold a complete update since it was last culled
+
+
+def bounding_sphere(mesh) -> tuple[np.ndarray, float]:
+    lo, hi = mesh.positions.min(0), mesh.positions.max(0)
+    c = (lo + hi) / 2
+    return c.astype(np.float64), float(np.linalg.norm(mesh.positions - c, axis=1).max())
+
+
+class Renderer:
+    """Everything on the device for one scene and settings; :meth:`frame` renders one frame."""
+
+    def __init__(self, scene, s: Settings, progress=None):
+        self.scene, self.s = scene, s
+        self.dev = get_device()
+        w, h = s.eye_res
+        screen = s.mode != "texture"
+        self.lights = scene.lights[: s.n_lights]
+        nl = max(1, len(self.lights))
+        self.eye_t = [fw.EyeTargets(w, h, nl, vis=screen) for _ in range(s.eyes)]
+        self.head = OrbitPath() if scene.head == "orbit" else PoseLogPath(scene.head)
+        n_neural = sum(o.material.kind == "neural" for o in scene.objects)
+        self.counters = CounterBuffer(max(1, n_neural * s.eyes))
+        self.timer = GpuTimer(max_passes=2 * n_neural * s.eyes + 2 * s.eyes + 2)
+        self.neural: list[_Neural] = []
+        self.draws = []
+        passes: dict = {}
+        for i, o in enumerate(scene.objects):
+            if progress:
+                progress(f"object {o.name}")
+            mesh = get_mesh(o.mesh, scene.base, f"objects[{i}].mesh")
+            if o.material.kind == "plain":
+                m = o.material
+                plain = (m.albedo, m.specular, m.shininess)
+                self.draws.append((fw.DrawObject(mesh, None, o.model, i, plain), None))
+                continue
+            res = o.texture_res or s.texture_res
+            atlas = get_atlas(mesh, res)
+            c, r = bounding_sphere(atlas.mesh)
+            n = _Neural(i, o, atlas, GpuAtlas(atlas), c, r)
+            mat = o.material.neural
+            if s.mode == "reference":
+                mat = s.reference or getattr(o.material, "reference", None) or mat
+            key = id(mat)
+            if key not in passes:
+                passes[key] = self._make_pass(mat)
+            for e in range(s.eyes):
+                n.targets.append(self._make_target(passes[key], n, e))
+            self.neural.append(n)
+            self.draws.append((fw.DrawObject(atlas.mesh, atlas.uv_atlas, o.model, i), n))
+
+    def _make_pass(self, mat):
+        s = self.s
+        if s.mode == "texture":
+            return TextureSpacePass(mat, s.precision, len(self.lights))
+        if s.mode == "screen":
+            return ScreenSpacePass(mat, s.precision, len(self.lights))
+        return ScreenSpacePass(mat, "f32", len(self.lights), buffer_weights=True)
+
+    def _make_target(self, p, n: _Neural, eye: int):
+        if self.s.mode == "texture":
+            return TextureTarget(p, n.gatlas, self.counters)
+        return ScreenTarget(p, n.gatlas, self.eye_t[eye], self.counters)
+
+    @staticmethod
+    def world_sphere(n: _Neural) -> tuple[np.ndarray, float]:
+        model = n.desc.model
+        c = model[:3, :3] @ n.centre + model[:3, 3]
+        return c, n.radius * float(np.linalg.norm(model[:3, :3], axis=0).max())
+
+    def _visible(self, n: _Neural, eyes) -> bool:
+        c, r = self.world_sphere(n)
+        return any(sphere_in_frustum(c, r, e.view_proj) for e in eyes)
+
+    def eyes_at(self, frame: int):
+        s = self.s
+        pos, rot = self.head.pose(frame / s.fps)
+        return eyes_from_pose(pos, rot, s.ipd, s.eyes, s.fov_y, s.eye_res[0] / s.eye_res[1])
+
+    def frame(self, f: int) -> FrameStats:
+        """Render display frame ``f`` (waits for the GPU); returns its statistics."""
+        s = self.s
+        t0 = time.perf_counter()
+        eyes = self.eyes_at(f)
+        lp, lc = light_arrays(self.lights, f / s.fps)
+        self.counters.clear()
+        enc = self.dev.create_command_encoder()
+        sl = frame_slice(f, s.reuse, s.schedule)
+        updated = culled = 0
+        if s.mode == "texture":
+            todo = []
+            for k, n in enumerate(self.neural):
+                if not self._visible(n, eyes):
+                    culled += 1
+                    n.fresh = False
+                elif not n.fresh:  # first sight (or back in view): one full update
+                    updated += 1
+                    todo.append((k, n, 0, 1))
+                    n.fresh = True
+                elif sl.update:
+                    updated += 1
+                    todo.append((k, n, sl.phase, sl.period))
+            if todo:
+                # all of a frame's texture-space dispatches in one compute pass: one timestamp
+                # pair around them (lavapipe's per-pass timestamps are unreliable when several
+                # independent compute passes follow each other)
+                cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("texture"))
+                for k, n, phase, period in todo:
+                    tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
+                    for e, (eye, tgt) in enumerate(zip(eyes, n.targets, strict=True)):
+                        slot = k * s.eyes + e
+                        tgt.update(n.desc.model, eye.position, tiling, lp, lc, phase, period, slot)
+                        tgt.dispatch(cp, phase, period)
+                cp.end()
+        for e, (eye, et) in enumerate(zip(eyes, self.eye_t, strict=True)):
+            et.update(eye.view_proj, eye.position, lp, lc)
+            self._draw(enc, e, et)
+            if s.mode != "texture":
+                inv = np.linalg.inv(eye.view_proj)
+                cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("screen"))
+                for k, n in enumerate(self.neural):
+                    if not self._visible(n, [eye]):
+                        culled += 1
+                        continue
+                    tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
+                    tgt = n.targets[e]
+                    c, r = self.world_sphere(n)
+                    rect = screen_rect(c, r, eye.view_proj, *s.eye_res)
+                    slot = k * s.eyes + e
+                    tgt.update(n.desc.model, eye.position, tiling, inv, lp, lc, slot, n.idx, rect)
+                    tgt.dispatch(cp)
+                cp.end()
+        self.timer.resolve(enc)
+        self.dev.queue.submit([enc.finish()])
+        gpu = self.timer.read()  # waits for the GPU
+        c = self.counters.read().sum(0)
+        wall = (time.perf_counter() - t0) * 1e3
+        if s.mode != "texture":
+            return FrameStats(
+                f, wall, gpu, 0, culled, 0, int(c[1]), int(c[2]), int(c[3]), int(c[0])
+            )
+        return FrameStats(f, wall, gpu, updated, culled, int(c[0]), int(c[1]), int(c[2]), int(c[3]))
+
+    def _draw(self, enc, e: int, et) -> None:
+        vis = self.s.mode != "texture"
+        rp = fw.begin_pass(enc, et, self.timer.writes("forward"))
+        nl = et.n_lights
+        for d, n in self.draws:
+            if n is None:
+                pipe = fw.render_pipeline(nl, "fs_plain_vis" if vis else "fs_plain", vis)
+                bg = d.bind_group(None, "plain")
+            elif vis:
+                pipe = fw.render_pipeline(nl, "fs_neural_vis", True)
+                bg = d.bind_group(None, "plain")
+            else:
+                pipe = fw.render_pipeline(nl, "fs_neural", False)
+                bg = d.bind_group(n.targets[e].view, ("eye", e))
+            rp.set_pipeline(pipe)
+            rp.set_bind_group(0, fw.frame_bind_group(et))
+            rp.set_bind_group(1, bg)
+            rp.set_vertex_buffer(0, d.vbuf)
+            rp.draw(d.n_vertices)
+        rp.end()
+
+    def read_eyes(self) -> list[np.ndarray]:
+        """The eyes' HDR colour ``[H, W, 4]`` float32 of the last frame."""
+        return [read_texture(et.colour).astype(np.float32) for et in self.eye_t]
+
+    def radiance(self, obj: int = 0, eye: int = 0) -> np.ndarray:
+        """Radiance texture ``[R, R, 4]`` of neural object ``obj`` for ``eye`` (texture mode)."""
+        return read_texture(self.neural[obj].targets[eye].texture).astype(np.float32)

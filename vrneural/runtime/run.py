@@ -1,0 +1,184 @@
+"""The `vrneural run` stage: resolve the config, render the frames, write outputs and
+``summary.json``, return the summary dict."""
+
+from __future__ import annotations
+
+import dataclasses
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+
+from vrneural.config import config_dict
+from vrneural.errors import VrnError
+from vrneural.formats.atomic import check_output, write_json
+from vrneural.runtime.config import RunConfig, resolve
+from vrneural.runtime.output import (
+    VideoWriter,
+    check_video,
+    downscale,
+    tonemap,
+    write_exr,
+    write_png,
+)
+
+
+def selected_frames(spec: str, frames: int) -> list[int]:
+    """Parse ``--save-frames``: 'first,last', 'all', 'none' or comma-separated indices."""
+    spec = spec.strip().lower()
+    if spec == "all":
+        return list(range(frames))
+    if spec in ("", "none"):
+        return []
+    out = set()
+    for tok in spec.split(","):
+        tok = tok.strip()
+        if tok == "first":
+            out.add(0)
+        elif tok == "last":
+            out.add(frames - 1)
+        else:
+            try:
+                k = int(tok)
+            except ValueError:
+                raise VrnError(
+                    f"--save-frames: {tok!r} is not first, last, all or an index"
+                ) from None
+            if not 0 <= k < frames:
+                raise VrnError(f"--save-frames: frame {k} is out of range [0, {frames - 1}]")
+            out.add(k)
+    return sorted(out)
+
+
+def percentiles(x) -> dict:
+    a = np.asarray(x, np.float64)
+    if not len(a):
+        return {}
+    return {
+        "median": float(np.median(a)),
+        "p95": float(np.percentile(a, 95)),
+        "p99": float(np.percentile(a, 99)),
+        "mean": float(a.mean()),
+        "max": float(a.max()),
+    }
+
+
+def run(cfg: RunConfig, progress: bool = True) -> dict:
+    """Render ``cfg``; returns the summary (also written to ``OUT/summary.json``)."""
+    from tqdm import tqdm
+
+    from vrneural.gpu.device import adapter_summary
+    from vrneural.runtime.profiles import get_profile
+    from vrneural.runtime.renderer import Renderer
+    from vrneural.runtime.scene import builtin_scene, load_scene
+
+    out = Path(cfg.out)
+    check_output(out, cfg.force)
+    if cfg.scene:
+        scene = load_scene(cfg.scene)
+    else:
+        prof = get_profile(cfg.profile or "quest3")
+        scene = builtin_scene(cfg.lights if cfg.lights else prof.lights)
+    adapter = adapter_summary()
+    s = resolve(cfg, scene, adapter)
+    save = selected_frames(cfg.save_frames, s.frames)
+    if cfg.video_scale < 1:
+        raise VrnError(f"--video-scale = {cfg.video_scale} must be >= 1")
+    video = None
+    if cfg.video:
+        check_video()
+    if out.exists() and cfg.force:
+        shutil.rmtree(out) if out.is_dir() else out.unlink()
+    out.mkdir(parents=True, exist_ok=True)
+    if cfg.video:
+        video = VideoWriter(out / "stereo.mp4", s.fps)
+    t_setup = time.perf_counter()
+    r = Renderer(scene, s)
+    setup_s = time.perf_counter() - t_setup
+    stats, files = [], []
+    for f in tqdm(range(s.frames), desc="vrneural run", unit="frame", disable=not progress):
+        stats.append(r.frame(f))
+        if f in save or video is not None:
+            hdr = r.read_eyes()
+            if f in save:
+                for e, img in enumerate(hdr):
+                    name = f"frame{f:04d}_eye{e}"
+                    files.append(str(write_png(out / f"{name}.png", tonemap(img))))
+                    files.append(str(write_exr(out / f"{name}.exr", img)))
+            if video is not None:
+                video.add([tonemap(downscale(img, cfg.video_scale)) for img in hdr])
+    if video is not None:
+        files.append(str(video.close()))
+    summary = make_summary(cfg, s, scene, adapter, stats, setup_s, files, r)
+    write_json(out / "summary.json", summary)
+    return summary
+
+
+def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
+    settings = dataclasses.asdict(dataclasses.replace(s, reference=None))
+    settings["reference"] = cfg.reference
+    warm = stats[1:] if len(stats) > 1 else stats  # frame 0 includes shader compilation
+    gpu_names = sorted({k for st in stats for k in st.gpu_ms})
+    per_frame = {
+        "wall_ms": [round(st.wall_ms, 3) for st in stats],
+        "updated_objects": [st.updated_objects for st in stats],
+        "culled_objects": [st.culled_objects for st in stats],
+        "blocks_shaded": [st.blocks_shaded for st in stats],
+        "blocks_backfacing": [st.blocks_backfacing for st in stats],
+        "pixels_shaded": [st.pixels_shaded for st in stats],
+        "mlp_coarse": [st.mlp_coarse for st in stats],
+        "mlp_fine": [st.mlp_fine for st in stats],
+        "gpu_ms": {k: [round(st.gpu_ms.get(k, 0.0), 4) for st in stats] for k in gpu_names},
+    }
+    return {
+        "adapter": adapter.to_dict(),
+        "config": config_dict(cfg),
+        "resolved": settings,
+        "scene": {
+            "name": scene.name,
+            "objects": [
+                {
+                    "name": o.name,
+                    "mesh": o.mesh,
+                    "material": o.material.kind,
+                    "source": o.material.source,
+                    "tiling": o.material.tiling,
+                }
+                for o in scene.objects
+            ],
+            "lights": len(r.lights),
+        },
+        "frames": len(stats),
+        "updates": int(sum(st.updated_objects > 0 for st in stats)),
+        "setup_s": round(setup_s, 3),
+        "frame_wall_ms": percentiles([st.wall_ms for st in warm]),
+        "gpu_ms": {
+            k: percentiles(per_frame["gpu_ms"][k][1:] or per_frame["gpu_ms"][k]) for k in gpu_names
+        },
+        "blocks_shaded_per_frame": percentiles(per_frame["blocks_shaded"]),
+        "mlp_evaluations_per_frame": percentiles(
+            [a + b for a, b in zip(per_frame["mlp_coarse"], per_frame["mlp_fine"], strict=True)]
+        ),
+        "per_frame": per_frame,
+        "files": files,
+        "note": "frame_wall_ms and gpu_ms percentiles exclude frame 0 (shader compilation)",
+    }
+
+
+def human_summary(sm: dict) -> str:
+    r = sm["resolved"]
+    fw = sm["frame_wall_ms"]
+    lines = [
+        f"adapter   {sm['adapter']['name']} ({sm['adapter']['backend']})",
+        f"run       mode={r['mode']} eyes={r['eyes']} reuse={r['reuse']} "
+        f"schedule={r['schedule']} precision={r['precision']} texture={r['texture_res']}^2 "
+        f"eye={r['eye_res'][0]}x{r['eye_res'][1]} lights={r['n_lights']}",
+        f"frames    {sm['frames']} (updates in {sm['updates']}), setup {sm['setup_s']:.1f} s",
+        f"frame ms  median {fw.get('median', 0):.1f}  p95 {fw.get('p95', 0):.1f}  "
+        f"p99 {fw.get('p99', 0):.1f} (wall, incl. GPU wait)",
+        "gpu ms    " + "  ".join(f"{k} {v['median']:.2f}" for k, v in sm["gpu_ms"].items()),
+        f"per frame blocks shaded {sm['blocks_shaded_per_frame'].get('median', 0):.0f}, MLP evals "
+        f"{sm['mlp_evaluations_per_frame'].get('median', 0):.0f} (median)",
+    ]
+    return "\n".join(lines)

@@ -1,0 +1,270 @@
+"""Scene files (TOML) and the built-in scene. Every error names the file and field path::
+
+    scene.toml: objects[2].material.scale = -1 is out of range (0, inf)
+
+Format (all lengths in metres, angles in degrees)::
+
+    profile = "quest3"            # optional; CLI flags override the profile
+    ipd = 0.063                   # optional, metres
+    [head]                        # optional: "orbit" (built-in smooth path) or a CSV pose log
+    path = "orbit"                # or path = "poses.csv" (rows t, x, y, z, qx, qy, qz, qw)
+    [[objects]]
+    mesh = "sphere"               # built-in name or a mesh file (relative to the scene file)
+    position = [0, 1, 0]
+    rotation = [0, 30, 0]         # XYZ Euler angles
+    scale = 1.0                   # uniform
+    texture_res = 1200            # optional, overrides the profile / --texture-res
+    [objects.material]            # neural: pack = "x.vrnm" | procedural = "random" | "lambertian"
+    pack = "leather.vrnm"
+    scale = 4.0                   # material tiling (BTF tiles per material-UV unit)
+    # ordinary: kind = "plain", albedo = [r, g, b], specular = 0.04, shininess = 32
+    [[lights]]
+    position = [1, 2, 1]
+    colour = [1, 1, 1]
+    intensity = 2.0               # W/sr
+    motion = "circle"             # optional: radius, period (s), phase (rad)
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from vrneural.errors import VrnError
+from vrneural.material import NeuralMaterial, lambertian_material, random_material
+from vrneural.runtime.lights import MOTIONS, PointLight, default_lights
+
+
+@dataclass
+class MaterialDesc:
+    kind: str  # "neural" | "plain"
+    neural: NeuralMaterial | None = None
+    source: str = ""  # pack path or procedural name
+    tiling: float = 1.0
+    albedo: tuple = (0.5, 0.5, 0.5)
+    specular: float = 0.04
+    shininess: float = 32.0
+
+
+@dataclass
+class ObjectDesc:
+    name: str
+    mesh: str
+    model: np.ndarray  # [4, 4] object -> world
+    material: MaterialDesc
+    texture_res: int | None = None
+
+
+@dataclass
+class Scene:
+    name: str
+    objects: list[ObjectDesc]
+    lights: list[PointLight]
+    profile: str | None = None
+    ipd: float | None = None
+    head: str = "orbit"  # "orbit" or a pose-log path
+    base: Path = field(default_factory=Path.cwd)
+
+
+def euler_matrix(deg) -> np.ndarray:
+    """Rotation ``[3, 3]`` from XYZ Euler angles in degrees (applied x, then y, then z)."""
+    x, y, z = np.radians(np.asarray(deg, np.float64))
+    rx = np.array([[1, 0, 0], [0, np.cos(x), -np.sin(x)], [0, np.sin(x), np.cos(x)]])
+    ry = np.array([[np.cos(y), 0, np.sin(y)], [0, 1, 0], [-np.sin(y), 0, np.cos(y)]])
+    rz = np.array([[np.cos(z), -np.sin(z), 0], [np.sin(z), np.cos(z), 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def model_matrix(position=(0, 0, 0), rotation=(0, 0, 0), scale=1.0) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3] = euler_matrix(rotation) * scale
+    m[:3, 3] = position
+    return m
+
+
+class _Fields:
+    """Typed access to one TOML table with errors naming ``file: path``."""
+
+    def __init__(self, src: str, path: str, table: dict):
+        self.src, self.path, self.t = src, path, table
+        if not isinstance(table, dict):
+            raise VrnError(f"{src}: {path} must be a table")
+
+    def err(self, key: str, msg: str) -> VrnError:
+        p = f"{self.path}.{key}" if self.path else key
+        return VrnError(f"{self.src}: {p} {msg}")
+
+    def num(self, key, default=None, lo=None, hi=None, lo_open=False, integer=False):
+        v = self.t.get(key, default)
+        if v is None:
+            raise self.err(key, "is missing")
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and v != int(v)):
+            raise self.err(key, f"= {v!r} must be {'an integer' if integer else 'a number'}")
+        bad = not math.isfinite(v) or (lo is not None and (v <= lo if lo_open else v < lo))
+        bad = bad or (hi is not None and v > hi)
+        if bad:
+            lo_s = "-inf" if lo is None else f"{lo:g}"
+            hi_s = "inf" if hi is None else f"{hi:g}"
+            br = "(" if lo_open else "["
+            raise self.err(
+                key, f"= {v!r} is out of range {br}{lo_s}, {hi_s}{')' if hi is None else ']'}"
+            )
+        return int(v) if integer else float(v)
+
+    def vec(self, key, default=None, n=3, lo=None):
+        v = self.t.get(key, default)
+        if v is None:
+            raise self.err(key, "is missing")
+        ok = isinstance(v, (list, tuple)) and len(v) == n
+        ok = ok and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+        if not ok or not all(math.isfinite(x) for x in v):
+            raise self.err(key, f"= {v!r} must be a list of {n} finite numbers")
+        if lo is not None and min(v) < lo:
+            raise self.err(key, f"= {v!r} has a value below {lo:g}")
+        return tuple(float(x) for x in v)
+
+    def str(self, key, default=None, choices=None):
+        v = self.t.get(key, default)
+        if v is None:
+            raise self.err(key, "is missing")
+        if not isinstance(v, str):
+            raise self.err(key, f"= {v!r} must be a string")
+        if choices is not None and v not in choices:
+            raise self.err(key, f"= {v!r} is not allowed; choose one of: {', '.join(choices)}")
+        return v
+
+    def unknown(self, allowed) -> None:
+        extra = sorted(set(self.t) - set(allowed))
+        if extra:
+            raise self.err(extra[0], f"is not a known field (known: {', '.join(sorted(allowed))})")
+
+
+def _material(src: str, path: str, t: dict, base: Path) -> MaterialDesc:
+    f = _Fields(src, path, t)
+    kind = f.str("kind", "neural", ("neural", "plain"))
+    if kind == "plain":
+        f.unknown(("kind", "albedo", "specular", "shininess"))
+        return MaterialDesc(
+            "plain",
+            albedo=f.vec("albedo", (0.5, 0.5, 0.5), lo=0.0),
+            specular=f.num("specular", 0.04, 0.0, 1.0),
+            shininess=f.num("shininess", 32.0, 0.0, 1e4, lo_open=True),
+        )
+    f.unknown(("kind", "pack", "procedural", "seed", "albedo", "scale"))
+    tiling = f.num("scale", 1.0, 0.0, lo_open=True)
+    if "pack" in t:
+        from vrneural.formats.vrnm import read_vrnm
+
+        p = Path(f.str("pack"))
+        p = p if p.is_absolute() else base / p
+        if not p.is_file():
+            raise f.err("pack", f"= {t['pack']!r}: file not found ({p})")
+        return MaterialDesc("neural", read_vrnm(p), str(p), tiling)
+    proc = f.str("procedural", "random", ("random", "lambertian"))
+    if proc == "random":
+        mat = random_material(f.num("seed", 0, 0, integer=True))
+    else:
+        mat = lambertian_material(f.vec("albedo", (0.8, 0.5, 0.2), lo=0.0))
+    return MaterialDesc("neural", mat, proc, tiling)
+
+
+def parse_scene(data: dict, src: str, base: Path) -> Scene:
+    top = _Fields(src, "", data)
+    top.unknown(("name", "profile", "ipd", "head", "objects", "lights"))
+    profile = top.str("profile", "") or None
+    ipd = top.num("ipd", 0.063, 0.0, 0.2) if "ipd" in data else None
+    head = "orbit"
+    if "head" in data:
+        h = _Fields(src, "head", data["head"])
+        h.unknown(("path",))
+        head = h.str("path", "orbit")
+        if head != "orbit":
+            p = Path(head)
+            p = p if p.is_absolute() else base / p
+            if not p.is_file():
+                raise h.err("path", f"= {head!r}: pose log not found ({p})")
+            head = str(p)
+    objs_raw = data.get("objects", [])
+    if not isinstance(objs_raw, list) or not objs_raw:
+        raise VrnError(f"{src}: objects must be a non-empty array of tables ([[objects]])")
+    objects = []
+    for i, o in enumerate(objs_raw):
+        f = _Fields(src, f"objects[{i}]", o)
+        f.unknown(("name", "mesh", "position", "rotation", "scale", "material", "texture_res"))
+        mesh = f.str("mesh")
+        model = model_matrix(
+            f.vec("position", (0, 0, 0)),
+            f.vec("rotation", (0, 0, 0)),
+            f.num("scale", 1.0, 0.0, lo_open=True),
+        )
+        mat = _material(src, f"objects[{i}].material", o.get("material", {}), base)
+        tres = f.num("texture_res", 0, 2, 16384, integer=True) if "texture_res" in o else None
+        if tres is not None and tres % 2:
+            raise f.err("texture_res", f"= {tres} must be even (2x2 blocks)")
+        objects.append(ObjectDesc(str(o.get("name", f"{mesh}{i}")), mesh, model, mat, tres))
+    lights = []
+    for i, lt in enumerate(data.get("lights", [])):
+        f = _Fields(src, f"lights[{i}]", lt)
+        f.unknown(
+            ("position", "colour", "color", "intensity", "motion", "radius", "period", "phase")
+        )
+        lights.append(
+            PointLight(
+                f.vec("position"),
+                f.vec("colour" if "colour" in lt else "color", (1, 1, 1), lo=0.0),
+                f.num("intensity", 1.0, 0.0),
+                f.str("motion", "none", MOTIONS),
+                f.num("radius", 0.0, 0.0),
+                f.num("period", 8.0, 0.0, lo_open=True),
+                f.num("phase", 0.0),
+            )
+        )
+    return Scene(str(data.get("name", Path(src).stem)), objects, lights, profile, ipd, head, base)
+
+
+def load_scene(path: str | Path) -> Scene:
+    p = Path(path)
+    if not p.is_file():
+        raise VrnError(f"{p}: scene file not found")
+    try:
+        data = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as e:
+        raise VrnError(f"{p}: invalid TOML ({e})") from None
+    except UnicodeDecodeError:
+        raise VrnError(f"{p}: not a text file") from None
+    return parse_scene(data, p.name, p.parent.resolve())
+
+
+#: Materials of the built-in scene: swap these for trained packs (paths to .vrnm files).
+BUILTIN_MATERIALS = {
+    "hero": {"procedural": "random", "seed": 3, "scale": 0.5},
+    "accent": {"procedural": "lambertian", "albedo": [0.7, 0.45, 0.25], "scale": 1.0},
+}
+
+
+def builtin_scene(n_lights: int = 3) -> Scene:
+    """A neural sphere and a neural tile on a plain floor, ``n_lights`` circling point lights."""
+    base = Path.cwd()
+    hero = _material("built-in scene", "hero", dict(BUILTIN_MATERIALS["hero"]), base)
+    acc = _material("built-in scene", "accent", dict(BUILTIN_MATERIALS["accent"]), base)
+    floor = MaterialDesc("plain", albedo=(0.35, 0.35, 0.38), specular=0.02, shininess=16.0)
+    from vrneural.runtime.assets import get_mesh
+
+    def fit(name: str, size: float) -> float:  # scale so the mesh's largest extent is ``size``
+        p = get_mesh(name).positions
+        return size / float((p.max(0) - p.min(0)).max())
+
+    objects = [
+        ObjectDesc(
+            "sphere", "sphere", model_matrix((0.0, 0.9, 0.0), (0, 0, 0), fit("sphere", 0.8)), hero
+        ),
+        ObjectDesc(
+            "tile", "plane", model_matrix((0.55, 0.55, 0.15), (60, -30, 0), fit("plane", 0.45)), acc
+        ),
+        ObjectDesc("floor", "plane", model_matrix((0, 0, 0), (0, 0, 0), fit("plane", 6.0)), floor),
+    ]
+    return Scene("builtin", objects, default_lights(n_lights), None, None, "orbit", base)

@@ -1,0 +1,119 @@
+"""Screen-space per-pixel shading (``shaders/screen_space.wgsl``): the comparison modes.
+
+``--mode screen``: the same student per pixel every frame (constant weights, chosen precision).
+``--mode reference``: the best network per pixel in f32 with storage-buffer weights (a teacher
+pack if given, else the material's own pack). The visibility pass (forward.py, ``*_vis``
+entry points) runs first; this pass writes the neural objects' pixels into the eye's colour.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vrneural.gpu.device import get_device
+from vrneural.gpu.pipelines import compute_pipeline
+from vrneural.material import NeuralMaterial
+from vrneural.runtime.codegen import screen_space_wgsl
+from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial
+from vrneural.runtime.reference import normal_matrix
+from vrneural.runtime.texture_pass import CounterBuffer, pack_lights
+
+PARAMS_BYTES = 272
+
+
+def pack_screen_params(
+    model, eye, tiling, inv_view_proj, width, height, slot, obj_id, rect=None
+) -> bytes:
+    f = np.zeros(56, np.float32)
+    f[0:16] = np.asarray(model, np.float32).T.ravel()
+    f[16:32] = normal_matrix(np.asarray(model, np.float32)).T.ravel()
+    f[32:35] = np.asarray(eye, np.float32)[:3]
+    f[36:40] = np.asarray(tiling, np.float32)
+    f[40:56] = np.asarray(inv_view_proj, np.float32).T.ravel()
+    rect = rect or (0, 0, width, height)
+    u = np.array([width, height, slot, obj_id, *rect], np.uint32)
+    return f.tobytes() + u.tobytes()
+
+
+def screen_rect(centre, radius, view_proj, width, height) -> tuple[int, int, int, int]:
+    """Pixel rectangle ``(x0, y0, w, h)`` covering a world bounding sphere (the whole screen
+    when the sphere reaches behind the eye)."""
+    c = np.asarray(centre, np.float64)
+    corners = c + radius * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    clip = np.c_[corners, np.ones(8)] @ np.asarray(view_proj, np.float64).T
+    if (clip[:, 3] <= 1e-6).any():
+        return (0, 0, width, height)
+    ndc = clip[:, :2] / clip[:, 3:]
+    x0 = int(np.clip(np.floor((ndc[:, 0].min() + 1) / 2 * width), 0, width))
+    x1 = int(np.clip(np.ceil((ndc[:, 0].max() + 1) / 2 * width), 0, width))
+    y0 = int(np.clip(np.floor((1 - ndc[:, 1].max()) / 2 * height), 0, height))
+    y1 = int(np.clip(np.ceil((1 - ndc[:, 1].min()) / 2 * height), 0, height))
+    return (x0, y0, max(0, x1 - x0), max(0, y1 - y0))
+
+
+class ScreenSpacePass:
+    """Compiled per-pixel kernel for one material."""
+
+    def __init__(self, mat: NeuralMaterial, precision="f32", n_lights=1, buffer_weights=False):
+        self.mat = mat
+        self.n_lights = max(1, n_lights)
+        self.code = screen_space_wgsl(mat, precision, self.n_lights, buffer_weights)
+        self.gmat = GpuMaterial(mat, buffer_weights)
+        self.pipe = compute_pipeline(self.code, label="screen_space")
+
+
+class ScreenTarget:
+    """One (object, eye) per-pixel shading dispatch."""
+
+    def __init__(self, spass: ScreenSpacePass, gatlas: GpuAtlas, eye_targets, counters):
+        import wgpu
+
+        dev = get_device()
+        self.spass = spass
+        self.size = eye_targets.size
+        u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
+        self.params = dev.create_buffer(size=PARAMS_BYTES, usage=u)
+        self.lights = dev.create_buffer(size=32 * spass.n_lights, usage=u)
+        entries = [
+            {"binding": 0, "resource": {"buffer": self.params}},
+            {"binding": 1, "resource": {"buffer": self.lights}},
+            {"binding": 2, "resource": {"buffer": gatlas.verts}},
+            {"binding": 3, "resource": {"buffer": gatlas.faces}},
+            {"binding": 4, "resource": eye_targets.vis.create_view()},
+            {"binding": 5, "resource": eye_targets.colour.create_view()},
+            {"binding": 6, "resource": {"buffer": counters.buf}},
+            *spass.gmat.entries(7),
+        ]
+        self.bind = dev.create_bind_group(
+            layout=spass.pipe.get_bind_group_layout(0), entries=entries
+        )
+
+    def update(self, model, eye, tiling, inv_view_proj, light_pos, light_rgb, slot, obj_id, rect):
+        """Uniforms of this dispatch; ``rect`` = (x0, y0, w, h) pixels to cover."""
+        q = get_device().queue
+        w, h = self.size
+        self.rect = rect
+        q.write_buffer(
+            self.params,
+            0,
+            pack_screen_params(model, eye, tiling, inv_view_proj, w, h, slot, obj_id, rect),
+        )
+        q.write_buffer(self.lights, 0, pack_lights(light_pos, light_rgb, self.spass.n_lights))
+
+    def encode(self, encoder, timestamp_writes=None) -> None:
+        cp = encoder.begin_compute_pass(timestamp_writes=timestamp_writes)
+        self.dispatch(cp)
+        cp.end()
+
+    def dispatch(self, cp) -> None:
+        """Record the dispatch over this target's pixel rectangle into compute pass ``cp``."""
+        w, h = self.rect[2], self.rect[3]
+        if w and h:
+            cp.set_pipeline(self.spass.pipe)
+            cp.set_bind_group(0, self.bind)
+            cp.dispatch_workgroups(math.ceil(w / 8), math.ceil(h / 8), 1)
+
+
+__all__ = ["CounterBuffer", "ScreenSpacePass", "ScreenTarget", "pack_screen_params"]

@@ -1,0 +1,164 @@
+"""The texture-space compute pass (``shaders/texture_space.wgsl``) and its GPU entry point
+:func:`shade_texture_space`, the twin of :func:`vrneural.runtime.reference.shade_texture_space`.
+
+One :class:`TextureSpacePass` per (material, precision, light count, weight variant) holds the
+pipeline; one :class:`TextureTarget` per (object, eye) holds the uniforms, the radiance texture
+and the bind group. Counters: 4 u32 per slot (blocks shaded, back-facing blocks skipped, coarse
+and fine MLP evaluations), accumulated with workgroup atomics, one slot per dispatch.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vrneural.gpu.device import get_device
+from vrneural.gpu.pipelines import compute_pipeline
+from vrneural.gpu.readback import read_buffer, read_texture, upload_buffer
+from vrneural.material import NeuralMaterial
+from vrneural.runtime.codegen import texture_space_wgsl
+from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial, new_radiance_texture
+from vrneural.runtime.reference import normal_matrix
+
+PARAMS_BYTES = 176  # mat4 model, mat4 normal_mat, vec4 eye, vec4 tiling, vec4<u32> sched
+WORKGROUP = 8
+
+
+def pack_params(model, eye, tiling, phase=0, period=1, slot=0) -> bytes:
+    """The ``Params`` uniform of texture_space.wgsl (matrices column-major)."""
+    f = np.zeros(40, np.float32)
+    f[0:16] = np.asarray(model, np.float32).T.ravel()
+    f[16:32] = normal_matrix(np.asarray(model, np.float32)).T.ravel()
+    f[32:35] = np.asarray(eye, np.float32)[:3]
+    f[36:40] = np.asarray(tiling, np.float32)
+    u = np.array([phase, period, slot, 0], np.uint32)
+    return f.tobytes() + u.tobytes()
+
+
+def pack_lights(light_pos: np.ndarray, light_rgb: np.ndarray, n: int) -> bytes:
+    """``array<Light, n>``: (pos.xyz, 0), (colour * intensity, 0) per light; zero-padded."""
+    a = np.zeros((max(n, 1), 2, 4), np.float32)
+    k = len(light_pos)
+    a[:k, 0, :3] = light_pos
+    a[:k, 1, :3] = light_rgb
+    return a.tobytes()
+
+
+class CounterBuffer:
+    """``slots x 4`` u32 atomic counters (zeroed on creation and by :meth:`clear`)."""
+
+    def __init__(self, slots: int):
+        import wgpu
+
+        self.slots = slots
+        self.buf = upload_buffer(
+            np.zeros(slots * 4, np.uint32),
+            wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC,
+            "counters",
+        )
+
+    def clear(self) -> None:
+        get_device().queue.write_buffer(self.buf, 0, np.zeros(self.slots * 4, np.uint32))
+
+    def read(self) -> np.ndarray:
+        return read_buffer(self.buf, np.uint32, self.slots * 4).reshape(self.slots, 4)
+
+
+class TextureSpacePass:
+    """Compiled texture-space kernel for one material and its GPU resources."""
+
+    def __init__(
+        self,
+        mat: NeuralMaterial,
+        precision: str = "f32",
+        n_lights: int = 1,
+        buffer_weights: bool = False,
+        gmat: GpuMaterial | None = None,
+    ):
+        self.mat = mat
+        self.n_lights = max(1, n_lights)
+        self.code = texture_space_wgsl(mat, precision, self.n_lights, buffer_weights)
+        self.gmat = gmat or GpuMaterial(mat, buffer_weights)
+
+    def pipeline(self, resolution: int):
+        return compute_pipeline(self.code, constants={"R": resolution}, label="texture_space")
+
+
+class TextureTarget:
+    """One (object, eye) radiance texture with its uniforms and bind group."""
+
+    def __init__(self, tpass: TextureSpacePass, gatlas: GpuAtlas, counters: CounterBuffer):
+        import wgpu
+
+        dev = get_device()
+        self.tpass = tpass
+        self.gatlas = gatlas
+        self.R = gatlas.resolution
+        self.pipe = tpass.pipeline(self.R)
+        u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
+        self.params = dev.create_buffer(size=PARAMS_BYTES, usage=u)
+        self.lights = dev.create_buffer(size=32 * tpass.n_lights, usage=u)
+        self.texture = new_radiance_texture(self.R)
+        self.view = self.texture.create_view()
+        entries = [
+            {"binding": 0, "resource": {"buffer": self.params}},
+            {"binding": 1, "resource": {"buffer": self.lights}},
+            {"binding": 2, "resource": {"buffer": gatlas.verts}},
+            {"binding": 3, "resource": {"buffer": gatlas.faces}},
+            {"binding": 4, "resource": {"buffer": gatlas.tri_ids}},
+            {"binding": 5, "resource": self.view},
+            {"binding": 6, "resource": {"buffer": counters.buf}},
+            *tpass.gmat.entries(7),
+        ]
+        self.bind = dev.create_bind_group(
+            layout=self.pipe.get_bind_group_layout(0), entries=entries
+        )
+
+    def update(self, model, eye, tiling, light_pos, light_rgb, phase=0, period=1, slot=0):
+        """Write this dispatch's uniforms (call before encoding it)."""
+        q = get_device().queue
+        q.write_buffer(self.params, 0, pack_params(model, eye, tiling, phase, period, slot))
+        q.write_buffer(self.lights, 0, pack_lights(light_pos, light_rgb, self.tpass.n_lights))
+
+    def encode(self, encoder, phase=0, period=1, timestamp_writes=None) -> None:
+        """Dispatch the block rows ``phase, phase + period, ...`` in a compute pass of its own."""
+        cp = encoder.begin_compute_pass(timestamp_writes=timestamp_writes)
+        self.dispatch(cp, phase, period)
+        cp.end()
+
+    def dispatch(self, cp, phase=0, period=1) -> None:
+        """Record this target's dispatch into an open compute pass ``cp``."""
+        nb = self.R // 2
+        rows = len(range(phase, nb, period))
+        if rows:
+            cp.set_pipeline(self.pipe)
+            cp.set_bind_group(0, self.bind)
+            cp.dispatch_workgroups(math.ceil(nb / WORKGROUP), math.ceil(rows / WORKGROUP), 1)
+
+
+def shade_texture_space(
+    atlas,
+    mat: NeuralMaterial,
+    model: np.ndarray,
+    eye: np.ndarray,
+    light_pos: np.ndarray,
+    light_rgb: np.ndarray,
+    tiling=(1.0, 1.0, 0.0, 0.0),
+    precision: str = "f32",
+    phase: int = 0,
+    period: int = 1,
+    buffer_weights: bool = False,
+):
+    """GPU texture-space pass on a fresh (zeroed) texture; returns ``(radiance [R, R, 4]
+    float32, counters [4])`` like the numpy twin of the same name."""
+    lp = np.asarray(light_pos, np.float32).reshape(-1, 3)
+    tp = TextureSpacePass(mat, precision, len(lp), buffer_weights)
+    counters = CounterBuffer(1)
+    tgt = TextureTarget(tp, GpuAtlas(atlas), counters)
+    tgt.update(model, eye, tiling, lp, light_rgb, phase, period, 0)
+    enc = get_device().create_command_encoder()
+    tgt.encode(enc, phase, period)
+    get_device().queue.submit([enc.finish()])
+    rad = read_texture(tgt.texture).astype(np.float32)
+    return rad, counters.read()[0].astype(np.int64)

@@ -1,0 +1,107 @@
+// Forward pass per eye (and the visibility pass of the screen-space modes).
+// Vertex buffer: triangles expanded (3 vertices per face), per vertex position.xyz, normal.xyz,
+// atlas uv, triangle index (u32). Colour target rgba16float (HDR), depth32float, less-test.
+//   fs_neural: bilinear sample of this eye's radiance texture at the atlas uv (clamp-to-edge;
+//              the atlas gutter guarantees valid taps).
+//   fs_plain:  ordinary material: Lambert + Blinn-Phong under the same point lights
+//              (twin: runtime/reference_plain.py:shade_plain).
+//   *_vis:     screen-space modes: plain objects write colour, neural objects write (id + 1, tri)
+//              into an rg32uint visibility target and leave colour 0 for the compute pass.
+
+struct Frame {
+    view_proj: mat4x4<f32>,
+    eye: vec4<f32>,        // world eye position
+    info: vec4<u32>,       // (light count, unused...)
+}
+struct Light {
+    pos: vec4<f32>,
+    radiance: vec4<f32>,   // colour * intensity, W/sr
+}
+struct Object {
+    model: mat4x4<f32>,
+    normal_mat: mat4x4<f32>,
+    albedo: vec4<f32>,     // plain: diffuse albedo rgb
+    spec: vec4<f32>,       // plain: (specular albedo, shininess, object id, unused)
+}
+
+@group(0) @binding(0) var<uniform> F: Frame;
+@group(0) @binding(1) var<uniform> lights: array<Light, {{ n_lights }}>;
+@group(1) @binding(0) var<uniform> O: Object;
+@group(1) @binding(1) var radiance: texture_2d<f32>;
+@group(1) @binding(2) var samp: sampler;
+
+struct VIn {
+    @location(0) pos: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) tri: u32,
+}
+struct VOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) @interpolate(flat) tri: u32,
+}
+
+@vertex
+fn vs_main(v: VIn) -> VOut {
+    var o: VOut;
+    let w = O.model * vec4<f32>(v.pos, 1.0);
+    o.clip = F.view_proj * w;
+    o.world = w.xyz;
+    o.normal = (O.normal_mat * vec4<f32>(v.normal, 0.0)).xyz;
+    o.uv = v.uv;
+    o.tri = v.tri;
+    return o;
+}
+
+fn plain_colour(world: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
+    var n = normalize(normal);
+    let wo = normalize(F.eye.xyz - world);
+    if (dot(n, wo) < 0.0) { n = -n; }  // two-sided
+    var c = vec3<f32>(0.0);
+    for (var i = 0u; i < F.info.x; i++) {
+        let lv = lights[i].pos.xyz - world;
+        let d2 = max(dot(lv, lv), 1e-12);
+        let wi = lv * inverseSqrt(d2);
+        let cos_i = dot(n, wi);
+        if (cos_i <= 0.0) { continue; }
+        let h = normalize(wi + wo);
+        let s = O.spec.x * (O.spec.y + 8.0) / (8.0 * 3.14159265) * pow(max(dot(n, h), 0.0), O.spec.y);
+        c += (O.albedo.rgb / 3.14159265 + vec3<f32>(s)) * cos_i * lights[i].radiance.rgb / d2;
+    }
+    return min(c, vec3<f32>(65504.0));
+}
+
+@fragment
+fn fs_neural(v: VOut) -> @location(0) vec4<f32> {
+    let c = textureSampleLevel(radiance, samp, v.uv, 0.0);
+    return vec4<f32>(c.rgb, 1.0);
+}
+
+@fragment
+fn fs_plain(v: VOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(plain_colour(v.world, v.normal), 1.0);
+}
+
+struct VisOut {
+    @location(0) colour: vec4<f32>,
+    @location(1) vis: vec2<u32>,
+}
+
+@fragment
+fn fs_plain_vis(v: VOut) -> VisOut {
+    var o: VisOut;
+    o.colour = vec4<f32>(plain_colour(v.world, v.normal), 1.0);
+    o.vis = vec2<u32>(0u, 0u);
+    return o;
+}
+
+@fragment
+fn fs_neural_vis(v: VOut) -> VisOut {
+    var o: VisOut;
+    o.colour = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+    o.vis = vec2<u32>(u32(O.spec.z) + 1u, v.tri);
+    return o;
+}

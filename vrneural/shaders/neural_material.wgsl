@@ -1,0 +1,262 @@
+// Neural material evaluation shared by the texture-space and screen-space kernels.
+// Semantics: vrneural/material.py (material_forward). Generated per material pack:
+//   arch coarse_fine: eval_coarse(dirs, U_c(u_c)) -> latent z, eval_fine(z, U_f(u_k)) -> RGB
+//   arch single:      eval_single(dirs, U(u_k)) -> RGB
+// with features from sample_a / sample_b, sampled once per texel outside the light loop.
+// dirs = [wi, wo, h] in the local frame (9 floats). Neural textures are texture_2d_array<f32>
+// (rgba16float, channels packed 4 per layer) sampled by manual bilinear wrap (4 textureLoads),
+// exactly like sample_bilinear_wrap. Weights are WGSL constants in unrolled code, or read from
+// a storage buffer in loops (buffer_weights; wide teachers and the >=10x comparison).
+{% import 'mlp.wgsl' as m %}
+
+{% macro bindings(mat, first_binding) %}
+@group(0) @binding({{ first_binding }}) var tex_a: texture_2d_array<f32>;  // coarse / features
+{% if mat.arch == 'coarse_fine' %}
+@group(0) @binding({{ first_binding + 1 }}) var tex_b: texture_2d_array<f32>;  // fine
+{% endif %}
+{% if mat.buffer_weights %}
+@group(0) @binding({{ first_binding + 2 }}) var<storage, read> weights: array<f32>;
+{% endif %}
+{% endmacro %}
+
+{% macro sampler_fn(name, tex, channels) %}
+// Bilinear wrap lookup of {{ channels }} channels at material uv (texel centres at (i + 0.5) / W).
+fn {{ name }}(uv: vec2<f32>) -> array<f32, {{ channels }}> {
+    let dims = vec2<i32>(textureDimensions({{ tex }}));
+    let x = uv.x * f32(dims.x) - 0.5;
+    let y = uv.y * f32(dims.y) - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let xi0 = ((i32(x0) % dims.x) + dims.x) % dims.x;
+    let yi0 = ((i32(y0) % dims.y) + dims.y) % dims.y;
+    let xi1 = (xi0 + 1) % dims.x;
+    let yi1 = (yi0 + 1) % dims.y;
+    var out: array<f32, {{ channels }}>;
+{% for layer in range((channels + 3) // 4) %}
+    {
+        let t00 = textureLoad({{ tex }}, vec2<i32>(xi0, yi0), {{ layer }}, 0);
+        let t10 = textureLoad({{ tex }}, vec2<i32>(xi1, yi0), {{ layer }}, 0);
+        let t01 = textureLoad({{ tex }}, vec2<i32>(xi0, yi1), {{ layer }}, 0);
+        let t11 = textureLoad({{ tex }}, vec2<i32>(xi1, yi1), {{ layer }}, 0);
+        let top = t00 * (1.0 - fx) + t10 * fx;
+        let bot = t01 * (1.0 - fx) + t11 * fx;
+        let v = top * (1.0 - fy) + bot * fy;
+{% for c in range(4) %}
+{% if layer * 4 + c < channels %}
+        out[{{ layer * 4 + c }}] = v[{{ c }}];
+{% endif %}
+{% endfor %}
+    }
+{% endfor %}
+    return out;
+}
+{% endmacro %}
+
+{% macro output_fn(output) %}
+// Output transform of the last layer's raw value (material.apply_output).
+fn apply_output(r: vec3<f32>) -> vec3<f32> {
+{% if output == 'log1p' %}
+    return exp(max(r, vec3<f32>(0.0))) - vec3<f32>(1.0);
+{% else %}
+    return max(r, vec3<f32>(0.0));
+{% endif %}
+}
+{% endmacro %}
+
+{% macro const_net(fname, prefix, layers, T, arg_decls, input_exprs, ret) %}
+{# input_exprs: one f32 expression per network input; ret: 'latent' or 'rgb' #}
+fn {{ fname }}({{ arg_decls }}) -> {{ 'vec3<f32>' if ret == 'rgb' else 'array<' ~ T ~ ', ' ~ layers[-1].n_out ~ '>' }} {
+{% set ins = [] %}
+{% for e in input_exprs %}
+    let in_{{ loop.index0 }} = {{ T }}({{ e }});
+{% set _ = ins.append('in_' ~ loop.index0) %}
+{% endfor %}
+{{ m.mlp_body(prefix, ins, layers, T) }}
+{% set L = layers|length %}
+{% if ret == 'rgb' %}
+    return vec3<f32>(f32({{ prefix }}{{ L }}_0), f32({{ prefix }}{{ L }}_1), f32({{ prefix }}{{ L }}_2));
+{% else %}
+{% set outs = [] %}
+{% for k in range(layers[-1].n_out) %}{% set _ = outs.append(prefix ~ L ~ '_' ~ k) %}{% endfor %}
+    return array<{{ T }}, {{ layers[-1].n_out }}>({{ outs|join(', ') }});
+{% endif %}
+}
+{% endmacro %}
+
+{% macro buffer_net_lib(mat, T) %}
+// Storage-buffer weights: per layer W[out, in] row-major then b[out] (mlp.pack_weights), all
+// networks concatenated in order {{ mat.net_order|join(', ') }}.
+const MAXW: u32 = {{ mat.max_width }}u;
+const L_IN = array<u32, {{ mat.buf_dims_in|length }}>({{ mat.buf_dims_in|join('u, ') }}u);
+const L_OUT = array<u32, {{ mat.buf_dims_out|length }}>({{ mat.buf_dims_out|join('u, ') }}u);
+const L_OFF = array<u32, {{ mat.buf_offsets|length }}>({{ mat.buf_offsets|join('u, ') }}u);
+const L_ACT = array<u32, {{ mat.buf_acts|length }}>({{ mat.buf_acts|join('u, ') }}u);  // 0 relu, 1 leaky, 2 none
+
+fn run_buffer_net(x_in: array<{{ T }}, MAXW>, first: u32, count: u32) -> array<{{ T }}, MAXW> {
+    var a = x_in;
+    var b: array<{{ T }}, MAXW>;
+    for (var l = first; l < first + count; l++) {
+        let n_in = L_IN[l];
+        let n_out = L_OUT[l];
+        let off = L_OFF[l];
+        for (var o = 0u; o < n_out; o++) {
+            var s = {{ T }}(weights[off + n_out * n_in + o]);
+            for (var k = 0u; k < n_in; k++) {
+                s += {{ T }}(weights[off + o * n_in + k]) * a[k];
+            }
+            if (L_ACT[l] == 0u) { s = max(s, {{ T }}(0)); }
+            else if (L_ACT[l] == 1u) { s = max(s, {{ T }}(0.01) * s); }
+            b[o] = s;
+        }
+        for (var o = 0u; o < n_out; o++) { a[o] = b[o]; }
+    }
+    return a;
+}
+{% endmacro %}
+
+{% macro material_fns(mat, T) %}
+{{ sampler_fn('sample_a', 'tex_a', mat.ca) }}
+{% if mat.arch == 'coarse_fine' %}
+{{ sampler_fn('sample_b', 'tex_b', mat.cb) }}
+{% endif %}
+{{ output_fn(mat.output) }}
+{% if mat.buffer_weights %}
+{{ buffer_net_lib(mat, T) }}
+{% if mat.arch == 'coarse_fine' %}
+fn eval_coarse(d: array<f32, 9>, f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, MAXW> {
+    var x: array<{{ T }}, MAXW>;
+    for (var k = 0u; k < 9u; k++) { x[k] = {{ T }}(d[k]); }
+    for (var k = 0u; k < {{ mat.ca }}u; k++) { x[9u + k] = {{ T }}(f[k]); }
+    return run_buffer_net(x, 0u, {{ mat.n_layers[0] }}u);
+}
+fn eval_fine(z: array<{{ T }}, MAXW>, f: array<f32, {{ mat.cb }}>) -> vec3<f32> {
+    var x = z;
+    for (var k = 0u; k < {{ mat.cb }}u; k++) { x[{{ mat.z }}u + k] = {{ T }}(f[k]); }
+    let y = run_buffer_net(x, {{ mat.n_layers[0] }}u, {{ mat.n_layers[1] }}u);
+    return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
+}
+{% else %}
+fn eval_single(d: array<f32, 9>, f: array<f32, {{ mat.ca }}>) -> vec3<f32> {
+    var x: array<{{ T }}, MAXW>;
+    for (var k = 0u; k < 9u; k++) { x[k] = {{ T }}(d[k]); }
+    for (var k = 0u; k < {{ mat.ca }}u; k++) { x[9u + k] = {{ T }}(f[k]); }
+    let y = run_buffer_net(x, 0u, {{ mat.n_layers[0] }}u);
+    return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
+}
+{% endif %}
+{% else %}
+{% set dexprs = [] %}
+{% for k in range(9) %}{% set _ = dexprs.append('d[' ~ k ~ ']') %}{% endfor %}
+{% if mat.arch == 'coarse_fine' %}
+{% set fa = [] %}
+{% for k in range(mat.ca) %}{% set _ = fa.append('f[' ~ k ~ ']') %}{% endfor %}
+{% set zb = [] %}
+{% for k in range(mat.z) %}{% set _ = zb.append('z[' ~ k ~ ']') %}{% endfor %}
+{% for k in range(mat.cb) %}{% set _ = zb.append('f[' ~ k ~ ']') %}{% endfor %}
+{{ const_net('coarse_net', 'c', mat.networks['coarse'], T, 'd: array<f32, 9>, f: array<f32, ' ~ mat.ca ~ '>', dexprs + fa, 'latent') }}
+{{ const_net('fine_net', 'q', mat.networks['fine'], T, 'z: array<' ~ T ~ ', ' ~ mat.z ~ '>, f: array<f32, ' ~ mat.cb ~ '>', zb, 'rgb') }}
+fn eval_coarse(d: array<f32, 9>, f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, {{ mat.z }}> {
+    return coarse_net(d, f);
+}
+fn eval_fine(z: array<{{ T }}, {{ mat.z }}>, f: array<f32, {{ mat.cb }}>) -> vec3<f32> {
+    return apply_output(fine_net(z, f));
+}
+{% else %}
+{% set fa = [] %}
+{% for k in range(mat.ca) %}{% set _ = fa.append('f[' ~ k ~ ']') %}{% endfor %}
+{{ const_net('single_net', 's', mat.networks['mlp'], T, 'd: array<f32, 9>, f: array<f32, ' ~ mat.ca ~ '>', dexprs + fa, 'rgb') }}
+fn eval_single(d: array<f32, 9>, f: array<f32, {{ mat.ca }}>) -> vec3<f32> {
+    return apply_output(single_net(d, f));
+}
+{% endif %}
+{% endif %}
+{% endmacro %}
+
+{% macro frame_fns() %}
+const PI: f32 = 3.14159265;
+const F16_MAX: f32 = 65504.0;
+
+// Barycentrics of p in the 2D triangle (a, b, c); extrapolated outside it (gutter texels);
+// (1/3, 1/3, 1/3) for a degenerate triangle. Twin: runtime/reference.py:barycentric_2d.
+fn bary2(p: vec2<f32>, a: vec2<f32>, b: vec2<f32>, c: vec2<f32>) -> vec3<f32> {
+    let v0 = b - a;
+    let v1 = c - a;
+    let v2 = p - a;
+    let den = v0.x * v1.y - v1.x * v0.y;
+    if (abs(den) < 1e-20) { return vec3<f32>(1.0 / 3.0); }
+    let l1 = (v2.x * v1.y - v1.x * v2.y) / den;
+    let l2 = (v0.x * v2.y - v2.x * v0.y) / den;
+    return vec3<f32>(1.0 - l1 - l2, l1, l2);
+}
+
+fn safe_normalize(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let n2 = dot(v, v);
+    if (n2 < 1e-20) { return fallback; }
+    return v * inverseSqrt(n2);
+}
+
+// Any unit vector orthogonal to unit n (for a degenerate tangent).
+fn ortho(n: vec3<f32>) -> vec3<f32> {
+    if (abs(n.x) < 0.9) { return normalize(cross(n, vec3<f32>(1.0, 0.0, 0.0))); }
+    return normalize(cross(n, vec3<f32>(0.0, 1.0, 0.0)));
+}
+
+// half_vector in material.py: normalize(wi + wo), (0, 0, 1) when |wi + wo|^2 < 1e-12.
+fn half_vec(wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    let s = wi + wo;
+    let n2 = dot(s, s);
+    if (n2 < 1e-12) { return vec3<f32>(0.0, 0.0, 1.0); }
+    return s / sqrt(n2);
+}
+
+fn dirs9(wi: vec3<f32>, wo: vec3<f32>) -> array<f32, 9> {
+    let h = half_vec(wi, wo);
+    return array<f32, 9>(wi.x, wi.y, wi.z, wo.x, wo.y, wo.z, h.x, h.y, h.z);
+}
+{% endmacro %}
+
+{% macro mesh_fns() %}
+// Mesh access (needs globals P: Params with model/normal_mat/tiling, verts, faces).
+struct Surf {
+    pos: vec3<f32>,  // world
+    n: vec3<f32>,    // unit normal, world
+    t: vec3<f32>,    // unit tangent, world
+    b: vec3<f32>,    // unit bitangent, world
+}
+
+fn vtx(i: u32, k: u32) -> vec4<f32> { return verts[i * 4u + k]; }
+
+// Material uv (tiled) of triangle tri at barycentrics l.
+fn material_uv_l(tri: u32, l: vec3<f32>) -> vec2<f32> {
+    let i0 = faces[tri * 3u];
+    let i1 = faces[tri * 3u + 1u];
+    let i2 = faces[tri * 3u + 2u];
+    let uv = l.x * vtx(i0, 3u).xy + l.y * vtx(i1, 3u).xy + l.z * vtx(i2, 3u).xy;
+    return uv * P.tiling.xy + P.tiling.zw;
+}
+
+// Interpolated world-space surface frame of triangle tri at barycentrics l.
+fn surface_l(tri: u32, l: vec3<f32>) -> Surf {
+    let i0 = faces[tri * 3u];
+    let i1 = faces[tri * 3u + 1u];
+    let i2 = faces[tri * 3u + 2u];
+    let pos = l.x * vtx(i0, 0u).xyz + l.y * vtx(i1, 0u).xyz + l.z * vtx(i2, 0u).xyz;
+    let nrm = l.x * vtx(i0, 1u).xyz + l.y * vtx(i1, 1u).xyz + l.z * vtx(i2, 1u).xyz;
+    let tan = l.x * vtx(i0, 2u) + l.y * vtx(i1, 2u) + l.z * vtx(i2, 2u);
+    let m3 = mat3x3<f32>(P.model[0].xyz, P.model[1].xyz, P.model[2].xyz);
+    let nm3 = mat3x3<f32>(P.normal_mat[0].xyz, P.normal_mat[1].xyz, P.normal_mat[2].xyz);
+    var s: Surf;
+    s.pos = (P.model * vec4<f32>(pos, 1.0)).xyz;
+    s.n = safe_normalize(nm3 * nrm, vec3<f32>(0.0, 0.0, 1.0));
+    let tw = m3 * tan.xyz;
+    s.t = safe_normalize(tw - s.n * dot(s.n, tw), ortho(s.n));
+    s.b = select(-1.0, 1.0, tan.w >= 0.0) * cross(s.n, s.t);
+    return s;
+}
+
+fn to_local(s: Surf, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(v, s.t), dot(v, s.b), dot(v, s.n));
+}
+{% endmacro %}

@@ -1,0 +1,124 @@
+// Screen-space shading of one neural object for one eye (the paper's "ours in screen space"
+// baseline, and --mode reference with buffer weights): one thread per pixel, every frame. The
+// visibility pass wrote (object id + 1, triangle) per pixel; the pixel's view ray is intersected
+// with that triangle's plane for barycentrics, then the surface frame, material uv and lights
+// are computed exactly as in texture_space.wgsl. Pixels do NOT share the coarse MLP: each pixel
+// runs the coarse MLP and the fine MLP once per light at its own material uv (u_c = u_k).
+// numpy twin of the per-point shading: runtime/reference.py:shade_points.
+{% import 'neural_material.wgsl' as nm %}
+{% if T == 'f16' %}
+enable f16;
+{% endif %}
+
+struct Params {
+    model: mat4x4<f32>,
+    normal_mat: mat4x4<f32>,
+    eye: vec4<f32>,
+    tiling: vec4<f32>,
+    inv_view_proj: mat4x4<f32>,
+    screen: vec4<u32>,  // (width, height, counter slot, object id)
+    rect: vec4<u32>,    // dispatch origin (x0, y0) and size (w, h): the object's screen bounds
+}
+struct Light {
+    pos: vec4<f32>,
+    radiance: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(1) var<uniform> lights: array<Light, {{ n_lights }}>;
+@group(0) @binding(2) var<storage, read> verts: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> faces: array<u32>;
+@group(0) @binding(4) var vis: texture_2d<u32>;
+@group(0) @binding(5) var out_tex: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
+{{ nm.bindings(mat, 7) }}
+
+{{ nm.frame_fns() }}
+{{ nm.material_fns(mat, T) }}
+{{ nm.mesh_fns() }}
+
+// Barycentrics of the ray (o, d) hitting the plane of triangle tri (world space).
+fn ray_bary(tri: u32, o: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    let v0 = (P.model * vec4<f32>(vtx(faces[tri * 3u], 0u).xyz, 1.0)).xyz;
+    let v1 = (P.model * vec4<f32>(vtx(faces[tri * 3u + 1u], 0u).xyz, 1.0)).xyz;
+    let v2 = (P.model * vec4<f32>(vtx(faces[tri * 3u + 2u], 0u).xyz, 1.0)).xyz;
+    let e1 = v1 - v0;
+    let e2 = v2 - v0;
+    let pv = cross(d, e2);
+    let det = dot(e1, pv);
+    if (abs(det) < 1e-20) { return vec3<f32>(1.0 / 3.0); }
+    let inv = 1.0 / det;
+    let tv = o - v0;
+    let u = dot(tv, pv) * inv;
+    let v = dot(d, cross(tv, e1)) * inv;
+    return vec3<f32>(1.0 - u - v, u, v);
+}
+
+fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
+    let id = textureLoad(vis, px, 0);
+    if (id.x != P.screen.w + 1u) { return vec4<u32>(0u); }
+    let ndc = vec2<f32>(
+        (f32(px.x) + 0.5) / f32(P.screen.x) * 2.0 - 1.0,
+        1.0 - (f32(px.y) + 0.5) / f32(P.screen.y) * 2.0,
+    );
+    let far = P.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
+    let near = P.inv_view_proj * vec4<f32>(ndc, 0.0, 1.0);
+    let dir = normalize(far.xyz / far.w - near.xyz / near.w);
+    let l = ray_bary(id.y, near.xyz / near.w, dir);
+    let s = surface_l(id.y, l);
+    let uv = material_uv_l(id.y, l);
+    let wo = to_local(s, safe_normalize(P.eye.xyz - s.pos, s.n));
+    if (wo.z <= 0.0) {
+        textureStore(out_tex, px, vec4<f32>(0.0, 0.0, 0.0, 1.0));
+        return vec4<u32>(0u, 1u, 0u, 0u);
+    }
+{% if mat.arch == 'coarse_fine' %}
+    let fc = sample_a(uv);
+    let ff = sample_b(uv);
+{% else %}
+    let fa = sample_a(uv);
+{% endif %}
+    var acc = vec3<f32>(0.0);
+    var n = 0u;
+    for (var li = 0u; li < {{ n_lights }}u; li++) {
+        let lv = lights[li].pos.xyz - s.pos;
+        let d2 = max(dot(lv, lv), 1e-12);
+        let wi = to_local(s, lv * inverseSqrt(d2));
+        if (wi.z <= 0.0) { continue; }
+        let d = dirs9(wi, wo);
+        n += 1u;
+{% if mat.arch == 'coarse_fine' %}
+        acc += eval_fine(eval_coarse(d, fc), ff) * lights[li].radiance.rgb / d2;
+{% else %}
+        acc += eval_single(d, fa) * lights[li].radiance.rgb / d2;
+{% endif %}
+    }
+    textureStore(out_tex, px, vec4<f32>(clamp(acc, vec3<f32>(0.0), vec3<f32>(F16_MAX)), 1.0));
+{% if mat.arch == 'coarse_fine' %}
+    return vec4<u32>(1u, 0u, n, n);
+{% else %}
+    return vec4<u32>(1u, 0u, 0u, n);
+{% endif %}
+}
+
+var<workgroup> wg_count: array<atomic<u32>, 4>;
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    if (lid < 4u) { atomicStore(&wg_count[lid], 0u); }
+    workgroupBarrier();
+    var c = vec4<u32>(0u);
+    let px = gid.xy + P.rect.xy;
+    if (gid.x < P.rect.z && gid.y < P.rect.w && px.x < P.screen.x && px.y < P.screen.y) {
+        c = shade_pixel(px);
+    }
+    for (var k = 0u; k < 4u; k++) {
+        if (c[k] != 0u) { atomicAdd(&wg_count[k], c[k]); }
+    }
+    workgroupBarrier();
+    if (lid < 4u) {
+        let v = atomicLoad(&wg_count[lid]);
+        if (v != 0u) { atomicAdd(&counters[P.screen.z * 4u + lid], v); }
+    }
+}

@@ -1,0 +1,175 @@
+// Texture-space shading of one object for one eye (paper section 4.2). One thread per 2x2
+// radiance-texel block: read the 4 triangle IDs, leave early when all are empty or when the block
+// faces away from the eye, build the local frame at the block centre, then per light: coarse MLP
+// once at the mean material uv, fine MLP 4 times, sum lights with inverse-square falloff, clamp
+// to the f16 range and store rgba16float. numpy twin: runtime/reference.py:shade_texture_space.
+// Template parameters: T (f32|f16), mat (runtime/codegen.py:MaterialSpec), n_lights.
+{% import 'neural_material.wgsl' as nm %}
+{% if T == 'f16' %}
+enable f16;
+{% endif %}
+
+struct Params {
+    model: mat4x4<f32>,       // object -> world
+    normal_mat: mat4x4<f32>,  // inverse transpose of the model's 3x3 (upper-left)
+    eye: vec4<f32>,           // eye position, world, metres
+    tiling: vec4<f32>,        // material uv = uv * tiling.xy + tiling.zw
+    sched: vec4<u32>,         // (block-row phase, block-row period, counter slot, unused)
+}
+
+struct Light {
+    pos: vec4<f32>,       // world position, metres
+    radiance: vec4<f32>,  // colour * intensity, W/sr
+}
+
+@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(1) var<uniform> lights: array<Light, {{ n_lights }}>;
+@group(0) @binding(2) var<storage, read> verts: array<vec4<f32>>;  // 4 per vertex, see gpu_material
+@group(0) @binding(3) var<storage, read> faces: array<u32>;        // [F * 3]
+@group(0) @binding(4) var<storage, read> tri_ids: array<u32>;      // [R * R], 0xFFFFFFFF = empty
+@group(0) @binding(5) var out_tex: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;  // 4 per slot
+{{ nm.bindings(mat, 7) }}
+
+override R: u32;  // radiance texture side (even)
+
+const EMPTY: u32 = 0xFFFFFFFFu;
+
+{{ nm.frame_fns() }}
+{{ nm.material_fns(mat, T) }}
+{{ nm.mesh_fns() }}
+
+fn texel_uv(x: u32, y: u32) -> vec2<f32> {
+    return (vec2<f32>(f32(x), f32(y)) + 0.5) / f32(R);
+}
+
+// Barycentrics of atlas point p in triangle tri.
+fn tri_bary(tri: u32, p: vec2<f32>) -> vec3<f32> {
+    let i0 = faces[tri * 3u];
+    let i1 = faces[tri * 3u + 1u];
+    let i2 = faces[tri * 3u + 2u];
+    let a = vec2<f32>(vtx(i0, 0u).w, vtx(i0, 1u).w);
+    let b = vec2<f32>(vtx(i1, 0u).w, vtx(i1, 1u).w);
+    let c = vec2<f32>(vtx(i2, 0u).w, vtx(i2, 1u).w);
+    return bary2(p, a, b, c);
+}
+
+fn surface(tri: u32, p: vec2<f32>) -> Surf { return surface_l(tri, tri_bary(tri, p)); }
+
+// Atlas and material uvs of one triangle's corners (fetched once per block and reused by its
+// texels that lie in the same triangle, the common case).
+struct TriUV {
+    a: vec2<f32>, b: vec2<f32>, c: vec2<f32>,     // atlas uv
+    ua: vec2<f32>, ub: vec2<f32>, uc: vec2<f32>,  // material uv
+}
+
+fn fetch_tri(tri: u32) -> TriUV {
+    let i0 = faces[tri * 3u];
+    let i1 = faces[tri * 3u + 1u];
+    let i2 = faces[tri * 3u + 2u];
+    var t: TriUV;
+    t.a = vec2<f32>(vtx(i0, 0u).w, vtx(i0, 1u).w);
+    t.b = vec2<f32>(vtx(i1, 0u).w, vtx(i1, 1u).w);
+    t.c = vec2<f32>(vtx(i2, 0u).w, vtx(i2, 1u).w);
+    t.ua = vtx(i0, 3u).xy;
+    t.ub = vtx(i1, 3u).xy;
+    t.uc = vtx(i2, 3u).xy;
+    return t;
+}
+
+// Tiled material uv at atlas point p of a fetched triangle (same math as material_uv).
+fn tri_material_uv(t: TriUV, p: vec2<f32>) -> vec2<f32> {
+    let l = bary2(p, t.a, t.b, t.c);
+    let uv = l.x * t.ua + l.y * t.ub + l.z * t.uc;
+    return uv * P.tiling.xy + P.tiling.zw;
+}
+
+// Shade one block; returns the counter increments (shaded, back-facing, coarse, fine evals).
+// Loops over the 4 texels are unrolled by the template (constant indices, no private arrays).
+fn shade_block(bx: u32, by: u32) -> vec4<u32> {
+    let x0 = bx * 2u;
+    let y0 = by * 2u;
+{% for k in range(4) %}
+    let id{{ k }} = tri_ids[(y0 + {{ k // 2 }}u) * R + x0 + {{ k % 2 }}u];
+{% endfor %}
+    // the first non-empty texel's triangle
+    let tc = select(select(select(id3, id2, id2 != EMPTY), id1, id1 != EMPTY), id0, id0 != EMPTY);
+    if (tc == EMPTY) { return vec4<u32>(0u); }
+    // Directions at the block centre, through that triangle.
+    let centre = vec2<f32>(f32(x0 + 1u), f32(y0 + 1u)) / f32(R);
+    let s = surface(tc, centre);
+    let wo = to_local(s, safe_normalize(P.eye.xyz - s.pos, s.n));
+    if (wo.z <= 0.0) { return vec4<u32>(0u, 1u, 0u, 0u); }
+    let tri_c = fetch_tri(tc);
+{% for k in range(4) %}
+    let p{{ k }} = texel_uv(x0 + {{ k % 2 }}u, y0 + {{ k // 2 }}u);
+    var uv{{ k }} = tri_material_uv(tri_c, p{{ k }});
+    if (id{{ k }} != tc && id{{ k }} != EMPTY) { uv{{ k }} = tri_material_uv(fetch_tri(id{{ k }}), p{{ k }}); }
+{% endfor %}
+    let uc = (uv0 + uv1 + uv2 + uv3) * 0.25;
+{% for k in range(4) %}
+    var acc{{ k }} = vec3<f32>(0.0);
+{% endfor %}
+{% if mat.arch == 'coarse_fine' %}
+    let fc = sample_a(uc);
+{% for k in range(4) %}
+    let f{{ k }} = sample_b(uv{{ k }});
+{% endfor %}
+{% else %}
+{% for k in range(4) %}
+    let f{{ k }} = sample_a(uv{{ k }});
+{% endfor %}
+{% endif %}
+    var n_coarse = 0u;
+    for (var li = 0u; li < {{ n_lights }}u; li++) {
+        let lv = lights[li].pos.xyz - s.pos;
+        let d2 = max(dot(lv, lv), 1e-12);
+        let wi = to_local(s, lv * inverseSqrt(d2));
+        if (wi.z > 0.0) {
+            let e = lights[li].radiance.rgb / d2;
+            let d = dirs9(wi, wo);
+            n_coarse += 1u;
+{% if mat.arch == 'coarse_fine' %}
+            let z = eval_coarse(d, fc);
+{% for k in range(4) %}
+            acc{{ k }} += eval_fine(z, f{{ k }}) * e;
+{% endfor %}
+{% else %}
+{% for k in range(4) %}
+            acc{{ k }} += eval_single(d, f{{ k }}) * e;
+{% endfor %}
+{% endif %}
+        }
+    }
+{% for k in range(4) %}
+    textureStore(out_tex, vec2<u32>(x0 + {{ k % 2 }}u, y0 + {{ k // 2 }}u),
+                 vec4<f32>(clamp(acc{{ k }}, vec3<f32>(0.0), vec3<f32>(F16_MAX)), 1.0));
+{% endfor %}
+{% if mat.arch == 'coarse_fine' %}
+    return vec4<u32>(1u, 0u, n_coarse, 4u * n_coarse);
+{% else %}
+    return vec4<u32>(1u, 0u, 0u, 4u * n_coarse);
+{% endif %}
+}
+
+var<workgroup> wg_count: array<vec4<u32>, 64>;
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let nb = R / 2u;
+    let bx = gid.x;
+    let by = gid.y * P.sched.y + P.sched.x;  // staggered: only rows with by % period == phase
+    var c = vec4<u32>(0u);
+    if (bx < nb && by < nb) { c = shade_block(bx, by); }
+    // counters: one slot per thread, summed by thread 0, one global atomic per counter
+    wg_count[lid] = c;
+    workgroupBarrier();
+    if (lid == 0u) {
+        var t = vec4<u32>(0u);
+        for (var k = 0u; k < 64u; k++) { t += wg_count[k]; }
+        for (var k = 0u; k < 4u; k++) {
+            if (t[k] != 0u) { atomicAdd(&counters[P.sched.z * 4u + k], t[k]); }
+        }
+    }
+}
