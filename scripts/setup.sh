@@ -19,9 +19,9 @@ fi
 stamp=.venv/.vrneural-setup
 want="$(sha256sum pyproject.toml | cut -c1-16) $TORCH_SPEC"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
-    echo "[setup] installing $TORCH_SPEC (CPU) and vrneural[train,dev,metrics] into .venv"
+    echo "[setup] installing $TORCH_SPEC (CPU) and vrneural[train,dev,metrics,ubo] into .venv"
     .venv/bin/python -m pip install -q --disable-pip-version-check "$TORCH_SPEC"
-    .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[train,dev,metrics]"
+    .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[train,dev,metrics,ubo]"
     echo "$want" > "$stamp"
 fi
 

@@ -5,15 +5,23 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from atlas_helpers import gutter_failures, linf_distance, texels_per_triangle, uv_area
+from atlas_helpers import (
+    bilinear_taps,
+    gutter_failures,
+    linf_distance,
+    random_points,
+    texels_per_triangle,
+    uv_area,
+)
 
 from vrneural.atlas import BUILTIN_MESHES, EMPTY, build_atlas, builtin_mesh, texel_barycentrics
+from vrneural.atlas.visualize import chart_ids
 
 R = 1200
 
 
 @pytest.fixture(scope="module")
-def atlases(tmp_path_factory):
+def atlases():
     """All built-in meshes at 1200^2 with padding 2, built once (no cache: a fresh build)."""
     return {
         n: (builtin_mesh(n), build_atlas(builtin_mesh(n), R, 2, cache=False))
@@ -21,13 +29,19 @@ def atlases(tmp_path_factory):
     }
 
 
+@pytest.fixture(scope="module")
+def distances(atlases):
+    """L-inf distance of each texel centre to its triangle, per mesh (computed once)."""
+    return {n: linf_distance(a) for n, (_, a) in atlases.items()}
+
+
 @pytest.mark.parametrize("name", BUILTIN_MESHES)
-def test_every_triangle_owns_a_texel(atlases, name):
+def test_every_triangle_owns_a_texel(atlases, distances, name):
     _, atlas = atlases[name]
     nonzero = uv_area(atlas) != 0
     assert nonzero.all(), "built-in meshes have no degenerate UV triangles"
     # "own": a texel with this ID whose square touches the triangle (centre within L-inf 0.5)
-    dist = linf_distance(atlas)
+    dist = distances[name]
     owned = atlas.tri_ids[(dist <= 0.5 + 1e-9)]
     counts = np.bincount(owned, minlength=len(atlas.mesh.faces))
     assert np.count_nonzero(counts[nonzero] == 0) == 0
@@ -36,15 +50,21 @@ def test_every_triangle_owns_a_texel(atlases, name):
 
 
 @pytest.mark.parametrize("name", BUILTIN_MESHES)
-def test_gutter_bilinear_taps_are_valid(atlases, name, rng):
+def test_gutter_bilinear_taps_are_valid_and_do_not_bleed(atlases, name, rng):
     _, atlas = atlases[name]
     assert gutter_failures(atlas, rng, per_tri=4) == 0
+    # stronger: every tap belongs to the point's own chart (no colour bleeding across charts)
+    chart = chart_ids(atlas)
+    tri, pts = random_points(atlas, rng, per_tri=2)
+    xs, ys = bilinear_taps(pts, R)
+    assert np.all(chart[atlas.tri_ids[ys, xs]] == chart[tri][:, None])
+    assert chart.max() + 1 == atlas.stats["charts"]
 
 
 @pytest.mark.parametrize("name", BUILTIN_MESHES)
-def test_ids_stay_within_padding_and_centres_inside_are_exact(atlases, name):
+def test_ids_stay_within_padding_and_centres_inside_are_exact(atlases, distances, name):
     _, atlas = atlases[name]
-    dist = linf_distance(atlas)
+    dist = distances[name]
     filled = atlas.tri_ids != EMPTY
     assert np.nanmax(dist) <= atlas.padding + 1e-9
     # a texel centre strictly inside a triangle must carry exactly that triangle's ID

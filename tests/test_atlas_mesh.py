@@ -123,6 +123,20 @@ def test_load_obj_ply_glb_and_scenes(tmp_path):
     np.testing.assert_allclose(ball.positions.mean(axis=0), [1, 0, 0], atol=1e-2)
 
 
+def test_file_normals_are_kept(tmp_path):
+    """A quad whose file normals are tilted (not the geometric +z): they survive loading."""
+    n = np.array([0.0, 0.6, 0.8])
+    text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+    text += "vn 0 0.6 0.8\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n"
+    (tmp_path / "q.obj").write_text(text)
+    (m,) = load_mesh(tmp_path / "q.obj")
+    np.testing.assert_allclose(m.normals, np.tile(n, (len(m.normals), 1)), atol=1e-6)
+    plain = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+    (tmp_path / "q2.obj").write_text(plain + "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+    (m2,) = load_mesh(tmp_path / "q2.obj")
+    np.testing.assert_allclose(m2.normals, np.tile([0, 0, 1.0], (len(m2.normals), 1)), atol=1e-6)
+
+
 def test_load_errors(tmp_path):
     with pytest.raises(VrnError, match="no such file"):
         load_mesh(tmp_path / "missing.obj")

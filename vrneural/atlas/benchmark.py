@@ -69,7 +69,7 @@ def plot(result: dict, path: Path) -> None:
 
     from vrneural.formats.atomic import atomic_path
 
-    fig, ax = plt.subplots(figsize=(7, 1.8))
+    fig, ax = plt.subplots(figsize=(7, 2.4))
     left = 0.0
     for k in STAGES[:-1]:
         v = result["median"][k]
@@ -78,8 +78,8 @@ def plot(result: dict, path: Path) -> None:
     ax.set_yticks([])
     ax.set_xlabel("seconds (median)")
     ax.set_title(f"atlas {result['mesh']} ({result['triangles']} tris) at {result['resolution']}^2")
-    ax.legend(ncol=4, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.45))
-    fig.tight_layout()
+    ax.legend(ncol=4, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.6))
+    fig.subplots_adjust(left=0.04, right=0.97, top=0.82, bottom=0.5)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=120)
     plt.close(fig)
@@ -98,6 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--force", action="store_true")
     a = p.parse_args(argv)
     out = check_output(a.output, a.force)
+    check_output(out.with_suffix(".png"), a.force)
     result = run_benchmark(a.mesh, a.res, a.padding, max(1, a.repeats))
     write_json(out, result)
     plot(result, out.with_suffix(".png"))

@@ -6,7 +6,7 @@ Material UV is arc length on the surface divided by :data:`TILE_M` (one BTF tile
 ========== ============================================================== ==========
 name       shape                                                          triangles
 ========== ============================================================== ==========
-sphere     UV sphere, radius 0.25 m, 64 x 32 segments (no pole fans:     4 096
+sphere     UV sphere, radius 0.25 m, 64 x 32 segments (no pole fans:     3 968
            each pole triangle has its own pole vertex)
 torus      ring radius 0.3 m, tube radius 0.1 m, 96 x 48 segments        9 216
 plane      1 x 1 m square in the xz plane facing +y, 16 x 16 quads        512

@@ -69,6 +69,10 @@ def _to_mesh(label: str, g) -> Mesh:
         uv = np.asarray(uv, dtype=np.float64)
         uv = uv if uv.shape == (len(pos), 2) else None
     normals = None
-    if "vertex_normals" in g._cache:  # present in the file (trimesh caches what it parsed)
+    try:  # normals present in the file: trimesh caches what it parsed (no public flag)
+        from_file = "vertex_normals" in g._cache
+    except (AttributeError, TypeError):
+        from_file = False
+    if from_file:
         normals = np.asarray(g.vertex_normals, dtype=np.float64)
     return make_mesh(label, pos, np.asarray(g.faces), uv=uv, normals=normals)

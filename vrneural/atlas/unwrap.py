@@ -10,6 +10,10 @@ asked for 1200^2 came back 1378 x 1384), and a fixed ``resolution`` with too hig
 2. **Pack** (fast, ~0.5 s for 700 charts): if that atlas is larger than R, or smaller than
    :data:`GOOD_FIT` R, the charts (UVs divided by ``texels_per_unit``) are re-packed alone
    with ``add_uv_mesh`` at a corrected ``texels_per_unit``; charting is not repeated.
+   xatlas gets ``bilinear = True`` (it reserves a 1-texel ring around each chart's
+   conservative footprint, so no other chart's texel is within 1 texel of it: bilinear taps
+   never bleed across charts) plus ``padding - 1`` texels of extra spacing. On the knot this
+   gives 39 % coverage instead of 34 % with ``padding`` + bilinear, with no bleeding taps.
 3. The packed pixel coordinates are scaled *up* uniformly by ``R / max(W, H) >= 1`` into the
    R x R texture: gaps between charts only grow, so padding stays >= ``padding`` texels.
 
@@ -46,7 +50,7 @@ def _pack_options(tpu: float, padding: int):
     po = xatlas.PackOptions()
     po.resolution = 0
     po.texels_per_unit = float(tpu)
-    po.padding = int(padding)
+    po.padding = max(int(padding) - 1, 0)  # + the bilinear ring = `padding` texels per chart
     po.bilinear = True
     return po
 

@@ -8,12 +8,18 @@ from vrneural.atlas.types import EMPTY, Atlas
 
 
 def chart_ids(atlas: Atlas) -> np.ndarray:
-    """[F] int: connected component of each face over shared (split) vertices = xatlas chart."""
+    """[F] int: the chart of each face: connected components over shared atlas-UV points.
+
+    Split vertices alone are not enough: xatlas welds coincident input vertices (e.g. across a
+    material-UV seam) into one chart while keeping them as separate output vertices with
+    identical atlas UVs. Different charts never share an atlas-UV point (they are padded apart).
+    """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    faces = atlas.mesh.faces.astype(np.int64)
-    F, V = len(faces), len(atlas.mesh.positions)
+    _, weld = np.unique(atlas.uv_atlas, axis=0, return_inverse=True)
+    faces = weld.reshape(-1)[atlas.mesh.faces.astype(np.int64)]
+    F, V = len(faces), int(weld.max()) + 1
     rows = np.repeat(np.arange(F), 3)
     g = coo_matrix((np.ones(3 * F), (rows, F + faces.reshape(-1))), shape=(F + V, F + V))
     _, labels = connected_components(g, directed=False)

@@ -102,5 +102,5 @@ def _run_all(args) -> int:
     return 0
 
 
-ENTRIES = {name: _entry(name) for name in SPECS if name in ("frames",)}
+ENTRIES = {name: _entry(name) for name in SPECS}
 ENTRIES["all"] = _register_all

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import platform
 import time
 from dataclasses import dataclass
@@ -227,19 +228,21 @@ def run_quality(cfg: QualityConfig) -> dict:
         raise VrnError(f"{root / 'results.json'}: output exists; pass --force to overwrite")
     root.mkdir(parents=True, exist_ok=True)
     results, slices, t_all = {}, {}, time.perf_counter()
+    doc: dict = {}
     for preset in presets:
         r = bench_material(preset, cfg, root, print)
         slices[preset] = (r.pop("slices"), r["slice_pairs"])
         results[preset] = r
-    doc = {
-        "benchmark": "quality",
-        "config": config_dict(cfg),
-        "versions": versions(),
-        "machine": {"cpu_count": __import__("os").cpu_count(), "torch_threads": 1},
-        "total_seconds": time.perf_counter() - t_all,
-        "labels": LABELS,
-        "results": results,
-    }
-    write_json(root / "results.json", doc)
-    write_report(doc, slices, root)
+        doc = {
+            "benchmark": "quality",
+            "config": config_dict(cfg),
+            "versions": versions(),
+            "machine": {"cpu_count": os.cpu_count(), "torch_threads": 1},
+            "total_seconds": time.perf_counter() - t_all,
+            "complete": len(results) == len(presets),
+            "labels": LABELS,
+            "results": results,
+        }
+        write_json(root / "results.json", doc)  # after every material: partial results
+        write_report(doc, slices, root)
     return doc

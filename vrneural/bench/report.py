@@ -71,7 +71,7 @@ def table(headers: list[str], rows: list[list]) -> list[str]:
 
     def cell(v):
         if isinstance(v, float):
-            return f"{v:.3g}" if abs(v) < 1e4 else f"{v:.0f}"
+            return f"{v:.3g}" if abs(v) < 1e3 else f"{v:.0f}"
         return str(v)
 
     out = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]

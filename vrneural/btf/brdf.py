@@ -67,10 +67,16 @@ def brdf(wi, wo, p: dict) -> np.ndarray:
     shading frame. ``p``: parameters broadcasting to S: ``albedo``/``f0``/``sheen`` ``[..., 3]``
     given as channel-last arrays, ``alpha_t``, ``alpha_b``, ``sheen_rough`` scalars per sample.
     Returns 0 where either direction is below the shading horizon.
+    """
+    return np.stack(brdf_rgb(wi, wo, p), -1)
 
-    Written so that only a handful of operations run on ``[*S, 3]`` arrays (the cost when S is
-    lights x samples): per-sample colour constants are folded first, scalars are combined before
-    they meet colour. Same formulas as :func:`schlick` etc.
+
+def brdf_rgb(wi, wo, p: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`brdf` as three channel planes ``(R, G, B)``, each ``[*S]`` float32.
+
+    The fast path: every operation runs on contiguous scalar planes (a channel-last ``[..., 3]``
+    layout makes numpy loop over an inner axis of length 3, several times slower). ``p`` may
+    be :func:`prepare`'d once per view to skip recomputing per-sample colour constants.
     """
     ix, iy, iz = wi
     ox, oy, oz = wo
@@ -89,27 +95,51 @@ def brdf(wi, wo, p: dict) -> np.ndarray:
     at, ab = p["alpha_t"], p["alpha_b"]
     d = ggx_d(hx, hy, hz, at, ab)
     g2 = 1.0 / (1.0 + smith_lambda(ix, iy, iz, at, ab) + smith_lambda(ox, oy, oz, at, ab))
-    spec = d * g2 / (4.0 * np.maximum(ci * co, EPS))  # [*S]
-    f0, sheen = p["f0"], p["sheen"]
-    if np.any(sheen > 0):
-        sh = charlie_d(hz, p["sheen_rough"]) * ashikhmin_v(ci, co)  # [*S]
-    else:  # no sheen anywhere: skip the (costly) pow
-        sh = np.zeros_like(spec)
+    above = ((iz > 0) & (oz > 0)).astype(np.float32)
+    spec = d * g2 * above / (4.0 * np.maximum(ci * co, EPS))  # [*S]
+    q = p if "_k" in p else prepare(p)
+    sh = None
+    if q["_has_sheen"]:  # else skip the (costly) pow
+        sh = charlie_d(hz, p["sheen_rough"]) * ashikhmin_v(ci, co) * above  # [*S]
 
     def m5(c):  # (1 - c)^5 (the Schlick weight), scalar per sample
         m = 1.0 - np.clip(c, 0.0, 1.0)
         m2 = m * m
         return m2 * m2 * m
 
-    k = np.minimum(1.0, f0.max(-1, keepdims=True) / 0.04) * (1.0 - f0)  # F = f0 + k m5
-    one_f0 = 1.0 - f0
-    diffuse = (1.0 - sheen.max(-1, keepdims=True)) * p["albedo"] * INV_PI
-    above = ((iz > 0) & (oz > 0)).astype(np.float32)
-    spec = spec * above
-    f = (f0 + k * m5(c_hi)[..., None]) * spec[..., None]
-    wd = (one_f0 - k * m5(ci)[..., None]) * (one_f0 - k * m5(co)[..., None])
-    f += wd * (diffuse + sheen * (sh * above)[..., None])
-    return f.astype(np.float32, copy=False)
+    m_h, m_i, m_o = m5(c_hi), m5(ci), m5(co)
+    out = []
+    for c in range(3):
+        k, a = q["_k"][c], q["_one_f0"][c]  # F = f0 + k m5 = 1 - a + k m5
+        f = (1.0 - a + k * m_h) * spec
+        lobe = q["_diffuse"][c] if sh is None else q["_diffuse"][c] + q["_sheen"][c] * sh
+        f += (a - k * m_i) * (a - k * m_o) * lobe
+        out.append(f.astype(np.float32, copy=False))
+    return out[0], out[1], out[2]
+
+
+def prepare(p: dict) -> dict:
+    """``p`` plus per-sample colour constants as channel planes (``_k[c]``: Schlick slope
+    ``min(1, max(f0) / 0.04) (1 - f0)``, ``_one_f0[c]``, ``_diffuse[c]``: ``(1 - max(sheen))
+    albedo / pi``, ``_sheen[c]``, ``_has_sheen``). Call once per view for many lights."""
+    f0 = np.asarray(p["f0"], np.float32)
+    sheen = np.asarray(p["sheen"], np.float32)
+    albedo = np.asarray(p["albedo"], np.float32)
+    f0max = np.maximum(np.maximum(f0[..., 0], f0[..., 1]), f0[..., 2])
+    smax = np.maximum(np.maximum(sheen[..., 0], sheen[..., 1]), sheen[..., 2])
+    s = np.minimum(1.0, f0max / 0.04)
+
+    def planes(fn):
+        return [np.ascontiguousarray(fn(c), dtype=np.float32) for c in range(3)]
+
+    return {
+        **p,
+        "_k": planes(lambda c: s * (1.0 - f0[..., c])),
+        "_one_f0": planes(lambda c: 1.0 - f0[..., c]),
+        "_diffuse": planes(lambda c: (1.0 - smax) * albedo[..., c] * INV_PI),
+        "_sheen": planes(lambda c: sheen[..., c]),
+        "_has_sheen": bool(np.any(sheen > 0)),
+    }
 
 
 def btf_value(wi, wo, p: dict) -> np.ndarray:

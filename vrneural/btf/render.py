@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vrneural.btf.brdf import brdf
+from vrneural.btf.brdf import brdf_rgb, prepare
 from vrneural.btf.heightfield import CHANNELS, Maps, bilinear_wrap, shift_wrap
 
 _C = {name: i for i, name in enumerate(CHANNELS)}
@@ -191,7 +191,7 @@ def render_view(
         ms = slice(m0, min(M, m0 + m_step))
         frame = [q[ms] for q in (tx, ty, tz, bx, by, bz, nx, ny, nz)]
         wo_b = tuple(q[ms] for q in wo_l)
-        p_b = {k: v[ms] for k, v in p.items()}
+        p_b = prepare({k: v[ms] for k, v in p.items()})
         ii0, ii1, jj0, jj1, ffx, ffy = i0[ms], i1[ms], j0[ms], j1[ms], fx[ms], fy[ms]
         for a in range(0, L, l_step):
             wi = scene.light_dirs[a : a + l_step]  # [Lc, 3]
@@ -205,8 +205,13 @@ def render_view(
                 c[0] * frame[3 * r] + c[1] * frame[3 * r + 1] + c[2] * frame[3 * r + 2]
                 for r in range(3)
             )
-            f = brdf(wi_l, wo_b, p_b)  # [Lc, Mb, 3]
-            f *= (np.maximum(wi_l[2], 0.0) * vis)[..., None]
+            scale = np.maximum(wi_l[2], 0.0) * vis  # cos(theta_i) at the hit x visibility
             t0, t1 = ms.start // S, ms.stop // S
-            out[a : a + l_step, t0:t1] = f.reshape(len(wi), t1 - t0, S, 3).mean(2)
+            for c, f in enumerate(brdf_rgb(wi_l, wo_b, p_b)):  # [Lc, Mb] per channel
+                f *= scale
+                f = f.reshape(len(wi), t1 - t0, S)
+                acc = f[:, :, 0].copy()
+                for k in range(1, S):  # box filter; explicit adds beat a short-axis reduce
+                    acc += f[:, :, k]
+                out[a : a + l_step, t0:t1, c] = acc * np.float32(1.0 / S)
     return out.reshape(L, H, W, 3)

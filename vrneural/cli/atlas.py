@@ -98,9 +98,11 @@ def run(args) -> int:
             print(f"{r['mesh']} -> {r['output']} ({r['resolution']}^2, padding {r['padding']})")
             for key, label, fmt in STAT_LINES:
                 print(f"  {label:18s} {fmt.format(r[key])}")
+            when = " (of the cached build)" if r["cache"] == "hit" else ""
             print(
-                f"  {'times':18s} xatlas {r.get('xatlas_s', 0):.2f} s, raster "
-                f"{r.get('raster_s', 0):.2f} s, dilate {r.get('dilate_s', 0):.2f} s"
+                f"  {'stage times':18s} xatlas {r['xatlas_s']:.2f} s, "
+                f"raster {r['raster_s']:.2f} s, slivers {r['sliver_s']:.3f} s, "
+                f"dilate {r['dilate_s']:.2f} s{when}"
             )
     for n in notes:
         print(f"warning: {n}")

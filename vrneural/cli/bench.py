@@ -35,7 +35,31 @@ def _run_quality(args) -> int:
     return 0
 
 
-BENCHMARKS = {"quality": _register_quality}
+def _register_extremes(sub) -> None:
+    from vrneural.bench.extremes import ExtremesConfig
+
+    p = sub.add_parser(
+        "extremes",
+        help="numerical stability at the extremes: every case works or is rejected clearly",
+        description="Run every extreme case (directions, precision, geometry, settings, "
+        "training) and write results.json, results.md and f16_error.png; exit 1 on any FAIL.",
+    )
+    p.add_argument("--out", default="bench-extremes", help="output directory")
+    add_config_args(p, ExtremesConfig)
+    p.set_defaults(func=_run_extremes)
+
+
+def _run_extremes(args) -> int:
+    from vrneural.bench.extremes import ExtremesConfig, run_extremes
+
+    doc = run_extremes(config_from_args(ExtremesConfig, args), args.out)
+    print(
+        f"{args.out}: results.json, results.md ({doc['n_fail']} FAIL, {doc['total_seconds']:.0f} s)"
+    )
+    return 1 if doc["n_fail"] else 0
+
+
+BENCHMARKS = {"quality": _register_quality, "extremes": _register_extremes}
 
 # frames, lights, materials, kernels, tradeoff, all (vrneural/bench/entries.py)
 from vrneural.bench.entries import ENTRIES  # noqa: E402

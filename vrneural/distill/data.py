@@ -64,6 +64,13 @@ class SliceData:
         self.res = (H, W)
         self.n_view = V
         self.values = torch.from_numpy(np.array(btf.values))  # [L, V, H, W, 3] f16
+        bad = ~torch.isfinite(self.values)
+        if bad.any():  # a NaN target would silently poison the weights (or the test L1)
+            first = [int(i) for i in torch.nonzero(bad)[0]]
+            raise VrnError(
+                f"{btf.path}: BTF values contain {int(bad.sum())} NaN/Inf entries "
+                f"(first at [light, view, y, x, rgb] = {first}); fix or re-import the BTF"
+            )
         self.light = torch.from_numpy(np.array(btf.light_dirs, np.float32))
         self.view = torch.from_numpy(np.array(btf.view_dirs, np.float32))
         test_set = set(test)

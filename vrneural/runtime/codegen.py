@@ -119,16 +119,27 @@ def _check_unroll(mat: NeuralMaterial, buffer_weights: bool) -> None:
         )
 
 
+RADIANCE_FORMATS = ("rgba16float", "rgba32float")
+
+
 def texture_space_wgsl(
-    mat: NeuralMaterial, precision: str = "f32", n_lights: int = 1, buffer_weights: bool = False
+    mat: NeuralMaterial,
+    precision: str = "f32",
+    n_lights: int = 1,
+    buffer_weights: bool = False,
+    radiance_format: str = "rgba16float",
 ) -> str:
     """WGSL of the texture-space pass for ``mat`` (see shaders/texture_space.wgsl)."""
     _check_unroll(mat, buffer_weights)
+    if radiance_format not in RADIANCE_FORMATS:
+        raise VrnError(f"radiance format {radiance_format!r} not in {RADIANCE_FORMATS}")
     return render_wgsl(
         "texture_space",
         T="f16" if precision == "f16" else "f32",
         mat=material_spec(mat, buffer_weights),
-        n_lights=max(1, int(n_lights)),
+        n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
+        n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
+        fmt=radiance_format,
     )
 
 
@@ -141,5 +152,6 @@ def screen_space_wgsl(
         "screen_space",
         T="f16" if precision == "f16" else "f32",
         mat=material_spec(mat, buffer_weights),
-        n_lights=max(1, int(n_lights)),
+        n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
+        n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
     )

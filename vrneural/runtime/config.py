@@ -55,7 +55,10 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     check_range("--frames", cfg.frames, 1, 1_000_000)
     tex = prof.texture_res if cfg.texture_res is None else cfg.texture_res
     max_tex = adapter.limits["max_texture_dimension_2d"]
-    check_range("--texture-res", tex, 2, max_tex)
+    from vrneural.atlas.build import MAX_RESOLUTION, MIN_RESOLUTION
+
+    # the atlas stage bounds R to [8, 8192]; below, above or odd is one clear error here
+    check_range("--texture-res", tex, MIN_RESOLUTION, min(max_tex, MAX_RESOLUTION))
     for i, o in enumerate(scene.objects):
         if o.texture_res and o.texture_res > max_tex:
             raise VrnError(
@@ -67,7 +70,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     if max(eye_res) > max_tex:
         raise VrnError(f"--eye-res = {eye_res} is above the adapter maximum {max_tex}")
     n_lights = prof.lights if cfg.lights is None else cfg.lights
-    check_range("--lights", n_lights, 1, 64)
+    check_range("--lights", n_lights, 0, 64)  # 0: neural objects render black
     if n_lights > len(scene.lights):
         raise VrnError(f"--lights = {n_lights} but the scene has {len(scene.lights)} lights")
     precision = resolve_precision(

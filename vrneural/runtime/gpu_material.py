@@ -102,13 +102,15 @@ class GpuAtlas:
         self.non_empty_blocks = int(count_non_empty_blocks(atlas.tri_ids))
 
 
-def new_radiance_texture(resolution: int, label: str = "radiance"):
-    """An ``rgba16float`` radiance texture (storage-written, sampled, copyable), zeroed."""
+def new_radiance_texture(resolution: int, label: str = "radiance", fmt: str = "rgba16float"):
+    """A radiance texture (storage-written, sampled, copyable), zeroed: ``rgba16float`` (the
+    runtime's) or ``rgba32float`` (the wider option: no f16 clamp, twice the memory; sampling it
+    bilinearly needs the float32-filterable feature)."""
     import wgpu
 
     return get_device().create_texture(
         size=(resolution, resolution, 1),
-        format="rgba16float",
+        format=fmt,
         usage=wgpu.TextureUsage.STORAGE_BINDING
         | wgpu.TextureUsage.TEXTURE_BINDING
         | wgpu.TextureUsage.COPY_SRC,

@@ -10,6 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 
 MOTIONS = ("none", "circle")
+#: Largest accepted ``colour * intensity`` (W/sr); shading sums in f32 and clamps to the f16
+#: range before the rgba16float store (README "Numerical behaviour at the extremes").
+MAX_INTENSITY = 1e6
 
 
 @dataclass

@@ -83,6 +83,18 @@ def material_uvs(atlas: Atlas, tri: np.ndarray, p: np.ndarray, tiling) -> np.nda
     return uv * t[:2] + t[2:]
 
 
+def camera_relative(model, eye, light_pos):
+    """``(model [4, 4], eye [3], light_pos [L, 3])`` re-expressed with the eye at the origin,
+    subtracted in float64 before anything is rounded to f32. Shading is translation invariant,
+    so this changes nothing but precision: an object 1e5 m from the world origin (f32 spacing
+    7.8 mm there) shades like one at the origin (README "Numerical behaviour at the extremes")."""
+    o = np.asarray(eye, np.float64).reshape(-1)[:3]
+    m = np.array(model, np.float64)
+    m[:3, 3] -= o
+    lp = np.asarray(light_pos, np.float64).reshape(-1, 3) - o
+    return m, np.zeros(3), lp
+
+
 def count_non_empty_blocks(tri_ids: np.ndarray) -> int:
     """2x2 blocks of ``tri_ids: [R, R]`` with at least one triangle."""
     r = tri_ids.shape[0]
@@ -160,6 +172,7 @@ def shade_texture_space(
     """
     R = atlas.resolution
     out = np.zeros((R, R, 4), np.float32) if previous is None else previous.copy()
+    model, eye, light_pos = camera_relative(model, eye, light_pos)
     g = texture_blocks(atlas, model, tiling, phase, period)
     tx, ty, pos, n, t, b, uvs = (g[k] for k in ("tx", "ty", "pos", "n", "t", "b", "uvs"))
     rad, front, nc, nf = shade_points(mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision)

@@ -36,7 +36,7 @@ import numpy as np
 
 from vrneural.errors import VrnError
 from vrneural.material import NeuralMaterial, lambertian_material, random_material
-from vrneural.runtime.lights import MOTIONS, PointLight, default_lights
+from vrneural.runtime.lights import MAX_INTENSITY, MOTIONS, PointLight, default_lights
 
 
 @dataclass
@@ -212,11 +212,15 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         f.unknown(
             ("position", "colour", "color", "intensity", "motion", "radius", "period", "phase")
         )
+        colour = f.vec("colour" if "colour" in lt else "color", (1, 1, 1), lo=0.0)
+        intensity = f.num("intensity", 1.0, 0.0, MAX_INTENSITY)
+        if max(colour) * intensity > MAX_INTENSITY:  # README: numerical behaviour at extremes
+            raise f.err("intensity", f"* colour = {max(colour) * intensity:g} W/sr is above 1e6")
         lights.append(
             PointLight(
                 f.vec("position"),
-                f.vec("colour" if "colour" in lt else "color", (1, 1, 1), lo=0.0),
-                f.num("intensity", 1.0, 0.0),
+                colour,
+                intensity,
                 f.str("motion", "none", MOTIONS),
                 f.num("radius", 0.0, 0.0),
                 f.num("period", 8.0, 0.0, lo_open=True),

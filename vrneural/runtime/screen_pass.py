@@ -58,8 +58,8 @@ class ScreenSpacePass:
 
     def __init__(self, mat: NeuralMaterial, precision="f32", n_lights=1, buffer_weights=False):
         self.mat = mat
-        self.n_lights = max(1, n_lights)
-        self.code = screen_space_wgsl(mat, precision, self.n_lights, buffer_weights)
+        self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
+        self.code = screen_space_wgsl(mat, precision, n_lights, buffer_weights)
         self.gmat = GpuMaterial(mat, buffer_weights)
         self.pipe = compute_pipeline(self.code, label="screen_space")
 

@@ -19,7 +19,7 @@ from vrneural.gpu.readback import read_buffer, read_texture, upload_buffer
 from vrneural.material import NeuralMaterial
 from vrneural.runtime.codegen import texture_space_wgsl
 from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial, new_radiance_texture
-from vrneural.runtime.reference import normal_matrix
+from vrneural.runtime.reference import camera_relative, normal_matrix
 
 PARAMS_BYTES = 176  # mat4 model, mat4 normal_mat, vec4 eye, vec4 tiling, vec4<u32> sched
 WORKGROUP = 8
@@ -75,10 +75,12 @@ class TextureSpacePass:
         n_lights: int = 1,
         buffer_weights: bool = False,
         gmat: GpuMaterial | None = None,
+        radiance_format: str = "rgba16float",
     ):
         self.mat = mat
-        self.n_lights = max(1, n_lights)
-        self.code = texture_space_wgsl(mat, precision, self.n_lights, buffer_weights)
+        self.radiance_format = radiance_format  # rgba32float: no f16 clamp, 2x memory
+        self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
+        self.code = texture_space_wgsl(mat, precision, n_lights, buffer_weights, radiance_format)
         self.gmat = gmat or GpuMaterial(mat, buffer_weights)
 
     def pipeline(self, resolution: int):
@@ -99,7 +101,7 @@ class TextureTarget:
         u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
         self.params = dev.create_buffer(size=PARAMS_BYTES, usage=u)
         self.lights = dev.create_buffer(size=32 * tpass.n_lights, usage=u)
-        self.texture = new_radiance_texture(self.R)
+        self.texture = new_radiance_texture(self.R, fmt=tpass.radiance_format)
         self.view = self.texture.create_view()
         entries = [
             {"binding": 0, "resource": {"buffer": self.params}},
@@ -116,7 +118,9 @@ class TextureTarget:
         )
 
     def update(self, model, eye, tiling, light_pos, light_rgb, phase=0, period=1, slot=0):
-        """Write this dispatch's uniforms (call before encoding it)."""
+        """Write this dispatch's uniforms (call before encoding it). World quantities are made
+        camera-relative in float64 first (:func:`~vrneural.runtime.reference.camera_relative`)."""
+        model, eye, light_pos = camera_relative(model, eye, light_pos)
         q = get_device().queue
         q.write_buffer(self.params, 0, pack_params(model, eye, tiling, phase, period, slot))
         q.write_buffer(self.lights, 0, pack_lights(light_pos, light_rgb, self.tpass.n_lights))
@@ -149,11 +153,12 @@ def shade_texture_space(
     phase: int = 0,
     period: int = 1,
     buffer_weights: bool = False,
+    radiance_format: str = "rgba16float",
 ):
     """GPU texture-space pass on a fresh (zeroed) texture; returns ``(radiance [R, R, 4]
     float32, counters [4])`` like the numpy twin of the same name."""
-    lp = np.asarray(light_pos, np.float32).reshape(-1, 3)
-    tp = TextureSpacePass(mat, precision, len(lp), buffer_weights)
+    lp = np.asarray(light_pos, np.float64).reshape(-1, 3)
+    tp = TextureSpacePass(mat, precision, len(lp), buffer_weights, radiance_format=radiance_format)
     counters = CounterBuffer(1)
     tgt = TextureTarget(tp, GpuAtlas(atlas), counters)
     tgt.update(model, eye, tiling, lp, light_rgb, phase, period, 0)

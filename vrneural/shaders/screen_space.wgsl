@@ -80,7 +80,7 @@ fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
 {% endif %}
     var acc = vec3<f32>(0.0);
     var n = 0u;
-    for (var li = 0u; li < {{ n_lights }}u; li++) {
+    for (var li = 0u; li < {{ n_active }}u; li++) {
         let lv = lights[li].pos.xyz - s.pos;
         let d2 = max(dot(lv, lv), 1e-12);
         let wi = to_local(s, lv * inverseSqrt(d2));

@@ -2,8 +2,9 @@
 // radiance-texel block: read the 4 triangle IDs, leave early when all are empty or when the block
 // faces away from the eye, build the local frame at the block centre, then per light: coarse MLP
 // once at the mean material uv, fine MLP 4 times, sum lights with inverse-square falloff, clamp
-// to the f16 range and store rgba16float. numpy twin: runtime/reference.py:shade_texture_space.
-// Template parameters: T (f32|f16), mat (runtime/codegen.py:MaterialSpec), n_lights.
+// to the f16 range and store rgba16float (or, as an option, rgba32float). numpy twin: runtime/reference.py:shade_texture_space.
+// Template parameters: T (f32|f16), mat (runtime/codegen.py:MaterialSpec), n_lights (uniform
+// array size, >= 1), n_active (lights shaded, 0 allowed: black).
 {% import 'neural_material.wgsl' as nm %}
 {% if T == 'f16' %}
 enable f16;
@@ -27,13 +28,16 @@ struct Light {
 @group(0) @binding(2) var<storage, read> verts: array<vec4<f32>>;  // 4 per vertex, see gpu_material
 @group(0) @binding(3) var<storage, read> faces: array<u32>;        // [F * 3]
 @group(0) @binding(4) var<storage, read> tri_ids: array<u32>;      // [R * R], 0xFFFFFFFF = empty
-@group(0) @binding(5) var out_tex: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(5) var out_tex: texture_storage_2d<{{ fmt | default('rgba16float') }}, write>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;  // 4 per slot
 {{ nm.bindings(mat, 7) }}
 
 override R: u32;  // radiance texture side (even)
 
 const EMPTY: u32 = 0xFFFFFFFFu;
+// Largest stored radiance: the f16 maximum for rgba16float, 1e30 for the wide rgba32float option
+// (finite, far above any scene: colour * intensity <= 1e6 W/sr, d^2 >= 1e-12 m^2).
+const OUT_MAX: f32 = {{ '1e30' if fmt == 'rgba32float' else '65504.0' }};
 
 {{ nm.frame_fns() }}
 {{ nm.material_fns(mat, T) }}
@@ -121,7 +125,7 @@ fn shade_block(bx: u32, by: u32) -> vec4<u32> {
 {% endfor %}
 {% endif %}
     var n_coarse = 0u;
-    for (var li = 0u; li < {{ n_lights }}u; li++) {
+    for (var li = 0u; li < {{ n_active }}u; li++) {
         let lv = lights[li].pos.xyz - s.pos;
         let d2 = max(dot(lv, lv), 1e-12);
         let wi = to_local(s, lv * inverseSqrt(d2));
@@ -143,7 +147,7 @@ fn shade_block(bx: u32, by: u32) -> vec4<u32> {
     }
 {% for k in range(4) %}
     textureStore(out_tex, vec2<u32>(x0 + {{ k % 2 }}u, y0 + {{ k // 2 }}u),
-                 vec4<f32>(clamp(acc{{ k }}, vec3<f32>(0.0), vec3<f32>(F16_MAX)), 1.0));
+                 vec4<f32>(clamp(acc{{ k }}, vec3<f32>(0.0), vec3<f32>(OUT_MAX)), 1.0));
 {% endfor %}
 {% if mat.arch == 'coarse_fine' %}
     return vec4<u32>(1u, 0u, n_coarse, 4u * n_coarse);

@@ -1,0 +1,101 @@
+"""Trade-off metrics (SSIM, PSNR, HDR-FLIP, Pareto) and bench option parsing: no GPU."""
+
+import numpy as np
+import pytest
+
+from vrneural.bench import metrics
+from vrneural.bench.report import int_list, stats
+from vrneural.bench.timing import frames_for
+from vrneural.bench.tradeoff import pareto
+from vrneural.errors import VrnError
+
+
+def test_ssim_identical_is_one(rng):
+    a = rng.random((40, 50, 3))
+    assert metrics.ssim(a, a) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_ssim_constant_images_match_the_closed_form():
+    # constant images: zero variances and covariance, so SSIM = (2ab + C1) / (a^2 + b^2 + C1)
+    a, b = 0.3, 0.7
+    c1 = (metrics.SSIM_K1 * 1.0) ** 2
+    want = (2 * a * b + c1) / (a * a + b * b + c1)
+    got = metrics.ssim(np.full((32, 32), a), np.full((32, 32), b))
+    assert got == pytest.approx(want, rel=1e-9)
+
+
+def test_ssim_symmetric_bounded_and_decreasing_with_noise(rng):
+    a = rng.random((48, 48))
+    b1 = np.clip(a + rng.normal(0, 0.05, a.shape), 0, 1)
+    b2 = np.clip(a + rng.normal(0, 0.2, a.shape), 0, 1)
+    s1, s2 = metrics.ssim(a, b1), metrics.ssim(a, b2)
+    assert metrics.ssim(b1, a) == pytest.approx(s1, abs=1e-12)
+    assert -1 <= s2 < s1 < 1
+
+
+def test_ssim_shape_mismatch_raises():
+    with pytest.raises(ValueError):
+        metrics.ssim(np.zeros((8, 8)), np.zeros((8, 9)))
+
+
+def test_psnr_known_value_and_identity():
+    a = np.zeros((4, 4, 3))
+    assert metrics.psnr(a, a + 0.1) == pytest.approx(20.0, abs=1e-9)  # MSE 0.01, peak 1
+    assert metrics.psnr(a, a) == 100.0
+
+
+def test_display_matches_runtime_tonemap(rng):
+    from vrneural.runtime.output import tonemap
+
+    hdr = rng.random((8, 8, 4)).astype(np.float32) * 5
+    d = metrics.display(hdr)
+    assert d.shape == (8, 8, 3) and d.min() >= 0 and d.max() <= 1
+    # tonemap is display() rounded to 8 bits
+    assert np.abs(d * 255 - tonemap(hdr)).max() <= 0.5 + 1e-6
+
+
+def test_flip_hdr_zero_for_identical_and_in_unit_range(rng):
+    a = (rng.random((32, 32, 3)) * 2).astype(np.float32)
+    assert metrics.flip_hdr(a, a, 23.0) == pytest.approx(0.0, abs=1e-6)
+    f = metrics.flip_hdr(a, a * 0.3, 23.0)
+    assert 0.0 < f <= 1.0
+
+
+def test_pixels_per_degree_quest3():
+    from vrneural.runtime.profiles import get_profile
+
+    p = get_profile("quest3")
+    assert metrics.pixels_per_degree(p.eye_res[1], p.fov_y) == pytest.approx(23.0)
+
+
+def test_frame_change():
+    f = [np.zeros((2, 2)), np.full((2, 2), 0.5), np.full((2, 2), 0.25)]
+    assert metrics.frame_change(f) == [0.5, 0.25]
+
+
+def test_pareto_front():
+    pts = [(1.0, 0.5), (2.0, 0.3), (3.0, 0.4), (0.5, 0.9), (2.0, 0.3)]
+    # (3, 0.4) is dominated by (2, 0.3); the duplicate (2, 0.3) points do not dominate each other
+    assert pareto(pts, lower_better=True) == [0, 1, 3, 4]
+    assert pareto([(1, 10.0), (2, 5.0)], lower_better=False) == [0]
+
+
+def test_frames_for_covers_whole_cycles():
+    assert frames_for(0, 1, 3) == 3
+    assert frames_for(4, 1, 3) == 5
+    assert frames_for(6, 2, 3) == 14
+    assert frames_for(2, 1, 4) == 6
+
+
+def test_int_list_errors_are_one_line():
+    assert int_list("--reuse", "0, 2,4", 0, 9) == [0, 2, 4]
+    for bad, word in (("a,b", "integers"), ("3,99", "out of range"), ("", "empty")):
+        with pytest.raises(VrnError, match=word):
+            int_list("--reuse", bad, 0, 9)
+    with pytest.raises(VrnError, match="even"):
+        int_list("--texture-res", "801", 2, 8192, even=True)
+
+
+def test_stats_percentiles():
+    s = stats([1.0, 2.0, 3.0, 4.0])
+    assert s["median"] == 2.5 and s["max"] == 4.0 and s["p99"] <= 4.0

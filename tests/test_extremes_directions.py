@@ -1,0 +1,99 @@
+"""Extreme directions: grazing (to 89.99 deg and beyond), along the normal, wi = -wo, below the
+horizon, unnormalized frames. Numpy reference (property-based) and the GPU kernel."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from vrneural.bench import extremes_shading as shd
+from vrneural.bench.extremes_fixtures import direction, dirs9, lipschitz_bound, quad_atlas
+from vrneural.material import half_vector, material_forward, random_material
+
+MATS = [random_material(3, "coarse_fine"), random_material(4, "single")]
+theta = st.floats(0.0, 89.99)
+phi = st.floats(0.0, 360.0)
+UV = np.full((2, 4, 2), 0.41, np.float32)
+
+
+@given(ti=theta, to=theta, pi=phi, po=phi, k=st.integers(0, 1), dt=st.floats(1e-6, 0.5))
+def test_reference_finite_nonnegative_and_continuous(ti, to, pi, po, k, dt):
+    mat = MATS[k]
+    wi = np.stack([direction(ti, pi), direction(min(ti + dt, 89.9999), pi)]).astype(np.float32)
+    wo = np.stack([direction(to, po), direction(to, po)]).astype(np.float32)
+    y = material_forward(mat, wi, wo, UV)
+    assert np.isfinite(y).all() and (y >= 0).all()
+    # continuity: the change is within the network's Lipschitz bound (1e-5: f32 rounding)
+    dy = np.abs(y[1] - y[0]).max()
+    dd = np.linalg.norm(dirs9(wi, wo)[1] - dirs9(wi, wo)[0])
+    assert dy <= lipschitz_bound(mat) * dd + 1e-5
+
+
+@given(t=st.floats(0.0, 180.0), p=phi)
+def test_opposite_directions_use_the_normal_as_half_vector(t, p):
+    wi = direction(t, p)[None].astype(np.float32)
+    h = half_vector(wi, -wi)
+    np.testing.assert_array_equal(h, [[0, 0, 1]])
+    for mat in MATS:
+        y = material_forward(mat, wi, -wi, UV[:1])
+        assert np.isfinite(y).all() and (y >= 0).all()
+
+
+def test_grazing_sweeps_and_normal_incidence():
+    assert shd.case_dir_grazing(True)["ok"]
+    assert shd.case_dir_normal_and_opposite(True)["ok"]
+
+
+def test_reference_horizon_jump_is_the_network_value():
+    for mat in [*MATS, shd.lambertian_material()]:
+        r = shd.horizon_check(mat)
+        assert r["ok"], r
+
+
+@given(sn=st.floats(1e-3, 1e3), st_=st.floats(1e-3, 1e3))
+@settings(max_examples=10)
+def test_reference_unnormalized_frames_shade_like_unit_frames(sn, st_):
+    from vrneural.bench.extremes_fixtures import quad_mesh
+    from vrneural.runtime import reference as ref
+
+    mat = MATS[0]
+    eye, lp, lc = np.float32([0.2, -0.3, 1.2]), np.float32([[0.4, 0.3, 0.9]]), np.ones((1, 3))
+    a, _ = ref.shade_texture_space(quad_atlas(8), mat, np.eye(4), eye, lp, lc)
+    b_at = quad_atlas(8, mesh=quad_mesh(normal_scale=sn, tangent_scale=st_))
+    b, _ = ref.shade_texture_space(b_at, mat, np.eye(4), eye, lp, lc)
+    np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7)
+
+
+@pytest.mark.gpu
+def test_gpu_horizon_grazing_and_unnormalized():
+    r = shd.horizon_check(MATS[0], "f32", gpu=True)
+    assert r["ok"], r
+    g = shd.case_dir_grazing_gpu(True)
+    assert g["ok"], g
+    u = shd.unnormalized_check(gpu=True)
+    assert u["ok"], u
+
+
+@pytest.fixture(scope="module")
+def gpu32():
+    return shd.GpuShade(quad_atlas(8, mesh=shd.quad_mesh(0.1)), MATS[0], "f32")
+
+
+@pytest.mark.gpu
+@given(te=st.floats(0.0, 89.99), tl=st.floats(0.0, 100.0), pl=phi)
+@settings(max_examples=8)
+def test_gpu_matches_twin_over_directions(gpu32, te, tl, pl):
+    from vrneural.runtime import reference as ref
+
+    at = quad_atlas(8, mesh=shd.quad_mesh(0.1))
+    eye = direction(te, 180) * 100
+    lp = direction(tl, pl)[None] * 100
+    lc = np.full((1, 3), 1e4)
+    got = gpu32.shade(np.eye(4), eye, lp, lc)
+    want, _ = ref.shade_texture_space(at, MATS[0], np.eye(4), eye, lp, lc)
+    assert np.isfinite(got).all() and (got >= 0).all()
+    if tl > 90:
+        assert not got[..., :3].any()  # light below the horizon adds exactly nothing
+    w16 = want.astype(np.float16).astype(np.float32)
+    # f32 math in another order, f16 storage on both sides: 2 f16 ulps (see test_runtime_texture)
+    assert (np.abs(got - w16) / (np.abs(w16) + 1e-2 * max(w16.max(), 1e-12))).max() <= 2 * 2.0**-10

@@ -1,0 +1,69 @@
+"""f16 vs f32 shading, the f16 path's clamps (1e6 W/sr at 1e-4 m), no flush-to-zero of values
+that matter, the rgba32float option, and the scene loader's intensity limit."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from vrneural.bench import extremes_precision as prec
+from vrneural.bench.extremes_fixtures import quad_atlas
+from vrneural.bench.extremes_shading import F16_MAX, F16_MIN_NORMAL, GpuShade
+from vrneural.errors import VrnError
+from vrneural.material import random_material
+from vrneural.runtime.codegen import texture_space_wgsl
+
+
+def test_zero_lights_generate_an_empty_light_loop():
+    code = texture_space_wgsl(random_material(1), n_lights=0)
+    assert "li < 0u" in code and "array<Light, 1>" in code
+
+
+def test_scene_intensity_limit(tmp_path):
+    from vrneural.runtime.scene import load_scene
+
+    head = '[[objects]]\nmesh = "plane"\nmaterial = { procedural = "lambertian" }\n'
+    ok = tmp_path / "ok.toml"
+    ok.write_text(head + "[[lights]]\nposition = [0, 1, 0]\nintensity = 1e6\n")
+    assert load_scene(ok).lights[0].intensity == 1e6
+    for bad in ("intensity = 2e6", "intensity = 1e6\ncolour = [2, 1, 1]"):
+        p = tmp_path / "hot.toml"
+        p.write_text(head + f"[[lights]]\nposition = [0, 1, 0]\n{bad}\n")
+        with pytest.raises(VrnError, match="intensity") as e:
+            load_scene(p)
+        assert "\n" not in str(e.value) and "hot.toml" in str(e.value)
+
+
+@pytest.mark.gpu
+def test_clamp_flush_and_wide_storage():
+    assert prec.case_prec_clamp(True)["ok"]
+    r = prec.case_prec_no_flush(True)
+    assert r["ok"], r
+    w = prec.case_prec_wide_storage(True)
+    assert w["ok"], w
+    assert w["rgba32float_bytes"] == 2 * w["rgba16float_bytes"]
+
+
+@pytest.fixture(scope="module")
+def pair():
+    at = quad_atlas(8)
+    mat = random_material(3)
+    return GpuShade(at, mat, "f32", 2), GpuShade(at, mat, "f16", 2)
+
+
+@pytest.mark.gpu
+@given(seed=st.integers(0, 2**31))
+@settings(max_examples=6)
+def test_f16_path_is_finite_and_close_over_scene_range(pair, seed):
+    ((eye, lp, lc),) = prec.scene_samples(1, seed)
+    a = pair[0].shade(np.eye(4), eye, lp, lc)[..., :3]
+    b = pair[1].shade(np.eye(4), eye, lp, lc)[..., :3]
+    for x in (a, b):
+        assert np.isfinite(x).all() and (x >= 0).all() and x.max() <= F16_MAX
+    m = (a >= F16_MIN_NORMAL) & (a < F16_MAX)
+    if m.any():
+        rel = np.abs(b[m] - a[m]) / a[m]
+        # random (untrained) weights; llvmpipe measured median 1e-3, p99.9 0.5 over 4 quick
+        # scenes (bench extremes): relative error explodes only where outputs nearly cancel
+        assert np.median(rel) <= 0.02
+        assert not (b[m] == 0).all()

@@ -1,0 +1,69 @@
+"""Extreme run settings: texture resolution (2, odd, above the maximum), reuse N = 0 and 1000,
+0 and 16 lights, 1 eye, 1 frame — through RunConfig -> resolve -> Renderer."""
+
+import pytest
+
+from vrneural.bench import extremes_settings as sett
+from vrneural.errors import VrnError
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize(
+    ("res", "msg"), [(2, "out of range"), (6, "out of range"), (129, "must be even")]
+)
+def test_texture_resolution_rejections(res, msg):
+    with pytest.raises(VrnError, match=msg) as e:
+        sett.render(frames=1, texture_res=res)
+    assert "--texture-res" in str(e.value) and "\n" not in str(e.value)
+
+
+@pytest.mark.gpu
+def test_above_adapter_maximum_is_rejected():
+    with pytest.raises(VrnError, match="--texture-res"):
+        sett.case_set_tex_res_above_max(True)
+
+
+@pytest.mark.gpu
+def test_kernel_works_at_resolution_2():
+    assert sett.case_set_kernel_res_2(True)["ok"]
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize(
+    "case",
+    [
+        "case_set_lights_0",
+        "case_set_lights_16",
+        "case_set_reuse_0",
+        "case_set_reuse_1000",
+        "case_set_one_eye_one_frame",
+    ],
+)
+def test_run_settings(case):
+    r = getattr(sett, case)(True)
+    assert r["ok"], r
+
+
+@pytest.mark.gpu
+def test_cli_accepts_zero_lights(tmp_path):
+    from vrneural.cli import main
+
+    out = tmp_path / "run"
+    code = main(
+        [
+            "run",
+            "--profile",
+            "tiny",
+            "--lights",
+            "0",
+            "--frames",
+            "2",
+            "--eyes",
+            "1",
+            "--eye-res",
+            "32x32",
+            "--out",
+            str(out),
+        ]
+    )
+    assert code == 0 and (out / "summary.json").is_file()

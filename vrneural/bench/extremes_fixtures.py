@@ -1,0 +1,121 @@
+"""Small hand-made inputs and the outcome rule of ``vrneural bench extremes``.
+
+Every case is a function ``case(quick) -> dict`` of measured values (``ok`` says whether the
+documented behaviour held). :func:`run_case` turns it into a record with one outcome:
+
+- ``works``: the case ran and its documented behaviour held (``ok`` true);
+- ``rejected``: a one-line :class:`VrnError` was raised, which the case expected;
+- ``FAIL``: anything else (behaviour violated, unexpected rejection or acceptance, a crash, a
+  multi-line error message).
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+
+import numpy as np
+
+from vrneural.atlas.types import EMPTY, Atlas, Mesh
+from vrneural.errors import VrnError
+
+
+def run_case(name: str, group: str, fn, expect: str = "works", quick: bool = True) -> dict:
+    """Run one case; see the module docstring for the outcome rule."""
+    t0 = time.perf_counter()
+    rec = {"case": name, "group": group, "expect": expect, "metrics": {}, "message": ""}
+    try:
+        m = fn(quick)
+    except VrnError as e:
+        msg = str(e)
+        rec["message"] = msg
+        one_line = "\n" not in msg and 0 < len(msg) < 400
+        rec["outcome"] = "rejected" if expect == "rejected" and one_line else "FAIL"
+        if expect != "rejected":
+            rec["message"] = f"unexpected rejection: {msg}"
+    except Exception as e:  # a crash is the finding: record it, keep running the others
+        tb = traceback.format_exception_only(type(e), e)[-1].strip()
+        rec["outcome"] = "FAIL"
+        rec["message"] = f"crash: {tb[:300]}"
+    else:
+        rec["metrics"] = {k: v for k, v in m.items() if k not in ("ok", "note")}
+        rec["message"] = str(m.get("note", ""))
+        if expect == "rejected":
+            rec["outcome"] = "FAIL"
+            rec["message"] = "accepted, but the documented behaviour is a rejection"
+        else:
+            rec["outcome"] = "works" if m.get("ok", False) else "FAIL"
+    rec["seconds"] = time.perf_counter() - t0
+    return rec
+
+
+def quad_mesh(size: float = 1.0, normal_scale: float = 1.0, tangent_scale: float = 1.0) -> Mesh:
+    """A ``size`` m square in the xy plane centred at the origin: normal +z, tangent +x, so the
+    local frame equals the world frame (bitangent +y). material uv = (x, y) / size + 0.5.
+    ``normal_scale`` / ``tangent_scale`` store deliberately unnormalized frames."""
+    s = size / 2
+    p = np.array([[-s, -s, 0], [s, -s, 0], [-s, s, 0], [s, s, 0]], np.float32)
+    n = np.tile(np.float32([0, 0, normal_scale]), (4, 1))
+    t = np.tile(np.float32([tangent_scale, 0, 0, 1]), (4, 1))
+    uv = (p[:, :2] / size + 0.5).astype(np.float32)
+    return Mesh("quad", p, np.array([[0, 1, 2], [1, 3, 2]], np.uint32), n, t, uv)
+
+
+def quad_atlas(res: int = 16, lo: float = 0.125, hi: float = 0.875, mesh: Mesh | None = None):
+    """``mesh`` (default :func:`quad_mesh`) mapped to atlas square ``[lo, hi]^2`` at ``res``;
+    texels outside are EMPTY, a 1-texel gutter keeps the nearest triangle."""
+    m = mesh or quad_mesh()
+    uva = (lo + (hi - lo) * m.uv).astype(np.float32)
+    c = (np.arange(res) + 0.5) / res
+    u, v = np.meshgrid(c, c)  # [y, x]
+    a = (u - lo) / (hi - lo)
+    b = (v - lo) / (hi - lo)
+    ids = np.where(a + b < 1.0, 0, 1).astype(np.uint32)
+    g = 1.0 / (res * (hi - lo))
+    inside = (a > -g) & (a < 1 + g) & (b > -g) & (b < 1 + g)
+    ids[~inside] = EMPTY
+    return Atlas(m, uva, ids, res, 1)
+
+
+def translate(x, y, z) -> np.ndarray:
+    """``[4, 4]`` float64 translation."""
+    m = np.eye(4)
+    m[:3, 3] = (x, y, z)
+    return m
+
+
+def direction(theta_deg: float, phi_deg: float = 0.0) -> np.ndarray:
+    """Unit vector ``[3]`` (float64) at polar angle ``theta`` from +z and azimuth ``phi``."""
+    t, p = np.radians(theta_deg), np.radians(phi_deg)
+    return np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
+
+
+def lipschitz_bound(mat) -> float:
+    """An upper bound of ``|d y / d dirs|`` (2-norm) of a material with ``linear`` output and
+    fixed features: the product of the layers' spectral norms (ReLU-type activations are
+    1-Lipschitz), the first layer restricted to its 9 direction inputs."""
+    if mat.output != "linear":
+        raise ValueError("the bound needs a linear output")
+
+    def chain(layers, first_cols):
+        b = np.linalg.norm(layers[0].weight[:, first_cols].astype(np.float64), 2)
+        for lay in layers[1:]:
+            b *= np.linalg.norm(lay.weight.astype(np.float64), 2)
+        return b
+
+    if mat.arch == "coarse_fine":
+        z = mat.networks["coarse"][-1].n_out
+        return chain(mat.networks["coarse"], slice(0, 9)) * chain(mat.networks["fine"], slice(0, z))
+    return chain(mat.networks["mlp"], slice(0, 9))
+
+
+def dirs9(wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
+    """``[N, 9]`` network direction inputs ``[wi, wo, h]`` (material.half_vector rule)."""
+    from vrneural.material import half_vector
+
+    return np.concatenate([wi, wo, half_vector(wi, wo)], -1).astype(np.float64)
+
+
+def finite_nonneg(a: np.ndarray) -> bool:
+    a = np.asarray(a)
+    return bool(np.isfinite(a).all() and (a >= 0).all())

@@ -1,0 +1,136 @@
+"""`vrneural bench lights`: frame time with 1 to 8 point lights (the paper's Fig. 10).
+
+The built-in scene with its first k of 8 circling point lights (the same 8 positions for every
+k), both eyes at the quest3 eye resolution, 1200^2 radiance textures, N = 4. Each light costs one
+more evaluation of the networks per texel, so shading cost grows about linearly with k.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+
+from vrneural.bench import report as rp
+from vrneural.bench import timing
+from vrneural.config import opt
+
+
+@dataclass
+class LightsConfig:
+    """`vrneural bench lights`."""
+
+    out: str = opt("bench-lights", "output directory", cli=False)
+    lights: str = opt("1,2,3,4,5,6,7,8", "light counts (comma-separated, 1..8)")
+    texture_res: int = opt(1200, "radiance texture side")
+    reuse: int = opt(4, "update interval N")
+    schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
+    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
+    eyes: int = opt(2, "eyes (1 or 2)")
+    cycles: int = opt(1, "update cycles measured per light count (N + 1 frames each)")
+    quick: bool = opt(False, "CI-sized: lights 1,2,4; texture 256; eyes 258x276")
+    progress: bool = opt(True, "show progress bars")
+    force: bool = opt(False, "overwrite an existing output directory")
+
+    def resolved(self) -> LightsConfig:
+        if not self.quick:
+            return self
+        return dataclasses.replace(self, lights="1,2,4", texture_res=256, eye_res="258x276")
+
+
+def run_lights(cfg: LightsConfig) -> dict:
+    from vrneural.errors import check_range
+    from vrneural.runtime.config import parse_res
+    from vrneural.runtime.profiles import get_profile
+    from vrneural.runtime.scene import builtin_scene
+
+    c = cfg.resolved()
+    counts = rp.int_list("--lights", c.lights, 1, 8)
+    check_range("--texture-res", c.texture_res, 2, 8192)
+    check_range("--reuse", c.reuse, 0, 64)
+    check_range("--eyes", c.eyes, 1, 2)
+    check_range("--cycles", c.cycles, 1, 100)
+    eye_res = parse_res(c.eye_res)
+    root = rp.prepare_out(cfg.out, cfg.force)
+    t0 = time.perf_counter()
+    prof = get_profile("quest3")
+    doc = rp.header("lights", c)
+    scene = builtin_scene(8)
+    n = timing.frames_for(c.reuse, c.cycles, 1)
+    bar = timing.progress(n * len(counts), "bench lights", c.progress)
+    for k in counts:
+        r = timing.make_renderer(
+            scene,
+            texture_res=c.texture_res,
+            eye_res=eye_res,
+            eyes=c.eyes,
+            n_lights=k,
+            reuse=c.reuse,
+            schedule=c.schedule,
+            fps=prof.fps,
+            fov_y=prof.fov_y,
+        )
+        rec = timing.base_record(r)
+        rec.update(timing.measure(r, c.reuse, c.schedule, c.cycles, 1, bar.update))
+        doc["records"].append(rec)
+        del r
+    bar.close()
+    recs = doc["records"]
+    base = recs[0]["shading_ms_per_frame"] / recs[0]["lights"]
+    md = [
+        "# Lights: frame time with 1 to 8 point lights (paper Fig. 10)",
+        "",
+        rp.adapter_line(doc),
+        f"Built-in scene, {c.eyes} eye(s) at {c.eye_res}, texture {c.texture_res}^2, "
+        f"N = {c.reuse} ({c.schedule}), {n} frames per light count after frame 0."
+        + (" **Quick run: reduced grid.**" if c.quick else ""),
+        "",
+    ]
+    rows = [
+        [
+            r["lights"],
+            r["fps"],
+            r["frame_ms"]["median"],
+            r["frame_ms"]["p99"],
+            r["shading_ms_per_frame"],
+            r["shading_ms_per_frame"] / (base * r["lights"]),
+            r["forward_ms"],
+            r["mlp_evals_per_frame"],
+        ]
+        for r in recs
+    ]
+    md += rp.table(
+        [
+            "lights",
+            "FPS",
+            "frame ms median",
+            "frame ms p99",
+            "shading ms/frame",
+            "shading / linear",
+            "forward ms",
+            "MLP evals/frame",
+        ],
+        rows,
+    )
+    md += [
+        "",
+        "shading / linear: shading ms over (1-light shading ms x lights); 1 = linear.",
+        "",
+        "![lights](lights.png)",
+    ]
+    fig, (ax, ax2) = rp.figure(9, 3.6, 2)
+    ks = [r["lights"] for r in recs]
+    ax.plot(ks, [r["fps"] for r in recs], "o-")
+    ax.set_xlabel("point lights")
+    ax.set_ylabel("FPS (mean frame time)")
+    ax.grid(alpha=0.3)
+    ax2.plot(ks, [r["shading_ms_per_frame"] for r in recs], "o-", label="neural shading")
+    ax2.plot(ks, [base * k for k in ks], "k:", label="linear in lights")
+    ax2.plot(ks, [r["forward_ms"] for r in recs], "s-", label="forward")
+    ax2.set_xlabel("point lights")
+    ax2.set_ylabel("GPU ms per displayed frame")
+    ax2.legend(fontsize=7)
+    ax2.grid(alpha=0.3)
+    fig.suptitle(f"bench lights on {doc['adapter']['name']}", fontsize=9)
+    rp.save_png(fig, root / "lights.png")
+    return rp.finish(root, doc, md, t0)

@@ -1,0 +1,141 @@
+"""`vrneural bench materials`: 1 to 4 materials rendered at once (the paper's Table 3).
+
+k upright squares side by side, each with a distinct random neural material (its own generated
+kernel), three point lights, 1024^2 radiance textures, N = 7, both eyes at the quest3 eye
+resolution. Radiance textures are RGBA float16 here (8 B/texel): ``res^2 * 8 * eyes`` bytes each.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+
+from vrneural.bench import report as rp
+from vrneural.bench import timing
+from vrneural.config import opt
+
+
+@dataclass
+class MaterialsConfig:
+    """`vrneural bench materials`."""
+
+    out: str = opt("bench-materials", "output directory", cli=False)
+    materials: str = opt("1,2,3,4", "material counts (comma-separated, 1..8)")
+    texture_res: int = opt(1024, "radiance texture side per material")
+    reuse: int = opt(7, "update interval N")
+    schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
+    lights: int = opt(3, "point lights")
+    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
+    eyes: int = opt(2, "eyes (1 or 2)")
+    cycles: int = opt(1, "update cycles measured per count (N + 1 frames each)")
+    quick: bool = opt(False, "CI-sized: materials 1,2,3; texture 256; eyes 258x276")
+    progress: bool = opt(True, "show progress bars")
+    force: bool = opt(False, "overwrite an existing output directory")
+
+    def resolved(self) -> MaterialsConfig:
+        if not self.quick:
+            return self
+        return dataclasses.replace(self, materials="1,2,3", texture_res=256, eye_res="258x276")
+
+
+def squares_scene(k: int, n_lights: int):
+    """k upright squares (0.3 m) in a row facing the built-in head path, distinct materials."""
+    from vrneural.runtime.lights import default_lights
+    from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, builtin_scene, model_matrix
+    from vrneural.material import random_material
+
+    base = builtin_scene(n_lights)
+    objs = []
+    for i in range(k):
+        x = (i - (k - 1) / 2) * 0.34
+        model = model_matrix((x, 0.85, 0.0), (70, 0, 0), 0.15)  # plane mesh spans [-1, 1]
+        mat = MaterialDesc("neural", random_material(100 + i), f"random:{100 + i}", 1.0)
+        objs.append(ObjectDesc(f"square{i}", "plane", model, mat))
+    return Scene(f"squares{k}", objs, default_lights(n_lights), None, None, "orbit", base.base)
+
+
+def run_materials(cfg: MaterialsConfig) -> dict:
+    from vrneural.errors import check_range
+    from vrneural.runtime.config import parse_res
+    from vrneural.runtime.profiles import get_profile
+
+    c = cfg.resolved()
+    counts = rp.int_list("--materials", c.materials, 1, 8)
+    check_range("--texture-res", c.texture_res, 2, 8192)
+    check_range("--reuse", c.reuse, 0, 64)
+    check_range("--lights", c.lights, 1, 8)
+    check_range("--eyes", c.eyes, 1, 2)
+    check_range("--cycles", c.cycles, 1, 100)
+    eye_res = parse_res(c.eye_res)
+    root = rp.prepare_out(cfg.out, cfg.force)
+    t0 = time.perf_counter()
+    prof = get_profile("quest3")
+    doc = rp.header("materials", c)
+    n = timing.frames_for(c.reuse, c.cycles, 1)
+    bar = timing.progress(n * len(counts), "bench materials", c.progress)
+    for k in counts:
+        r = timing.make_renderer(
+            squares_scene(k, c.lights),
+            texture_res=c.texture_res,
+            eye_res=eye_res,
+            eyes=c.eyes,
+            n_lights=c.lights,
+            reuse=c.reuse,
+            schedule=c.schedule,
+            fps=prof.fps,
+            fov_y=prof.fov_y,
+        )
+        rec = timing.base_record(r)
+        rec.update(timing.measure(r, c.reuse, c.schedule, c.cycles, 1, bar.update))
+        rec["radiance_texture_mb"] = c.texture_res**2 * 8 * c.eyes / 2**20
+        doc["records"].append(rec)
+        del r
+    bar.close()
+    recs = doc["records"]
+    md = [
+        "# Materials: several materials at once (paper Table 3)",
+        "",
+        rp.adapter_line(doc),
+        f"k squares with distinct materials, {c.lights} lights, {c.eyes} eye(s) at {c.eye_res}, "
+        f"texture {c.texture_res}^2 per material, N = {c.reuse} ({c.schedule}), {n} frames per "
+        "count after frame 0." + (" **Quick run: reduced grid.**" if c.quick else ""),
+        "",
+    ]
+    rows = [
+        [
+            r["materials"],
+            r["fps"],
+            r["frame_ms"]["median"],
+            r["frame_ms"]["p99"],
+            r["shading_ms_per_frame"],
+            r["forward_ms"],
+            r["radiance_texture_mb"] * r["materials"],
+        ]
+        for r in recs
+    ]
+    md += rp.table(
+        [
+            "materials",
+            "FPS",
+            "frame ms median",
+            "frame ms p99",
+            "shading ms/frame",
+            "forward ms",
+            "radiance textures MB",
+        ],
+        rows,
+    )
+    md += ["", "![materials](materials.png)"]
+    fig, (ax,) = rp.figure(5, 3.5)
+    ks = [r["materials"] for r in recs]
+    ax.plot(ks, [r["frame_ms"]["median"] for r in recs], "o-", label="frame ms (median)")
+    ax.plot(ks, [r["shading_ms_per_frame"] for r in recs], "s-", label="shading ms/frame")
+    ax.set_xlabel("materials")
+    ax.set_ylabel("ms")
+    ax.set_xticks(ks)
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    ax.set_title(f"bench materials on {doc['adapter']['name']}", fontsize=9)
+    rp.save_png(fig, root / "materials.png")
+    return rp.finish(root, doc, md, t0)
