@@ -130,4 +130,5 @@ def texel_stats(ids: np.ndarray, rinfo: dict, n_faces: int) -> dict:
         "zero_area_triangles": rinfo["zero_area_triangles"],
         "sliver_fixes": rinfo["sliver_fixes"],
         "overlap_texels": rinfo["overlap_texels"],
+        "max_abs_barycentric": rinfo["max_abs_barycentric"],
     }

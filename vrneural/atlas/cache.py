@@ -24,7 +24,7 @@ from vrneural.atlas.types import Atlas, Mesh
 from vrneural.errors import VrnError
 from vrneural.formats.container import read_container, write_container
 
-ATLAS_CODE_VERSION = 2
+ATLAS_CODE_VERSION = 3
 MAGIC = b"VRNATLAS"
 FORMAT_VERSION = 1
 

@@ -158,6 +158,7 @@ def rasterize_ids(
     px, area, es = _setup(uv, faces, R)
     good = np.flatnonzero(area != 0)
     ids, claims = _coverage(px, es, good, R)
+    covered = ids != EMPTY
     t1 = time.perf_counter()
     counts = np.bincount(ids[ids != EMPTY], minlength=len(faces))
     overlap = claims - int(counts.sum())
@@ -168,12 +169,16 @@ def rasterize_ids(
     border = np.intersect1d(boundary_faces(faces), good)
     gutter = dilate_ids(ids, px, es, border, R, padding)
     t3 = time.perf_counter()
+    # texels outside their triangle (sliver + gutter): how far the runtime extrapolates
+    out_tex = np.flatnonzero(~covered & (ids != EMPTY))
+    extra = _centre_barycentrics(px[ids[out_tex]], out_tex, R) if len(out_tex) else np.zeros((1, 3))
     info = {
         "zero_area_triangles": int(len(faces) - len(good)),
         "sliver_fixes": fixed,
         "slivers_unfixed": int(len(slivers) - fixed),
         "overlap_texels": overlap,
         "gutter_texels": gutter,
+        "max_abs_barycentric": float(np.abs(extra).max()),
         "raster_s": t1 - t0,
         "sliver_s": t2 - t1,
         "dilate_s": t3 - t2,
@@ -277,11 +282,17 @@ def texel_barycentrics(atlas) -> np.ndarray:
     if len(tex) == 0:
         return out.reshape(R, R, 3)
     tri = atlas.uv_atlas.astype(np.float64)[atlas.mesh.faces[ids[tex]].astype(np.int64)] * R
+    out[tex] = _centre_barycentrics(tri, tex, R)
+    return out.reshape(R, R, 3)
+
+
+def _centre_barycentrics(tri: np.ndarray, tex: np.ndarray, R: int) -> np.ndarray:
+    """[N, 3] float64 barycentrics of texel centres ``tex`` (flat indices) in pixel-space
+    triangles ``tri`` [N, 3, 2] (zero-area triangles give finite garbage, never NaN)."""
     cx, cy = tex % R + 0.5, tex // R + 0.5
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
     den = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
     den = np.where(den == 0, 1.0, den)
     l1 = ((cx - a[:, 0]) * (c[:, 1] - a[:, 1]) - (cy - a[:, 1]) * (c[:, 0] - a[:, 0])) / den
     l2 = ((b[:, 0] - a[:, 0]) * (cy - a[:, 1]) - (b[:, 1] - a[:, 1]) * (cx - a[:, 0])) / den
-    out[tex] = np.stack([1.0 - l1 - l2, l1, l2], axis=1)
-    return out.reshape(R, R, 3)
+    return np.stack([1.0 - l1 - l2, l1, l2], axis=1)

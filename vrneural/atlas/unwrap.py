@@ -11,15 +11,17 @@ asked for 1200^2 came back 1378 x 1384), and a fixed ``resolution`` with too hig
    :data:`GOOD_FIT` R, the charts (UVs divided by ``texels_per_unit``) are re-packed alone
    with ``add_uv_mesh`` at a corrected ``texels_per_unit``; charting is not repeated.
    xatlas gets ``bilinear = True`` (it reserves a 1-texel ring around each chart's
-   conservative footprint, so no other chart's texel is within 1 texel of it: bilinear taps
-   never bleed across charts) plus ``padding - 1`` texels of extra spacing. On the knot this
-   gives 39 % coverage instead of 34 % with ``padding`` + bilinear, with no bleeding taps.
+   conservative footprint, so bilinear taps of one chart never read another chart's texels:
+   checked on random points of every built-in mesh by tests/test_atlas_build.py) plus
+   ``padding - 1`` texels of extra spacing. On the knot this gives 39 % coverage instead of
+   34 % with ``padding`` + bilinear, with no bleeding taps either way.
 3. The packed pixel coordinates are scaled *up* uniformly by ``R / max(W, H) >= 1`` into the
-   R x R texture: gaps between charts only grow, so padding stays >= ``padding`` texels.
+   R x R texture: gaps between charts only grow.
 
 Speed (measured, see README "Atlas"): xatlas's chart growing and parameterization get much
-slower with chart size: on the 100k-triangle knot, unlimited charts took 83 s of CPU, charts
-capped at ~2000 triangles 31 s, at ~300 triangles 8 s, and 4-5 s with ``max_iterations = 0``.
+slower with chart size. CPU time of ``generate`` on the 100k-triangle knot with
+``max_iterations = 0``: unlimited charts 83 s, charts capped at ~2000 triangles 31 s, at ~300
+triangles 3.8 s (8.1 s with xatlas's default single iteration).
 So meshes above :data:`FAST_FACES` triangles use ``max_chart_area`` for about
 :data:`FACES_PER_CHART` triangles per chart and no chart-relocation iterations: more, smaller
 charts (more seams and gutter texels, a few % lower fill) for a 10-20x faster unwrap.

@@ -15,6 +15,7 @@ STAT_LINES = (
     ("texels_per_triangle_median", "texels/tri median", "{:g}"),
     ("triangles_without_texels", "tris w/o texels", "{}"),
     ("zero_area_triangles", "zero-area tris", "{}"),
+    ("max_abs_barycentric", "max |barycentric|", "{:.2f} (gutter extrapolation)"),
     ("cache", "cache", "{}"),
     ("total_s", "time", "{:.2f} s"),
 )
