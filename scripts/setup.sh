@@ -3,7 +3,8 @@
 #   1. a virtual environment in .venv
 #   2. the pinned CPU build of PyTorch, installed BEFORE the package, so pip never resolves
 #      a bare `torch` (which would pull several GB of CUDA packages)
-#   3. vrneural itself, editable, with the train/dev/metrics extras
+#   3. vrneural itself, editable, with the train/dev/metrics extras, and btf-extractor
+#      (UBO2014 import; built without isolation, see below)
 #   4. Mesa's lavapipe CPU Vulkan driver, only when wgpu finds no adapter
 # Re-running is cheap: steps 2-3 are skipped while pyproject.toml is unchanged.
 set -euo pipefail
@@ -17,11 +18,17 @@ if [ ! -x .venv/bin/python ]; then
     "$PY" -m venv .venv
 fi
 stamp=.venv/.vrneural-setup
-want="$(sha256sum pyproject.toml | cut -c1-16) $TORCH_SPEC"
+want="$(cat pyproject.toml scripts/setup.sh | sha256sum | cut -c1-16) $TORCH_SPEC"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
-    echo "[setup] installing $TORCH_SPEC (CPU) and vrneural[train,dev,metrics,ubo] into .venv"
+    echo "[setup] installing $TORCH_SPEC (CPU) and vrneural[train,dev,metrics] into .venv"
     .venv/bin/python -m pip install -q --disable-pip-version-check "$TORCH_SPEC"
-    .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[train,dev,metrics,ubo]"
+    .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[train,dev,metrics]"
+    # UBO2014 import: btf-extractor's own build pins numpy<1.20 (no Python 3.11 build), so it
+    # is built against the installed numpy without build isolation.
+    echo "[setup] building btf-extractor (UBO2014 import) against the installed numpy"
+    .venv/bin/python -m pip install -q --disable-pip-version-check poetry-core "Cython<0.30"
+    .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps \
+        --no-build-isolation btf-extractor
     echo "$want" > "$stamp"
 fi
 

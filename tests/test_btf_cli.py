@@ -182,3 +182,15 @@ def test_synth_existing_output_with_force_is_replaced(small_btf, tmp_path):
     )
     assert r.returncode == 0, r.stderr
     assert read_btf(out).meta["name"] == "metal"
+
+
+def test_interrupted_partial_is_never_discarded_silently(tmp_path, vrn_inproc):
+    out = tmp_path / "p.btf"
+    partial = tmp_path / "p.btf.partial"
+    partial.write_bytes(b"hours of work")
+    synth = ["btf", "synth", "--preset", "wood", "--res", "4", "--dirs", "3", "--no-progress"]
+    _one_line_error(vrn_inproc(*synth, "-o", str(out)), "--resume", "--force")
+    assert partial.read_bytes() == b"hours of work" and not out.exists()
+    r = vrn_inproc(*synth, "-o", str(out), "--resume")  # not ours to continue: starts over
+    assert r.returncode == 0 and "starting over" in r.stderr
+    assert read_btf(out).shape == (3, 3, 4, 4) and not partial.exists()

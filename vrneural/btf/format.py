@@ -132,6 +132,7 @@ class BtfWriter:
         }
         self._w = ContainerWriter(path, BTF_MAGIC, BTF_VERSION, header, specs, resume=resume)
         self.partial = self._w.partial  #: the file being written (``<path>.partial``)
+        self.resumed = self._w.resumed  #: True when an identical unfinished write was reopened
         self.progress_file = self._w.partial.with_name(self._w.partial.name + ".done")
         if not self._w.resumed:
             self._w.array("light_dirs")[:] = light_dirs

@@ -142,7 +142,7 @@ def metal(rng, n: int) -> Maps:
     u, v = uv_grid(n)
     grooves = spectral_noise(rng, n, 8, n / 2, beta=0.8, stretch=(40.0, 1.0))
     wobble = 0.08 * spectral_noise(rng, n, 1, 4)
-    height = 0.0005 * grooves
+    height = 0.001 * grooves
     scratch = np.zeros((n, n))
     sc_angle = np.zeros((n, n))
     for _ in range(2):  # straight periodic scratches: integer direction (k, m) across the tile
@@ -153,9 +153,9 @@ def metal(rng, n: int) -> Maps:
         scratch = np.maximum(scratch, this)
     height = height - 0.001 * scratch
     smudge = 0.5 + 0.5 * np.tanh(1.5 * spectral_noise(rng, n, 1, 6) - 1.0)
-    f0 = lerp((0.91, 0.92, 0.92), (0.80, 0.80, 0.82), smudge)
-    alpha_t = 0.07 + 0.05 * smudge
-    alpha_b = 0.32 + 0.06 * smudge
+    f0 = lerp((0.91, 0.92, 0.92), (0.84, 0.84, 0.86), smudge)
+    alpha_t = 0.07 + 0.025 * smudge
+    alpha_b = 0.32 + 0.04 * smudge
     return _maps(
         n,
         height,

@@ -1,9 +1,9 @@
 """Contact sheets (`vrneural btf show`) and summaries (`vrneural btf info`) of a ``.btf``.
 
-The sheet shows BTF slices at several characteristic ``(wi, wo)`` pairs (each tiled 2 x 2 so that
-seams would show), tonemapped with one exposure for the whole sheet, plus the unfolded apparent
-BRDF of one texel: an image over light index (rows) x view index (columns), like the papers'
-figures (log-tonemapped because it spans orders of magnitude).
+The sheet shows BTF slices at several characteristic ``(wi, wo)`` pairs (each tiled 2 x 2 so
+that seams would show), each tonemapped with its own exposure (printed in its title), plus the
+unfolded apparent BRDF of one texel: an image over light index (rows) x view index (columns),
+like the papers' figures (log-tonemapped because it spans orders of magnitude).
 """
 
 from __future__ import annotations
@@ -87,10 +87,10 @@ def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
         li, vi = nearest(btf.light_dirs, tl, pl), nearest(btf.view_dirs, tv, pv)
         slices.append(np.tile(btf.slice(li, vi), (2, 2, 1)))
         labels.append(f"{label}\n(l{li}, v{vi})")
-    # one exposure for the sheet: the median panel's 99th percentile maps to 0.8, so the very
-    # bright grazing panels saturate instead of darkening all others
-    ref = np.median([np.percentile(s.max(-1), 99.0) for s in slices])
-    exposure = 0.8 / max(float(ref), 1e-6)
+    # one exposure per panel (its 99th percentile -> 0.8), printed in its title: glossy
+    # materials span orders of magnitude between mirror and off-mirror pairs, so one global
+    # exposure would show either the highlights or everything else
+    exposures = [0.8 / max(float(np.percentile(s.max(-1), 99.0)), 1e-6) for s in slices]
     x, y = texel if texel is not None else (W // 2, H // 2)
     unf = np.asarray(btf.values[:, :, y, x, :], np.float32)  # [L, V, 3]
     lum = np.log1p(unf / max(float(np.percentile(unf, 50)), 1e-6))
@@ -101,14 +101,14 @@ def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
     fig = plt.figure(figsize=(4 * cols, 4 * rows + 6.5), dpi=100)
     name = btf.meta.get("name", btf.path.name if btf.path else "?")
     fig.suptitle(
-        f"{name}: {L} lights x {V} views x {H}x{W} texels (slices tiled 2x2, exposure "
-        f"{exposure:.3g})",
+        f"{name}: {L} lights x {V} views x {H}x{W} texels (slices tiled 2x2, each panel "
+        "with its own exposure x)",
         fontsize=13,
     )
-    for k, (img, lab) in enumerate(zip(slices, labels, strict=True)):
+    for k, (img, lab, ex) in enumerate(zip(slices, labels, exposures, strict=True)):
         ax = fig.add_subplot(rows + 2, cols, k + 1)
-        ax.imshow(tonemap(img, exposure), interpolation="nearest")
-        ax.set_title(lab, fontsize=9)
+        ax.imshow(tonemap(img, ex), interpolation="nearest")
+        ax.set_title(f"{lab} x{ex:.3g}", fontsize=9)
         ax.axis("off")
     ax = fig.add_subplot(rows + 2, 1, (rows + 1, rows + 2))
     ax.imshow(np.clip(unf_img, 0, 1), interpolation="nearest", aspect="auto")

@@ -85,7 +85,10 @@ def synthesize(cfg: BtfConfig, out, resume: bool = False, progress: bool = True)
         "seed": cfg.seed,
     }
     out = Path(out)
+    had_partial = out.with_name(out.name + ".partial").exists()
     w = BtfWriter(out, dirs, dirs, (cfg.res, cfg.res), meta, resume=resume)
+    if resume and had_partial and not w.resumed:
+        print(f"{w.partial}: made with other settings; starting over", file=sys.stderr)
     todo = [v for v in range(len(dirs)) if v not in w.done]
     if resume and w.done:
         print(f"{out}: resuming, {len(w.done)}/{len(dirs)} views already done", file=sys.stderr)

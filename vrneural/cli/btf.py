@@ -73,6 +73,19 @@ def _same_file(a, b) -> bool:
     return Path(a).resolve() == Path(b).resolve()
 
 
+def _check_partial(out: Path, resume: bool, force: bool) -> None:
+    """An interrupted run's ``<out>.partial`` is only continued (--resume) or discarded (--force)
+    on request: a long render is never thrown away by accident."""
+    from vrneural.errors import VrnError
+
+    partial = out.with_name(out.name + ".partial")
+    if partial.exists() and not (resume or force):
+        raise VrnError(
+            f"{partial} exists from an interrupted run; pass --resume to continue it "
+            "or --force to start over"
+        )
+
+
 def run_synth(args) -> int:
     from vrneural.btf.synth import BtfConfig, synthesize
     from vrneural.config import config_from_args, write_config
@@ -84,6 +97,7 @@ def run_synth(args) -> int:
     if not args.output.endswith(".btf"):
         raise VrnError(f"{args.output}: output must end in .btf")
     out = check_output(args.output, args.force)
+    _check_partial(out, args.resume, args.force)
     path = synthesize(cfg, out, resume=args.resume, progress=not args.no_progress)
     write_config(path, cfg)
     print(path)
@@ -147,5 +161,6 @@ def run_import(args) -> int:
     if _same_file(args.file, args.output):
         raise VrnError(f"{args.output}: output would overwrite the input")
     out = check_output(args.output, args.force)
+    _check_partial(out, args.resume, args.force)
     print(import_ubo(args.file, out, resume=args.resume, progress=not args.no_progress))
     return 0
