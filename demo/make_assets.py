@@ -40,12 +40,17 @@ RECIPE = {
     "spp": 4,  # jittered sub-samples per texel in btf synth
     "seed": 0,  # btf synth seed and training seed
     "teach_epochs": 4,
-    "distill_epochs": 4,
+    "distill_epochs": 2,
 }
 
 
-def step(log: list, name: str, cmd: list[str], prefix: str) -> None:
-    """Run one CLI step, streaming its output with a ``[preset]`` prefix; record wall time."""
+def step(log: list, name: str, cmd: list[str], prefix: str, done: dict | None = None) -> None:
+    """Run one CLI step, streaming its output with a ``[preset]`` prefix; record wall time.
+    ``done``: the record of this exact step from an earlier run whose output exists (reused)."""
+    if done is not None and done.get("command") == "vrneural " + " ".join(cmd):
+        print(f"[{prefix}] {name}: reusing the output of an earlier run ({done['seconds']} s)")
+        log.append(dict(done, reused=True))
+        return
     print(f"[{prefix}] $ vrneural {' '.join(cmd)}", flush=True)
     t0 = time.perf_counter()
     env = dict(os.environ, XDG_RUNTIME_DIR=os.environ.get("XDG_RUNTIME_DIR", "/tmp"))
@@ -66,19 +71,31 @@ def build(preset: str, work: Path, force: bool) -> dict:
     f = ["--force"] if force else []
     btf, tea, stu = str(w / f"{preset}.btf"), str(w / "teacher.pt"), str(w / "student.pt")
     log: list = []
-    t0 = time.perf_counter()
+    rec = w / "steps.json"  # per-step records, so an interrupted run resumes at the next step
+    prev = {} if force or not rec.is_file() else json.loads(rec.read_text())
+
+    def keep(name: str, out: str) -> dict | None:
+        return prev.get(name) if Path(out).is_file() else None
+
+    def save() -> None:
+        rec.write_text(json.dumps({e["step"]: e for e in log}, indent=1) + "\n")
+
     ep = ["--no-progress"] if os.environ.get("VRN_NO_PROGRESS") else []
     synth = ["btf", "synth", "--preset", preset, "--res", str(r["res"]), "--dirs", str(r["dirs"])]
     synth += ["--spp", str(r["spp"]), "--seed", str(r["seed"]), "-o", btf, *ep]
-    step(log, "btf synth", synth + f, preset)
+    step(log, "btf synth", synth + f, preset, keep("btf synth", btf))
+    save()
     teach = ["teach", btf, "-o", tea, "--epochs", str(r["teach_epochs"]), "--seed", str(r["seed"])]
-    step(log, "teach", teach + ["--no-export", *ep] + f, preset)
+    step(log, "teach", [*teach, "--no-export", *ep, *f], preset, keep("teach", tea))
+    save()
     dist = ["distill", tea, "-o", stu, "--epochs", str(r["distill_epochs"])]
-    step(log, "distill", dist + ["--seed", str(r["seed"]), "--no-export", *ep] + f, preset)
+    step(log, "distill", [*dist, "--seed", str(r["seed"]), "--no-export", *ep, *f], preset)
+    save()
     out_s, out_t = DATA / f"{preset}.vrnm", DATA / f"{preset}.teacher.vrnm"
     step(log, "export student", ["export", stu, "-o", str(out_s), "--force"], preset)
     step(log, "export teacher", ["export", tea, "-o", str(out_t), "--force"], preset)
-    total = round(time.perf_counter() - t0, 1)
+    save()
+    total = round(sum(e["seconds"] for e in log), 1)  # sum of steps (earlier runs included)
     entry = {"preset": preset, "recipe": dict(r), "steps": log, "total_seconds": total}
     for role, src in (("teacher", tea), ("student", stu)):
         for cfg in (Path(src + ".config.json"), Path(src).with_suffix(".config.json")):

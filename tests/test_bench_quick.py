@@ -123,3 +123,8 @@ def test_bench_user_errors_are_one_line(capsys, tmp_path):
     assert "WIDTHxHEIGHT" in _err(capsys, ["tradeoff", "--eye-res", "big", "--out", o])
     (tmp_path / "o").mkdir()
     assert "--force" in _err(capsys, ["materials", "--out", o])
+
+
+def test_tradeoff_missing_packs_is_one_line(capsys, tmp_path):
+    msg = _err(capsys, ["tradeoff", "--packs", str(tmp_path), "--out", str(tmp_path / "o")])
+    assert "--packs" in msg and "teacher.vrnm" in msg and "not found" in msg

@@ -67,3 +67,18 @@ def test_f16_path_is_finite_and_close_over_scene_range(pair, seed):
         # scenes (bench extremes): relative error explodes only where outputs nearly cancel
         assert np.median(rel) <= 0.02
         assert not (b[m] == 0).all()
+
+
+@pytest.mark.gpu
+def test_wide_radiance_format_matches_twin_without_f16_rounding():
+    from vrneural.runtime import reference as ref
+
+    at, mat = quad_atlas(32), random_material(3)
+    eye = np.float64([0.3, 0.2, 1.5])
+    lp = np.float64([[0.5, 0.5, 1.0], [-1, 0, 0.5]])
+    lc = np.float64([[1, 0.5, 0.2], [2, 2, 2]])
+    got = GpuShade(at, mat, "f32", 2, "rgba32float").shade(np.eye(4), eye, lp, lc)
+    want, _ = ref.shade_texture_space(at, mat, np.eye(4), eye, lp, lc)
+    np.testing.assert_array_equal(got[..., 3], want[..., 3])
+    # f32 on both sides, no f16 store: llvmpipe measured 2.1e-5 (summation order, fma)
+    assert (np.abs(got - want) / (np.abs(want) + 1e-2)).max() <= 1e-4

@@ -32,6 +32,7 @@ def test_kernel_works_at_resolution_2():
 @pytest.mark.parametrize(
     "case",
     [
+        "case_set_far_origin_render",
         "case_set_lights_0",
         "case_set_lights_16",
         "case_set_reuse_0",
@@ -48,22 +49,9 @@ def test_run_settings(case):
 def test_cli_accepts_zero_lights(tmp_path):
     from vrneural.cli import main
 
+    scene = tmp_path / "s.toml"
+    scene.write_text(sett.SCENE_TOML)  # no [[lights]]
     out = tmp_path / "run"
-    code = main(
-        [
-            "run",
-            "--profile",
-            "tiny",
-            "--lights",
-            "0",
-            "--frames",
-            "2",
-            "--eyes",
-            "1",
-            "--eye-res",
-            "32x32",
-            "--out",
-            str(out),
-        ]
-    )
+    argv = ["run", str(scene), "--profile", "tiny", "--lights", "0", "--frames", "1"]
+    code = main([*argv, "--eyes", "1", "--eye-res", "32x32", "--out", str(out)])
     assert code == 0 and (out / "summary.json").is_file()

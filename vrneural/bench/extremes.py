@@ -4,7 +4,7 @@ Each case (``vrneural/bench/extremes_*.py``) either works with its documented be
 rejected with a one-line error; anything else is a FAIL. The run writes ``results.json`` (one
 record per case: outcome, message, measured values, seconds), ``results.md`` (the table) and
 ``f16_error.png`` (histogram of the f16-vs-f32 relative error). Heavy cases (1M triangles, the
-8192^2 texture) run in full size only without ``--quick``. Exit code 1 when any case FAILs.
+largest accepted texture) run in full size only without ``--quick``. Exit code 1 on any FAIL.
 """
 
 from __future__ import annotations
@@ -51,10 +51,11 @@ CASES = [
     ("inf_vertex_obj", "geometry", geo.case_geo_inf_vertex_file, R, "load_mesh"),
     ("far_1e5m", "geometry", geo.case_geo_far_origin, W, "camera-relative = at origin"),
     ("many_triangles", "geometry", geo.case_geo_many_triangles, W, "1M (quick: 20k)"),
+    ("far_1e5m_render", "geometry", sett.case_set_far_origin_render, W, "image = at origin"),
     ("tex_res_2_kernel", "settings", sett.case_set_kernel_res_2, W, "kernel alone, one block"),
     ("tex_res_2_run", "settings", sett.case_set_tex_res_2, R, "atlas needs R >= 8"),
     ("tex_res_odd", "settings", sett.case_set_tex_res_odd, R, "2x2 blocks"),
-    ("tex_res_max", "settings", sett.case_set_tex_res_max, W, "8192 (quick: 1024)"),
+    ("tex_res_max", "settings", sett.case_set_tex_res_max, W, "largest accepted (quick: 1024)"),
     ("tex_res_above_max", "settings", sett.case_set_tex_res_above_max, R, "adapter max + 2"),
     ("reuse_N=0", "settings", sett.case_set_reuse_0, W, "update every frame"),
     ("reuse_N=1000", "settings", sett.case_set_reuse_1000, W, "staggered 1/1001"),
@@ -73,7 +74,9 @@ CASES = [
 class ExtremesConfig:
     """``vrneural bench extremes`` settings."""
 
-    quick: bool = opt(False, "small sizes for the heavy cases (1M triangles -> 20k, 8192 -> 1024)")
+    quick: bool = opt(
+        False, "small sizes for the heavy cases (1M triangles -> 20k, max texture -> 1024)"
+    )
     only: str = opt("", "comma-separated case names or groups to run (default: all)")
     force: bool = opt(False, "overwrite an existing --out directory")
 

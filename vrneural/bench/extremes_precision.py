@@ -42,7 +42,7 @@ def f16_vs_f32(mat, samples, R: int = 32) -> dict:
     f16 path returned as 0."""
     at = quad_atlas(R)
     g32, g16 = GpuShade(at, mat, "f32", 2), GpuShade(at, mat, "f16", 2)
-    errs, flushed, finite, n_clamped = [], 0, True, 0
+    errs, errs_f, flushed, flushed_f, finite, n_clamped = [], [], 0, 0, True, 0
     for eye, lp, lc in samples:
         a = g32.shade(np.eye(4), eye, lp, lc)[..., :3]
         b = g16.shade(np.eye(4), eye, lp, lc)[..., :3]
@@ -51,8 +51,16 @@ def f16_vs_f32(mat, samples, R: int = 32) -> dict:
         n_clamped += int((a >= F16_MAX).sum())
         errs.append(np.abs(b[m] - a[m]) / a[m])
         flushed += int((b[m] == 0).sum())
+        # the same, with a floor of 1% of the image's (unclamped) peak: values that matter
+        floor = 0.01 * float(a[m].max(initial=0.0))
+        errs_f.append(np.abs(b[m] - a[m]) / np.maximum(a[m], floor))
+        flushed_f += int(((b == 0) & m & (a >= floor)).sum())
     e = np.concatenate(errs) if errs else np.zeros(1)
+    ef = np.concatenate(errs_f) if errs_f else np.zeros(1)
     return {
+        "max_rel_err_floor1pct": float(ef.max(initial=0)),
+        "p999_rel_err_floor1pct": float(np.percentile(ef, 99.9)) if ef.size else 0.0,
+        "flushed_to_zero_above_1pct": flushed_f,
         "finite": bool(finite),
         "values": int(e.size),
         "max_rel_err": float(e.max(initial=0)),
@@ -89,7 +97,7 @@ def weight_ranges(mat) -> dict:
 
 def case_prec_f16_vs_f32(quick: bool) -> dict:
     out = {}
-    worst_p999 = worst_max = 0.0
+    worst_p999 = worst_max = worst_f = 0.0
     ok = True
     for name, mat in (
         ("coarse_fine", random_material(3)),
@@ -100,10 +108,19 @@ def case_prec_f16_vs_f32(quick: bool) -> dict:
         out.update({f"{name}_weights_{k}": v for k, v in weight_ranges(mat).items()})
         worst_p999 = max(worst_p999, r["p999_rel_err"])
         worst_max = max(worst_max, r["max_rel_err"])
+        worst_f = max(worst_f, r["p999_rel_err_floor1pct"])
         ok &= r["finite"]
-    # Documented behaviour: finite and non-negative everywhere; the error size is reported
-    # (random, untrained weights: a worst case for f16, whose error scales with activations).
-    return {"ok": ok, "max_rel_err": worst_max, "p999_rel_err": worst_p999, **out}
+    # Documented behaviour: finite and non-negative everywhere (no overflow, no NaN). The error
+    # is measured and reported, not bounded: with random, untrained weights f16's absolute
+    # error scales with the activations, not the output, so near-cancelling outputs can come
+    # out 0 (README "Numerical behaviour at the extremes").
+    return {
+        "ok": ok,
+        "max_rel_err": worst_max,
+        "p999_rel_err": worst_p999,
+        "p999_rel_err_floor1pct": worst_f,
+        **out,
+    }
 
 
 def clamp_check(precision: str, radiance_format: str = "rgba16float") -> dict:

@@ -13,18 +13,53 @@ from vrneural.runtime import reference as ref
 EYE_RES = "32x32"
 
 
+#: A small scene of procedural neural materials (independent of the bundled packs), TOML.
+SCENE_TOML = """
+[[objects]]
+mesh = "sphere"
+position = [0.0, 0.9, 0.0]
+scale = 0.4
+material = { procedural = "random", seed = 3, scale = 0.5 }
+[[objects]]
+mesh = "plane"
+position = [0.55, 0.55, 0.15]
+rotation = [60, -30, 0]
+scale = 0.2
+material = { procedural = "lambertian", albedo = [0.7, 0.45, 0.25] }
+[[objects]]
+mesh = "plane"
+scale = 3.0
+material = { kind = "plain", albedo = [0.35, 0.35, 0.38] }
+"""
+
+
+def extreme_scene(n_lights: int):
+    """:data:`SCENE_TOML` with ``n_lights`` of :func:`default_lights` (0 allowed)."""
+    import tempfile
+    from pathlib import Path
+
+    from vrneural.runtime.lights import default_lights
+    from vrneural.runtime.scene import load_scene
+
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "extremes.toml"
+        p.write_text(SCENE_TOML)
+        sc = load_scene(p)
+    sc.lights = default_lights(n_lights)
+    return sc
+
+
 def render(frames: int = 3, scene=None, **kw) -> dict:
-    """Resolve ``RunConfig(**kw)`` on the built-in scene (profile tiny) and render ``frames``.
-    Returns per-frame stats, the last frame's eye images and neural radiance textures."""
+    """Resolve ``RunConfig(**kw)`` on :func:`extreme_scene` (profile tiny) and render
+    ``frames``. Returns per-frame stats, the last frame's eye images and radiance textures."""
     from vrneural.gpu.device import adapter_summary
     from vrneural.runtime.config import RunConfig, resolve
     from vrneural.runtime.renderer import Renderer
-    from vrneural.runtime.scene import builtin_scene
 
     kw.setdefault("eye_res", EYE_RES)
     cfg = RunConfig(profile="tiny", frames=frames, **kw)
     n = cfg.lights if cfg.lights is not None else 2
-    sc = scene or builtin_scene(n)
+    sc = scene or extreme_scene(n)
     s = resolve(cfg, sc, adapter_summary())
     r = Renderer(sc, s)
     stats = [r.frame(f) for f in range(s.frames)]
@@ -109,14 +144,55 @@ def case_set_kernel_res_2(quick: bool) -> dict:
 
 
 def case_set_tex_res_max(quick: bool) -> dict:
-    """The largest accepted radiance texture (8192, the atlas maximum; 1024 with --quick) on
-    the built-in plane: atlas + kernel."""
-    from vrneural.atlas import MAX_RESOLUTION, build_atlas, builtin_mesh
+    """The largest accepted radiance texture (``config.max_texture_res``: 5792 on lavapipe;
+    1024 with --quick) on the built-in plane: atlas + kernel."""
+    from vrneural.atlas import build_atlas, builtin_mesh
     from vrneural.bench.extremes_shading import GpuShade
+    from vrneural.gpu.device import adapter_summary
+    from vrneural.runtime.config import max_texture_res
 
-    R = 1024 if quick else MAX_RESOLUTION
+    R = 1024 if quick else max_texture_res(adapter_summary())
     at = build_atlas(builtin_mesh("plane"), R, cache=False)
     got = GpuShade(at, random_material(1)).shade(
         np.eye(4), np.float64([0.1, 1.0, 0.2]), np.float64([[0.3, 0.8, 0.1]]), np.ones((1, 3))
     )
     return {"ok": finite_nonneg(got) and bool(got[..., 3].any()), "resolution": R}
+
+
+def far_scene_images(offset: float, frames: int = 2) -> list:
+    """:func:`extreme_scene` (objects, lights and a straight 2-pose head path) translated by
+    ``offset`` m on every axis, rendered through the Renderer: eye images ``[H, W, 4]``."""
+    import dataclasses
+    import tempfile
+    from pathlib import Path
+
+    sc = extreme_scene(2)
+    o = np.full(3, offset)
+    objs = []
+    for ob in sc.objects:
+        m = np.array(ob.model, np.float64)
+        m[:3, 3] += o
+        objs.append(dataclasses.replace(ob, model=m))
+    lights = [
+        dataclasses.replace(lt, position=tuple(np.asarray(lt.position) + o)) for lt in sc.lights
+    ]
+    with tempfile.TemporaryDirectory() as d:
+        log = Path(d) / "pose.csv"
+        p0, p1 = np.array([0.0, 1.2, 1.6]) + o, np.array([0.05, 1.2, 1.55]) + o
+        rows = [
+            f"{t},{float(p[0])!r},{float(p[1])!r},{float(p[2])!r},-0.17,0,0,0.985"
+            for t, p in ((0, p0), (1, p1))
+        ]
+        log.write_text("\n".join(rows) + "\n")
+        scene = dataclasses.replace(sc, objects=objs, lights=lights, head=str(log))
+        return render(frames=frames, scene=scene, eyes=1)["eyes"]
+
+
+def case_set_far_origin_render(quick: bool) -> dict:
+    """Whole scene + viewer 1e5 m from the origin: the rendered image equals the one at the
+    origin (floating origin in the renderer, camera-relative texture pass)."""
+    a, b = far_scene_images(0.0)[0], far_scene_images(1e5)[0]
+    d = np.abs(a[..., :3] - b[..., :3])
+    frac = float((d > 1e-2 * (np.abs(a[..., :3]) + 1e-2)).mean())
+    ok = finite_nonneg(b) and frac <= 1e-3
+    return {"ok": ok, "max_abs_diff": float(d.max()), "frac_pixels_off": frac}

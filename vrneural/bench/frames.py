@@ -1,6 +1,6 @@
 """`vrneural bench frames`: the paper's Table 2 on this adapter.
 
-Frame time of the built-in scene (a neural sphere and a neural tile on a plain floor, one point
+Frame time of the benchmark scene (a neural sphere and a neural tile on a plain floor, one point
 light, both eyes at the quest3 eye resolution) over radiance-texture resolution x update interval
 N, for the burst and staggered schedules, plus per-pixel screen-space shading of the same
 student. Shown as FPS (from the mean frame time) and ms (median, p99).
@@ -47,7 +47,6 @@ def run_frames(cfg: FramesConfig) -> dict:
     from vrneural.errors import check_range
     from vrneural.runtime.config import parse_res
     from vrneural.runtime.profiles import get_profile
-    from vrneural.runtime.scene import builtin_scene
     from vrneural.runtime.schedule import SCHEDULES
 
     c = cfg.resolved()
@@ -63,7 +62,7 @@ def run_frames(cfg: FramesConfig) -> dict:
     t0 = time.perf_counter()
     prof = get_profile("quest3")
     doc = rp.header("frames", c)
-    scene = builtin_scene(c.lights)
+    scene = timing.bench_scene(c.lights)
     kw = dict(eye_res=eye_res, eyes=c.eyes, n_lights=c.lights, fps=prof.fps, fov_y=prof.fov_y)
     per_res = sum(timing.frames_for(n, c.cycles, c.min_frames) for n in reuses) * len(scheds)
     total = per_res * len(texs) + (c.min_frames if c.screen else 0)
@@ -103,10 +102,10 @@ def markdown(doc: dict) -> list[str]:
         "# Frames: frame time over texture resolution x update interval (paper Table 2)",
         "",
         rp.adapter_line(doc),
-        f"Built-in scene (2 neural objects + plain floor), {c['lights']} light(s), {c['eyes']} "
-        f"eye(s) at {c['eye_res']}; >= {c['min_frames']} frames and {c['cycles']} update "
-        "cycle(s) per configuration (frame 0 of each renderer excluded)."
-        + (" **Quick run: reduced grid.**" if c["quick"] else ""),
+        "Benchmark scene (2 neural objects with random student weights + plain floor), "
+        f"{c['lights']} light(s), {c['eyes']} eye(s) at {c['eye_res']}; >= {c['min_frames']} "
+        f"frames and {c['cycles']} update cycle(s) per configuration (frame 0 of each renderer "
+        "excluded)." + (" **Quick run: reduced grid.**" if c["quick"] else ""),
         "Cells: FPS from the mean frame time (median / p99 frame ms, wall clock incl. GPU wait).",
     ]
     for sched in dict.fromkeys(r["schedule"] for r in tex):

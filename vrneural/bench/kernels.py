@@ -29,7 +29,7 @@ class KernelsConfig:
     """`vrneural bench kernels`."""
 
     out: str = opt("bench-kernels", "output directory", cli=False)
-    texels: int = opt(1 << 20, "texels per evaluation (the student's coarse net runs on 1/4)")
+    texels: int = opt(1 << 18, "texels per evaluation (the student's coarse net runs on 1/4)")
     repeats: int = opt(3, "timed repeats (median)")
     networks: str = opt("student,single8,neumip", "networks (comma-separated)")
     precisions: str = opt("f32,f16", "GPU precisions (f16 needs shader-f16)")

@@ -1,8 +1,9 @@
 """`vrneural bench lights`: frame time with 1 to 8 point lights (the paper's Fig. 10).
 
-The built-in scene with its first k of 8 circling point lights (the same 8 positions for every
-k), both eyes at the quest3 eye resolution, 1200^2 radiance textures, N = 4. Each light costs one
-more evaluation of the networks per texel, so shading cost grows about linearly with k.
+The benchmark scene (:func:`vrneural.bench.timing.bench_scene`) with its first k of 8 circling
+point lights (the same 8 positions for every k), both eyes at the quest3 eye resolution, 1200^2
+radiance textures, N = 4. Each light costs one more evaluation of the networks per texel, so the
+shading work grows linearly with k.
 """
 
 from __future__ import annotations
@@ -42,7 +43,6 @@ def run_lights(cfg: LightsConfig) -> dict:
     from vrneural.errors import check_range
     from vrneural.runtime.config import parse_res
     from vrneural.runtime.profiles import get_profile
-    from vrneural.runtime.scene import builtin_scene
 
     c = cfg.resolved()
     counts = rp.int_list("--lights", c.lights, 1, 8)
@@ -55,7 +55,7 @@ def run_lights(cfg: LightsConfig) -> dict:
     t0 = time.perf_counter()
     prof = get_profile("quest3")
     doc = rp.header("lights", c)
-    scene = builtin_scene(8)
+    scene = timing.bench_scene(8)
     n = timing.frames_for(c.reuse, c.cycles, 1)
     bar = timing.progress(n * len(counts), "bench lights", c.progress)
     for k in counts:
@@ -81,7 +81,7 @@ def run_lights(cfg: LightsConfig) -> dict:
         "# Lights: frame time with 1 to 8 point lights (paper Fig. 10)",
         "",
         rp.adapter_line(doc),
-        f"Built-in scene, {c.eyes} eye(s) at {c.eye_res}, texture {c.texture_res}^2, "
+        f"Benchmark scene, {c.eyes} eye(s) at {c.eye_res}, texture {c.texture_res}^2, "
         f"N = {c.reuse} ({c.schedule}), {n} frames per light count after frame 0."
         + (" **Quick run: reduced grid.**" if c.quick else ""),
         "",

@@ -42,17 +42,16 @@ class MaterialsConfig:
 def squares_scene(k: int, n_lights: int):
     """k upright squares (0.3 m) in a row facing the built-in head path, distinct materials."""
     from vrneural.runtime.lights import default_lights
-    from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, builtin_scene, model_matrix
+    from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
     from vrneural.material import random_material
 
-    base = builtin_scene(n_lights)
     objs = []
     for i in range(k):
         x = (i - (k - 1) / 2) * 0.34
         model = model_matrix((x, 0.85, 0.0), (70, 0, 0), 0.15)  # plane mesh spans [-1, 1]
         mat = MaterialDesc("neural", random_material(100 + i), f"random:{100 + i}", 1.0)
         objs.append(ObjectDesc(f"square{i}", "plane", model, mat))
-    return Scene(f"squares{k}", objs, default_lights(n_lights), None, None, "orbit", base.base)
+    return Scene(f"squares{k}", objs, default_lights(n_lights), None, None, "orbit")
 
 
 def run_materials(cfg: MaterialsConfig) -> dict:

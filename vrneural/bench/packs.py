@@ -83,6 +83,6 @@ def load_packs(paths: dict[str, Path]) -> dict:
     out = {}
     for k, p in paths.items():
         if not Path(p).is_file():
-            raise VrnError(f"--{k.replace('_', '-')}-pack = {str(p)!r}: file not found")
+            raise VrnError(f"--packs: {str(p)!r} not found (needs {', '.join(PACKS)} .vrnm)")
         out[k] = read_vrnm(p)
     return out

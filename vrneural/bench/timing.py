@@ -120,3 +120,40 @@ def progress(total: int, desc: str, enabled: bool):
     from tqdm import tqdm
 
     return tqdm(total=total, desc=desc, unit="frame", disable=not enabled)
+
+
+def bench_scene(n_lights: int, materials=None):
+    """The benchmark scene, independent of the bundled packs: a neural sphere (0.8 m) and a
+    neural tile (0.45 m) on a plain 6 m floor, ``n_lights`` circling point lights
+    (:func:`vrneural.runtime.lights.default_lights`: the first k of them are the same for every
+    count only through ``scene.lights[:k]``), the built-in head orbit. ``materials``: two
+    NeuralMaterials (default: seeded random students, the runtime's coarse-to-fine 8-wide
+    architecture; frame time does not depend on the weights' values)."""
+    from pathlib import Path
+
+    from vrneural.material import random_material
+    from vrneural.runtime.assets import get_mesh
+    from vrneural.runtime.lights import default_lights
+    from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
+
+    def fit(name: str, size: float) -> float:  # scale so the mesh's largest extent is ``size``
+        p = get_mesh(name).positions
+        return size / float((p.max(0) - p.min(0)).max())
+
+    mats = materials or (random_material(3), random_material(4))
+    hero = MaterialDesc("neural", mats[0], mats[0].meta.get("name", "hero"), 0.5)
+    tile = MaterialDesc("neural", mats[1], mats[1].meta.get("name", "tile"), 1.0)
+    floor = MaterialDesc("plain", albedo=(0.35, 0.35, 0.38), specular=0.02, shininess=16.0)
+    objects = [
+        ObjectDesc(
+            "sphere", "sphere", model_matrix((0, 0.9, 0), (0, 0, 0), fit("sphere", 0.8)), hero
+        ),
+        ObjectDesc(
+            "tile",
+            "plane",
+            model_matrix((0.55, 0.55, 0.15), (60, -30, 0), fit("plane", 0.45)),
+            tile,
+        ),
+        ObjectDesc("floor", "plane", model_matrix((0, 0, 0), (0, 0, 0), fit("plane", 6.0)), floor),
+    ]
+    return Scene("bench", objects, default_lights(n_lights), None, None, "orbit", Path.cwd())

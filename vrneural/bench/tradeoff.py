@@ -1,6 +1,6 @@
 """`vrneural bench tradeoff`: what each knob buys and costs, against the per-pixel teacher.
 
-Along the standard head-motion path (the built-in orbit) through the built-in scene, with its
+Along the standard head-motion path (the built-in orbit) through the benchmark scene, with its
 neural objects given a trained pack, each knob is varied alone from a base setting (texture
 ``base_res``^2, N = ``base_reuse``, staggered, f32, the distilled coarse-to-fine student, per-eye
 radiance textures): texture resolution, N, schedule, precision, the network (student without
@@ -119,16 +119,11 @@ def settings(c: TradeoffConfig, has_f16: bool) -> list[dict]:
 
 
 def scene_with(mat, n_lights: int):
-    """The built-in scene with every neural object using material ``mat``."""
-    from vrneural.runtime.scene import MaterialDesc, builtin_scene
+    """The benchmark scene (:func:`~vrneural.bench.timing.bench_scene`), both neural objects
+    using material ``mat``."""
+    from vrneural.bench.timing import bench_scene
 
-    sc = builtin_scene(n_lights)
-    for o in sc.objects:
-        if o.material.kind == "neural":
-            o.material = MaterialDesc(
-                "neural", mat, mat.meta.get("name", "pack"), o.material.tiling
-            )
-    return sc
+    return bench_scene(n_lights, (mat, mat))
 
 
 def render(scene, s, frames: list[int], bar=None, keep=None):
@@ -168,6 +163,8 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     check_range("--lights", c.lights, 1, 8)
     check_range("--shimmer-frames", c.shimmer_frames, 0, 100000)
     sets = settings(c, adapter_summary().features.get("shader-f16", False))
+    if c.packs:  # fail before any work or output
+        load_packs({k: Path(c.packs) / f"{k}.vrnm" for k in PACKS})
     root = rp.prepare_out(cfg.out, cfg.force)
     t0 = time.perf_counter()
     doc = rp.header("tradeoff", c)
@@ -285,7 +282,7 @@ def markdown(doc: dict) -> list[str]:
         "# Trade-off: each knob against the per-pixel teacher",
         "",
         rp.adapter_line(doc),
-        f"Built-in scene with trained packs ({_packs_line(doc)}), {c['lights']} lights, both eyes "
+        f"Benchmark scene with trained packs ({_packs_line(doc)}), {c['lights']} lights, both eyes "
         f"at {c['eye_res']}, {c['frames']} frames along the built-in head path. Base: texture "
         f"{c['base_res']}^2, N = {c['base_reuse']}, staggered, f32, distilled student. FLIP: "
         f"HDR, {doc['ppd']:.2f} ppd (eye height / FOV; {doc['profile_ppd']:.1f} at the full "

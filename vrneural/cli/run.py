@@ -3,7 +3,7 @@ comparison mode), offscreen; write PNG/EXR frames or a stereo video and summary.
 
 from __future__ import annotations
 
-import sys
+from pathlib import Path
 
 
 def register(sub) -> None:
@@ -31,5 +31,12 @@ def main(args) -> int:
     cfg = config_from_args(RunConfig, args, scene=args.scene)
     sm = run(cfg, progress=not args.quiet)
     print(human_summary(sm))
-    print(f"wrote {cfg.out}/summary.json", file=sys.stderr)
+    out = sm["out"]
+    pngs = sorted(Path(f).name for f in sm["files"] if f.endswith(".png"))
+    print(f"wrote     {out}/")
+    if any(f.endswith(".mp4") for f in sm["files"]):
+        print(f"  video   {out}/stereo.mp4 (left eye | right eye)")
+    if pngs:
+        print(f"  frames  {', '.join(pngs)} (+ .exr)")
+    print(f"  summary {out}/summary.json")
     return 0

@@ -3,6 +3,7 @@ resolution against a device profile, the scene and the adapter."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from vrneural.config import opt
@@ -26,8 +27,8 @@ class RunConfig:
     schedule: str = opt("staggered", "reuse schedule: staggered | burst", choices=SCHEDULES)
     precision: str = opt("auto", "auto | f16 | f32", choices=("auto", "f16", "f32"))
     reference: str | None = opt(None, "teacher pack (.vrnm) for --mode reference")
-    out: str = opt("out/run", "output directory")
-    video: bool = opt(False, "write a side-by-side stereo video (needs imageio-ffmpeg)")
+    out: str = opt("", "output directory (default: a new out/run-YYYYmmdd-HHMMSS per run)")
+    video: bool = opt(True, "write OUT/stereo.mp4, both eyes side by side (imageio-ffmpeg)")
     video_scale: int = opt(4, "video downscale factor (integer)")
     save_frames: str = opt("first,last", "frames saved as PNG + EXR: 'first,last', 'all', '0,45'")
     force: bool = opt(False, "overwrite an existing output directory")
@@ -43,6 +44,18 @@ def parse_res(s: str, field: str = "--eye-res") -> tuple[int, int]:
     return w, h
 
 
+def max_texture_res(adapter) -> int:
+    """Largest radiance texture side R accepted: the atlas stage's maximum (8192), the
+    adapter's 2D texture limit, and its storage-binding limit for the ``R * R`` u32 triangle-ID
+    buffer (128 MiB on lavapipe -> 5792), rounded down to even."""
+    from vrneural.atlas.build import MAX_RESOLUTION
+
+    lim = adapter.limits
+    ids = math.isqrt(int(lim.get("max_storage_buffer_binding_size", 2**27)) // 4)
+    r = min(int(lim["max_texture_dimension_2d"]), MAX_RESOLUTION, ids)
+    return r - r % 2
+
+
 def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     """Profile < scene < CLI; validates ranges against the adapter (``AdapterSummary``)."""
     from vrneural.runtime.codegen import resolve_precision
@@ -55,14 +68,15 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     check_range("--frames", cfg.frames, 1, 1_000_000)
     tex = prof.texture_res if cfg.texture_res is None else cfg.texture_res
     max_tex = adapter.limits["max_texture_dimension_2d"]
-    from vrneural.atlas.build import MAX_RESOLUTION, MIN_RESOLUTION
+    from vrneural.atlas.build import MIN_RESOLUTION
 
-    # the atlas stage bounds R to [8, 8192]; below, above or odd is one clear error here
-    check_range("--texture-res", tex, MIN_RESOLUTION, min(max_tex, MAX_RESOLUTION))
+    # [8, max_texture_res]: the atlas stage's bounds and the adapter's; odd is rejected below
+    check_range("--texture-res", tex, MIN_RESOLUTION, max_texture_res(adapter))
     for i, o in enumerate(scene.objects):
-        if o.texture_res and o.texture_res > max_tex:
+        if o.texture_res and o.texture_res > max_texture_res(adapter):
             raise VrnError(
-                f"objects[{i}].texture_res = {o.texture_res} is above the adapter maximum {max_tex}"
+                f"objects[{i}].texture_res = {o.texture_res} is above the maximum "
+                f"{max_texture_res(adapter)} (atlas stage and adapter limits)"
             )
     if tex % 2:
         raise VrnError(f"--texture-res = {tex} must be even (2x2 blocks)")

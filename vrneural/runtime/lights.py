@@ -40,10 +40,12 @@ class PointLight:
 
 
 def light_arrays(lights: list[PointLight], t: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(positions [L, 3], colour * intensity [L, 3])`` float32 at time ``t``."""
+    """``(positions [L, 3] float64, colour * intensity [L, 3] float32)`` at time ``t``.
+    Positions stay float64 so that the renderer can make them camera-relative before they
+    are rounded to f32 (a light 1e5 m from the origin would otherwise move in 7.8 mm steps)."""
     if not lights:
-        return np.zeros((0, 3), np.float32), np.zeros((0, 3), np.float32)
-    pos = np.stack([lt.at(t) for lt in lights]).astype(np.float32)
+        return np.zeros((0, 3), np.float64), np.zeros((0, 3), np.float32)
+    pos = np.stack([lt.at(t) for lt in lights]).astype(np.float64)
     rgb = np.stack([lt.radiance for lt in lights]).astype(np.float32)
     return pos, rgb
 

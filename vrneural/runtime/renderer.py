@@ -88,6 +88,9 @@ class Renderer:
         nl = max(1, len(self.lights))
         self.eye_t = [fw.EyeTargets(w, h, nl, vis=screen) for _ in range(s.eyes)]
         self.head = OrbitPath() if scene.head == "orbit" else PoseLogPath(scene.head)
+        # Floating origin: everything uploaded to the GPU is relative to the first eye position
+        # (subtracted in float64), so scenes far from the world origin keep f32 precision.
+        self.origin = np.asarray(self.eyes_at(0)[0].position, np.float64)
         n_neural = sum(o.material.kind == "neural" for o in scene.objects)
         self.counters = CounterBuffer(max(1, n_neural * s.eyes))
         self.timer = GpuTimer(max_passes=2 * n_neural * s.eyes + 2 * s.eyes + 2)
@@ -101,9 +104,9 @@ class Renderer:
             if o.material.kind == "plain":
                 m = o.material
                 plain = (m.albedo, m.specular, m.shininess)
-                self.draws.append((fw.DrawObject(mesh, None, o.model, i, plain), None))
+                self.draws.append((fw.DrawObject(mesh, None, self.rebase(o.model), i, plain), None))
                 continue
-            res = o.texture_res or s.texture_res
+            res = o.texture_res or max(s.texture_res, o.min_texture_res or 0)
             atlas = get_atlas(mesh, res)
             c, r = bounding_sphere(atlas.mesh)
             n = _Neural(i, o, atlas, GpuAtlas(atlas), c, r)
@@ -116,7 +119,14 @@ class Renderer:
             for e in range(s.eyes):
                 n.targets.append(self._make_target(passes[key], n, e))
             self.neural.append(n)
-            self.draws.append((fw.DrawObject(atlas.mesh, atlas.uv_atlas, o.model, i), n))
+            draw = fw.DrawObject(atlas.mesh, atlas.uv_atlas, self.rebase(o.model), i)
+            self.draws.append((draw, n))
+
+    def rebase(self, model: np.ndarray) -> np.ndarray:
+        """``model [4, 4]`` with the floating origin subtracted (float64)."""
+        m = np.array(model, np.float64)
+        m[:3, 3] -= self.origin
+        return m
 
     def _make_pass(self, mat):
         s = self.s
@@ -181,11 +191,15 @@ class Renderer:
                         tgt.update(n.desc.model, eye.position, tiling, lp, lc, phase, period, slot)
                         tgt.dispatch(cp, phase, period)
                 cp.end()
+        shift = np.eye(4)
+        shift[:3, 3] = self.origin
+        lp_r = lp - self.origin
         for e, (eye, et) in enumerate(zip(eyes, self.eye_t, strict=True)):
-            et.update(eye.view_proj, eye.position, lp, lc)
+            vp_r = eye.view_proj @ shift  # origin-relative position -> clip
+            et.update(vp_r, eye.position - self.origin, lp_r, lc)
             self._draw(enc, e, et)
             if s.mode != "texture":
-                inv = np.linalg.inv(eye.view_proj)
+                inv = np.linalg.inv(vp_r)
                 cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("screen"))
                 for k, n in enumerate(self.neural):
                     if not self._visible(n, [eye]):
@@ -196,7 +210,8 @@ class Renderer:
                     c, r = self.world_sphere(n)
                     rect = screen_rect(c, r, eye.view_proj, *s.eye_res)
                     slot = k * s.eyes + e
-                    tgt.update(n.desc.model, eye.position, tiling, inv, lp, lc, slot, n.idx, rect)
+                    model_r, eye_r = self.rebase(n.desc.model), eye.position - self.origin
+                    tgt.update(model_r, eye_r, tiling, inv, lp_r, lc, slot, n.idx, rect)
                     tgt.dispatch(cp)
                 cp.end()
         self.timer.resolve(enc)

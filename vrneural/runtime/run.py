@@ -51,6 +51,16 @@ def selected_frames(spec: str, frames: int) -> list[int]:
     return sorted(out)
 
 
+def default_out() -> str:
+    """A new ``out/run-YYYYmmdd-HHMMSS`` (suffixed ``-2``, ``-3``... if taken): no --force."""
+    base = time.strftime("out/run-%Y%m%d-%H%M%S")
+    out, k = base, 1
+    while Path(out).exists():
+        k += 1
+        out = f"{base}-{k}"
+    return out
+
+
 def percentiles(x) -> dict:
     a = np.asarray(x, np.float64)
     if not len(a):
@@ -73,7 +83,8 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     from vrneural.runtime.renderer import Renderer
     from vrneural.runtime.scene import builtin_scene, load_scene
 
-    out = Path(cfg.out)
+    out = Path(cfg.out or default_out())
+    cfg = dataclasses.replace(cfg, out=str(out))
     check_output(out, cfg.force)
     if cfg.scene:
         scene = load_scene(cfg.scene)
@@ -161,6 +172,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
             [a + b for a, b in zip(per_frame["mlp_coarse"], per_frame["mlp_fine"], strict=True)]
         ),
         "per_frame": per_frame,
+        "out": cfg.out,
         "files": files,
         "note": "frame_wall_ms and gpu_ms percentiles exclude frame 0 (shader compilation)",
     }

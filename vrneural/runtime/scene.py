@@ -48,6 +48,7 @@ class MaterialDesc:
     albedo: tuple = (0.5, 0.5, 0.5)
     specular: float = 0.04
     shininess: float = 32.0
+    reference: NeuralMaterial | None = None  # teacher pack used by ``--mode reference``
 
 
 @dataclass
@@ -57,6 +58,7 @@ class ObjectDesc:
     model: np.ndarray  # [4, 4] object -> world
     material: MaterialDesc
     texture_res: int | None = None
+    min_texture_res: int | None = None  # floor under the profile's (dense meshes need texels)
 
 
 @dataclass
@@ -243,32 +245,84 @@ def load_scene(path: str | Path) -> Scene:
     return parse_scene(data, p.name, p.parent.resolve())
 
 
-#: Materials of the built-in scene: swap these for trained packs (paths to .vrnm files).
+#: Materials of the built-in scene: packs bundled in ``vrneural/data/materials`` (trained by
+#: ``demo/make_assets.py``; ``<name>.teacher.vrnm`` is the per-pixel reference of ``--mode
+#: reference``), ``scale`` = BTF tiles per material-UV unit (mesh UVs are in metres).
 BUILTIN_MATERIALS = {
-    "hero": {"procedural": "random", "seed": 3, "scale": 0.5},
-    "accent": {"procedural": "lambertian", "albedo": [0.7, 0.45, 0.25], "scale": 1.0},
+    "leather": {"pack": "leather.vrnm", "scale": 2.5},
+    "fabric": {"pack": "fabric.vrnm", "scale": 2.0},
+    "wood": {"pack": "wood.vrnm", "scale": 1.5},
 }
 
 
+def builtin_pack(name: str) -> Path:
+    """Path of a bundled pack (``name`` like ``"leather.vrnm"``); one-line error if missing."""
+    from importlib.resources import files
+
+    p = Path(str(files("vrneural") / "data" / "materials" / name))
+    if not p.is_file():
+        raise VrnError(
+            f"built-in scene: material pack {p} is missing; rebuild the bundled packs with "
+            "`python demo/make_assets.py` (about 30 min) or reinstall vrneural"
+        )
+    return p
+
+
+def builtin_material(key: str) -> MaterialDesc:
+    """The bundled student pack ``key`` with its teacher attached as ``.reference``."""
+    from vrneural.formats.vrnm import read_vrnm
+
+    spec = BUILTIN_MATERIALS[key]
+    stem = spec["pack"].removesuffix(".vrnm")
+    desc = MaterialDesc("neural", read_vrnm(builtin_pack(spec["pack"])), stem, spec["scale"])
+    teacher = Path(str(builtin_pack(spec["pack"]))).with_name(f"{stem}.teacher.vrnm")
+    desc.reference = read_vrnm(teacher) if teacher.is_file() else None
+    return desc
+
+
+def builtin_lights() -> list[PointLight]:
+    """Key (warm, front left), fill (cool, right) and a slowly circling back light (12 s)."""
+    return [
+        PointLight((-1.0, 2.0, 1.3), (1.0, 0.93, 0.85), 4.5),
+        PointLight((1.4, 1.5, 0.9), (0.85, 0.9, 1.0), 2.2),
+        PointLight((0.0, 1.9, -0.4), (1.0, 0.85, 0.7), 3.0, "circle", 0.9, 12.0, 0.0),
+    ]
+
+
 def builtin_scene(n_lights: int = 3) -> Scene:
-    """A neural sphere and a neural tile on a plain floor, ``n_lights`` circling point lights."""
-    base = Path.cwd()
-    hero = _material("built-in scene", "hero", dict(BUILTIN_MATERIALS["hero"]), base)
-    acc = _material("built-in scene", "accent", dict(BUILTIN_MATERIALS["accent"]), base)
-    floor = MaterialDesc("plain", albedo=(0.35, 0.35, 0.38), specular=0.02, shininess=16.0)
+    """The demo: a leather sphere, a draped fabric cloth and a wood torus (bundled neural packs)
+    on a plain floor; the first ``n_lights`` of three point lights (one circling slowly), the
+    quest3 profile and the built-in head orbit. Same as ``demo/scene.toml``."""
     from vrneural.runtime.assets import get_mesh
 
     def fit(name: str, size: float) -> float:  # scale so the mesh's largest extent is ``size``
         p = get_mesh(name).positions
         return size / float((p.max(0) - p.min(0)).max())
 
+    floor = MaterialDesc("plain", albedo=(0.32, 0.32, 0.34), specular=0.03, shininess=24.0)
+    m = builtin_material
     objects = [
         ObjectDesc(
-            "sphere", "sphere", model_matrix((0.0, 0.9, 0.0), (0, 0, 0), fit("sphere", 0.8)), hero
+            "leather sphere",
+            "sphere",
+            model_matrix((-0.55, 0.78, -0.15), (0, 0, 0), 1.4),
+            m("leather"),
         ),
         ObjectDesc(
-            "tile", "plane", model_matrix((0.55, 0.55, 0.15), (60, -30, 0), fit("plane", 0.45)), acc
+            "fabric cloth",
+            "cloth",
+            model_matrix((0.0, 0.34, -0.2), (0, 20, 0), 1.7),
+            m("fabric"),
+            min_texture_res=256,  # xatlas cannot pack its 32768 triangles into 128^2 (tiny)
+        ),
+        ObjectDesc(
+            "wood torus", "torus", model_matrix((0.55, 0.85, -0.1), (60, 0, 0), 0.8), m("wood")
         ),
         ObjectDesc("floor", "plane", model_matrix((0, 0, 0), (0, 0, 0), fit("plane", 6.0)), floor),
     ]
-    return Scene("builtin", objects, default_lights(n_lights), None, None, "orbit", base)
+    lights = builtin_lights()
+    if n_lights > len(lights):
+        lights += default_lights(n_lights)[len(lights) :]
+    return Scene(
+        "builtin", objects, lights[: max(n_lights, 0)], "quest3", None, "orbit", Path.cwd()
+    )
