@@ -12,10 +12,12 @@ then the packs, the resolved training configs and the wall time of every step ar
 
 Each pack's ``meta`` keeps the provenance/metrics/ranges that export writes and gains a
 ``build`` entry (the commands and the wall seconds of every step). Intermediate files (BTF,
-checkpoints) go to ``--work`` (default ``out/assets``). Usage::
+checkpoints) go to ``--work`` (default ``out/assets``); a rerun without ``--force`` reuses the
+finished steps recorded in ``<work>/<preset>/steps.json`` (same command, output present) and
+keeps their recorded times. Usage::
 
-    python demo/make_assets.py                 # leather, fabric, wood; ~25-35 min on 2 cores
-    python demo/make_assets.py --presets wood --jobs 1 --force
+    .venv/bin/python demo/make_assets.py       # leather, fabric, wood; ~30 min on 2 cores
+    .venv/bin/python demo/make_assets.py --presets wood --jobs 1 --force
 """
 
 from __future__ import annotations

@@ -263,7 +263,7 @@ def builtin_pack(name: str) -> Path:
     if not p.is_file():
         raise VrnError(
             f"built-in scene: material pack {p} is missing; rebuild the bundled packs with "
-            "`python demo/make_assets.py` (about 30 min) or reinstall vrneural"
+            "`.venv/bin/python demo/make_assets.py` (about 30 min) or reinstall vrneural"
         )
     return p
 
