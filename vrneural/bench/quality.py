@@ -18,14 +18,13 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import platform
 import time
 from dataclasses import dataclass
-from importlib import metadata
 from pathlib import Path
 
 from vrneural.config import config_dict, opt
 from vrneural.errors import VrnError, check_range
+from vrneural.versions import package_versions
 
 METHODS = ("lafortune", "neumip", "single8", "student_nodistill", "student")
 LABELS = {
@@ -60,16 +59,6 @@ class QualityConfig:
         return dataclasses.replace(
             self, res=16, dirs=8, teacher_epochs=2, epochs=2, lafortune_iters=5
         )
-
-
-def versions() -> dict:
-    out = {"python": platform.python_version(), "machine": platform.machine()}
-    for name in ("vrneural", "torch", "numpy", "matplotlib"):
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = None
-    return out
 
 
 def make_btf(preset: str, cfg: QualityConfig, path: Path) -> Path:
@@ -236,7 +225,7 @@ def run_quality(cfg: QualityConfig) -> dict:
         doc = {
             "benchmark": "quality",
             "config": config_dict(cfg),
-            "versions": versions(),
+            "versions": package_versions(),
             "machine": {"cpu_count": os.cpu_count(), "torch_threads": 1},
             "total_seconds": time.perf_counter() - t_all,
             "complete": len(results) == len(presets),

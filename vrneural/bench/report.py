@@ -46,14 +46,14 @@ def stats(x) -> dict:
 
 def header(bench: str, cfg) -> dict:
     """The common head of every ``results.json``: bench name, adapter, versions, config."""
-    from vrneural.cli.info import versions
+    from vrneural.versions import package_versions
     from vrneural.gpu.device import adapter_summary
 
     resolved = cfg.resolved() if hasattr(cfg, "resolved") else cfg
     return {
         "bench": bench,
         "adapter": adapter_summary().to_dict(),
-        "versions": versions(),
+        "versions": package_versions(),
         "config": config_dict(resolved),
         "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "records": [],

@@ -3,19 +3,6 @@
 from __future__ import annotations
 
 import json
-from importlib import metadata
-
-PACKAGES = (
-    "vrneural",
-    "wgpu",
-    "numpy",
-    "trimesh",
-    "xatlas",
-    "imageio",
-    "OpenImageIO",
-    "torch",
-    "flip-evaluator",
-)
 
 
 def register(sub) -> None:
@@ -36,18 +23,9 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def versions() -> dict[str, str | None]:
-    out = {}
-    for name in PACKAGES:
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = None
-    return out
-
-
 def collect(texels: int) -> dict:
     from vrneural.errors import check_range
+    from vrneural.versions import package_versions
     from vrneural.gpu import adapter_summary, has_feature
     from vrneural.gpu.probe import mlp_throughput
     from vrneural.gpu.timing import timestamp_period_ns
@@ -67,7 +45,7 @@ def collect(texels: int) -> dict:
         "f16_verdict": None
         if f16 is None
         else ("native (faster or equal)" if f16 >= 0.9 * f32 else "emulated or slow: prefer f32"),
-        "versions": versions(),
+        "versions": package_versions(),
     }
 
 
