@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vrneural.atlas.types import EMPTY, Atlas, Mesh
+from vrneural.atlas.types import Atlas, Mesh
 
 
 def quad_mesh(size: float = 1.0, tilt: float = 0.0) -> Mesh:
@@ -34,14 +34,6 @@ def quad_atlas(
 ) -> Atlas:
     """The quad mapped to atlas square ``[lo, hi]^2``; texels outside are EMPTY (a 1-texel
     gutter keeps the nearest triangle)."""
-    m = quad_mesh(size, tilt)
-    uva = (lo + (hi - lo) * m.uv).astype(np.float32)
-    c = (np.arange(res) + 0.5) / res
-    u, v = np.meshgrid(c, c)  # [y, x]
-    a = (u - lo) / (hi - lo)
-    b = (v - lo) / (hi - lo)
-    ids = np.where(a + b < 1.0, 0, 1).astype(np.uint32)
-    g = 1.0 / (res * (hi - lo))
-    inside = (a > -g) & (a < 1 + g) & (b > -g) & (b < 1 + g)
-    ids[~inside] = EMPTY
-    return Atlas(m, uva, ids, res, 1)
+    from vrneural.bench.extremes_fixtures import quad_atlas as fixture_quad_atlas
+
+    return fixture_quad_atlas(res, lo, hi, mesh=quad_mesh(size, tilt))
