@@ -9,6 +9,7 @@ import numpy as np
 from tqdm import tqdm
 
 from vrneural.atlas.cache import cache_key, load_cached, split_mesh, store
+from vrneural.atlas.geometry import check_geometry
 from vrneural.atlas.raster import rasterize_ids
 from vrneural.atlas.types import EMPTY, Atlas, Mesh
 from vrneural.atlas.unwrap import unwrap
@@ -32,23 +33,8 @@ class AtlasConfig:
 
 def validate_mesh(mesh: Mesh) -> None:
     """Raise :class:`VrnError` for a mesh the atlas cannot handle (one line, names the mesh)."""
-    pos, faces = np.asarray(mesh.positions), np.asarray(mesh.faces)
-    if pos.ndim != 2 or pos.shape[1] != 3:
-        raise VrnError(f"{mesh.name}: positions have shape {list(pos.shape)}, expected [V, 3]")
-    if faces.size == 0:
-        raise VrnError(f"{mesh.name}: mesh has no faces")
-    if faces.ndim != 2 or faces.shape[1] != 3:
-        raise VrnError(f"{mesh.name}: faces have shape {list(faces.shape)}, expected [F, 3]")
-    bad = ~np.isfinite(pos).all(axis=1)
-    if bad.any():
-        raise VrnError(
-            f"{mesh.name}: {int(bad.sum())} vertices have NaN/Inf positions "
-            f"(first at vertex {int(np.argmax(bad))})"
-        )
-    if int(faces.max()) >= len(pos):
-        raise VrnError(
-            f"{mesh.name}: face index {int(faces.max())} out of range; allowed [0, {len(pos) - 1}]"
-        )
+    pos = np.asarray(mesh.positions)
+    check_geometry(mesh.name, pos, np.asarray(mesh.faces))
     for name, width in (("normals", 3), ("tangents", 4), ("uv", 2)):
         a = np.asarray(getattr(mesh, name))
         if a.shape != (len(pos), width):

@@ -31,21 +31,9 @@ class MeshWarning(UserWarning):
     """A recoverable mesh problem (e.g. skipped degenerate triangles), with a count."""
 
 
-def make_mesh(
-    name: str,
-    positions: np.ndarray,
-    faces: np.ndarray,
-    uv: np.ndarray | None = None,
-    normals: np.ndarray | None = None,
-    drop_degenerate: bool = True,
-) -> Mesh:
-    """Validate arrays and build a :class:`Mesh` with normals and tangents.
-
-    positions: [V, 3] metres; faces: [F, 3] int; uv: [V, 2] material UV or None (then
-    :func:`box_uv` generates it, splitting vertices); normals: [V, 3] or None.
-    """
-    pos = np.asarray(positions, dtype=np.float64)
-    fac = np.asarray(faces)
+def check_geometry(name: str, pos: np.ndarray, fac: np.ndarray) -> None:
+    """Raise :class:`VrnError` (one line, naming the mesh) unless ``pos`` is a finite ``[V, 3]``
+    array and ``fac`` a non-empty ``[F, 3]`` array of vertex indices in ``[0, V)``."""
     if pos.ndim != 2 or pos.shape[1] != 3:
         raise VrnError(f"{name}: positions have shape {list(pos.shape)}, expected [V, 3]")
     if fac.size == 0:
@@ -63,6 +51,24 @@ def make_mesh(
             f"{name}: face indices out of range [{int(fac.min())}, {int(fac.max())}]; "
             f"allowed [0, {len(pos) - 1}]"
         )
+
+
+def make_mesh(
+    name: str,
+    positions: np.ndarray,
+    faces: np.ndarray,
+    uv: np.ndarray | None = None,
+    normals: np.ndarray | None = None,
+    drop_degenerate: bool = True,
+) -> Mesh:
+    """Validate arrays and build a :class:`Mesh` with normals and tangents.
+
+    positions: [V, 3] metres; faces: [F, 3] int; uv: [V, 2] material UV or None (then
+    :func:`box_uv` generates it, splitting vertices); normals: [V, 3] or None.
+    """
+    pos = np.asarray(positions, dtype=np.float64)
+    fac = np.asarray(faces)
+    check_geometry(name, pos, fac)
     fac = fac.astype(np.int64)
     if uv is not None:
         uv = np.asarray(uv, dtype=np.float64)
