@@ -71,15 +71,13 @@ def run_frames(cfg: FramesConfig) -> dict:
         r = timing.make_renderer(scene, texture_res=res, **kw)
         for sched in scheds:
             for n in reuses:
-                rec = timing.base_record(r)
-                rec.update(timing.measure(r, n, sched, c.cycles, c.min_frames, bar.update))
+                rec = timing.measured_record(r, n, sched, c.cycles, c.min_frames, bar.update)
                 rec["schedule"], rec["reuse"] = sched, n
                 doc["records"].append(rec)
         del r
     if c.screen:
         r = timing.make_renderer(scene, mode="screen", texture_res=texs[0], **kw)
-        rec = timing.base_record(r)
-        rec.update(timing.measure(r, 0, "burst", 1, c.min_frames, bar.update))
+        rec = timing.measured_record(r, 0, "burst", 1, c.min_frames, bar.update)
         doc["records"].append(rec)
     bar.close()
     md = markdown(doc)

@@ -70,8 +70,7 @@ def run_lights(cfg: LightsConfig) -> dict:
             fps=prof.fps,
             fov_y=prof.fov_y,
         )
-        rec = timing.base_record(r)
-        rec.update(timing.measure(r, c.reuse, c.schedule, c.cycles, 1, bar.update))
+        rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update)
         doc["records"].append(rec)
         del r
     bar.close()

@@ -85,8 +85,7 @@ def run_materials(cfg: MaterialsConfig) -> dict:
             fps=prof.fps,
             fov_y=prof.fov_y,
         )
-        rec = timing.base_record(r)
-        rec.update(timing.measure(r, c.reuse, c.schedule, c.cycles, 1, bar.update))
+        rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update)
         rec["radiance_texture_mb"] = c.texture_res**2 * 8 * c.eyes / 2**20
         doc["records"].append(rec)
         del r

@@ -99,6 +99,13 @@ def measure(r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=Non
     }
 
 
+def measured_record(r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=None) -> dict:
+    """:func:`base_record` of renderer ``r`` with the timing fields of :func:`measure`."""
+    rec = base_record(r)
+    rec.update(measure(r, reuse, schedule, cycles, min_frames, tick))
+    return rec
+
+
 def base_record(r, **extra) -> dict:
     s = r.s
     return {
