@@ -94,9 +94,18 @@ def case_train_nan(quick: bool) -> dict:
 
 
 def case_train_lr_floor(quick: bool) -> dict:
-    """lr 1e-3 -> floor 1e-5 in factors of 0.1 (threshold 10: every epoch counts as a
-    plateau): the lr reaches the floor, stays there, and training goes on finite."""
-    r = teach("smooth", epochs=5, lr=1e-3, lr_min=1e-5, lr_factor=0.1, lr_threshold=10.0)
+    """lr 1e-3 -> floor 1e-5 in factors of 0.1 (absolute threshold 10, no patience: every epoch
+    counts as a plateau): the lr reaches the floor, stays there, and training goes on finite."""
+    r = teach(
+        "smooth",
+        epochs=5,
+        lr=1e-3,
+        lr_min=1e-5,
+        lr_factor=0.1,
+        lr_threshold=10.0,
+        lr_threshold_mode="abs",
+        lr_patience=0,
+    )
     lr = r["lr"]
     ok = r["finite"] and abs(lr[-1] - 1e-5) < 1e-12 and min(lr) >= 1e-5 * (1 - 1e-9)
     return {"ok": bool(ok), "lr": lr, "train_loss": r["train_loss"]}

@@ -23,9 +23,15 @@ class TrainConfig:
     lr: float = opt(5e-4, "initial Adam learning rate")
     lr_min: float = opt(1e-7, "ReduceLROnPlateau floor")
     lr_factor: float = opt(0.5, "ReduceLROnPlateau decay factor")
-    lr_threshold: float = opt(1e-4, "halve lr when the test L1 improves by less than this")
-    lr_threshold_mode: str = opt("abs", "threshold mode (abs: absolute L1)", choices=("abs", "rel"))
-    lr_patience: int = opt(0, "epochs without improvement before halving")
+    lr_threshold: float = opt(
+        5e-3, "halve lr when the test L1 improves by less than this (see README: Training)"
+    )
+    lr_threshold_mode: str = opt(
+        "rel",
+        "threshold mode: rel (fraction of the best L1) or abs (L1 units)",
+        choices=("abs", "rel"),
+    )
+    lr_patience: int = opt(2, "epochs without enough improvement before halving")
     tex_lr_scale: float = opt(10.0, "learning-rate multiplier for neural textures")
     test_fraction: float = opt(0.1, "held-out fraction of (wi, wo) pairs (distill: teacher's)")
     split_seed: int = opt(0, "seed of the train/test split (distill reuses the teacher's split)")

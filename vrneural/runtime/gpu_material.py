@@ -100,6 +100,38 @@ class GpuAtlas:
         self.faces = upload_buffer(np.asarray(atlas.mesh.faces, np.uint32).ravel(), s, "faces")
         self.tri_ids = upload_buffer(np.asarray(atlas.tri_ids, np.uint32).ravel(), s, "tri_ids")
         self.non_empty_blocks = int(count_non_empty_blocks(atlas.tri_ids))
+        self._lists: dict[int, tuple] = {}
+
+    def block_list(self, period: int):
+        """The candidate blocks of the texture-space pass for a row period: a storage buffer of
+        the non-empty 2x2 blocks (packed ``by << 16 | bx``, row-major), grouped by phase
+        (``by % period``), and ``[(offset, count)]`` per phase. Built once per period."""
+        import wgpu
+
+        if period not in self._lists:
+            by, bx = non_empty_blocks(self.atlas.tri_ids)
+            packed, spans, off = [], [], 0
+            for ph in range(period):
+                sel = by % period == ph
+                packed.append((by[sel].astype(np.uint32) << 16) | bx[sel].astype(np.uint32))
+                spans.append((off, int(sel.sum())))
+                off += int(sel.sum())
+            data = np.concatenate([*packed, np.zeros(1, np.uint32)])  # never an empty buffer
+            buf = upload_buffer(
+                data, wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC, f"blocks/{period}"
+            )
+            self._lists[period] = (buf, spans)
+        return self._lists[period]
+
+
+def non_empty_blocks(tri_ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row-major ``(by, bx)`` of the 2x2 blocks of ``tri_ids: [R, R]`` with a triangle."""
+    r = tri_ids.shape[0]
+    if r // 2 > 0xFFFF:
+        raise ValueError(f"atlas resolution {r} exceeds the packed block index (max 131070)")
+    b = (tri_ids != np.uint32(0xFFFFFFFF)).reshape(r // 2, 2, r // 2, 2).any(axis=(1, 3))
+    by, bx = np.nonzero(b)
+    return by, bx
 
 
 def new_radiance_texture(resolution: int, label: str = "radiance", fmt: str = "rgba16float"):

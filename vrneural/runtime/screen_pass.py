@@ -18,7 +18,7 @@ from vrneural.material import NeuralMaterial
 from vrneural.runtime.codegen import screen_space_wgsl
 from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial
 from vrneural.runtime.reference import normal_matrix
-from vrneural.runtime.texture_pass import CounterBuffer, pack_lights
+from vrneural.runtime.texture_pass import WORKGROUP_SIZE, CounterBuffer, grid, pack_lights
 
 PARAMS_BYTES = 272
 
@@ -61,7 +61,32 @@ class ScreenSpacePass:
         self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
         self.code = screen_space_wgsl(mat, precision, n_lights, buffer_weights)
         self.gmat = GpuMaterial(mat, buffer_weights)
-        self.pipe = compute_pipeline(self.code, label="screen_space")
+        self.pipes = {
+            e: compute_pipeline(self.code, e, label=f"screen_space/{e}")
+            for e in ("cull", "args", "main")
+        }
+        self.pipe = self.pipes["main"]
+
+
+_SCRATCH: dict = {}
+
+
+def _scratch(width: int, height: int):
+    """The compaction buffers (pixel list, count, indirect args) for one eye size, shared by
+    every screen target: their dispatches run one after another in a pass."""
+    import wgpu
+
+    key = (get_device(), width, height)
+    if key not in _SCRATCH:
+        dev = get_device()
+        st = wgpu.BufferUsage.STORAGE
+        x, y = grid(width * height)
+        _SCRATCH[key] = (
+            dev.create_buffer(size=4 * x * y * WORKGROUP_SIZE, usage=st),
+            dev.create_buffer(size=16, usage=st),  # zero at creation; args re-zeroes it
+            dev.create_buffer(size=16, usage=st | wgpu.BufferUsage.INDIRECT),
+        )
+    return _SCRATCH[key]
 
 
 class ScreenTarget:
@@ -76,19 +101,33 @@ class ScreenTarget:
         u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
         self.params = dev.create_buffer(size=PARAMS_BYTES, usage=u)
         self.lights = dev.create_buffer(size=32 * spass.n_lights, usage=u)
-        entries = [
-            {"binding": 0, "resource": {"buffer": self.params}},
-            {"binding": 1, "resource": {"buffer": self.lights}},
-            {"binding": 2, "resource": {"buffer": gatlas.verts}},
-            {"binding": 3, "resource": {"buffer": gatlas.faces}},
-            {"binding": 4, "resource": eye_targets.vis.create_view()},
-            {"binding": 5, "resource": eye_targets.colour.create_view()},
-            {"binding": 6, "resource": {"buffer": counters.buf}},
-            *spass.gmat.entries(7),
-        ]
-        self.bind = dev.create_bind_group(
-            layout=spass.pipe.get_bind_group_layout(0), entries=entries
-        )
+        todo, todo_n, self.ind = _scratch(*self.size)
+        res = {
+            0: {"buffer": self.params},
+            1: {"buffer": self.lights},
+            2: {"buffer": gatlas.verts},
+            3: {"buffer": gatlas.faces},
+            4: eye_targets.vis.create_view(),
+            5: eye_targets.colour.create_view(),
+            6: {"buffer": counters.buf},
+            13: {"buffer": todo},
+            14: {"buffer": todo_n},
+            15: {"buffer": self.ind},
+        }
+        res.update({e["binding"]: e["resource"] for e in spass.gmat.entries(7)})
+        used = {
+            "cull": (0, 4, 13, 14),
+            "args": (13, 14, 15),
+            "main": tuple(k for k in res if k not in (14, 15)),
+        }
+        self.binds = {
+            e: dev.create_bind_group(
+                layout=spass.pipes[e].get_bind_group_layout(0),
+                entries=[{"binding": k, "resource": res[k]} for k in keys],
+            )
+            for e, keys in used.items()
+        }
+        self.rect = (0, 0, 0, 0)
 
     def update(self, model, eye, tiling, inv_view_proj, light_pos, light_rgb, slot, obj_id, rect):
         """Uniforms of this dispatch; ``rect`` = (x0, y0, w, h) pixels to cover."""
@@ -108,12 +147,19 @@ class ScreenTarget:
         cp.end()
 
     def dispatch(self, cp) -> None:
-        """Record the dispatch over this target's pixel rectangle into compute pass ``cp``."""
+        """Record this target's dispatches into compute pass ``cp``: list the rectangle's pixels
+        that show the object, then shade only those."""
         w, h = self.rect[2], self.rect[3]
         if w and h:
-            cp.set_pipeline(self.spass.pipe)
-            cp.set_bind_group(0, self.bind)
-            cp.dispatch_workgroups(math.ceil(w / 8), math.ceil(h / 8), 1)
+            for e in ("cull", "args", "main"):
+                cp.set_pipeline(self.spass.pipes[e])
+                cp.set_bind_group(0, self.binds[e])
+                if e == "cull":
+                    cp.dispatch_workgroups(math.ceil(w / 8), math.ceil(h / 8), 1)
+                elif e == "args":
+                    cp.dispatch_workgroups(1, 1, 1)
+                else:
+                    cp.dispatch_workgroups_indirect(self.ind, 0)
 
 
 __all__ = ["CounterBuffer", "ScreenSpacePass", "ScreenTarget", "pack_screen_params"]

@@ -9,7 +9,6 @@ and fine MLP evaluations), accumulated with workgroup atomics, one slot per disp
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
@@ -22,17 +21,18 @@ from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial, new_radiance_te
 from vrneural.runtime.reference import camera_relative, normal_matrix
 
 PARAMS_BYTES = 176  # mat4 model, mat4 normal_mat, vec4 eye, vec4 tiling, vec4<u32> sched
-WORKGROUP = 8
+WORKGROUP_SIZE = 64  # 1D workgroups of the cull and shade kernels
 
 
-def pack_params(model, eye, tiling, phase=0, period=1, slot=0) -> bytes:
-    """The ``Params`` uniform of texture_space.wgsl (matrices column-major)."""
+def pack_params(model, eye, tiling, offset=0, count=0, slot=0) -> bytes:
+    """The ``Params`` uniform of texture_space.wgsl (matrices column-major); ``offset, count``:
+    this dispatch's span of the atlas's candidate block list."""
     f = np.zeros(40, np.float32)
     f[0:16] = np.asarray(model, np.float32).T.ravel()
     f[16:32] = normal_matrix(np.asarray(model, np.float32)).T.ravel()
     f[32:35] = np.asarray(eye, np.float32)[:3]
     f[36:40] = np.asarray(tiling, np.float32)
-    u = np.array([phase, period, slot, 0], np.uint32)
+    u = np.array([offset, count, slot, 0], np.uint32)
     return f.tobytes() + u.tobytes()
 
 
@@ -83,12 +83,26 @@ class TextureSpacePass:
         self.code = texture_space_wgsl(mat, precision, n_lights, buffer_weights, radiance_format)
         self.gmat = gmat or GpuMaterial(mat, buffer_weights)
 
-    def pipeline(self, resolution: int):
-        return compute_pipeline(self.code, constants={"R": resolution}, label="texture_space")
+    def pipeline(self, resolution: int, entry: str = "main"):
+        return compute_pipeline(
+            self.code, entry, constants={"R": resolution}, label=f"texture_space/{entry}"
+        )
+
+
+def grid(n: int, size: int = WORKGROUP_SIZE) -> tuple[int, int]:
+    """Workgroups ``(x, y)`` covering ``n`` invocations, each dimension within the 65535 limit
+    (the kernels index them as ``(wid.y * nwg.x + wid.x) * size + lid``)."""
+    wg = -(-n // size)
+    y = max(1, -(-wg // 65535))
+    return -(-wg // y), y
 
 
 class TextureTarget:
-    """One (object, eye) radiance texture with its uniforms and bind group."""
+    """One (object, eye) radiance texture with its uniforms, compaction buffers and bind groups.
+
+    An update is three dispatches (texture_space.wgsl): ``cull`` keeps the front-facing blocks of
+    the candidate list, ``args`` turns their count into indirect workgroup counts, ``main``
+    shades only those blocks."""
 
     def __init__(self, tpass: TextureSpacePass, gatlas: GpuAtlas, counters: CounterBuffer):
         import wgpu
@@ -97,33 +111,59 @@ class TextureTarget:
         self.tpass = tpass
         self.gatlas = gatlas
         self.R = gatlas.resolution
-        self.pipe = tpass.pipeline(self.R)
+        self.pipes = {e: tpass.pipeline(self.R, e) for e in ("cull", "args", "main")}
+        self.pipe = self.pipes["main"]
         u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
+        st = wgpu.BufferUsage.STORAGE
         self.params = dev.create_buffer(size=PARAMS_BYTES, usage=u)
         self.lights = dev.create_buffer(size=32 * tpass.n_lights, usage=u)
         self.texture = new_radiance_texture(self.R, fmt=tpass.radiance_format)
         self.view = self.texture.create_view()
-        entries = [
-            {"binding": 0, "resource": {"buffer": self.params}},
-            {"binding": 1, "resource": {"buffer": self.lights}},
-            {"binding": 2, "resource": {"buffer": gatlas.verts}},
-            {"binding": 3, "resource": {"buffer": gatlas.faces}},
-            {"binding": 4, "resource": {"buffer": gatlas.tri_ids}},
-            {"binding": 5, "resource": self.view},
-            {"binding": 6, "resource": {"buffer": counters.buf}},
-            *tpass.gmat.entries(7),
-        ]
-        self.bind = dev.create_bind_group(
-            layout=self.pipe.get_bind_group_layout(0), entries=entries
-        )
+        x, y = grid(gatlas.non_empty_blocks)
+        cap = max(1, x * y * WORKGROUP_SIZE)
+        self.todo = dev.create_buffer(size=4 * cap, usage=st)
+        self.todo_n = dev.create_buffer(size=16, usage=st | wgpu.BufferUsage.COPY_DST)
+        self.ind = dev.create_buffer(size=16, usage=st | wgpu.BufferUsage.INDIRECT)
+        self.counters = counters
+        self.binds: dict = {}
+        self.span = (0, 0)
+
+    def _bind(self, entry: str, period: int):
+        """Bind group of one entry point (auto layouts differ per entry point)."""
+        key = (entry, period if entry == "cull" else 0)
+        if key not in self.binds:
+            g, tp = self.gatlas, self.tpass
+            res = {
+                0: {"buffer": self.params},
+                1: {"buffer": self.lights},
+                2: {"buffer": g.verts},
+                3: {"buffer": g.faces},
+                4: {"buffer": g.tri_ids},
+                5: self.view,
+                6: {"buffer": self.counters.buf},
+                12: {"buffer": g.block_list(period)[0]},
+                13: {"buffer": self.todo},
+                14: {"buffer": self.todo_n},
+                15: {"buffer": self.ind},
+            }
+            res.update({e["binding"]: e["resource"] for e in tp.gmat.entries(7)})
+            used = {"cull": (0, 2, 3, 4, 6, 12, 13, 14), "args": (13, 14, 15)}
+            keys = used.get(entry, tuple(k for k in res if k not in (12, 14, 15)))
+            self.binds[key] = get_device().create_bind_group(
+                layout=self.pipes[entry].get_bind_group_layout(0),
+                entries=[{"binding": k, "resource": res[k]} for k in keys],
+            )
+        return self.binds[key]
 
     def update(self, model, eye, tiling, light_pos, light_rgb, phase=0, period=1, slot=0):
         """Write this dispatch's uniforms (call before encoding it). World quantities are made
         camera-relative in float64 first (:func:`~vrneural.runtime.reference.camera_relative`)."""
         model, eye, light_pos = camera_relative(model, eye, light_pos)
+        self.span = self.gatlas.block_list(period)[1][phase]
         q = get_device().queue
-        q.write_buffer(self.params, 0, pack_params(model, eye, tiling, phase, period, slot))
+        q.write_buffer(self.params, 0, pack_params(model, eye, tiling, *self.span, slot))
         q.write_buffer(self.lights, 0, pack_lights(light_pos, light_rgb, self.tpass.n_lights))
+        q.write_buffer(self.todo_n, 0, np.zeros(4, np.uint32))
 
     def encode(self, encoder, phase=0, period=1, timestamp_writes=None) -> None:
         """Dispatch the block rows ``phase, phase + period, ...`` in a compute pass of its own."""
@@ -132,13 +172,20 @@ class TextureTarget:
         cp.end()
 
     def dispatch(self, cp, phase=0, period=1) -> None:
-        """Record this target's dispatch into an open compute pass ``cp``."""
-        nb = self.R // 2
-        rows = len(range(phase, nb, period))
-        if rows:
-            cp.set_pipeline(self.pipe)
-            cp.set_bind_group(0, self.bind)
-            cp.dispatch_workgroups(math.ceil(nb / WORKGROUP), math.ceil(rows / WORKGROUP), 1)
+        """Record this target's three dispatches into an open compute pass ``cp`` (after
+        :meth:`update` with the same ``phase, period``)."""
+        n = self.gatlas.block_list(period)[1][phase][1]
+        if not n:
+            return
+        cp.set_pipeline(self.pipes["cull"])
+        cp.set_bind_group(0, self._bind("cull", period))
+        cp.dispatch_workgroups(*grid(n), 1)
+        cp.set_pipeline(self.pipes["args"])
+        cp.set_bind_group(0, self._bind("args", period))
+        cp.dispatch_workgroups(1, 1, 1)
+        cp.set_pipeline(self.pipes["main"])
+        cp.set_bind_group(0, self._bind("main", period))
+        cp.dispatch_workgroups_indirect(self.ind, 0)
 
 
 def shade_texture_space(

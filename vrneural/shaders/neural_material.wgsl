@@ -65,15 +65,31 @@ fn apply_output(r: vec3<f32>) -> vec3<f32> {
 }
 {% endmacro %}
 
-{% macro const_net(fname, prefix, layers, T, arg_decls, input_exprs, ret) %}
-{# input_exprs: one f32 expression per network input; ret: 'latent' or 'rgb' #}
+{% macro const_pre(fname, prefix, layer, T, arg_decl, n_arg, col0) %}
+{# The loop-invariant part of a first layer: bias + W[:, col0:col0+n_arg] f (see mlp.wgsl). #}
+fn {{ fname }}({{ arg_decl }}) -> array<{{ T }}, {{ layer.n_out }}> {
+{% set ins = {} %}
+{% for k in range(n_arg) %}
+    let in_{{ k }} = {{ T }}(f[{{ k }}]);
+{% set _ = ins.update({col0 + k: 'in_' ~ k}) %}
+{% endfor %}
+{{ m.affine(prefix ~ 'p', ins, layer, range(col0, col0 + n_arg), T, true) }}
+{% set outs = [] %}
+{% for o in range(layer.n_out) %}{% set _ = outs.append(prefix ~ 'p_' ~ o) %}{% endfor %}
+    return array<{{ T }}, {{ layer.n_out }}>({{ outs|join(', ') }});
+}
+{% endmacro %}
+
+{% macro const_net(fname, prefix, layers, T, arg_decls, input_exprs, first_cols, base_exprs, ret) %}
+{# input_exprs: one f32 expression per loop-varying input column (first_cols); base_exprs: the
+   first layer's hoisted part per unit; ret: 'latent' or 'rgb' #}
 fn {{ fname }}({{ arg_decls }}) -> {{ 'vec3<f32>' if ret == 'rgb' else 'array<' ~ T ~ ', ' ~ layers[-1].n_out ~ '>' }} {
-{% set ins = [] %}
+{% set ins = {} %}
 {% for e in input_exprs %}
     let in_{{ loop.index0 }} = {{ T }}({{ e }});
-{% set _ = ins.append('in_' ~ loop.index0) %}
+{% set _ = ins.update({first_cols[loop.index0]: 'in_' ~ loop.index0}) %}
 {% endfor %}
-{{ m.mlp_body(prefix, ins, layers, T) }}
+{{ m.mlp_body(prefix, ins, layers, T, base_exprs, first_cols) }}
 {% set L = layers|length %}
 {% if ret == 'rgb' %}
     return vec3<f32>(f32({{ prefix }}{{ L }}_0), f32({{ prefix }}{{ L }}_1), f32({{ prefix }}{{ L }}_2));
@@ -87,32 +103,61 @@ fn {{ fname }}({{ arg_decls }}) -> {{ 'vec3<f32>' if ret == 'rgb' else 'array<' 
 
 {% macro buffer_net_lib(mat, T) %}
 // Storage-buffer weights: per layer W[out, in] row-major then b[out] (mlp.pack_weights), all
-// networks concatenated in order {{ mat.net_order|join(', ') }}.
+// networks concatenated in order {{ mat.net_order|join(', ') }}. The first layers are split
+// exactly as in the constant-weight code (loop-invariant part hoisted), so the two variants do
+// the same arithmetic and differ only in where the weights come from.
 const MAXW: u32 = {{ mat.max_width }}u;
 const L_IN = array<u32, {{ mat.buf_dims_in|length }}>({{ mat.buf_dims_in|join('u, ') }}u);
 const L_OUT = array<u32, {{ mat.buf_dims_out|length }}>({{ mat.buf_dims_out|join('u, ') }}u);
 const L_OFF = array<u32, {{ mat.buf_offsets|length }}>({{ mat.buf_offsets|join('u, ') }}u);
 const L_ACT = array<u32, {{ mat.buf_acts|length }}>({{ mat.buf_acts|join('u, ') }}u);  // 0 relu, 1 leaky, 2 none
 
+fn buf_act(l: u32, s: {{ T }}) -> {{ T }} {
+    if (L_ACT[l] == 0u) { return max(s, {{ T }}(0)); }
+    if (L_ACT[l] == 1u) { return max(s, {{ T }}(0.01) * s); }
+    return s;
+}
+
+// Pre-activation part of layer l over its input columns [c0, c0 + n) (x[k] feeds column c0 + k),
+// plus the bias when with_bias.
+fn buf_affine(l: u32, x: array<{{ T }}, MAXW>, c0: u32, n: u32, with_bias: bool) -> array<{{ T }}, MAXW> {
+    var y: array<{{ T }}, MAXW>;
+    let n_in = L_IN[l];
+    let n_out = L_OUT[l];
+    let off = L_OFF[l];
+    for (var o = 0u; o < n_out; o++) {
+        var s = {{ T }}(0);
+        if (with_bias) { s = {{ T }}(weights[off + n_out * n_in + o]); }
+        for (var k = 0u; k < n; k++) {
+            s += {{ T }}(weights[off + o * n_in + c0 + k]) * x[k];
+        }
+        y[o] = s;
+    }
+    return y;
+}
+
 fn run_buffer_net(x_in: array<{{ T }}, MAXW>, first: u32, count: u32) -> array<{{ T }}, MAXW> {
     var a = x_in;
-    var b: array<{{ T }}, MAXW>;
     for (var l = first; l < first + count; l++) {
-        let n_in = L_IN[l];
-        let n_out = L_OUT[l];
-        let off = L_OFF[l];
-        for (var o = 0u; o < n_out; o++) {
-            var s = {{ T }}(weights[off + n_out * n_in + o]);
-            for (var k = 0u; k < n_in; k++) {
-                s += {{ T }}(weights[off + o * n_in + k]) * a[k];
-            }
-            if (L_ACT[l] == 0u) { s = max(s, {{ T }}(0)); }
-            else if (L_ACT[l] == 1u) { s = max(s, {{ T }}(0.01) * s); }
-            b[o] = s;
-        }
-        for (var o = 0u; o < n_out; o++) { a[o] = b[o]; }
+        let y = buf_affine(l, a, 0u, L_IN[l], true);
+        for (var o = 0u; o < L_OUT[l]; o++) { a[o] = buf_act(l, y[o]); }
     }
     return a;
+}
+
+// Layer l from its full pre-activation, then layers l + 1 .. last - 1.
+fn buf_finish(l: u32, pre: array<{{ T }}, MAXW>, last: u32) -> array<{{ T }}, MAXW> {
+    var a: array<{{ T }}, MAXW>;
+    for (var o = 0u; o < L_OUT[l]; o++) { a[o] = buf_act(l, pre[o]); }
+    return run_buffer_net(a, l + 1u, last - l - 1u);
+}
+
+fn buf_dirs_part(l: u32, d: array<f32, 9>, base: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
+    var x: array<{{ T }}, MAXW>;
+    for (var k = 0u; k < 9u; k++) { x[k] = {{ T }}(d[k]); }
+    var y = buf_affine(l, x, 0u, 9u, false);
+    for (var o = 0u; o < L_OUT[l]; o++) { y[o] += base[o]; }
+    return y;
 }
 {% endmacro %}
 
@@ -122,27 +167,43 @@ fn run_buffer_net(x_in: array<{{ T }}, MAXW>, first: u32, count: u32) -> array<{
 {{ sampler_fn('sample_b', 'tex_b', mat.cb) }}
 {% endif %}
 {{ output_fn(mat.output) }}
+// Evaluation API (both variants). The first layer of every network is split into the part that
+// does not change with the light (bias + W_f features: pre_a, pre_b, computed once per texel or
+// block outside the light loop) and the part that does (W_d dirs, and for the fine network
+// W_z z_c, computed once per block per light by fine_z and shared by the block's 4 texels):
+//   coarse_fine: z = eval_coarse(dirs, pre_a(U_c(u_c))); zz = fine_z(z);
+//                rgb_k = eval_fine(zz, pre_b(U_f(u_k)))
+//   single:      rgb_k = eval_single(dirs, pre_a(U(u_k)))
 {% if mat.buffer_weights %}
 {{ buffer_net_lib(mat, T) }}
-{% if mat.arch == 'coarse_fine' %}
-fn eval_coarse(d: array<f32, 9>, f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, MAXW> {
+fn pre_a(f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, MAXW> {
     var x: array<{{ T }}, MAXW>;
-    for (var k = 0u; k < 9u; k++) { x[k] = {{ T }}(d[k]); }
-    for (var k = 0u; k < {{ mat.ca }}u; k++) { x[9u + k] = {{ T }}(f[k]); }
-    return run_buffer_net(x, 0u, {{ mat.n_layers[0] }}u);
+    for (var k = 0u; k < {{ mat.ca }}u; k++) { x[k] = {{ T }}(f[k]); }
+    return buf_affine(0u, x, 9u, {{ mat.ca }}u, true);
 }
-fn eval_fine(z: array<{{ T }}, MAXW>, f: array<f32, {{ mat.cb }}>) -> vec3<f32> {
-    var x = z;
-    for (var k = 0u; k < {{ mat.cb }}u; k++) { x[{{ mat.z }}u + k] = {{ T }}(f[k]); }
-    let y = run_buffer_net(x, {{ mat.n_layers[0] }}u, {{ mat.n_layers[1] }}u);
+{% if mat.arch == 'coarse_fine' %}
+{% set nc = mat.n_layers[0] %}
+{% set nf = mat.n_layers[1] %}
+fn eval_coarse(d: array<f32, 9>, pa: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
+    return buf_finish(0u, buf_dirs_part(0u, d, pa), {{ nc }}u);
+}
+fn pre_b(f: array<f32, {{ mat.cb }}>) -> array<{{ T }}, MAXW> {
+    var x: array<{{ T }}, MAXW>;
+    for (var k = 0u; k < {{ mat.cb }}u; k++) { x[k] = {{ T }}(f[k]); }
+    return buf_affine({{ nc }}u, x, {{ mat.z }}u, {{ mat.cb }}u, true);
+}
+fn fine_z(z: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
+    return buf_affine({{ nc }}u, z, 0u, {{ mat.z }}u, false);
+}
+fn eval_fine(zz: array<{{ T }}, MAXW>, pb: array<{{ T }}, MAXW>) -> vec3<f32> {
+    var pre: array<{{ T }}, MAXW>;
+    for (var o = 0u; o < MAXW; o++) { pre[o] = zz[o] + pb[o]; }
+    let y = buf_finish({{ nc }}u, pre, {{ nc + nf }}u);
     return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
 }
 {% else %}
-fn eval_single(d: array<f32, 9>, f: array<f32, {{ mat.ca }}>) -> vec3<f32> {
-    var x: array<{{ T }}, MAXW>;
-    for (var k = 0u; k < 9u; k++) { x[k] = {{ T }}(d[k]); }
-    for (var k = 0u; k < {{ mat.ca }}u; k++) { x[9u + k] = {{ T }}(f[k]); }
-    let y = run_buffer_net(x, 0u, {{ mat.n_layers[0] }}u);
+fn eval_single(d: array<f32, 9>, pa: array<{{ T }}, MAXW>) -> vec3<f32> {
+    let y = buf_finish(0u, buf_dirs_part(0u, d, pa), {{ mat.n_layers[0] }}u);
     return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
 }
 {% endif %}
@@ -150,25 +211,35 @@ fn eval_single(d: array<f32, 9>, f: array<f32, {{ mat.ca }}>) -> vec3<f32> {
 {% set dexprs = [] %}
 {% for k in range(9) %}{% set _ = dexprs.append('d[' ~ k ~ ']') %}{% endfor %}
 {% if mat.arch == 'coarse_fine' %}
-{% set fa = [] %}
-{% for k in range(mat.ca) %}{% set _ = fa.append('f[' ~ k ~ ']') %}{% endfor %}
-{% set zb = [] %}
-{% for k in range(mat.z) %}{% set _ = zb.append('z[' ~ k ~ ']') %}{% endfor %}
-{% for k in range(mat.cb) %}{% set _ = zb.append('f[' ~ k ~ ']') %}{% endfor %}
-{{ const_net('coarse_net', 'c', mat.networks['coarse'], T, 'd: array<f32, 9>, f: array<f32, ' ~ mat.ca ~ '>', dexprs + fa, 'latent') }}
-{{ const_net('fine_net', 'q', mat.networks['fine'], T, 'z: array<' ~ T ~ ', ' ~ mat.z ~ '>, f: array<f32, ' ~ mat.cb ~ '>', zb, 'rgb') }}
-fn eval_coarse(d: array<f32, 9>, f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, {{ mat.z }}> {
-    return coarse_net(d, f);
+{% set cl = mat.networks['coarse'] %}
+{% set fl = mat.networks['fine'] %}
+{% set pab = [] %}
+{% for o in range(cl[0].n_out) %}{% set _ = pab.append('pa[' ~ o ~ ']') %}{% endfor %}
+{% set zzb = [] %}
+{% for o in range(fl[0].n_out) %}{% set _ = zzb.append('(zz[' ~ o ~ '] + pb[' ~ o ~ '])') %}{% endfor %}
+{{ const_pre('pre_a', 'c', cl[0], T, 'f: array<f32, ' ~ mat.ca ~ '>', mat.ca, 9) }}
+{{ const_pre('pre_b', 'q', fl[0], T, 'f: array<f32, ' ~ mat.cb ~ '>', mat.cb, mat.z) }}
+fn fine_z(z: array<{{ T }}, {{ mat.z }}>) -> array<{{ T }}, {{ fl[0].n_out }}> {
+{% set zin = {} %}
+{% for k in range(mat.z) %}{% set _ = zin.update({k: 'z[' ~ k ~ ']'}) %}{% endfor %}
+{{ m.affine('zz', zin, fl[0], range(mat.z), T, false) }}
+{% set outs = [] %}
+{% for o in range(fl[0].n_out) %}{% set _ = outs.append('zz_' ~ o) %}{% endfor %}
+    return array<{{ T }}, {{ fl[0].n_out }}>({{ outs|join(', ') }});
 }
-fn eval_fine(z: array<{{ T }}, {{ mat.z }}>, f: array<f32, {{ mat.cb }}>) -> vec3<f32> {
-    return apply_output(fine_net(z, f));
+{{ const_net('eval_coarse', 'c', cl, T, 'd: array<f32, 9>, pa: array<' ~ T ~ ', ' ~ cl[0].n_out ~ '>', dexprs, range(9)|list, pab, 'latent') }}
+{{ const_net('fine_net', 'q', fl, T, 'zz: array<' ~ T ~ ', ' ~ fl[0].n_out ~ '>, pb: array<' ~ T ~ ', ' ~ fl[0].n_out ~ '>', [], [], zzb, 'rgb') }}
+fn eval_fine(zz: array<{{ T }}, {{ fl[0].n_out }}>, pb: array<{{ T }}, {{ fl[0].n_out }}>) -> vec3<f32> {
+    return apply_output(fine_net(zz, pb));
 }
 {% else %}
-{% set fa = [] %}
-{% for k in range(mat.ca) %}{% set _ = fa.append('f[' ~ k ~ ']') %}{% endfor %}
-{{ const_net('single_net', 's', mat.networks['mlp'], T, 'd: array<f32, 9>, f: array<f32, ' ~ mat.ca ~ '>', dexprs + fa, 'rgb') }}
-fn eval_single(d: array<f32, 9>, f: array<f32, {{ mat.ca }}>) -> vec3<f32> {
-    return apply_output(single_net(d, f));
+{% set sl = mat.networks['mlp'] %}
+{% set pab = [] %}
+{% for o in range(sl[0].n_out) %}{% set _ = pab.append('pa[' ~ o ~ ']') %}{% endfor %}
+{{ const_pre('pre_a', 's', sl[0], T, 'f: array<f32, ' ~ mat.ca ~ '>', mat.ca, 9) }}
+{{ const_net('single_net', 's', sl, T, 'd: array<f32, 9>, pa: array<' ~ T ~ ', ' ~ sl[0].n_out ~ '>', dexprs, range(9)|list, pab, 'rgb') }}
+fn eval_single(d: array<f32, 9>, pa: array<{{ T }}, {{ sl[0].n_out }}>) -> vec3<f32> {
+    return apply_output(single_net(d, pa));
 }
 {% endif %}
 {% endif %}

@@ -32,6 +32,13 @@ struct Light {
 @group(0) @binding(5) var out_tex: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 {{ nm.bindings(mat, 7) }}
+// Compaction as in texture_space.wgsl: the object's pixels of the rectangle (packed y << 16 | x,
+// padded with EMPTY to whole workgroups), their count, the indirect args.
+@group(0) @binding(13) var<storage, read_write> todo: array<u32>;
+@group(0) @binding(14) var<storage, read_write> todo_n: array<atomic<u32>>;
+@group(0) @binding(15) var<storage, read_write> ind: array<u32>;
+
+const EMPTY: u32 = 0xFFFFFFFFu;
 
 {{ nm.frame_fns() }}
 {{ nm.material_fns(mat, T) }}
@@ -72,11 +79,9 @@ fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
         textureStore(out_tex, px, vec4<f32>(0.0, 0.0, 0.0, 1.0));
         return vec4<u32>(0u, 1u, 0u, 0u);
     }
+    let pa = pre_a(sample_a(uv));  // light-independent first-layer parts (neural_material)
 {% if mat.arch == 'coarse_fine' %}
-    let fc = sample_a(uv);
-    let ff = sample_b(uv);
-{% else %}
-    let fa = sample_a(uv);
+    let pb = pre_b(sample_b(uv));
 {% endif %}
     var acc = vec3<f32>(0.0);
     var n = 0u;
@@ -88,9 +93,9 @@ fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
         let d = dirs9(wi, wo);
         n += 1u;
 {% if mat.arch == 'coarse_fine' %}
-        acc += eval_fine(eval_coarse(d, fc), ff) * lights[li].radiance.rgb / d2;
+        acc += eval_fine(fine_z(eval_coarse(d, pa)), pb) * lights[li].radiance.rgb / d2;
 {% else %}
-        acc += eval_single(d, fa) * lights[li].radiance.rgb / d2;
+        acc += eval_single(d, pa) * lights[li].radiance.rgb / d2;
 {% endif %}
     }
     textureStore(out_tex, px, vec4<f32>(clamp(acc, vec3<f32>(0.0), vec3<f32>(F16_MAX)), 1.0));
@@ -101,18 +106,52 @@ fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
 {% endif %}
 }
 
-var<workgroup> wg_count: array<atomic<u32>, 4>;
+// cull: the rectangle's pixels that show this object -> todo; args: indirect workgroup counts;
+// main: shade the listed pixels only (a CPU adapter pays for every dispatched lane, so the
+// pixels of other objects and of the background inside the rectangle cost nothing).
+var<workgroup> wg_n: atomic<u32>;
+var<workgroup> wg_base: u32;
 
 @compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>,
+fn cull(@builtin(global_invocation_id) gid: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    if (lid == 0u) { atomicStore(&wg_n, 0u); }
+    workgroupBarrier();
+    let px = gid.xy + P.rect.xy;
+    var keep = false;
+    var slot = 0u;
+    if (gid.x < P.rect.z && gid.y < P.rect.w && px.x < P.screen.x && px.y < P.screen.y) {
+        keep = textureLoad(vis, px, 0).x == P.screen.w + 1u;
+        if (keep) { slot = atomicAdd(&wg_n, 1u); }
+    }
+    workgroupBarrier();
+    if (lid == 0u) { wg_base = atomicAdd(&todo_n[0], atomicLoad(&wg_n)); }
+    let base = workgroupUniformLoad(&wg_base);
+    if (keep) { todo[base + slot] = (px.y << 16u) | px.x; }
+}
+
+@compute @workgroup_size(1)
+fn args() {
+    let n = atomicExchange(&todo_n[0], 0u);  // and zero for the next object
+    let wg = (n + 63u) / 64u;
+    let y = max(1u, (wg + 65534u) / 65535u);
+    let x = (wg + y - 1u) / y;
+    ind[0] = x;
+    ind[1] = y;
+    ind[2] = 1u;
+    for (var k = n; k < x * y * 64u; k++) { todo[k] = EMPTY; }
+}
+
+var<workgroup> wg_count: array<atomic<u32>, 4>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     if (lid < 4u) { atomicStore(&wg_count[lid], 0u); }
     workgroupBarrier();
     var c = vec4<u32>(0u);
-    let px = gid.xy + P.rect.xy;
-    if (gid.x < P.rect.z && gid.y < P.rect.w && px.x < P.screen.x && px.y < P.screen.y) {
-        c = shade_pixel(px);
-    }
+    let packed = todo[(wid.y * nwg.x + wid.x) * 64u + lid];
+    if (packed != EMPTY) { c = shade_pixel(vec2<u32>(packed & 0xFFFFu, packed >> 16u)); }
     for (var k = 0u; k < 4u; k++) {
         if (c[k] != 0u) { atomicAdd(&wg_count[k], c[k]); }
     }

@@ -1,7 +1,8 @@
 // Texture-space shading of one object for one eye (paper section 4.2). One thread per 2x2
 // radiance-texel block: read the 4 triangle IDs, leave early when all are empty or when the block
-// faces away from the eye, build the local frame at the block centre, then per light: coarse MLP
-// once at the mean material uv, fine MLP 4 times, sum lights with inverse-square falloff, clamp
+// faces away from the eye, build the local frame at the block centre, sample the neural textures
+// and hoist the light-independent part of the first layers, then per light: coarse MLP once at
+// the mean material uv, fine MLP 4 times, sum lights with inverse-square falloff, clamp
 // to the f16 range and store rgba16float (or, as an option, rgba32float). numpy twin: runtime/reference.py:shade_texture_space.
 // Template parameters: T (f32|f16), mat (runtime/codegen.py:MaterialSpec), n_lights (uniform
 // array size, >= 1), n_active (lights shaded, 0 allowed: black).
@@ -15,7 +16,7 @@ struct Params {
     normal_mat: mat4x4<f32>,  // inverse transpose of the model's 3x3 (upper-left)
     eye: vec4<f32>,           // eye position, world, metres
     tiling: vec4<f32>,        // material uv = uv * tiling.xy + tiling.zw
-    sched: vec4<u32>,         // (block-row phase, block-row period, counter slot, unused)
+    sched: vec4<u32>,         // (candidate list offset, candidate count, counter slot, unused)
 }
 
 struct Light {
@@ -31,6 +32,13 @@ struct Light {
 @group(0) @binding(5) var out_tex: texture_storage_2d<{{ fmt | default('rgba16float') }}, write>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;  // 4 per slot
 {{ nm.bindings(mat, 7) }}
+// Compaction (see the entry points at the end): candidate blocks (non-empty, in this dispatch's
+// block rows; packed by << 16 | bx, built once per atlas), the blocks to shade this time (front-
+// facing candidates, padded with EMPTY to whole workgroups), their count, the indirect args.
+@group(0) @binding(12) var<storage, read> cand: array<u32>;
+@group(0) @binding(13) var<storage, read_write> todo: array<u32>;
+@group(0) @binding(14) var<storage, read_write> todo_n: array<atomic<u32>>;
+@group(0) @binding(15) var<storage, read_write> ind: array<u32>;  // (x, y, z) workgroups
 
 override R: u32;  // radiance texture side (even)
 
@@ -89,6 +97,7 @@ fn tri_material_uv(t: TriUV, p: vec2<f32>) -> vec2<f32> {
 }
 
 // Shade one block; returns the counter increments (shaded, back-facing, coarse, fine evals).
+// (Blocks reach it through the cull pass, so the empty / back-facing returns are a safety net.)
 // Loops over the 4 texels are unrolled by the template (constant indices, no private arrays).
 fn shade_block(bx: u32, by: u32) -> vec4<u32> {
     let x0 = bx * 2u;
@@ -114,14 +123,15 @@ fn shade_block(bx: u32, by: u32) -> vec4<u32> {
 {% for k in range(4) %}
     var acc{{ k }} = vec3<f32>(0.0);
 {% endfor %}
+    // the light-independent part of every first layer, once per block / texel (neural_material)
 {% if mat.arch == 'coarse_fine' %}
-    let fc = sample_a(uc);
+    let pa = pre_a(sample_a(uc));
 {% for k in range(4) %}
-    let f{{ k }} = sample_b(uv{{ k }});
+    let pb{{ k }} = pre_b(sample_b(uv{{ k }}));
 {% endfor %}
 {% else %}
 {% for k in range(4) %}
-    let f{{ k }} = sample_a(uv{{ k }});
+    let pa{{ k }} = pre_a(sample_a(uv{{ k }}));
 {% endfor %}
 {% endif %}
     var n_coarse = 0u;
@@ -134,13 +144,13 @@ fn shade_block(bx: u32, by: u32) -> vec4<u32> {
             let d = dirs9(wi, wo);
             n_coarse += 1u;
 {% if mat.arch == 'coarse_fine' %}
-            let z = eval_coarse(d, fc);
+            let zz = fine_z(eval_coarse(d, pa));  // W_z z_c, shared by the 4 texels
 {% for k in range(4) %}
-            acc{{ k }} += eval_fine(z, f{{ k }}) * e;
+            acc{{ k }} += eval_fine(zz, pb{{ k }}) * e;
 {% endfor %}
 {% else %}
 {% for k in range(4) %}
-            acc{{ k }} += eval_single(d, f{{ k }}) * e;
+            acc{{ k }} += eval_single(d, pa{{ k }}) * e;
 {% endfor %}
 {% endif %}
         }
@@ -156,16 +166,83 @@ fn shade_block(bx: u32, by: u32) -> vec4<u32> {
 {% endif %}
 }
 
+// Geometry-only test of one block: 0 empty, 1 back-facing, 2 to be shaded (same rule as
+// shade_block, so a block shade_block is given never turns out back-facing there).
+fn block_state(bx: u32, by: u32) -> u32 {
+    let x0 = bx * 2u;
+    let y0 = by * 2u;
+    let id0 = tri_ids[y0 * R + x0];
+    let id1 = tri_ids[y0 * R + x0 + 1u];
+    let id2 = tri_ids[(y0 + 1u) * R + x0];
+    let id3 = tri_ids[(y0 + 1u) * R + x0 + 1u];
+    let tc = select(select(select(id3, id2, id2 != EMPTY), id1, id1 != EMPTY), id0, id0 != EMPTY);
+    if (tc == EMPTY) { return 0u; }
+    let s = surface(tc, vec2<f32>(f32(x0 + 1u), f32(y0 + 1u)) / f32(R));
+    let wo = to_local(s, safe_normalize(P.eye.xyz - s.pos, s.n));
+    return select(2u, 1u, wo.z <= 0.0);
+}
+
+// Three dispatches per (object, eye) update, in one compute pass:
+//   cull  over the candidate list: keep the front-facing blocks (workgroup-compacted append);
+//   args  one thread: indirect workgroup counts for the kept blocks, padding with EMPTY,
+//         and the count back to zero;
+//   main  over the kept blocks only (dispatch_workgroups_indirect).
+// A CPU adapter (lavapipe) runs every lane of a SIMD group through both sides of a branch, so
+// an early out saves nothing there; dispatching only the work is what makes cost follow the
+// scene (it also keeps GPU warps full).
+var<workgroup> wg_n: atomic<u32>;
+var<workgroup> wg_back: atomic<u32>;
+var<workgroup> wg_base: u32;
+
+@compute @workgroup_size(64)
+fn cull(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let i = (wid.y * nwg.x + wid.x) * 64u + lid;
+    if (lid == 0u) {
+        atomicStore(&wg_n, 0u);
+        atomicStore(&wg_back, 0u);
+    }
+    workgroupBarrier();
+    var packed = EMPTY;
+    var slot = 0u;
+    var keep = false;
+    if (i < P.sched.y) {
+        packed = cand[P.sched.x + i];
+        let st = block_state(packed & 0xFFFFu, packed >> 16u);
+        keep = st == 2u;
+        if (keep) { slot = atomicAdd(&wg_n, 1u); }
+        if (st == 1u) { atomicAdd(&wg_back, 1u); }
+    }
+    workgroupBarrier();
+    if (lid == 0u) {
+        wg_base = atomicAdd(&todo_n[0], atomicLoad(&wg_n));
+        let b = atomicLoad(&wg_back);
+        if (b != 0u) { atomicAdd(&counters[P.sched.z * 4u + 1u], b); }
+    }
+    let base = workgroupUniformLoad(&wg_base);
+    if (keep) { todo[base + slot] = packed; }
+}
+
+@compute @workgroup_size(1)
+fn args() {
+    let n = atomicExchange(&todo_n[0], 0u);  // and zero for the next update
+    let wg = (n + 63u) / 64u;
+    let y = max(1u, (wg + 65534u) / 65535u);
+    let x = (wg + y - 1u) / y;
+    ind[0] = x;
+    ind[1] = y;
+    ind[2] = 1u;
+    for (var k = n; k < x * y * 64u; k++) { todo[k] = EMPTY; }
+}
+
 var<workgroup> wg_count: array<vec4<u32>, 64>;
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>,
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let nb = R / 2u;
-    let bx = gid.x;
-    let by = gid.y * P.sched.y + P.sched.x;  // staggered: only rows with by % period == phase
+    let packed = todo[(wid.y * nwg.x + wid.x) * 64u + lid];
     var c = vec4<u32>(0u);
-    if (bx < nb && by < nb) { c = shade_block(bx, by); }
+    if (packed != EMPTY) { c = shade_block(packed & 0xFFFFu, packed >> 16u); }
     // counters: one slot per thread, summed by thread 0, one global atomic per counter
     wg_count[lid] = c;
     workgroupBarrier();
