@@ -1,7 +1,10 @@
 """GPU resources of a neural material and of an atlased mesh.
 
-- Neural textures ``[H, W, C]`` float16 become ``rgba16float`` 2D array textures with
-  ``ceil(C / 4)`` layers (channels packed 4 per layer, zero-padded), read by ``textureLoad``.
+- Neural textures ``[H, W, C]`` float16 become ``rgba32uint`` 2D array textures with
+  ``ceil(C / 8)`` layers: 8 float16 channels per texel and layer, two per u32 (channel 2k in the
+  low half, 2k + 1 in the high half; zero-padded), read by ``textureLoad`` and
+  ``unpack2x16float``. One 128-bit load brings 8 channels: half the loads of 4-channel
+  ``rgba16float`` layers (measured on llvmpipe: see README, Runtime), same values.
 - Weights: constants in the generated code, or (buffer variant) one float32 storage buffer in
   :func:`vrneural.runtime.codegen.packed_weights` layout.
 - An atlas becomes three storage buffers: ``verts`` (4 vec4 per vertex: ``pos.xyz, atlas_u``;
@@ -22,26 +25,28 @@ from vrneural.runtime.reference import count_non_empty_blocks
 
 
 def upload_feature_texture(tex: np.ndarray, label: str = ""):
-    """``tex: [H, W, C]`` float16 -> a ``texture_2d_array`` (rgba16float, ceil(C/4) layers)."""
+    """``tex: [H, W, C]`` float16 -> a ``texture_2d_array`` (rgba32uint, 8 float16 channels
+    per texel and layer, ceil(C/8) layers)."""
     import wgpu
 
     h, w, c = tex.shape
-    layers = (c + 3) // 4
-    data = np.zeros((layers, h, w, 4), np.float16)
+    layers = (c + 7) // 8
+    data = np.zeros((layers, h, w, 8), np.float16)
     for i in range(layers):
-        part = tex[:, :, 4 * i : 4 * i + 4]
+        part = np.asarray(tex[:, :, 8 * i : 8 * i + 8], np.float16)
         data[i, :, :, : part.shape[2]] = part
+    words = np.ascontiguousarray(data).view("<u4")  # [layers, h, w, 4]: (lo, hi) half pairs
     dev = get_device()
     t = dev.create_texture(
         size=(w, h, layers),
-        format="rgba16float",
+        format="rgba32uint",
         usage=wgpu.TextureUsage.TEXTURE_BINDING | wgpu.TextureUsage.COPY_DST,
         label=label,
     )
     dev.queue.write_texture(
         {"texture": t},
-        np.ascontiguousarray(data),
-        {"bytes_per_row": w * 8, "rows_per_image": h},
+        np.ascontiguousarray(words),
+        {"bytes_per_row": w * 16, "rows_per_image": h},
         (w, h, layers),
     )
     return t

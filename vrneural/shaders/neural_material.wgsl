@@ -3,16 +3,17 @@
 //   arch coarse_fine: eval_coarse(dirs, U_c(u_c)) -> latent z, eval_fine(z, U_f(u_k)) -> RGB
 //   arch single:      eval_single(dirs, U(u_k)) -> RGB
 // with features from sample_a / sample_b, sampled once per texel outside the light loop.
-// dirs = [wi, wo, h] in the local frame (9 floats). Neural textures are texture_2d_array<f32>
-// (rgba16float, channels packed 4 per layer) sampled by manual bilinear wrap (4 textureLoads),
+// dirs = [wi, wo, h] in the local frame (9 floats). Neural textures are texture_2d_array<u32>
+// (rgba32uint: 8 float16 channels per texel and layer, two per u32, see gpu_material.py)
+// sampled by manual bilinear wrap (4 textureLoads per 8 channels, unpack2x16float),
 // exactly like sample_bilinear_wrap. Weights are WGSL constants in unrolled code, or read from
 // a storage buffer in loops (buffer_weights; wide teachers and the >=10x comparison).
 {% import 'mlp.wgsl' as m %}
 
 {% macro bindings(mat, first_binding) %}
-@group(0) @binding({{ first_binding }}) var tex_a: texture_2d_array<f32>;  // coarse / features
+@group(0) @binding({{ first_binding }}) var tex_a: texture_2d_array<u32>;  // coarse / features
 {% if mat.arch == 'coarse_fine' %}
-@group(0) @binding({{ first_binding + 1 }}) var tex_b: texture_2d_array<f32>;  // fine
+@group(0) @binding({{ first_binding + 1 }}) var tex_b: texture_2d_array<u32>;  // fine
 {% endif %}
 {% if mat.buffer_weights %}
 @group(0) @binding({{ first_binding + 2 }}) var<storage, read> weights: array<f32>;
@@ -34,18 +35,23 @@ fn {{ name }}(uv: vec2<f32>) -> array<f32, {{ channels }}> {
     let xi1 = (xi0 + 1) % dims.x;
     let yi1 = (yi0 + 1) % dims.y;
     var out: array<f32, {{ channels }}>;
-{% for layer in range((channels + 3) // 4) %}
+{% for layer in range((channels + 7) // 8) %}
     {
         let t00 = textureLoad({{ tex }}, vec2<i32>(xi0, yi0), {{ layer }}, 0);
         let t10 = textureLoad({{ tex }}, vec2<i32>(xi1, yi0), {{ layer }}, 0);
         let t01 = textureLoad({{ tex }}, vec2<i32>(xi0, yi1), {{ layer }}, 0);
         let t11 = textureLoad({{ tex }}, vec2<i32>(xi1, yi1), {{ layer }}, 0);
-        let top = t00 * (1.0 - fx) + t10 * fx;
-        let bot = t01 * (1.0 - fx) + t11 * fx;
-        let v = top * (1.0 - fy) + bot * fy;
-{% for c in range(4) %}
-{% if layer * 4 + c < channels %}
-        out[{{ layer * 4 + c }}] = v[{{ c }}];
+{% for q in range(4) %}
+{% if layer * 8 + 2 * q < channels %}
+        {
+            let top = unpack2x16float(t00[{{ q }}]) * (1.0 - fx) + unpack2x16float(t10[{{ q }}]) * fx;
+            let bot = unpack2x16float(t01[{{ q }}]) * (1.0 - fx) + unpack2x16float(t11[{{ q }}]) * fx;
+            let v = top * (1.0 - fy) + bot * fy;
+            out[{{ layer * 8 + 2 * q }}] = v.x;
+{% if layer * 8 + 2 * q + 1 < channels %}
+            out[{{ layer * 8 + 2 * q + 1 }}] = v.y;
+{% endif %}
+        }
 {% endif %}
 {% endfor %}
     }
