@@ -182,6 +182,10 @@ def test_gpu_repeated_updates_of_one_target_give_the_same_result():
         want, cw = reference.shade_texture_space(at, mat, np.eye(4), eye, LP, LC)
         np.testing.assert_array_equal(cnt.read()[0], cw)
         assert 0 < cw[0] < reference.count_non_empty_blocks(at.tri_ids)
+        got = read_texture(tgt.texture).astype(np.float32)
+        m = want[..., 3] > 0  # the texels this update wrote
+        err = np.abs(got[m, :3] - _f16(want[m, :3])) / (np.abs(want[m, :3]) + 1e-2)
+        assert err.max() <= 2 * 2.0**-10
     # the last update (from -EYE) left the blocks seen only from EYE as they were
     got = read_texture(tgt.texture).astype(np.float32)
     assert (got[..., 3] > 0).sum() > 4 * cw[0]
