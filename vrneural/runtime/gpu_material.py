@@ -21,7 +21,7 @@ from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import upload_buffer
 from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.runtime.codegen import packed_weights
-from vrneural.runtime.reference import count_non_empty_blocks
+from vrneural.runtime.reference import count_non_empty_blocks, non_empty_blocks
 
 
 def upload_feature_texture(tex: np.ndarray, label: str = ""):
@@ -114,6 +114,11 @@ class GpuAtlas:
         import wgpu
 
         if period not in self._lists:
+            if self.resolution // 2 > 0xFFFF:
+                raise ValueError(
+                    f"atlas resolution {self.resolution} exceeds the packed block index "
+                    "(max 131070)"
+                )
             by, bx = non_empty_blocks(self.atlas.tri_ids)
             packed, spans, off = [], [], 0
             for ph in range(period):
@@ -127,16 +132,6 @@ class GpuAtlas:
             )
             self._lists[period] = (buf, spans)
         return self._lists[period]
-
-
-def non_empty_blocks(tri_ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Row-major ``(by, bx)`` of the 2x2 blocks of ``tri_ids: [R, R]`` with a triangle."""
-    r = tri_ids.shape[0]
-    if r // 2 > 0xFFFF:
-        raise ValueError(f"atlas resolution {r} exceeds the packed block index (max 131070)")
-    b = (tri_ids != np.uint32(0xFFFFFFFF)).reshape(r // 2, 2, r // 2, 2).any(axis=(1, 3))
-    by, bx = np.nonzero(b)
-    return by, bx
 
 
 def new_radiance_texture(resolution: int, label: str = "radiance", fmt: str = "rgba16float"):

@@ -95,11 +95,17 @@ def camera_relative(model, eye, light_pos):
     return m, np.zeros(3), lp
 
 
+def non_empty_blocks(tri_ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row-major ``(by, bx)`` of the 2x2 blocks of ``tri_ids: [R, R]`` with a triangle (the
+    blocks the texture-space pass considers; the GPU's candidate lists come from here too)."""
+    r = tri_ids.shape[0]
+    b = (tri_ids != np.uint32(EMPTY)).reshape(r // 2, 2, r // 2, 2).any(axis=(1, 3))
+    return np.nonzero(b)
+
+
 def count_non_empty_blocks(tri_ids: np.ndarray) -> int:
     """2x2 blocks of ``tri_ids: [R, R]`` with at least one triangle."""
-    r = tri_ids.shape[0]
-    b = (tri_ids != np.uint32(0xFFFFFFFF)).reshape(r // 2, 2, r // 2, 2)
-    return int(b.any(axis=(1, 3)).sum())
+    return len(non_empty_blocks(tri_ids)[0])
 
 
 def shade_points(mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f32"):
@@ -134,10 +140,9 @@ def texture_blocks(atlas: Atlas, model: np.ndarray, tiling=(1.0, 1.0, 0.0, 0.0),
     R = atlas.resolution
     nb = R // 2
     ids = atlas.tri_ids.reshape(nb, 2, nb, 2).transpose(0, 2, 1, 3).reshape(nb, nb, 4)
-    rows = np.zeros(nb, bool)
-    rows[phase::period] = True
-    ne = (ids != EMPTY).any(-1) & rows[:, None]
-    by, bx = np.nonzero(ne)
+    by, bx = non_empty_blocks(atlas.tri_ids)
+    sel = by % period == phase
+    by, bx = by[sel], bx[sel]
     blk = ids[by, bx]  # [N, 4]
     first = np.argmax(blk != EMPTY, axis=1)
     tc = blk[np.arange(len(blk)), first].astype(np.int64)

@@ -18,7 +18,13 @@ from vrneural.material import NeuralMaterial
 from vrneural.runtime.codegen import screen_space_wgsl
 from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial
 from vrneural.runtime.reference import normal_matrix
-from vrneural.runtime.texture_pass import WORKGROUP_SIZE, CounterBuffer, grid, pack_lights
+from vrneural.runtime.texture_pass import (
+    ARGS_BINDINGS,
+    CompactionBuffers,
+    CounterBuffer,
+    dispatch_compacted,
+    pack_lights,
+)
 
 PARAMS_BYTES = 272
 
@@ -71,21 +77,12 @@ class ScreenSpacePass:
 _SCRATCH: dict = {}
 
 
-def _scratch(width: int, height: int):
-    """The compaction buffers (pixel list, count, indirect args) for one eye size, shared by
-    every screen target: their dispatches run one after another in a pass."""
-    import wgpu
-
+def _scratch(width: int, height: int) -> CompactionBuffers:
+    """The compaction buffers for one eye size, shared by every screen target: their
+    dispatches run one after another in a pass."""
     key = (get_device(), width, height)
     if key not in _SCRATCH:
-        dev = get_device()
-        st = wgpu.BufferUsage.STORAGE
-        x, y = grid(width * height)
-        _SCRATCH[key] = (
-            dev.create_buffer(size=4 * x * y * WORKGROUP_SIZE, usage=st),
-            dev.create_buffer(size=16, usage=st),  # zero at creation; args re-zeroes it
-            dev.create_buffer(size=16, usage=st | wgpu.BufferUsage.INDIRECT),
-        )
+        _SCRATCH[key] = CompactionBuffers(width * height)
     return _SCRATCH[key]
 
 
@@ -101,7 +98,7 @@ class ScreenTarget:
         u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
         self.params = dev.create_buffer(size=PARAMS_BYTES, usage=u)
         self.lights = dev.create_buffer(size=32 * spass.n_lights, usage=u)
-        todo, todo_n, self.ind = _scratch(*self.size)
+        self.compact = _scratch(*self.size)
         res = {
             0: {"buffer": self.params},
             1: {"buffer": self.lights},
@@ -110,14 +107,12 @@ class ScreenTarget:
             4: eye_targets.vis.create_view(),
             5: eye_targets.colour.create_view(),
             6: {"buffer": counters.buf},
-            13: {"buffer": todo},
-            14: {"buffer": todo_n},
-            15: {"buffer": self.ind},
+            **self.compact.resources(),
         }
         res.update({e["binding"]: e["resource"] for e in spass.gmat.entries(7)})
         used = {
             "cull": (0, 4, 13, 14),
-            "args": (13, 14, 15),
+            "args": ARGS_BINDINGS,
             "main": tuple(k for k in res if k not in (14, 15)),
         }
         self.binds = {
@@ -151,15 +146,8 @@ class ScreenTarget:
         that show the object, then shade only those."""
         w, h = self.rect[2], self.rect[3]
         if w and h:
-            for e in ("cull", "args", "main"):
-                cp.set_pipeline(self.spass.pipes[e])
-                cp.set_bind_group(0, self.binds[e])
-                if e == "cull":
-                    cp.dispatch_workgroups(math.ceil(w / 8), math.ceil(h / 8), 1)
-                elif e == "args":
-                    cp.dispatch_workgroups(1, 1, 1)
-                else:
-                    cp.dispatch_workgroups_indirect(self.ind, 0)
+            cull_grid = (math.ceil(w / 8), math.ceil(h / 8))
+            dispatch_compacted(cp, self.spass.pipes, self.binds, cull_grid, self.compact.ind)
 
 
 __all__ = ["CounterBuffer", "ScreenSpacePass", "ScreenTarget", "pack_screen_params"]

@@ -97,6 +97,43 @@ def grid(n: int, size: int = WORKGROUP_SIZE) -> tuple[int, int]:
     return -(-wg // y), y
 
 
+class CompactionBuffers:
+    """The buffers of compact.wgsl (bindings 13-15) for up to ``n`` items: the list of items to
+    shade (padded to whole workgroups), its count (zero at creation; ``args`` re-zeroes it) and
+    the indirect workgroup counts."""
+
+    def __init__(self, n: int):
+        import wgpu
+
+        dev = get_device()
+        st = wgpu.BufferUsage.STORAGE
+        x, y = grid(n)
+        self.todo = dev.create_buffer(size=4 * max(1, x * y * WORKGROUP_SIZE), usage=st)
+        self.todo_n = dev.create_buffer(size=16, usage=st)
+        self.ind = dev.create_buffer(size=16, usage=st | wgpu.BufferUsage.INDIRECT)
+
+    def resources(self) -> dict:
+        return {13: {"buffer": self.todo}, 14: {"buffer": self.todo_n}, 15: {"buffer": self.ind}}
+
+
+#: bindings of the ``args`` entry point (compact.wgsl)
+ARGS_BINDINGS = (13, 14, 15)
+
+
+def dispatch_compacted(cp, pipes: dict, binds: dict, cull_grid, ind) -> None:
+    """Record ``cull`` over ``cull_grid`` workgroups, then ``args``, then ``main`` over the
+    items ``cull`` kept (indirect) into the open compute pass ``cp``."""
+    cp.set_pipeline(pipes["cull"])
+    cp.set_bind_group(0, binds["cull"])
+    cp.dispatch_workgroups(*cull_grid, 1)
+    cp.set_pipeline(pipes["args"])
+    cp.set_bind_group(0, binds["args"])
+    cp.dispatch_workgroups(1, 1, 1)
+    cp.set_pipeline(pipes["main"])
+    cp.set_bind_group(0, binds["main"])
+    cp.dispatch_workgroups_indirect(ind, 0)
+
+
 class TextureTarget:
     """One (object, eye) radiance texture with its uniforms, compaction buffers and bind groups.
 
@@ -114,19 +151,13 @@ class TextureTarget:
         self.pipes = {e: tpass.pipeline(self.R, e) for e in ("cull", "args", "main")}
         self.pipe = self.pipes["main"]
         u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
-        st = wgpu.BufferUsage.STORAGE
         self.params = dev.create_buffer(size=PARAMS_BYTES, usage=u)
         self.lights = dev.create_buffer(size=32 * tpass.n_lights, usage=u)
         self.texture = new_radiance_texture(self.R, fmt=tpass.radiance_format)
         self.view = self.texture.create_view()
-        x, y = grid(gatlas.non_empty_blocks)
-        cap = max(1, x * y * WORKGROUP_SIZE)
-        self.todo = dev.create_buffer(size=4 * cap, usage=st)
-        self.todo_n = dev.create_buffer(size=16, usage=st | wgpu.BufferUsage.COPY_DST)
-        self.ind = dev.create_buffer(size=16, usage=st | wgpu.BufferUsage.INDIRECT)
+        self.compact = CompactionBuffers(gatlas.non_empty_blocks)
         self.counters = counters
         self.binds: dict = {}
-        self.span = (0, 0)
 
     def _bind(self, entry: str, period: int):
         """Bind group of one entry point (auto layouts differ per entry point)."""
@@ -142,12 +173,10 @@ class TextureTarget:
                 5: self.view,
                 6: {"buffer": self.counters.buf},
                 12: {"buffer": g.block_list(period)[0]},
-                13: {"buffer": self.todo},
-                14: {"buffer": self.todo_n},
-                15: {"buffer": self.ind},
+                **self.compact.resources(),
             }
             res.update({e["binding"]: e["resource"] for e in tp.gmat.entries(7)})
-            used = {"cull": (0, 2, 3, 4, 6, 12, 13, 14), "args": (13, 14, 15)}
+            used = {"cull": (0, 2, 3, 4, 6, 12, 13, 14), "args": ARGS_BINDINGS}
             keys = used.get(entry, tuple(k for k in res if k not in (12, 14, 15)))
             self.binds[key] = get_device().create_bind_group(
                 layout=self.pipes[entry].get_bind_group_layout(0),
@@ -159,11 +188,10 @@ class TextureTarget:
         """Write this dispatch's uniforms (call before encoding it). World quantities are made
         camera-relative in float64 first (:func:`~vrneural.runtime.reference.camera_relative`)."""
         model, eye, light_pos = camera_relative(model, eye, light_pos)
-        self.span = self.gatlas.block_list(period)[1][phase]
+        span = self.gatlas.block_list(period)[1][phase]
         q = get_device().queue
-        q.write_buffer(self.params, 0, pack_params(model, eye, tiling, *self.span, slot))
+        q.write_buffer(self.params, 0, pack_params(model, eye, tiling, *span, slot))
         q.write_buffer(self.lights, 0, pack_lights(light_pos, light_rgb, self.tpass.n_lights))
-        q.write_buffer(self.todo_n, 0, np.zeros(4, np.uint32))
 
     def encode(self, encoder, phase=0, period=1, timestamp_writes=None) -> None:
         """Dispatch the block rows ``phase, phase + period, ...`` in a compute pass of its own."""
@@ -175,17 +203,9 @@ class TextureTarget:
         """Record this target's three dispatches into an open compute pass ``cp`` (after
         :meth:`update` with the same ``phase, period``)."""
         n = self.gatlas.block_list(period)[1][phase][1]
-        if not n:
-            return
-        cp.set_pipeline(self.pipes["cull"])
-        cp.set_bind_group(0, self._bind("cull", period))
-        cp.dispatch_workgroups(*grid(n), 1)
-        cp.set_pipeline(self.pipes["args"])
-        cp.set_bind_group(0, self._bind("args", period))
-        cp.dispatch_workgroups(1, 1, 1)
-        cp.set_pipeline(self.pipes["main"])
-        cp.set_bind_group(0, self._bind("main", period))
-        cp.dispatch_workgroups_indirect(self.ind, 0)
+        if n:
+            binds = {e: self._bind(e, period) for e in self.pipes}
+            dispatch_compacted(cp, self.pipes, binds, grid(n), self.compact.ind)
 
 
 def shade_texture_space(

@@ -6,6 +6,7 @@
 // runs the coarse MLP and the fine MLP once per light at its own material uv (u_c = u_k).
 // numpy twin of the per-point shading: runtime/reference.py:shade_points.
 {% import 'neural_material.wgsl' as nm %}
+{% import 'compact.wgsl' as cmp %}
 {% if T == 'f16' %}
 enable f16;
 {% endif %}
@@ -32,12 +33,8 @@ struct Light {
 @group(0) @binding(5) var out_tex: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 {{ nm.bindings(mat, 7) }}
-// Compaction as in texture_space.wgsl: the object's pixels of the rectangle (packed y << 16 | x,
-// padded with EMPTY to whole workgroups), their count, the indirect args.
-@group(0) @binding(13) var<storage, read_write> todo: array<u32>;
-@group(0) @binding(14) var<storage, read_write> todo_n: array<atomic<u32>>;
-@group(0) @binding(15) var<storage, read_write> ind: array<u32>;
-
+// Compaction (compact.wgsl): the object's pixels of the rectangle, packed y << 16 | x.
+{{ cmp.bindings() }}
 const EMPTY: u32 = 0xFFFFFFFFu;
 
 {{ nm.frame_fns() }}
@@ -109,37 +106,17 @@ fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
 // cull: the rectangle's pixels that show this object -> todo; args: indirect workgroup counts;
 // main: shade the listed pixels only (a CPU adapter pays for every dispatched lane, so the
 // pixels of other objects and of the background inside the rectangle cost nothing).
-var<workgroup> wg_n: atomic<u32>;
-var<workgroup> wg_base: u32;
+{{ cmp.fns() }}
 
 @compute @workgroup_size(8, 8)
 fn cull(@builtin(global_invocation_id) gid: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    if (lid == 0u) { atomicStore(&wg_n, 0u); }
-    workgroupBarrier();
     let px = gid.xy + P.rect.xy;
     var keep = false;
-    var slot = 0u;
     if (gid.x < P.rect.z && gid.y < P.rect.w && px.x < P.screen.x && px.y < P.screen.y) {
         keep = textureLoad(vis, px, 0).x == P.screen.w + 1u;
-        if (keep) { slot = atomicAdd(&wg_n, 1u); }
     }
-    workgroupBarrier();
-    if (lid == 0u) { wg_base = atomicAdd(&todo_n[0], atomicLoad(&wg_n)); }
-    let base = workgroupUniformLoad(&wg_base);
-    if (keep) { todo[base + slot] = (px.y << 16u) | px.x; }
-}
-
-@compute @workgroup_size(1)
-fn args() {
-    let n = atomicExchange(&todo_n[0], 0u);  // and zero for the next object
-    let wg = (n + 63u) / 64u;
-    let y = max(1u, (wg + 65534u) / 65535u);
-    let x = (wg + y - 1u) / y;
-    ind[0] = x;
-    ind[1] = y;
-    ind[2] = 1u;
-    for (var k = n; k < x * y * 64u; k++) { todo[k] = EMPTY; }
+    compact_append(keep, (px.y << 16u) | px.x, lid);
 }
 
 var<workgroup> wg_count: array<atomic<u32>, 4>;
@@ -150,7 +127,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     if (lid < 4u) { atomicStore(&wg_count[lid], 0u); }
     workgroupBarrier();
     var c = vec4<u32>(0u);
-    let packed = todo[(wid.y * nwg.x + wid.x) * 64u + lid];
+    let packed = todo[todo_index(wid, nwg, lid)];
     if (packed != EMPTY) { c = shade_pixel(vec2<u32>(packed & 0xFFFFu, packed >> 16u)); }
     for (var k = 0u; k < 4u; k++) {
         if (c[k] != 0u) { atomicAdd(&wg_count[k], c[k]); }

@@ -7,6 +7,7 @@
 // Template parameters: T (f32|f16), mat (runtime/codegen.py:MaterialSpec), n_lights (uniform
 // array size, >= 1), n_active (lights shaded, 0 allowed: black).
 {% import 'neural_material.wgsl' as nm %}
+{% import 'compact.wgsl' as cmp %}
 {% if T == 'f16' %}
 enable f16;
 {% endif %}
@@ -32,13 +33,10 @@ struct Light {
 @group(0) @binding(5) var out_tex: texture_storage_2d<{{ fmt | default('rgba16float') }}, write>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;  // 4 per slot
 {{ nm.bindings(mat, 7) }}
-// Compaction (see the entry points at the end): candidate blocks (non-empty, in this dispatch's
-// block rows; packed by << 16 | bx, built once per atlas), the blocks to shade this time (front-
-// facing candidates, padded with EMPTY to whole workgroups), their count, the indirect args.
+// Compaction (compact.wgsl): candidate blocks (non-empty, in this dispatch's block rows; packed
+// by << 16 | bx, built once per atlas), the blocks to shade this time (front-facing candidates).
 @group(0) @binding(12) var<storage, read> cand: array<u32>;
-@group(0) @binding(13) var<storage, read_write> todo: array<u32>;
-@group(0) @binding(14) var<storage, read_write> todo_n: array<atomic<u32>>;
-@group(0) @binding(15) var<storage, read_write> ind: array<u32>;  // (x, y, z) workgroups
+{{ cmp.bindings() }}
 
 override R: u32;  // radiance texture side (even)
 
@@ -190,49 +188,27 @@ fn block_state(bx: u32, by: u32) -> u32 {
 // A CPU adapter (lavapipe) runs every lane of a SIMD group through both sides of a branch, so
 // an early out saves nothing there; dispatching only the work is what makes cost follow the
 // scene (it also keeps GPU warps full).
-var<workgroup> wg_n: atomic<u32>;
+{{ cmp.fns() }}
 var<workgroup> wg_back: atomic<u32>;
-var<workgroup> wg_base: u32;
 
 @compute @workgroup_size(64)
 fn cull(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let i = (wid.y * nwg.x + wid.x) * 64u + lid;
-    if (lid == 0u) {
-        atomicStore(&wg_n, 0u);
-        atomicStore(&wg_back, 0u);
-    }
+    let i = todo_index(wid, nwg, lid);
+    if (lid == 0u) { atomicStore(&wg_back, 0u); }  // see compact_append
     workgroupBarrier();
     var packed = EMPTY;
-    var slot = 0u;
-    var keep = false;
+    var st = 0u;
     if (i < P.sched.y) {
         packed = cand[P.sched.x + i];
-        let st = block_state(packed & 0xFFFFu, packed >> 16u);
-        keep = st == 2u;
-        if (keep) { slot = atomicAdd(&wg_n, 1u); }
+        st = block_state(packed & 0xFFFFu, packed >> 16u);
         if (st == 1u) { atomicAdd(&wg_back, 1u); }
     }
-    workgroupBarrier();
+    compact_append(st == 2u, packed, lid);
     if (lid == 0u) {
-        wg_base = atomicAdd(&todo_n[0], atomicLoad(&wg_n));
         let b = atomicLoad(&wg_back);
         if (b != 0u) { atomicAdd(&counters[P.sched.z * 4u + 1u], b); }
     }
-    let base = workgroupUniformLoad(&wg_base);
-    if (keep) { todo[base + slot] = packed; }
-}
-
-@compute @workgroup_size(1)
-fn args() {
-    let n = atomicExchange(&todo_n[0], 0u);  // and zero for the next update
-    let wg = (n + 63u) / 64u;
-    let y = max(1u, (wg + 65534u) / 65535u);
-    let x = (wg + y - 1u) / y;
-    ind[0] = x;
-    ind[1] = y;
-    ind[2] = 1u;
-    for (var k = n; k < x * y * 64u; k++) { todo[k] = EMPTY; }
 }
 
 var<workgroup> wg_count: array<vec4<u32>, 64>;
@@ -240,7 +216,7 @@ var<workgroup> wg_count: array<vec4<u32>, 64>;
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let packed = todo[(wid.y * nwg.x + wid.x) * 64u + lid];
+    let packed = todo[todo_index(wid, nwg, lid)];
     var c = vec4<u32>(0u);
     if (packed != EMPTY) { c = shade_block(packed & 0xFFFFu, packed >> 16u); }
     // counters: one slot per thread, summed by thread 0, one global atomic per counter
