@@ -50,3 +50,21 @@ def test_bench_quality_smoke(tmp_path):
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     code, err = run_cli(*args)  # results exist: refuse without --force
     assert code == 2 and "--force" in err
+    code, err = run_cli(*args, "--resume")  # every checkpoint matches: nothing is retrained
+    assert code == 0, err
+    again = json.loads((out / "results.json").read_text())["results"]["leather"]["methods"]
+    for name, m in methods.items():
+        for key in ("whole_l1", "train_seconds", "epochs"):
+            assert again[name][key] == m[key], (name, key)
+    i = args.index("--epochs")
+    longer = [*args[: i + 1], 2, *args[i + 2 :]]
+    code, err = run_cli(*longer, "--resume")  # students continue to 2 epochs, teacher reused
+    assert code == 0, err
+    more = json.loads((out / "results.json").read_text())["results"]["leather"]["methods"]
+    assert more["teacher"]["train_seconds"] == methods["teacher"]["train_seconds"]
+    for name in ("neumip", "single8", "student_nodistill", "student"):
+        assert (
+            more[name]["epochs"] == 2
+            and more[name]["train_seconds"] > methods[name]["train_seconds"]
+        )
+        assert len(more[name]["curve"]) == 2 and more[name]["curve"][0] == methods[name]["curve"][0]

@@ -149,13 +149,41 @@ def test_gpu_candidate_lists_partition_the_non_empty_blocks():
     for period in (1, 3, 5):
         buf, spans = g.block_list(period)
         data = read_buffer(buf, np.uint32, sum(n for _, n in spans))
+        by = g.geometry()["by"]
         seen = []
         for phase, (off, n) in enumerate(spans):
             part = data[off : off + n]
-            assert ((part >> 16) % period == phase).all()
+            assert (by[part] % period == phase).all()
             seen.append(part)
         allb = np.concatenate(seen)
         assert len(np.unique(allb)) == len(allb) == g.non_empty_blocks
+
+
+@pytest.mark.gpu
+def test_gpu_geometry_atlas_holds_the_twins_block_geometry():
+    """The buffers the texture-space kernels read are reference.block_geometry, bit for bit:
+    packed block coordinates, object-space attributes, untiled texel UVs."""
+    atlas_mod = pytest.importorskip("vrneural.atlas")
+    from vrneural.gpu.readback import read_buffer
+    from vrneural.runtime.gpu_material import GpuAtlas
+
+    at = atlas_mod.build_atlas(atlas_mod.builtin_mesh("torus"), 64, cache=False)
+    geo = GpuAtlas(at).geometry()
+    want = reference.block_geometry(at)
+    n = len(want["by"])
+    got = {
+        k: read_buffer(geo[k], np.float32, 4 * n).reshape(n, 4)
+        for k in ("pos", "nrm", "tan", "uv01", "uv23")
+    }
+    packed = got["pos"][:, 3].view(np.uint32)
+    np.testing.assert_array_equal(packed >> 16, want["by"])
+    np.testing.assert_array_equal(packed & 0xFFFF, want["bx"])
+    np.testing.assert_array_equal(got["pos"][:, :3], want["pos"])
+    np.testing.assert_array_equal(got["nrm"][:, :3], want["nrm"])
+    np.testing.assert_array_equal(got["nrm"][:, 3], np.where(want["tan"][:, 3] >= 0, 1, -1))
+    np.testing.assert_array_equal(got["tan"][:, :3], want["tan"][:, :3])
+    uv = np.concatenate([got["uv01"], got["uv23"]], 1).reshape(n, 4, 2)
+    np.testing.assert_array_equal(uv, want["uv"])
 
 
 @pytest.mark.gpu

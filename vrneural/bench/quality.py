@@ -52,6 +52,11 @@ class QualityConfig:
     quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
+    resume: bool = opt(
+        False,
+        "reuse the checkpoints in OUT that match this run (same config, BTF and teacher): "
+        "finished ones as they are, interrupted or shorter ones continued; train the rest",
+    )
 
     def resolved(self) -> QualityConfig:
         if not self.quick:
@@ -82,9 +87,10 @@ def make_btf(preset: str, cfg: QualityConfig, path: Path) -> Path:
 def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     """Train and evaluate every method on one preset; returns its records."""
     from vrneural.btf.format import read_btf
+    from vrneural.distill.checkpoint import file_sha256
     from vrneural.distill.config import DistillConfig, TeachConfig
-    from vrneural.distill.data import SliceData
-    from vrneural.distill.distill import model_from_checkpoint, run_distill
+    from vrneural.distill.data import SliceData, btf_fingerprint
+    from vrneural.distill.distill import model_from_checkpoint, resolve_method, run_distill
     from vrneural.distill.evaluate import mean_l1, predict_slice
     from vrneural.distill.teach import run_teach
 
@@ -93,24 +99,26 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     t0 = time.perf_counter()
     btf_path = make_btf(preset, cfg, root / "btf" / f"{preset}.btf")
     synth_s = time.perf_counter() - t0
-    common = dict(seed=cfg.seed, progress=cfg.progress, force=True, max_test_slices=0)
-    t0 = time.perf_counter()
-    tck = run_teach(
-        TeachConfig(
-            btf=str(btf_path), output=str(d / "teacher.pt"), epochs=cfg.teacher_epochs, **common
-        )
+    common = dict(seed=cfg.seed, progress=cfg.progress, max_test_slices=0)
+    tcfg = TeachConfig(
+        btf=str(btf_path), output=str(d / "teacher.pt"), epochs=cfg.teacher_epochs, **common
     )
-    records = {"teacher": {"train_seconds": time.perf_counter() - t0, "ck": tck}}
-    log(f"{preset}: teacher  {records['teacher']['train_seconds']:.0f} s")
+    tcfg.resume = cfg.resume and _reusable(
+        tcfg, btf_sha=btf_fingerprint(read_btf(btf_path))["sha256"]
+    )
+    tcfg.force = not tcfg.resume
+    tck = run_teach(tcfg)
+    records = {"teacher": {"ck": tck}}
+    log(f"{preset}: teacher  {tck['train_seconds']:.0f} s")
     runs = {
         "neumip": dict(method="neumip", distill=False),
         "single8": dict(method="single8"),
         "student_nodistill": dict(method="student", distill=False),
         "student": dict(method="student"),
     }
+    tsha = file_sha256(d / "teacher.pt")
     for name, kw in runs.items():
-        t0 = time.perf_counter()
-        ck = run_distill(
+        dcfg = resolve_method(
             DistillConfig(
                 teacher=str(d / "teacher.pt"),
                 output=str(d / f"{name}.pt"),
@@ -119,8 +127,11 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
                 **common,
             )
         )
-        records[name] = {"train_seconds": time.perf_counter() - t0, "ck": ck}
-        log(f"{preset}: {name}  {records[name]['train_seconds']:.0f} s")
+        dcfg.resume = cfg.resume and _reusable(dcfg, teacher_sha=tsha)
+        dcfg.force = not dcfg.resume
+        ck = run_distill(dcfg)
+        records[name] = {"ck": ck}
+        log(f"{preset}: {name}  {ck['train_seconds']:.0f} s")
     btf = read_btf(btf_path)
     data = SliceData(btf, tck["split"]["test"])
     every = list(range(len(data.train) + len(data.test)))
@@ -135,7 +146,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
         out["methods"][name] = {
             "whole_l1": mean_l1(model, data, every),
             "test_l1": mean_l1(model, data, data.test),
-            "train_seconds": r["train_seconds"],
+            "train_seconds": ck["train_seconds"],
             "epochs": ck["epoch"],
             "curve": [h["test_l1"] for h in ck["history"]],
             "weight_bytes": mat.weight_bytes,
@@ -144,12 +155,38 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
             "macs_per_texel": mat.macs_per_texel,
         }
         out["slices"][name] = [predict_slice(model, data, p).numpy() for p in slices]
-    t0 = time.perf_counter()
-    out["methods"]["lafortune"] = _lafortune(data, every, slices, cfg, out)
-    out["methods"]["lafortune"]["train_seconds"] = time.perf_counter() - t0
+    out["methods"]["lafortune"] = _lafortune(
+        data, every, slices, cfg, out, d / "lafortune.npz", tck["btf"]["sha256"]
+    )
     log(f"{preset}: lafortune  {out['methods']['lafortune']['train_seconds']:.0f} s")
     out["slice_pairs"] = slices
     return out
+
+
+# Fields that may differ between a reusable checkpoint and this run: paths and workflow flags
+# (the BTF and the teacher are compared by content), and the epochs (a shorter run continues).
+_FREE = {"btf", "output", "teacher", "epochs", "progress", "force", "resume"}
+
+
+def _reusable(cfg, btf_sha: str | None = None, teacher_sha: str | None = None) -> bool:
+    """True when ``cfg.output`` holds a checkpoint of this very training run, up to its epochs."""
+    from vrneural.distill.checkpoint import load_checkpoint
+
+    path = Path(cfg.output)
+    if not path.exists():
+        return False
+    try:
+        ck = load_checkpoint(path)
+    except VrnError:
+        return False
+    want, have = dataclasses.asdict(cfg), ck["config"]
+    if any(have.get(k) != v for k, v in want.items() if k not in _FREE):
+        return False
+    if int(ck["epoch"]) > cfg.epochs:
+        return False
+    if btf_sha is not None and ck["btf"].get("sha256") != btf_sha:
+        return False
+    return teacher_sha is None or ck.get("teacher", {}).get("sha256") == teacher_sha
 
 
 def _img(blocks, res):
@@ -164,18 +201,35 @@ def _slice_pairs(data) -> list[int]:
     return [means[-1][1], means[len(means) // 2][1]]
 
 
-def _lafortune(data, every, slices, cfg: QualityConfig, out: dict) -> dict:
+def _lafortune(data, every, slices, cfg: QualityConfig, out: dict, path: Path, btf_sha: str):
+    """Fit (or, with --resume, reload a matching fit from ``path``) and evaluate Lafortune."""
+    import numpy as np
     import torch
 
     from vrneural.distill.lafortune import N_PARAMS, fit_lafortune, predict_lafortune
+    from vrneural.formats.atomic import atomic_path
 
     L = data.values.shape[0]
     H, W = data.res
     flat = data.values.reshape(L * data.n_view, H * W, 3)
-    wi = torch.stack([data.dirs(p)[0] for p in data.train])
-    wo = torch.stack([data.dirs(p)[1] for p in data.train])
-    y = flat[data.train].float().transpose(0, 1)  # [T, M, 3]
-    params = fit_lafortune(y, wi, wo, iters=cfg.lafortune_iters)
+    key = json.dumps({"btf": btf_sha, "train": list(data.train), "iters": cfg.lafortune_iters})
+    params = None
+    if cfg.resume and path.exists():
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                if str(z["key"]) == key:
+                    params, seconds = torch.from_numpy(z["params"]), float(z["seconds"])
+        except (OSError, ValueError, KeyError):
+            params = None
+    if params is None:
+        t0 = time.perf_counter()
+        wi = torch.stack([data.dirs(p)[0] for p in data.train])
+        wo = torch.stack([data.dirs(p)[1] for p in data.train])
+        y = flat[data.train].float().transpose(0, 1)  # [T, M, 3]
+        params = fit_lafortune(y, wi, wo, iters=cfg.lafortune_iters)
+        seconds = time.perf_counter() - t0
+        with atomic_path(path) as tmp, open(tmp, "wb") as f:
+            np.savez(f, key=np.array(key), params=params.numpy(), seconds=np.array(seconds))
 
     def l1(pairs):
         e = [
@@ -190,6 +244,7 @@ def _lafortune(data, every, slices, cfg: QualityConfig, out: dict) -> dict:
     return {
         "whole_l1": l1(every),
         "test_l1": l1(data.test),
+        "train_seconds": seconds,
         "epochs": None,
         "curve": [],
         "weight_bytes": 0,
@@ -213,8 +268,11 @@ def run_quality(cfg: QualityConfig) -> dict:
     if cfg.res % 2:
         raise VrnError(f"--res = {cfg.res} must be even (2x2 texel blocks)")
     root = Path(cfg.out)
-    if (root / "results.json").exists() and not cfg.force:
-        raise VrnError(f"{root / 'results.json'}: output exists; pass --force to overwrite")
+    if (root / "results.json").exists() and not (cfg.force or cfg.resume):
+        raise VrnError(
+            f"{root / 'results.json'}: output exists; pass --resume to reuse its checkpoints "
+            "or --force to retrain"
+        )
     root.mkdir(parents=True, exist_ok=True)
     results, slices, t_all = {}, {}, time.perf_counter()
     doc: dict = {}

@@ -78,20 +78,24 @@ def _latent_widths(spec: dict) -> list[int]:
     return [spec["coarse_hidden"][-1], spec["fine_hidden"][0]]
 
 
+def resolve_method(cfg: DistillConfig) -> DistillConfig:
+    """The config as trained: NeuMIP always uses log(1 + y) output, as the paper modified it."""
+    return dataclasses.replace(cfg, space="log") if cfg.method == "neumip" else cfg
+
+
 def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     """Train (or resume) a student/baseline; returns the final checkpoint dict."""
     check_train_config(cfg)
     for k in ("sigma", "lambda1", "lambda2"):
         check_range(f"--{k}", getattr(cfg, k), 0.0, 100.0)
-    if cfg.method == "neumip":
-        cfg = dataclasses.replace(cfg, space="log")  # NeuMIP as the paper modified it
+    cfg = resolve_method(cfg)
     outs = outputs_of(cfg.output, cfg.export)
     resume = prepare_outputs(cfg, outs)
     if resume is not None:
         if resume.get("kind") != "student":
             raise VrnError(f"{cfg.output}: is not a student checkpoint; cannot --resume distill")
         old = dict(resume["config"])
-        old.update(epochs=cfg.epochs, resume=True, progress=cfg.progress)
+        old.update(epochs=cfg.epochs, teacher=cfg.teacher, resume=True, progress=cfg.progress)
         if cfg.btf:
             old["btf"] = cfg.btf
         cfg = DistillConfig(**old)

@@ -191,6 +191,8 @@ def fit(
                     ep=epoch, loss=f"{history[-1]['train_loss']:.4g}", test_l1=f"{last_test:.4g}"
                 )
             save(epoch >= cfg.epochs)
+    if resume is not None and resume.get("finished") and int(resume["epoch"]) == epoch:
+        return resume  # nothing left to train: the file stays as it is (its hash too)
     return save(epoch >= cfg.epochs)
 
 

@@ -46,12 +46,13 @@ def parse_res(s: str, field: str = "--eye-res") -> tuple[int, int]:
 
 def max_texture_res(adapter) -> int:
     """Largest radiance texture side R accepted: the atlas stage's maximum (8192), the
-    adapter's 2D texture limit, and its storage-binding limit for the ``R * R`` u32 triangle-ID
-    buffer (128 MiB on lavapipe -> 5792), rounded down to even."""
+    adapter's 2D texture limit, and its storage-binding limit for the largest per-atlas buffer,
+    the geometry atlas's ``vec4`` per 2x2 block (``R * R / 4 * 16`` bytes, like an ``R * R`` u32
+    image: 128 MiB on lavapipe -> 5792), rounded down to even."""
     from vrneural.atlas.build import MAX_RESOLUTION
 
     lim = adapter.limits
-    ids = math.isqrt(int(lim.get("max_storage_buffer_binding_size", 2**27)) // 4)
+    ids = math.isqrt(int(lim.get("max_storage_buffer_binding_size", 2**27)) // 4)  # R^2 / 4 * 16
     r = min(int(lim["max_texture_dimension_2d"]), MAX_RESOLUTION, ids)
     return r - r % 2
 

@@ -7,9 +7,12 @@
   ``rgba16float`` layers (measured on llvmpipe: see README, Runtime), same values.
 - Weights: constants in the generated code, or (buffer variant) one float32 storage buffer in
   :func:`vrneural.runtime.codegen.packed_weights` layout.
-- An atlas becomes three storage buffers: ``verts`` (4 vec4 per vertex: ``pos.xyz, atlas_u``;
-  ``normal.xyz, atlas_v``; ``tangent.xyzw``; ``material_uv.xy, 0, 0``), ``faces`` ``[F*3]`` u32
-  and ``tri_ids`` ``[R*R]`` u32.
+- An atlas becomes two storage buffers: ``verts`` (4 vec4 per vertex: ``pos.xyz, atlas_u``;
+  ``normal.xyz, atlas_v``; ``tangent.xyzw``; ``material_uv.xy, 0, 0``) and ``faces`` ``[F*3]``
+  u32 (the screen pass), plus, built once on first use by
+  the texture-space pass, the *geometry atlas* (``GpuAtlas.geometry``): per non-empty 2x2
+  block, five ``vec4<f32>`` arrays (struct of arrays: each at most ``R * R / 4 * 16`` bytes, the
+  size of an ``R * R`` u32 image) holding what ``reference.block_geometry`` computes.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import upload_buffer
 from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.runtime.codegen import packed_weights
-from vrneural.runtime.reference import count_non_empty_blocks, non_empty_blocks
+from vrneural.runtime.reference import block_geometry, count_non_empty_blocks
 
 
 def upload_feature_texture(tex: np.ndarray, label: str = ""):
@@ -103,30 +106,59 @@ class GpuAtlas:
         s = wgpu.BufferUsage.STORAGE
         self.verts = upload_buffer(vertex_table(atlas.mesh, atlas.uv_atlas), s, "verts")
         self.faces = upload_buffer(np.asarray(atlas.mesh.faces, np.uint32).ravel(), s, "faces")
-        self.tri_ids = upload_buffer(np.asarray(atlas.tri_ids, np.uint32).ravel(), s, "tri_ids")
         self.non_empty_blocks = int(count_non_empty_blocks(atlas.tri_ids))
         self._lists: dict[int, tuple] = {}
+        self._geometry: dict | None = None
 
-    def block_list(self, period: int):
-        """The candidate blocks of the texture-space pass for a row period: a storage buffer of
-        the non-empty 2x2 blocks (packed ``by << 16 | bx``, row-major), grouped by phase
-        (``by % period``), and ``[(offset, count)]`` per phase. Built once per period."""
-        import wgpu
+    def geometry(self) -> dict:
+        """The geometry atlas, built on first use and kept: ``by, bx`` of the non-empty blocks
+        (numpy) and its storage buffers, each ``[N]`` ``vec4<f32>``: ``pos`` (object position,
+        ``bitcast<f32>(by << 16 | bx)``), ``nrm`` (object normal, tangent handedness),
+        ``tan`` (object tangent, 0), ``uv01`` and ``uv23`` (untiled material UVs of texels
+        0, 1 and 2, 3). The texture-space kernels read these instead of the mesh: no triangle
+        fetch or barycentrics per update (README, Runtime)."""
+        if self._geometry is None:
+            import wgpu
 
-        if period not in self._lists:
             if self.resolution // 2 > 0xFFFF:
                 raise ValueError(
                     f"atlas resolution {self.resolution} exceeds the packed block index "
                     "(max 131070)"
                 )
-            by, bx = non_empty_blocks(self.atlas.tri_ids)
-            packed, spans, off = [], [], 0
+            g = block_geometry(self.atlas)
+            n = len(g["by"])
+            arr = np.zeros((5, max(n, 1), 4), np.float32)
+            packed = (g["by"].astype(np.uint32) << 16) | g["bx"].astype(np.uint32)
+            arr[0, :n, :3] = g["pos"]
+            arr[0, :n, 3] = packed.view(np.float32)
+            arr[1, :n, :3] = g["nrm"]
+            arr[1, :n, 3] = np.where(g["tan"][:, 3] >= 0, 1.0, -1.0)
+            arr[2, :n, :3] = g["tan"][:, :3]
+            arr[3, :n] = g["uv"][:, :2].reshape(n, 4)
+            arr[4, :n] = g["uv"][:, 2:].reshape(n, 4)
+            s = wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC
+            names = ("pos", "nrm", "tan", "uv01", "uv23")
+            self._geometry = {
+                k: upload_buffer(arr[i], s, f"geometry/{k}") for i, k in enumerate(names)
+            }
+            self._geometry.update(by=g["by"], bx=g["bx"])
+        return self._geometry
+
+    def block_list(self, period: int):
+        """The candidate blocks of the texture-space pass for a row period: a storage buffer of
+        indices into :meth:`geometry` (the non-empty 2x2 blocks, row-major), grouped by phase
+        (``by % period``), and ``[(offset, count)]`` per phase. Built once per period."""
+        import wgpu
+
+        if period not in self._lists:
+            by = self.geometry()["by"]
+            idx, spans, off = [], [], 0
             for ph in range(period):
-                sel = by % period == ph
-                packed.append((by[sel].astype(np.uint32) << 16) | bx[sel].astype(np.uint32))
-                spans.append((off, int(sel.sum())))
-                off += int(sel.sum())
-            data = np.concatenate([*packed, np.zeros(1, np.uint32)])  # never an empty buffer
+                sel = np.nonzero(by % period == ph)[0]
+                idx.append(sel.astype(np.uint32))
+                spans.append((off, len(sel)))
+                off += len(sel)
+            data = np.concatenate([*idx, np.zeros(1, np.uint32)])  # never an empty buffer
             buf = upload_buffer(
                 data, wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC, f"blocks/{period}"
             )

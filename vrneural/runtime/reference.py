@@ -52,9 +52,10 @@ def normal_matrix(model: np.ndarray) -> np.ndarray:
     return out
 
 
-def surface_frames(atlas: Atlas, tri: np.ndarray, p: np.ndarray, model: np.ndarray):
-    """World position, normal, tangent, bitangent ``[N, 3]`` each, of triangles ``tri: [N]`` at
-    atlas points ``p: [N, 2]`` (barycentric interpolation, Gram-Schmidt tangent)."""
+def interp_attributes(atlas: Atlas, tri: np.ndarray, p: np.ndarray):
+    """Object-space position ``[N, 3]``, normal ``[N, 3]`` (not normalised) and tangent
+    ``[N, 4]`` (w: handedness) of triangles ``tri: [N]`` at atlas points ``p: [N, 2]``
+    (barycentric interpolation, f32)."""
     m = atlas.mesh
     f = m.faces[tri].astype(np.int64)  # [N, 3]
     uva = atlas.uv_atlas.astype(np.float32)
@@ -63,14 +64,26 @@ def surface_frames(atlas: Atlas, tri: np.ndarray, p: np.ndarray, model: np.ndarr
     def interp(a):
         return (lam * a[f].astype(np.float32)).sum(1)
 
+    return interp(m.positions), interp(m.normals), interp(m.tangents)
+
+
+def world_frames(pos: np.ndarray, nrm: np.ndarray, tan: np.ndarray, model: np.ndarray):
+    """World position, unit normal, tangent and bitangent ``[N, 3]`` each from object-space
+    attributes (:func:`interp_attributes`): normal matrix, Gram-Schmidt tangent, handedness.
+    Twin of ``frame_of`` in neural_material.wgsl."""
     model = model.astype(np.float32)
-    pos = interp(m.positions) @ model[:3, :3].T + model[:3, 3]
-    n = safe_normalize(interp(m.normals) @ normal_matrix(model)[:3, :3].T, np.float32([0, 0, 1]))
-    tan = interp(m.tangents)
+    pos = pos @ model[:3, :3].T + model[:3, 3]
+    n = safe_normalize(nrm @ normal_matrix(model)[:3, :3].T, np.float32([0, 0, 1]))
     tw = tan[:, :3] @ model[:3, :3].T
     t = safe_normalize(tw - n * (n * tw).sum(-1, keepdims=True), ortho(n))
     b = np.where(tan[:, 3:] >= 0, 1.0, -1.0).astype(np.float32) * np.cross(n, t)
     return pos, n, t, b
+
+
+def surface_frames(atlas: Atlas, tri: np.ndarray, p: np.ndarray, model: np.ndarray):
+    """World position, normal, tangent, bitangent ``[N, 3]`` each, of triangles ``tri: [N]`` at
+    atlas points ``p: [N, 2]`` (barycentric interpolation, Gram-Schmidt tangent)."""
+    return world_frames(*interp_attributes(atlas, tri, p), model)
 
 
 def material_uvs(atlas: Atlas, tri: np.ndarray, p: np.ndarray, tiling) -> np.ndarray:
@@ -132,27 +145,42 @@ def shade_points(mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f
     return acc, front, n_coarse, 4 * n_coarse
 
 
-def texture_blocks(atlas: Atlas, model: np.ndarray, tiling=(1.0, 1.0, 0.0, 0.0), phase=0, period=1):
-    """Geometry of the non-empty 2x2 blocks in rows ``phase::period``: texel coordinates
-    ``tx, ty: [N, 4]``, the block-centre frame ``pos, n, t, b: [N, 3]`` (world) through the first
-    non-empty texel's triangle, and the texels' material UVs ``uvs: [N, 4, 2]`` (empty texels use
-    that triangle too)."""
+def block_geometry(atlas: Atlas) -> dict:
+    """What the texture-space pass needs of the atlas, once per atlas (the GPU's "geometry
+    atlas", ``GpuAtlas.geometry``): for each non-empty 2x2 block in :func:`non_empty_blocks`
+    order, ``by, bx: [N]``, the object-space attributes at the block centre ``pos, nrm: [N, 3]``,
+    ``tan: [N, 4]`` through the first non-empty texel's triangle, and the untiled material UVs
+    of its 4 texels ``uv: [N, 4, 2]`` (texel order (0,0), (1,0), (0,1), (1,1); each texel through
+    its own triangle, empty texels through the centre's, extrapolated)."""
     R = atlas.resolution
     nb = R // 2
     ids = atlas.tri_ids.reshape(nb, 2, nb, 2).transpose(0, 2, 1, 3).reshape(nb, nb, 4)
     by, bx = non_empty_blocks(atlas.tri_ids)
-    sel = by % period == phase
-    by, bx = by[sel], bx[sel]
     blk = ids[by, bx]  # [N, 4]
     first = np.argmax(blk != EMPTY, axis=1)
     tc = blk[np.arange(len(blk)), first].astype(np.int64)
     centre = np.stack([2 * bx + 1, 2 * by + 1], -1).astype(np.float32) / np.float32(R)
-    pos, n, t, b = surface_frames(atlas, tc, centre, model)
+    pos, nrm, tan = interp_attributes(atlas, tc, centre)
     tri = np.where(blk != EMPTY, blk, tc[:, None]).astype(np.int64)  # [N, 4]
     tx = 2 * bx[:, None] + np.array([0, 1, 0, 1])  # [N, 4]
     ty = 2 * by[:, None] + np.array([0, 0, 1, 1])
     p = (np.stack([tx, ty], -1).astype(np.float32) + np.float32(0.5)) / np.float32(R)
-    uvs = material_uvs(atlas, tri.ravel(), p.reshape(-1, 2), tiling).reshape(-1, 4, 2)
+    uv = material_uvs(atlas, tri.ravel(), p.reshape(-1, 2), (1.0, 1.0, 0.0, 0.0))
+    return {"by": by, "bx": bx, "pos": pos, "nrm": nrm, "tan": tan, "uv": uv.reshape(-1, 4, 2)}
+
+
+def texture_blocks(atlas: Atlas, model: np.ndarray, tiling=(1.0, 1.0, 0.0, 0.0), phase=0, period=1):
+    """Geometry of the non-empty 2x2 blocks in rows ``phase::period``: texel coordinates
+    ``tx, ty: [N, 4]``, the block-centre frame ``pos, n, t, b: [N, 3]`` (world) and the texels'
+    tiled material UVs ``uvs: [N, 4, 2]`` (from :func:`block_geometry`)."""
+    g = block_geometry(atlas)
+    sel = g["by"] % period == phase
+    by, bx = g["by"][sel], g["bx"][sel]
+    pos, n, t, b = world_frames(g["pos"][sel], g["nrm"][sel], g["tan"][sel], model)
+    tl = np.asarray(tiling, np.float32)
+    uvs = g["uv"][sel] * tl[:2] + tl[2:]
+    tx = 2 * bx[:, None] + np.array([0, 1, 0, 1])
+    ty = 2 * by[:, None] + np.array([0, 0, 1, 1])
     return {"tx": tx, "ty": ty, "pos": pos, "n": n, "t": t, "b": b, "uvs": uvs}
 
 

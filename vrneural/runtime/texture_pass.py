@@ -164,19 +164,22 @@ class TextureTarget:
         key = (entry, period if entry == "cull" else 0)
         if key not in self.binds:
             g, tp = self.gatlas, self.tpass
+            geo = g.geometry()
             res = {
                 0: {"buffer": self.params},
                 1: {"buffer": self.lights},
-                2: {"buffer": g.verts},
-                3: {"buffer": g.faces},
-                4: {"buffer": g.tri_ids},
+                2: {"buffer": geo["pos"]},
+                3: {"buffer": geo["nrm"]},
+                4: {"buffer": geo["tan"]},
+                16: {"buffer": geo["uv01"]},
+                17: {"buffer": geo["uv23"]},
                 5: self.view,
                 6: {"buffer": self.counters.buf},
                 12: {"buffer": g.block_list(period)[0]},
                 **self.compact.resources(),
             }
             res.update({e["binding"]: e["resource"] for e in tp.gmat.entries(7)})
-            used = {"cull": (0, 2, 3, 4, 6, 12, 13, 14), "args": ARGS_BINDINGS}
+            used = {"cull": (0, 2, 3, 6, 12, 13, 14), "args": ARGS_BINDINGS}
             keys = used.get(entry, tuple(k for k in res if k not in (12, 14, 15)))
             self.binds[key] = get_device().create_bind_group(
                 layout=self.pipes[entry].get_bind_group_layout(0),

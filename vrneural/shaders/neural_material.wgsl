@@ -294,8 +294,8 @@ fn dirs9(wi: vec3<f32>, wo: vec3<f32>) -> array<f32, 9> {
 }
 {% endmacro %}
 
-{% macro mesh_fns() %}
-// Mesh access (needs globals P: Params with model/normal_mat/tiling, verts, faces).
+{% macro surface_fns() %}
+// Surface frames (need a global P: Params with model and normal_mat).
 struct Surf {
     pos: vec3<f32>,  // world
     n: vec3<f32>,    // unit normal, world
@@ -303,6 +303,34 @@ struct Surf {
     b: vec3<f32>,    // unit bitangent, world
 }
 
+// World-space frame from object-space attributes (normal not normalised, tangent w: handedness):
+// normal matrix, Gram-Schmidt tangent. Twin: runtime/reference.py:world_frames.
+fn frame_of(pos: vec3<f32>, nrm: vec3<f32>, tan: vec4<f32>) -> Surf {
+    let m3 = mat3x3<f32>(P.model[0].xyz, P.model[1].xyz, P.model[2].xyz);
+    let nm3 = mat3x3<f32>(P.normal_mat[0].xyz, P.normal_mat[1].xyz, P.normal_mat[2].xyz);
+    var s: Surf;
+    s.pos = (P.model * vec4<f32>(pos, 1.0)).xyz;
+    s.n = safe_normalize(nm3 * nrm, vec3<f32>(0.0, 0.0, 1.0));
+    let tw = m3 * tan.xyz;
+    s.t = safe_normalize(tw - s.n * dot(s.n, tw), ortho(s.n));
+    s.b = select(-1.0, 1.0, tan.w >= 0.0) * cross(s.n, s.t);
+    return s;
+}
+
+// World position and unit normal only (the cull's facing test; same math as frame_of).
+fn pos_normal_of(pos: vec3<f32>, nrm: vec3<f32>) -> array<vec3<f32>, 2> {
+    let nm3 = mat3x3<f32>(P.normal_mat[0].xyz, P.normal_mat[1].xyz, P.normal_mat[2].xyz);
+    return array<vec3<f32>, 2>((P.model * vec4<f32>(pos, 1.0)).xyz,
+                               safe_normalize(nm3 * nrm, vec3<f32>(0.0, 0.0, 1.0)));
+}
+
+fn to_local(s: Surf, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(v, s.t), dot(v, s.b), dot(v, s.n));
+}
+{% endmacro %}
+
+{% macro mesh_fns() %}
+// Mesh access (needs globals P: Params with model/normal_mat/tiling, verts, faces).
 fn vtx(i: u32, k: u32) -> vec4<f32> { return verts[i * 4u + k]; }
 
 // Material uv (tiled) of triangle tri at barycentrics l.
@@ -322,18 +350,7 @@ fn surface_l(tri: u32, l: vec3<f32>) -> Surf {
     let pos = l.x * vtx(i0, 0u).xyz + l.y * vtx(i1, 0u).xyz + l.z * vtx(i2, 0u).xyz;
     let nrm = l.x * vtx(i0, 1u).xyz + l.y * vtx(i1, 1u).xyz + l.z * vtx(i2, 1u).xyz;
     let tan = l.x * vtx(i0, 2u) + l.y * vtx(i1, 2u) + l.z * vtx(i2, 2u);
-    let m3 = mat3x3<f32>(P.model[0].xyz, P.model[1].xyz, P.model[2].xyz);
-    let nm3 = mat3x3<f32>(P.normal_mat[0].xyz, P.normal_mat[1].xyz, P.normal_mat[2].xyz);
-    var s: Surf;
-    s.pos = (P.model * vec4<f32>(pos, 1.0)).xyz;
-    s.n = safe_normalize(nm3 * nrm, vec3<f32>(0.0, 0.0, 1.0));
-    let tw = m3 * tan.xyz;
-    s.t = safe_normalize(tw - s.n * dot(s.n, tw), ortho(s.n));
-    s.b = select(-1.0, 1.0, tan.w >= 0.0) * cross(s.n, s.t);
-    return s;
+    return frame_of(pos, nrm, tan);
 }
 
-fn to_local(s: Surf, v: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(dot(v, s.t), dot(v, s.b), dot(v, s.n));
-}
 {% endmacro %}

@@ -39,6 +39,7 @@ const EMPTY: u32 = 0xFFFFFFFFu;
 
 {{ nm.frame_fns() }}
 {{ nm.material_fns(mat, T) }}
+{{ nm.surface_fns() }}
 {{ nm.mesh_fns() }}
 
 // Barycentrics of the ray (o, d) hitting the plane of triangle tri (world space).

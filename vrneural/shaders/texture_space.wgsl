@@ -1,6 +1,7 @@
 // Texture-space shading of one object for one eye (paper section 4.2). One thread per 2x2
-// radiance-texel block: read the 4 triangle IDs, leave early when all are empty or when the block
-// faces away from the eye, build the local frame at the block centre, sample the neural textures
+// radiance-texel block: read the block's record of the geometry atlas (object-space attributes at
+// the block centre and its 4 texels' material uvs, gpu_material.GpuAtlas.geometry, built once per
+// atlas), leave early when the block faces away from the eye, build the local frame, sample the neural textures
 // and hoist the light-independent part of the first layers, then per light: coarse MLP once at
 // the mean material uv, fine MLP 4 times, sum lights with inverse-square falloff, clamp
 // to the f16 range and store rgba16float (or, as an option, rgba32float). numpy twin: runtime/reference.py:shade_texture_space.
@@ -27,96 +28,51 @@ struct Light {
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<uniform> lights: array<Light, {{ n_lights }}>;
-@group(0) @binding(2) var<storage, read> verts: array<vec4<f32>>;  // 4 per vertex, see gpu_material
-@group(0) @binding(3) var<storage, read> faces: array<u32>;        // [F * 3]
-@group(0) @binding(4) var<storage, read> tri_ids: array<u32>;      // [R * R], 0xFFFFFFFF = empty
+// The geometry atlas (one vec4 per non-empty block in each array, see gpu_material.py):
+@group(0) @binding(2) var<storage, read> geo_pos: array<vec4<f32>>;   // object pos, bitcast(by << 16 | bx)
+@group(0) @binding(3) var<storage, read> geo_nrm: array<vec4<f32>>;   // object normal, tangent sign
+@group(0) @binding(4) var<storage, read> geo_tan: array<vec4<f32>>;   // object tangent, 0
+@group(0) @binding(16) var<storage, read> geo_uv01: array<vec4<f32>>; // untiled uv of texels 0, 1
+@group(0) @binding(17) var<storage, read> geo_uv23: array<vec4<f32>>; // untiled uv of texels 2, 3
 @group(0) @binding(5) var out_tex: texture_storage_2d<{{ fmt | default('rgba16float') }}, write>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;  // 4 per slot
 {{ nm.bindings(mat, 7) }}
-// Compaction (compact.wgsl): candidate blocks (non-empty, in this dispatch's block rows; packed
-// by << 16 | bx, built once per atlas), the blocks to shade this time (front-facing candidates).
+// Compaction (compact.wgsl): candidate blocks (indices into the geometry atlas of the non-empty
+// blocks in this dispatch's block rows, built once per atlas), the blocks to shade this time.
 @group(0) @binding(12) var<storage, read> cand: array<u32>;
 {{ cmp.bindings() }}
 
 override R: u32;  // radiance texture side (even)
 
-const EMPTY: u32 = 0xFFFFFFFFu;
+const EMPTY: u32 = 0xFFFFFFFFu;  // padding of the compacted list
 // Largest stored radiance: the f16 maximum for rgba16float, 1e30 for the wide rgba32float option
 // (finite, far above any scene: colour * intensity <= 1e6 W/sr, d^2 >= 1e-12 m^2).
 const OUT_MAX: f32 = {{ '1e30' if fmt == 'rgba32float' else '65504.0' }};
 
 {{ nm.frame_fns() }}
 {{ nm.material_fns(mat, T) }}
-{{ nm.mesh_fns() }}
+{{ nm.surface_fns() }}
 
-fn texel_uv(x: u32, y: u32) -> vec2<f32> {
-    return (vec2<f32>(f32(x), f32(y)) + 0.5) / f32(R);
-}
+fn tiled(uv: vec2<f32>) -> vec2<f32> { return uv * P.tiling.xy + P.tiling.zw; }
 
-// Barycentrics of atlas point p in triangle tri.
-fn tri_bary(tri: u32, p: vec2<f32>) -> vec3<f32> {
-    let i0 = faces[tri * 3u];
-    let i1 = faces[tri * 3u + 1u];
-    let i2 = faces[tri * 3u + 2u];
-    let a = vec2<f32>(vtx(i0, 0u).w, vtx(i0, 1u).w);
-    let b = vec2<f32>(vtx(i1, 0u).w, vtx(i1, 1u).w);
-    let c = vec2<f32>(vtx(i2, 0u).w, vtx(i2, 1u).w);
-    return bary2(p, a, b, c);
-}
-
-fn surface(tri: u32, p: vec2<f32>) -> Surf { return surface_l(tri, tri_bary(tri, p)); }
-
-// Atlas and material uvs of one triangle's corners (fetched once per block and reused by its
-// texels that lie in the same triangle, the common case).
-struct TriUV {
-    a: vec2<f32>, b: vec2<f32>, c: vec2<f32>,     // atlas uv
-    ua: vec2<f32>, ub: vec2<f32>, uc: vec2<f32>,  // material uv
-}
-
-fn fetch_tri(tri: u32) -> TriUV {
-    let i0 = faces[tri * 3u];
-    let i1 = faces[tri * 3u + 1u];
-    let i2 = faces[tri * 3u + 2u];
-    var t: TriUV;
-    t.a = vec2<f32>(vtx(i0, 0u).w, vtx(i0, 1u).w);
-    t.b = vec2<f32>(vtx(i1, 0u).w, vtx(i1, 1u).w);
-    t.c = vec2<f32>(vtx(i2, 0u).w, vtx(i2, 1u).w);
-    t.ua = vtx(i0, 3u).xy;
-    t.ub = vtx(i1, 3u).xy;
-    t.uc = vtx(i2, 3u).xy;
-    return t;
-}
-
-// Tiled material uv at atlas point p of a fetched triangle (same math as material_uv).
-fn tri_material_uv(t: TriUV, p: vec2<f32>) -> vec2<f32> {
-    let l = bary2(p, t.a, t.b, t.c);
-    let uv = l.x * t.ua + l.y * t.ub + l.z * t.uc;
-    return uv * P.tiling.xy + P.tiling.zw;
-}
-
-// Shade one block; returns the counter increments (shaded, back-facing, coarse, fine evals).
-// (Blocks reach it through the cull pass, so the empty / back-facing returns are a safety net.)
-// Loops over the 4 texels are unrolled by the template (constant indices, no private arrays).
-fn shade_block(bx: u32, by: u32) -> vec4<u32> {
-    let x0 = bx * 2u;
-    let y0 = by * 2u;
-{% for k in range(4) %}
-    let id{{ k }} = tri_ids[(y0 + {{ k // 2 }}u) * R + x0 + {{ k % 2 }}u];
-{% endfor %}
-    // the first non-empty texel's triangle
-    let tc = select(select(select(id3, id2, id2 != EMPTY), id1, id1 != EMPTY), id0, id0 != EMPTY);
-    if (tc == EMPTY) { return vec4<u32>(0u); }
-    // Directions at the block centre, through that triangle.
-    let centre = vec2<f32>(f32(x0 + 1u), f32(y0 + 1u)) / f32(R);
-    let s = surface(tc, centre);
+// Shade block k of the geometry atlas; returns the counter increments (shaded, back-facing,
+// coarse, fine evals). Blocks reach it through the cull pass, so the back-facing return is a
+// safety net. Loops over the 4 texels are unrolled by the template (no private arrays).
+fn shade_block(k: u32) -> vec4<u32> {
+    let g0 = geo_pos[k];
+    let g1 = geo_nrm[k];
+    let packed = bitcast<u32>(g0.w);
+    let x0 = (packed & 0xFFFFu) * 2u;
+    let y0 = (packed >> 16u) * 2u;
+    let s = frame_of(g0.xyz, g1.xyz, vec4<f32>(geo_tan[k].xyz, g1.w));
     let wo = to_local(s, safe_normalize(P.eye.xyz - s.pos, s.n));
     if (wo.z <= 0.0) { return vec4<u32>(0u, 1u, 0u, 0u); }
-    let tri_c = fetch_tri(tc);
-{% for k in range(4) %}
-    let p{{ k }} = texel_uv(x0 + {{ k % 2 }}u, y0 + {{ k // 2 }}u);
-    var uv{{ k }} = tri_material_uv(tri_c, p{{ k }});
-    if (id{{ k }} != tc && id{{ k }} != EMPTY) { uv{{ k }} = tri_material_uv(fetch_tri(id{{ k }}), p{{ k }}); }
-{% endfor %}
+    let q01 = geo_uv01[k];
+    let q23 = geo_uv23[k];
+    let uv0 = tiled(q01.xy);
+    let uv1 = tiled(q01.zw);
+    let uv2 = tiled(q23.xy);
+    let uv3 = tiled(q23.zw);
     let uc = (uv0 + uv1 + uv2 + uv3) * 0.25;
 {% for k in range(4) %}
     var acc{{ k }} = vec3<f32>(0.0);
@@ -164,20 +120,11 @@ fn shade_block(bx: u32, by: u32) -> vec4<u32> {
 {% endif %}
 }
 
-// Geometry-only test of one block: 0 empty, 1 back-facing, 2 to be shaded (same rule as
-// shade_block, so a block shade_block is given never turns out back-facing there).
-fn block_state(bx: u32, by: u32) -> u32 {
-    let x0 = bx * 2u;
-    let y0 = by * 2u;
-    let id0 = tri_ids[y0 * R + x0];
-    let id1 = tri_ids[y0 * R + x0 + 1u];
-    let id2 = tri_ids[(y0 + 1u) * R + x0];
-    let id3 = tri_ids[(y0 + 1u) * R + x0 + 1u];
-    let tc = select(select(select(id3, id2, id2 != EMPTY), id1, id1 != EMPTY), id0, id0 != EMPTY);
-    if (tc == EMPTY) { return 0u; }
-    let s = surface(tc, vec2<f32>(f32(x0 + 1u), f32(y0 + 1u)) / f32(R));
-    let wo = to_local(s, safe_normalize(P.eye.xyz - s.pos, s.n));
-    return select(2u, 1u, wo.z <= 0.0);
+// Facing test of block k (same rule as shade_block, so a block it keeps never turns out
+// back-facing there): true when the eye sees its front.
+fn block_front(k: u32) -> bool {
+    let pn = pos_normal_of(geo_pos[k].xyz, geo_nrm[k].xyz);
+    return dot(safe_normalize(P.eye.xyz - pn[0], pn[1]), pn[1]) > 0.0;
 }
 
 // Three dispatches per (object, eye) update, in one compute pass:
@@ -197,14 +144,14 @@ fn cull(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let i = todo_index(wid, nwg, lid);
     if (lid == 0u) { atomicStore(&wg_back, 0u); }  // see compact_append
     workgroupBarrier();
-    var packed = EMPTY;
-    var st = 0u;
+    var k = EMPTY;
+    var front = false;
     if (i < P.sched.y) {
-        packed = cand[P.sched.x + i];
-        st = block_state(packed & 0xFFFFu, packed >> 16u);
-        if (st == 1u) { atomicAdd(&wg_back, 1u); }
+        k = cand[P.sched.x + i];
+        front = block_front(k);
+        if (!front) { atomicAdd(&wg_back, 1u); }
     }
-    compact_append(st == 2u, packed, lid);
+    compact_append(front, k, lid);
     if (lid == 0u) {
         let b = atomicLoad(&wg_back);
         if (b != 0u) { atomicAdd(&counters[P.sched.z * 4u + 1u], b); }
@@ -216,9 +163,9 @@ var<workgroup> wg_count: array<vec4<u32>, 64>;
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let packed = todo[todo_index(wid, nwg, lid)];
+    let k = todo[todo_index(wid, nwg, lid)];
     var c = vec4<u32>(0u);
-    if (packed != EMPTY) { c = shade_block(packed & 0xFFFFu, packed >> 16u); }
+    if (k != EMPTY) { c = shade_block(k); }
     // counters: one slot per thread, summed by thread 0, one global atomic per counter
     wg_count[lid] = c;
     workgroupBarrier();

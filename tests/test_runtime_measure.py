@@ -1,0 +1,40 @@
+"""`python -m vrneural.runtime.measure --quick`: the runtime targets' measurement runs end to end
+and reports sane, self-consistent numbers (never an absolute time: those live in benchmarks)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+
+@pytest.mark.gpu
+def test_measure_quick_writes_every_target(tmp_path):
+    from vrneural.runtime.measure import main
+
+    out = tmp_path / "m.json"
+    assert main([str(out), "--quick"]) == 0
+    doc = json.loads(out.read_text())
+    for key in ("texture_vs_screen", "constants_vs_buffer", "vs_torch"):
+        r = doc[key]
+        assert math.isfinite(r["ratio"]) and r["ratio"] > 0 and r["target"] > 1, key
+    tvs = doc["texture_vs_screen"]
+    # per displayed frame the texture pass evaluates fewer networks than the screen pass
+    assert tvs["texture_mlp_evals_per_update"] / 5 < tvs["screen_mlp_evals_per_frame"]
+    sch = doc["schedules"]
+    n = sch["config"]["frames"] - 1
+    for k in ("burst", "staggered"):
+        d = sch[k]
+        assert len(d["frame_wall_ms"]["series"]) == len(d["frame_cpu_ms"]["series"]) == n
+        assert d["p99_over_median"] >= 1 and d["cpu_p99_over_median"] >= 1
+        assert (
+            0 <= d["mean_abs_error_vs_every_frame"] < 0.1 * sch["config"]["mean_displayed_radiance"]
+        )
+    # staggered spreads the work: its busiest frame is far below a burst frame's (counters)
+    assert sch["staggered"]["work_p99_over_median"] < 1.5
+    assert (
+        sch["burst"]["mlp_evals_per_frame"]["p99"]
+        > 3 * sch["staggered"]["mlp_evals_per_frame"]["p99"]
+    )
+    assert sch["control_every_frame"]["p99_over_median"] >= 1
