@@ -68,6 +68,51 @@ def test_gpu_matches_twin(arch, precision, buffer_weights):
 
 
 @pytest.mark.gpu
+@pytest.mark.parametrize(
+    "tiling",
+    [(3.7, 5.3, -2.31, -7.9), (37.3, 41.9, 1000.37, -513.1)],  # negative uvs; large uvs
+    ids=["negative", "large"],
+)
+def test_gpu_neural_texture_wrap_matches_twin(tiling):
+    """The samplers wrap texel indices without an integer division (wrap_index in
+    neural_material.wgsl): material UVs far outside [0, 1) in both directions give the twin's
+    np.mod indices."""
+    from vrneural.runtime import texture_pass
+
+    at = quad_atlas(32)
+    mat = random_material(5)
+    args = (at, mat, np.eye(4, dtype=np.float32), EYE, LP, LC, tiling, "f32")
+    got, _ = texture_pass.shade_texture_space(*args)
+    want, _ = reference.shade_texture_space(*args)
+    err = np.abs(got[..., :3] - _f16(want[..., :3])) / (np.abs(want[..., :3]) + 1e-2)
+    # f32 both sides (2 f16 ulps, as above); at uv ~ 1e3 the f32 texel coordinate itself has
+    # ~1e-3 texel spacing, so the large case gets the rounding of uv * W too.
+    assert err.max() <= (2 * 2.0**-10 if tiling[2] < 100 else 2e-2)
+
+
+@pytest.mark.gpu
+def test_gpu_compaction_with_and_without_subgroups_agree():
+    """The cull's two compaction paths (subgroup operations where the device has them, else
+    workgroup atomics and barriers) list the same blocks: identical radiance and counters, both
+    equal to the twin's counters; the candidate list spans several workgroups and subgroups."""
+    from vrneural.gpu.device import has_feature
+    from vrneural.runtime import texture_pass
+
+    at = quad_atlas(64)
+    mat = random_material(7)
+    for eye in (np.float32([0.9, -0.4, 0.6]), np.float32([0.2, 0.1, -0.8])):  # front, behind
+        args = (at, mat, np.eye(4, dtype=np.float32), eye, LP, LC, TILING, "f32")
+        runs = [texture_pass.shade_texture_space(*args, subgroups=False)]
+        if has_feature("subgroup"):
+            runs.append(texture_pass.shade_texture_space(*args, subgroups=True))
+        _, cw = reference.shade_texture_space(*args)
+        for rad, cnt in runs:
+            np.testing.assert_array_equal(cnt, cw)
+            np.testing.assert_array_equal(rad, runs[0][0])
+        assert max(cw[0], cw[1]) > 64 * 4  # several workgroups of listed / back-facing blocks
+
+
+@pytest.mark.gpu
 def test_gpu_back_facing_blocks_are_not_shaded():
     from vrneural.runtime import texture_pass
 

@@ -128,8 +128,10 @@ def texture_space_wgsl(
     n_lights: int = 1,
     buffer_weights: bool = False,
     radiance_format: str = "rgba16float",
+    subgroups: bool = False,
 ) -> str:
-    """WGSL of the texture-space pass for ``mat`` (see shaders/texture_space.wgsl)."""
+    """WGSL of the texture-space pass for ``mat`` (see shaders/texture_space.wgsl);
+    ``subgroups``: compaction with subgroup operations (device feature "subgroup")."""
     _check_unroll(mat, buffer_weights)
     if radiance_format not in RADIANCE_FORMATS:
         raise VrnError(f"radiance format {radiance_format!r} not in {RADIANCE_FORMATS}")
@@ -140,11 +142,16 @@ def texture_space_wgsl(
         n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
         fmt=radiance_format,
+        subgroups=subgroups,
     )
 
 
 def screen_space_wgsl(
-    mat: NeuralMaterial, precision: str = "f32", n_lights: int = 1, buffer_weights: bool = False
+    mat: NeuralMaterial,
+    precision: str = "f32",
+    n_lights: int = 1,
+    buffer_weights: bool = False,
+    subgroups: bool = False,
 ) -> str:
     """WGSL of the per-pixel screen-space pass for ``mat`` (see shaders/screen_space.wgsl)."""
     _check_unroll(mat, buffer_weights)
@@ -154,4 +161,5 @@ def screen_space_wgsl(
         mat=material_spec(mat, buffer_weights),
         n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
+        subgroups=subgroups,
     )

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from vrneural.gpu.device import get_device
+from vrneural.gpu.device import get_device, has_feature
 from vrneural.gpu.pipelines import compute_pipeline
 from vrneural.material import NeuralMaterial
 from vrneural.runtime.codegen import screen_space_wgsl
@@ -62,10 +62,13 @@ def screen_rect(centre, radius, view_proj, width, height) -> tuple[int, int, int
 class ScreenSpacePass:
     """Compiled per-pixel kernel for one material."""
 
-    def __init__(self, mat: NeuralMaterial, precision="f32", n_lights=1, buffer_weights=False):
+    def __init__(
+        self, mat: NeuralMaterial, precision="f32", n_lights=1, buffer_weights=False, subgroups=None
+    ):
         self.mat = mat
         self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
-        self.code = screen_space_wgsl(mat, precision, n_lights, buffer_weights)
+        self.subgroups = has_feature("subgroup") if subgroups is None else subgroups
+        self.code = screen_space_wgsl(mat, precision, n_lights, buffer_weights, self.subgroups)
         self.gmat = GpuMaterial(mat, buffer_weights)
         self.pipes = {
             e: compute_pipeline(self.code, e, label=f"screen_space/{e}")

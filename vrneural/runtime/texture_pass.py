@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vrneural.gpu.device import get_device
+from vrneural.gpu.device import get_device, has_feature
 from vrneural.gpu.pipelines import compute_pipeline
 from vrneural.gpu.readback import read_buffer, read_texture, upload_buffer
 from vrneural.material import NeuralMaterial
@@ -76,11 +76,15 @@ class TextureSpacePass:
         buffer_weights: bool = False,
         gmat: GpuMaterial | None = None,
         radiance_format: str = "rgba16float",
+        subgroups: bool | None = None,
     ):
         self.mat = mat
         self.radiance_format = radiance_format  # rgba32float: no f16 clamp, 2x memory
         self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
-        self.code = texture_space_wgsl(mat, precision, n_lights, buffer_weights, radiance_format)
+        self.subgroups = has_feature("subgroup") if subgroups is None else subgroups
+        self.code = texture_space_wgsl(
+            mat, precision, n_lights, buffer_weights, radiance_format, self.subgroups
+        )
         self.gmat = gmat or GpuMaterial(mat, buffer_weights)
 
     def pipeline(self, resolution: int, entry: str = "main"):
@@ -224,11 +228,20 @@ def shade_texture_space(
     period: int = 1,
     buffer_weights: bool = False,
     radiance_format: str = "rgba16float",
+    subgroups: bool | None = None,
 ):
     """GPU texture-space pass on a fresh (zeroed) texture; returns ``(radiance [R, R, 4]
-    float32, counters [4])`` like the numpy twin of the same name."""
+    float32, counters [4])`` like the numpy twin of the same name. ``subgroups``: None = use
+    them where the device has the feature."""
     lp = np.asarray(light_pos, np.float64).reshape(-1, 3)
-    tp = TextureSpacePass(mat, precision, len(lp), buffer_weights, radiance_format=radiance_format)
+    tp = TextureSpacePass(
+        mat,
+        precision,
+        len(lp),
+        buffer_weights,
+        radiance_format=radiance_format,
+        subgroups=subgroups,
+    )
     counters = CounterBuffer(1)
     tgt = TextureTarget(tp, GpuAtlas(atlas), counters)
     tgt.update(model, eye, tiling, lp, light_rgb, phase, period, 0)

@@ -20,6 +20,19 @@
 {% endif %}
 {% endmacro %}
 
+{% macro wrap_fn() %}
+// i mod n in [0, n) for an integer-valued float i (|i| < 2^24), without an integer division:
+// CPU adapters have no vector integer divide (LLVM scalarises it), and this is the sampler's
+// inner loop. The reciprocal's rounding can leave the result one period off; the selects fix it.
+fn wrap_index(i: f32, n: i32) -> i32 {
+    let fn_ = f32(n);
+    var m = i - fn_ * floor(i * (1.0 / fn_));
+    m = select(m, m - fn_, m >= fn_);
+    m = select(m, m + fn_, m < 0.0);
+    return i32(m);
+}
+{% endmacro %}
+
 {% macro sampler_fn(name, tex, channels) %}
 // Bilinear wrap lookup of {{ channels }} channels at material uv (texel centres at (i + 0.5) / W).
 fn {{ name }}(uv: vec2<f32>) -> array<f32, {{ channels }}> {
@@ -30,10 +43,10 @@ fn {{ name }}(uv: vec2<f32>) -> array<f32, {{ channels }}> {
     let y0 = floor(y);
     let fx = x - x0;
     let fy = y - y0;
-    let xi0 = ((i32(x0) % dims.x) + dims.x) % dims.x;
-    let yi0 = ((i32(y0) % dims.y) + dims.y) % dims.y;
-    let xi1 = (xi0 + 1) % dims.x;
-    let yi1 = (yi0 + 1) % dims.y;
+    let xi0 = wrap_index(x0, dims.x);
+    let yi0 = wrap_index(y0, dims.y);
+    let xi1 = select(xi0 + 1, 0, xi0 + 1 == dims.x);
+    let yi1 = select(yi0 + 1, 0, yi0 + 1 == dims.y);
     var out: array<f32, {{ channels }}>;
 {% for layer in range((channels + 7) // 8) %}
     {
@@ -168,6 +181,7 @@ fn buf_dirs_part(l: u32, d: array<f32, 9>, base: array<{{ T }}, MAXW>) -> array<
 {% endmacro %}
 
 {% macro material_fns(mat, T) %}
+{{ wrap_fn() }}
 {{ sampler_fn('sample_a', 'tex_a', mat.ca) }}
 {% if mat.arch == 'coarse_fine' %}
 {{ sampler_fn('sample_b', 'tex_b', mat.cb) }}

@@ -107,7 +107,7 @@ fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
 // cull: the rectangle's pixels that show this object -> todo; args: indirect workgroup counts;
 // main: shade the listed pixels only (a CPU adapter pays for every dispatched lane, so the
 // pixels of other objects and of the background inside the rectangle cost nothing).
-{{ cmp.fns() }}
+{{ cmp.fns(subgroups) }}
 
 @compute @workgroup_size(8, 8)
 fn cull(@builtin(global_invocation_id) gid: vec3<u32>,

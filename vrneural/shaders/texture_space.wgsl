@@ -135,27 +135,20 @@ fn block_front(k: u32) -> bool {
 // A CPU adapter (lavapipe) runs every lane of a SIMD group through both sides of a branch, so
 // an early out saves nothing there; dispatching only the work is what makes cost follow the
 // scene (it also keeps GPU warps full).
-{{ cmp.fns() }}
-var<workgroup> wg_back: atomic<u32>;
+{{ cmp.fns(subgroups) }}
 
 @compute @workgroup_size(64)
 fn cull(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     let i = todo_index(wid, nwg, lid);
-    if (lid == 0u) { atomicStore(&wg_back, 0u); }  // see compact_append
-    workgroupBarrier();
     var k = EMPTY;
     var front = false;
     if (i < P.sched.y) {
         k = cand[P.sched.x + i];
         front = block_front(k);
-        if (!front) { atomicAdd(&wg_back, 1u); }
     }
     compact_append(front, k, lid);
-    if (lid == 0u) {
-        let b = atomicLoad(&wg_back);
-        if (b != 0u) { atomicAdd(&counters[P.sched.z * 4u + 1u], b); }
-    }
+    count_add(P.sched.z * 4u + 1u, select(0u, 1u, i < P.sched.y && !front), lid);
 }
 
 var<workgroup> wg_count: array<vec4<u32>, 64>;
