@@ -43,6 +43,7 @@ def test_bench_quality_smoke(tmp_path):
     for m in methods.values():
         assert 0 < m["whole_l1"] < 10 and m["storage_bytes"] > 0
     assert methods["student"]["weight_bytes"] == 1516
+    assert all(methods[k]["epoch_seconds_median"] > 0 for k in methods if k != "lafortune")
     assert doc["versions"]["torch"] and doc["config"]["res"] == 8
     md = (out / "results.md").read_text()
     assert "| leather |" in md and "1.5x below Lafortune" in md

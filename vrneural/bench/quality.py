@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import statistics
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -147,6 +148,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
             "whole_l1": mean_l1(model, data, every),
             "test_l1": mean_l1(model, data, data.test),
             "train_seconds": ck["train_seconds"],
+            "epoch_seconds_median": statistics.median(h["seconds"] for h in ck["history"]),
             "epochs": ck["epoch"],
             "curve": [h["test_l1"] for h in ck["history"]],
             "weight_bytes": mat.weight_bytes,
