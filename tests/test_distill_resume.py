@@ -69,3 +69,28 @@ def test_distill_resume_equals_straight_run(btf, tmp_path):
     run_distill(DistillConfig(output=str(b), epochs=2, resume=True, **kw))
     _same(a, b)
     assert any(k.startswith("T1.") for k in load_checkpoint(b)["net"])  # T maps resumed too
+
+
+def test_resume_writes_where_the_checkpoint_is_now(btf, tmp_path):
+    """A checkpoint moved (with its teacher) to another directory resumes there: the stored
+    config's old output path is neither written nor needed."""
+    import shutil
+
+    from vrneural.distill.distill import run_distill
+
+    old, new = tmp_path / "old", tmp_path / "new"
+    old.mkdir()
+    kw = dict(progress=False, max_test_slices=4, export=False)
+    run_teach(TeachConfig(btf=str(btf), output=str(old / "t.pt"), epochs=1, width=32, **kw))
+    run_distill(DistillConfig(teacher=str(old / "t.pt"), output=str(old / "s.pt"), epochs=1, **kw))
+    shutil.copytree(old, new)
+    shutil.rmtree(old)
+    run_distill(
+        DistillConfig(
+            teacher=str(new / "t.pt"), output=str(new / "s.pt"), epochs=2, resume=True, **kw
+        )
+    )
+    run_teach(TeachConfig(btf=str(btf), output=str(new / "t.pt"), epochs=2, resume=True, **kw))
+    assert not old.exists()
+    assert load_checkpoint(new / "t.pt")["epoch"] == 2
+    assert load_checkpoint(new / "s.pt")["epoch"] == 2

@@ -95,7 +95,13 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         if resume.get("kind") != "student":
             raise VrnError(f"{cfg.output}: is not a student checkpoint; cannot --resume distill")
         old = dict(resume["config"])
-        old.update(epochs=cfg.epochs, teacher=cfg.teacher, resume=True, progress=cfg.progress)
+        old.update(
+            epochs=cfg.epochs,
+            output=cfg.output,  # where it is now (the directory may have moved)
+            teacher=cfg.teacher,
+            resume=True,
+            progress=cfg.progress,
+        )
         if cfg.btf:
             old["btf"] = cfg.btf
         cfg = DistillConfig(**old)

@@ -71,7 +71,9 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
         if resume.get("kind") != "teacher":
             raise VrnError(f"{cfg.output}: is not a teacher checkpoint; cannot --resume teach")
         old = dict(resume["config"])
-        old.update(epochs=cfg.epochs, btf=cfg.btf, resume=True, progress=cfg.progress)
+        old.update(
+            epochs=cfg.epochs, output=cfg.output, btf=cfg.btf, resume=True, progress=cfg.progress
+        )
         cfg = TeachConfig(**old)
     btf = read_btf(cfg.btf)
     fp = btf_fingerprint(btf)
