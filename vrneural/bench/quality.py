@@ -182,7 +182,9 @@ def _reusable(cfg, btf_sha: str | None = None, teacher_sha: str | None = None) -
     except VrnError:
         return False
     want, have = dataclasses.asdict(cfg), ck["config"]
-    if any(have.get(k) != v for k, v in want.items() if k not in _FREE):
+    # a field newer than the checkpoint counts as its default (what that run used)
+    default = {f.name: f.default for f in dataclasses.fields(cfg)}
+    if any(have.get(k, default[k]) != v for k, v in want.items() if k not in _FREE):
         return False
     if int(ck["epoch"]) > cfg.epochs:
         return False
