@@ -26,9 +26,18 @@ So meshes above :data:`FAST_FACES` triangles use ``max_chart_area`` for about
 :data:`FACES_PER_CHART` triangles per chart and no chart-relocation iterations: more, smaller
 charts (more seams and gutter texels, a few % lower fill) for a 10-20x faster unwrap.
 Random (not brute-force) placement is xatlas's default and kept.
+
+**In a child process.** xatlas destroys an atlas by stopping its worker threads, and that
+shutdown can lose its wake-up (it sets the flag and notifies without holding the worker's
+mutex): the join then waits forever, with the GIL held. We saw it once in CI, in a test that
+builds many atlases. So :func:`unwrap` runs the work in a process forked from a clean,
+single-threaded fork server, sends the arrays back, and ends with ``os._exit`` before any
+xatlas object is destroyed; every atlas object stays referenced until then.
 """
 
 from __future__ import annotations
+
+import os
 
 import numpy as np
 
@@ -57,12 +66,63 @@ def _pack_options(tpu: float, padding: int):
     return po
 
 
+#: seconds a child unwrap may take before it is declared hung (the largest built-in mesh at
+#: 8192^2 takes well under a minute)
+CHILD_TIMEOUT_S = 1800.0
+
+
 def unwrap(mesh: Mesh, resolution: int, padding: int) -> tuple[np.ndarray, np.ndarray, dict]:
     """Unwrap ``mesh`` with xatlas. Returns ``(vmapping [V'] int64, uv [V', 2] float32 in
     [0, 1], info)``. Split vertex ``i`` copies input vertex ``vmapping[i]``; the faces keep
     their order, re-indexed onto the split vertices as ``info["faces"]`` [F, 3] int64.
-    ``info`` also holds charts, texels_per_unit, packed size and pack count.
+    ``info`` also holds charts, texels_per_unit, packed size and pack count. Runs in a child
+    process (module docstring); errors come back as the same one-line :class:`VrnError`.
     """
+    import multiprocessing as mp
+
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(["numpy", "xatlas", "vrneural.atlas.unwrap"])
+    recv, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_child, args=(send, mesh, resolution, padding), daemon=True)
+    proc.start()
+    send.close()
+    try:
+        if not recv.poll(CHILD_TIMEOUT_S):
+            raise VrnError(f"{mesh.name}: xatlas did not finish in {CHILD_TIMEOUT_S:.0f} s")
+        kind, payload = recv.recv()
+    except EOFError:
+        raise VrnError(
+            f"{mesh.name}: the xatlas process died (exit code {proc.exitcode})"
+        ) from None
+    finally:
+        recv.close()
+        if proc.is_alive():
+            proc.kill()
+        proc.join()
+    if kind == "error":
+        raise VrnError(payload)
+    if kind == "crash":
+        raise RuntimeError(f"{mesh.name}: xatlas unwrap failed: {payload}")
+    return payload
+
+
+def _child(conn, mesh: Mesh, resolution: int, padding: int) -> None:
+    """Child process: unwrap, send ``(kind, payload)``, exit without destroying xatlas objects."""
+    keep: list = []  # every xatlas.Atlas, alive until os._exit
+    try:
+        msg = ("ok", _unwrap(mesh, resolution, padding, keep))
+    except VrnError as e:
+        msg = ("error", str(e))
+    except BaseException as e:  # reported to the parent, which raises
+        msg = ("crash", f"{type(e).__name__}: {e}")
+    try:
+        conn.send(msg)
+        conn.close()
+    finally:
+        os._exit(0)
+
+
+def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list):
     import xatlas
 
     pos = np.ascontiguousarray(mesh.positions, dtype=np.float32)
@@ -73,6 +133,7 @@ def unwrap(mesh: Mesh, resolution: int, padding: int) -> tuple[np.ndarray, np.nd
     R = resolution
     tpu = R * np.sqrt(TARGET_FILL / area3d)
     atlas = xatlas.Atlas()
+    keep.append(atlas)
     atlas.add_mesh(pos, faces)
     co = xatlas.ChartOptions()
     if len(faces) > FAST_FACES:
@@ -97,6 +158,7 @@ def unwrap(mesh: Mesh, resolution: int, padding: int) -> tuple[np.ndarray, np.nd
             chart_uv = (uv.astype(np.float64) * [W, H] / tpu).astype(np.float32)
         tpu *= 0.99 * R / max(W, H, 1)
         again = xatlas.Atlas()
+        keep.append(again)
         again.add_uv_mesh(chart_uv, idx)
         again.generate(xatlas.ChartOptions(), _pack_options(tpu, padding))
         vm2, idx2, uv = again[0]
