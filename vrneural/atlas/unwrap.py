@@ -30,9 +30,9 @@ Random (not brute-force) placement is xatlas's default and kept.
 **In a child process.** xatlas destroys an atlas by stopping its worker threads, and that
 shutdown can lose its wake-up (it sets the flag and notifies without holding the worker's
 mutex): the join then waits forever, with the GIL held. We saw it once in CI, in a test that
-builds many atlases. So :func:`unwrap` runs the work in a process forked from a clean,
-single-threaded fork server, sends the arrays back, and ends with ``os._exit`` before any
-xatlas object is destroyed; every atlas object stays referenced until then.
+builds many atlases. So :func:`unwrap` runs the work in a forked child process, which sends
+the arrays back and ends with ``os._exit`` before any xatlas object is destroyed; every atlas
+object stays referenced until then.
 """
 
 from __future__ import annotations
@@ -80,8 +80,10 @@ def unwrap(mesh: Mesh, resolution: int, padding: int) -> tuple[np.ndarray, np.nd
     """
     import multiprocessing as mp
 
-    ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload(["numpy", "xatlas", "vrneural.atlas.unwrap"])
+    # fork, not spawn / forkserver: those re-import the caller's main module in the child,
+    # which breaks scripts without a __main__ guard and `python -` (stdin). The child touches
+    # only numpy and xatlas, never the parent's GPU or torch threads.
+    ctx = mp.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_child, args=(send, mesh, resolution, padding), daemon=True)
     proc.start()
