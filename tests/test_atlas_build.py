@@ -108,3 +108,24 @@ def test_barycentrics_reproduce_texel_centres(atlases):
     assert np.all(bary[atlas.tri_ids == EMPTY] == 0)
     # the stat is the largest weight over texels outside their triangle (inside ones are <= 1)
     assert np.abs(bary).max() == pytest.approx(atlas.stats["max_abs_barycentric"], abs=1e-5)
+
+
+def test_unwrap_child_works_from_an_unguarded_script(tmp_path):
+    """xatlas runs in a forked child (unwrap.py): a user script without a __main__ guard, as
+    well as `python -` from stdin, builds an atlas once, not recursively, and exits cleanly."""
+    import subprocess
+    import sys
+
+    code = (
+        "from vrneural.atlas import build_atlas, builtin_mesh\n"
+        "a = build_atlas(builtin_mesh('plane'), 32, cache=False)\n"
+        "print('built', a.resolution)\n"
+    )
+    script = tmp_path / "user_script.py"
+    script.write_text(code)
+    for args, stdin in (([str(script)], None), (["-"], code)):
+        r = subprocess.run(
+            [sys.executable, *args], input=stdin, capture_output=True, text=True, timeout=120
+        )
+        assert r.returncode == 0, r.stderr
+        assert r.stdout.count("built 32") == 1
