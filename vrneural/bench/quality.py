@@ -104,9 +104,8 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     tcfg = TeachConfig(
         btf=str(btf_path), output=str(d / "teacher.pt"), epochs=cfg.teacher_epochs, **common
     )
-    tcfg.resume = cfg.resume and _reusable(
-        tcfg, btf_sha=btf_fingerprint(read_btf(btf_path))["sha256"]
-    )
+    btf = read_btf(btf_path)
+    tcfg.resume = cfg.resume and _reusable(tcfg, btf_sha=btf_fingerprint(btf)["sha256"])
     tcfg.force = not tcfg.resume
     tck = run_teach(tcfg)
     records = {"teacher": {"ck": tck}}
@@ -133,7 +132,6 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
         ck = run_distill(dcfg)
         records[name] = {"ck": ck}
         log(f"{preset}: {name}  {ck['train_seconds']:.0f} s")
-    btf = read_btf(btf_path)
     data = SliceData(btf, tck["split"]["test"])
     every = list(range(len(data.train) + len(data.test)))
     slices = _slice_pairs(data)

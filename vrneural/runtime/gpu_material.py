@@ -24,7 +24,7 @@ from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import upload_buffer
 from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.runtime.codegen import packed_weights
-from vrneural.runtime.reference import block_geometry, count_non_empty_blocks
+from vrneural.runtime.reference import block_geometry
 
 
 def upload_feature_texture(tex: np.ndarray, label: str = ""):
@@ -106,9 +106,13 @@ class GpuAtlas:
         s = wgpu.BufferUsage.STORAGE
         self.verts = upload_buffer(vertex_table(atlas.mesh, atlas.uv_atlas), s, "verts")
         self.faces = upload_buffer(np.asarray(atlas.mesh.faces, np.uint32).ravel(), s, "faces")
-        self.non_empty_blocks = int(count_non_empty_blocks(atlas.tri_ids))
         self._lists: dict[int, tuple] = {}
         self._geometry: dict | None = None
+
+    @property
+    def non_empty_blocks(self) -> int:
+        """Blocks of the geometry atlas (the texture-space pass's candidates)."""
+        return len(self.geometry()["by"])
 
     def geometry(self) -> dict:
         """The geometry atlas, built on first use and kept: ``by, bx`` of the non-empty blocks

@@ -52,19 +52,21 @@ def normal_matrix(model: np.ndarray) -> np.ndarray:
     return out
 
 
+def _interpolate(atlas: Atlas, tri: np.ndarray, p: np.ndarray, *arrays: np.ndarray) -> list:
+    """Per-vertex ``arrays`` of ``atlas.mesh`` interpolated (f32) in triangles ``tri: [N]`` at
+    atlas points ``p: [N, 2]`` with :func:`barycentric_2d`."""
+    f = atlas.mesh.faces[tri].astype(np.int64)  # [N, 3]
+    uva = atlas.uv_atlas.astype(np.float32)
+    lam = barycentric_2d(p, uva[f[:, 0]], uva[f[:, 1]], uva[f[:, 2]])[..., None]  # [N, 3, 1]
+    return [(lam * a[f].astype(np.float32)).sum(1) for a in arrays]
+
+
 def interp_attributes(atlas: Atlas, tri: np.ndarray, p: np.ndarray):
     """Object-space position ``[N, 3]``, normal ``[N, 3]`` (not normalised) and tangent
     ``[N, 4]`` (w: handedness) of triangles ``tri: [N]`` at atlas points ``p: [N, 2]``
     (barycentric interpolation, f32)."""
     m = atlas.mesh
-    f = m.faces[tri].astype(np.int64)  # [N, 3]
-    uva = atlas.uv_atlas.astype(np.float32)
-    lam = barycentric_2d(p, uva[f[:, 0]], uva[f[:, 1]], uva[f[:, 2]])[..., None]  # [N, 3, 1]
-
-    def interp(a):
-        return (lam * a[f].astype(np.float32)).sum(1)
-
-    return interp(m.positions), interp(m.normals), interp(m.tangents)
+    return tuple(_interpolate(atlas, tri, p, m.positions, m.normals, m.tangents))
 
 
 def world_frames(pos: np.ndarray, nrm: np.ndarray, tan: np.ndarray, model: np.ndarray):
@@ -78,22 +80,6 @@ def world_frames(pos: np.ndarray, nrm: np.ndarray, tan: np.ndarray, model: np.nd
     t = safe_normalize(tw - n * (n * tw).sum(-1, keepdims=True), ortho(n))
     b = np.where(tan[:, 3:] >= 0, 1.0, -1.0).astype(np.float32) * np.cross(n, t)
     return pos, n, t, b
-
-
-def surface_frames(atlas: Atlas, tri: np.ndarray, p: np.ndarray, model: np.ndarray):
-    """World position, normal, tangent, bitangent ``[N, 3]`` each, of triangles ``tri: [N]`` at
-    atlas points ``p: [N, 2]`` (barycentric interpolation, Gram-Schmidt tangent)."""
-    return world_frames(*interp_attributes(atlas, tri, p), model)
-
-
-def material_uvs(atlas: Atlas, tri: np.ndarray, p: np.ndarray, tiling) -> np.ndarray:
-    """Tiled material UV ``[N, 2]`` of triangles ``tri`` at atlas points ``p``."""
-    f = atlas.mesh.faces[tri].astype(np.int64)
-    uva = atlas.uv_atlas.astype(np.float32)
-    lam = barycentric_2d(p, uva[f[:, 0]], uva[f[:, 1]], uva[f[:, 2]])[..., None]
-    uv = (lam * atlas.mesh.uv[f].astype(np.float32)).sum(1)
-    t = np.asarray(tiling, np.float32)
-    return uv * t[:2] + t[2:]
 
 
 def camera_relative(model, eye, light_pos):
@@ -165,7 +151,7 @@ def block_geometry(atlas: Atlas) -> dict:
     tx = 2 * bx[:, None] + np.array([0, 1, 0, 1])  # [N, 4]
     ty = 2 * by[:, None] + np.array([0, 0, 1, 1])
     p = (np.stack([tx, ty], -1).astype(np.float32) + np.float32(0.5)) / np.float32(R)
-    uv = material_uvs(atlas, tri.ravel(), p.reshape(-1, 2), (1.0, 1.0, 0.0, 0.0))
+    (uv,) = _interpolate(atlas, tri.ravel(), p.reshape(-1, 2), atlas.mesh.uv)
     return {"by": by, "bx": bx, "pos": pos, "nrm": nrm, "tan": tan, "uv": uv.reshape(-1, 4, 2)}
 
 
