@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from distill_helpers import run_cli
 
 
@@ -69,3 +71,75 @@ def test_bench_quality_smoke(tmp_path):
             and more[name]["train_seconds"] > methods[name]["train_seconds"]
         )
         assert len(more[name]["curve"]) == 2 and more[name]["curve"][0] == methods[name]["curve"][0]
+    code, err = run_cli(*longer, "--resume", "--repeats", 2)  # seed 0 reused, seed 1 trained
+    assert code == 0, err
+    two = json.loads((out / "results.json").read_text())["results"]["leather"]["methods"]
+    for name in ("neumip", "single8", "student_nodistill", "student"):
+        r = two[name]
+        assert (
+            r["seeds"] == [0, 1]
+            and len(r["curves"]) == 2
+            and (out / "leather" / f"{name}.seed1.pt").exists()
+        )
+        assert r["whole_l1_seeds"][0] == more[name]["whole_l1"]  # the seed-0 network, reused
+        assert r["whole_l1_seeds"][1] != r["whole_l1_seeds"][0]
+        assert r["whole_l1"] == pytest.approx(sum(r["whole_l1_seeds"]) / 2)
+    assert two["teacher"]["whole_l1_seeds"] == [more["teacher"]["whole_l1"]]
+    assert "seeds 0-1" in (out / "results.md").read_text()
+
+
+def _rec(*seeds):
+    return {"whole_l1": sum(seeds) / len(seeds), "whole_l1_seeds": list(seeds)}
+
+
+def test_quality_targets_use_seed_means_and_flag_overlapping_ranges():
+    from vrneural.bench.quality_report import decided, markdown, targets
+
+    m = {
+        "neumip": _rec(1.0, 1.1),
+        "single8": _rec(1.2, 1.3),
+        "student_nodistill": _rec(1.05, 1.5),
+        "lafortune": _rec(2.0),
+        "student": _rec(1.0, 1.2),  # mean 1.1
+    }
+    t, sure = targets(m), decided(m)
+    assert t == {
+        "within 10% of NeuMIP": True,  # 1.1 <= 1.1 * 1.05
+        "below single-level 8-wide": True,  # 1.1 < 1.25
+        "below no-distillation": True,  # 1.1 < 1.275
+        "1.5x below Lafortune": True,  # 1.65 <= 2.0
+    }
+    assert sure == {
+        "within 10% of NeuMIP": False,  # [1.0, 1.2] / 1.1 overlaps [1.0, 1.1]
+        "below single-level 8-wide": False,  # [1.0, 1.2] overlaps [1.2, 1.3]
+        "below no-distillation": False,  # [1.0, 1.2] overlaps [1.05, 1.5]
+        "1.5x below Lafortune": True,  # 1.5 * 1.2 = 1.8 < 2.0 for every seed
+    }
+    m["student"] = _rec(1.4, 1.6)  # now clearly worse than single8, by every seed
+    assert targets(m)["below single-level 8-wide"] is False
+    assert decided(m)["below single-level 8-wide"] is True
+    for r in m.values():
+        r |= {
+            "texture_bytes": 1,
+            "weight_bytes": 1,
+            "macs_per_texel": None,
+            "test_l1": 1.0,
+            "train_seconds": 1.0,
+        }
+    doc = {
+        "results": {"leather": {"methods": m}},
+        "config": {
+            "res": 8,
+            "dirs": 4,
+            "teacher_epochs": 1,
+            "epochs": 1,
+            "lafortune_iters": 2,
+            "seed": 3,
+            "repeats": 2,
+        },
+        "labels": {k: k for k in m},
+        "total_seconds": 1.0,
+    }
+    md = markdown(doc)
+    assert "seeds 3-4" in md and "1.50000 (1.40000-1.60000)" in md
+    assert "**no** *(seeds overlap)*" in md  # below no-distillation: 1.5 vs 1.275, overlapping
