@@ -24,6 +24,11 @@ def _same(a, b):
     ):
         assert torch.equal(sa["exp_avg_sq"], sb["exp_avg_sq"])
     assert [h["test_l1"] for h in ca["history"]] == [h["test_l1"] for h in cb["history"]]
+    assert ("ema" in ca) == ("ema" in cb)
+    if "ema" in ca:
+        assert ca["ema"]["count"] == cb["ema"]["count"]
+        for k, v in ca["ema"]["avg"].items():
+            assert torch.equal(v, cb["ema"]["avg"][k]), k
 
 
 @pytest.fixture(scope="module")
@@ -94,3 +99,73 @@ def test_resume_writes_where_the_checkpoint_is_now(btf, tmp_path):
     assert not old.exists()
     assert load_checkpoint(new / "t.pt")["epoch"] == 2
     assert load_checkpoint(new / "s.pt")["epoch"] == 2
+
+
+def test_distill_with_ema_resumes_exactly_and_exports_the_average(btf, tmp_path):
+    """--ema: Ctrl-C mid-epoch + resume equals the straight run (average included); the
+    checkpoint's network, its test L1 and its pack are the average, not the last step."""
+    import numpy as np
+
+    from vrneural.distill.data import SliceData
+    from vrneural.distill.distill import model_from_checkpoint, run_distill
+    from vrneural.distill.evaluate import mean_l1
+    from vrneural.formats.vrnm import read_vrnm
+    from vrneural.btf.format import read_btf
+    from vrneural.material import material_forward
+
+    t = tmp_path / "t.pt"
+    assert run_cli("teach", btf, "-o", t, "--epochs", 1, "--width", 32, *FAST)[0] == 0
+    a, b = tmp_path / "a.pt", tmp_path / "b.pt"
+    kw = dict(teacher=str(t), progress=False, max_test_slices=0, ema=0.9, epochs=2)
+    ck = run_distill(DistillConfig(output=str(a), **kw))
+
+    def ctrl_c(epoch, step):
+        if (epoch, step) == (1, 3):
+            signal.raise_signal(signal.SIGINT)
+
+    with pytest.raises(Interrupted):
+        run_distill(DistillConfig(output=str(b), **kw), on_step=ctrl_c)
+    run_distill(DistillConfig(output=str(b), resume=True, **kw))
+    _same(a, b)
+    steps = 2 * (25 - round(25 * 0.1))  # 2 epochs of the 5 x 5 pairs' training share
+    assert ck["ema"]["count"] == steps
+    last = {k: v for k, v in ck["net"].items() if k.startswith("model.")}
+    avg = {k: v for k, v in ck["ema"]["avg"].items() if k.startswith("model.")}
+    assert set(avg) == set(last) and any(not torch.equal(avg[k], last[k]) for k in avg)
+    model = model_from_checkpoint(ck)
+    for k, v in model.state_dict().items():
+        assert torch.equal(v, avg["model." + k]), k
+    data = SliceData(read_btf(btf), ck["split"]["test"])
+    assert mean_l1(model, data, data.test) == pytest.approx(ck["history"][-1]["test_l1"], rel=1e-6)
+    mat = read_vrnm(a.with_suffix(".vrnm"))
+    wi, wo = data.dirs(data.test[0])
+    uv = data.uv(None, shard=False)
+    n = uv.shape[0]
+    got = material_forward(
+        mat, np.tile(wi.numpy(), (n, 1)), np.tile(wo.numpy(), (n, 1)), uv.numpy()
+    )
+    want = model.predict(wi, wo, uv).numpy()
+    np.testing.assert_allclose(got, want, atol=1e-5)
+
+
+def test_ema_average_and_swap():
+    from torch import nn
+
+    from vrneural.distill.train import Ema
+
+    net = nn.Linear(2, 1, bias=False)
+    with torch.no_grad():
+        net.weight.fill_(0.0)
+    ema = Ema(net, decay=0.5)
+    with torch.no_grad():
+        net.weight.fill_(1.0)
+    ema.update()  # decay min(0.5, 2/11): avg = 0 + (1 - 2/11) * 1
+    assert float(ema.avg["weight"][0, 0]) == pytest.approx(9 / 11)
+    ema.update()  # now min(0.5, 3/12) = 0.25
+    assert float(ema.avg["weight"][0, 0]) == pytest.approx(9 / 11 + 0.75 * (1 - 9 / 11))
+    with ema.applied():
+        assert float(net.weight.detach()[0, 0]) == pytest.approx(float(ema.avg["weight"][0, 0]))
+    assert float(net.weight[0, 0]) == 1.0  # swapped back
+    again = Ema(net, decay=0.5)
+    again.load(ema.state())
+    assert again.count == 2 and torch.equal(again.avg["weight"], ema.avg["weight"])

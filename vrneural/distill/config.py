@@ -33,6 +33,11 @@ class TrainConfig:
     )
     lr_patience: int = opt(2, "epochs without enough improvement before halving")
     tex_lr_scale: float = opt(10.0, "learning-rate multiplier for neural textures")
+    ema: float = opt(
+        0.0,
+        "decay of an exponential moving average of the weights, evaluated and exported "
+        "instead of the last step (0 = off; see README: Training)",
+    )
     test_fraction: float = opt(0.1, "held-out fraction of (wi, wo) pairs (distill: teacher's)")
     split_seed: int = opt(0, "seed of the train/test split (distill reuses the teacher's split)")
     max_test_slices: int = opt(64, "test slices used for the per-epoch test L1 (0 = all)")

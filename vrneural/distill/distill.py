@@ -26,9 +26,13 @@ from vrneural.errors import VrnError, check_range
 
 
 def model_from_checkpoint(ck: dict) -> NeuralModel:
-    """The trained :class:`NeuralModel` of a checkpoint (frozen, eval mode)."""
+    """The trained :class:`NeuralModel` of a checkpoint (frozen, eval mode): its weight
+    average where it was trained with ``--ema``, else the last step's weights."""
     model = NeuralModel(ck["spec"])
-    state = {k[len("model.") :]: v for k, v in ck["net"].items() if k.startswith("model.")}
+    net = dict(ck["net"])
+    if ck.get("ema"):
+        net.update(ck["ema"]["avg"])
+    state = {k[len("model.") :]: v for k, v in net.items() if k.startswith("model.")}
     try:
         model.load_state_dict(state)
     except RuntimeError as e:

@@ -37,6 +37,7 @@ def check_train_config(cfg) -> None:
     check_range("--lr", cfg.lr, 1e-9, 1.0)
     check_range("--test-fraction", cfg.test_fraction, 0.0, 0.9)
     check_range("--lr-factor", cfg.lr_factor, 1e-3, 0.999)
+    check_range("--ema", cfg.ema, 0.0, 0.999999)
 
 
 def outputs_of(output: str, export: bool) -> list[str]:

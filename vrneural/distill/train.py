@@ -63,6 +63,50 @@ def threading_main() -> bool:
     return threading.current_thread() is threading.main_thread()
 
 
+class Ema:
+    """Exponential moving average of the trainable parameters (Polyak averaging).
+
+    With one ``(wi, wo)`` slice per step the weights jitter from step to step; the average is
+    a better network than the last iterate and a steadier test L1 for ReduceLROnPlateau. The
+    decay ramps up as ``min(decay, (1 + t) / (10 + t))`` so early averages do not remember the
+    random initialisation. ``applied()`` swaps the average in (evaluation, export) and back.
+    """
+
+    def __init__(self, net: nn.Module, decay: float):
+        self.decay = decay
+        self.params = {k: p for k, p in net.named_parameters() if p.requires_grad}
+        self.avg = {k: p.detach().clone() for k, p in self.params.items()}
+        self.count = 0
+
+    @torch.no_grad()
+    def update(self) -> None:
+        self.count += 1
+        d = min(self.decay, (1 + self.count) / (10 + self.count))
+        for k, p in self.params.items():
+            self.avg[k].lerp_(p.detach(), 1.0 - d)
+
+    @contextlib.contextmanager
+    def applied(self):
+        keep = {k: p.detach().clone() for k, p in self.params.items()}
+        with torch.no_grad():
+            for k, p in self.params.items():
+                p.copy_(self.avg[k])
+        try:
+            yield
+        finally:
+            with torch.no_grad():
+                for k, p in self.params.items():
+                    p.copy_(keep[k])
+
+    def state(self) -> dict:
+        return {"avg": {k: v.clone() for k, v in self.avg.items()}, "count": self.count}
+
+    def load(self, state: dict) -> None:
+        for k in self.avg:
+            self.avg[k].copy_(state["avg"][k])
+        self.count = int(state["count"])
+
+
 class Interrupted(KeyboardInterrupt):
     """Raised after the checkpoint of an interrupted run is saved (a KeyboardInterrupt, so
     callers that do not know it still exit with code 130)."""
@@ -104,8 +148,11 @@ def fit(
     )
     epoch, step, loss_sum, history, seconds = 0, 0, 0.0, [], 0.0
     gen = torch.Generator()
+    ema = Ema(net, cfg.ema) if cfg.ema > 0 else None
     if resume is not None:
         net.load_state_dict(resume["net"])
+        if ema is not None:
+            ema.load(resume["ema"])
         opt.load_state_dict(resume["optimizer"])
         sched.load_state_dict(resume["scheduler"])
         epoch, step = int(resume["epoch"]), int(resume["step"])
@@ -129,6 +176,8 @@ def fit(
             "train_seconds": seconds,
             "finished": finished,
         }
+        if ema is not None:
+            ck["ema"] = ema.state()  # the exported network (see model_from_checkpoint)
         if rank == 0:
             save_checkpoint(out, ck)
         return ck
@@ -157,6 +206,8 @@ def fit(
                 opt.zero_grad(set_to_none=True)
                 loss.backward()
                 opt.step()
+                if ema is not None:
+                    ema.update()
                 loss_sum += float(loss.detach())
                 step += 1
                 if bar is not None:
@@ -172,7 +223,7 @@ def fit(
                     save(False)
                     raise Interrupted(f"epoch {epoch + 1} step {step}/{n}")
             net.eval()
-            with torch.no_grad():
+            with torch.no_grad(), ema.applied() if ema else contextlib.nullcontext():
                 last_test = float(test_l1())
             sched.step(last_test)
             seconds += time.perf_counter() - t0
