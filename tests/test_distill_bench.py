@@ -86,6 +86,16 @@ def test_bench_quality_smoke(tmp_path):
         assert r["whole_l1"] == pytest.approx(sum(r["whole_l1_seeds"]) / 2)
     assert two["teacher"]["whole_l1_seeds"] == [more["teacher"]["whole_l1"]]
     assert "seeds 0-1" in (out / "results.md").read_text()
+    j = args.index(out)
+    code, err = run_cli(*args[:j], tmp_path / "e", *args[j + 1 :], "--ema", 0.9)
+    assert code == 0, err
+    from vrneural.distill.checkpoint import load_checkpoint
+
+    for name in ("neumip", "single8", "student_nodistill", "student"):
+        ck = load_checkpoint(tmp_path / "e" / "leather" / f"{name}.pt")
+        assert ck["config"]["ema"] == 0.9 and ck["ema"]["count"] > 0
+    assert load_checkpoint(tmp_path / "e" / "leather" / "teacher.pt")["config"]["ema"] == 0.0
+    assert "weight averaging (--ema 0.9)" in (tmp_path / "e" / "results.md").read_text()
 
 
 def _rec(*seeds):

@@ -58,6 +58,7 @@ class QualityConfig:
     repeats: int = opt(
         1, "train every network but the teacher with this many seeds (seed, seed+1, ...)"
     )
+    ema: float = opt(0.0, "weight-average decay of every network but the teacher (distill --ema)")
     quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
@@ -140,6 +141,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
                     output=str(d / f"{stem}.pt"),
                     epochs=cfg.epochs,
                     seed=seed,
+                    ema=cfg.ema,
                     **kw,
                     **common,
                 )

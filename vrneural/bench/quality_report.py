@@ -71,7 +71,9 @@ def markdown(doc: dict) -> str:
         "",
         f"Budget: {cfg['res']}^2 texels, {cfg['dirs']} x {cfg['dirs']} (light, view) "
         f"directions, teacher {cfg['teacher_epochs']} epochs, every other network "
-        f"{cfg['epochs']} epochs, Lafortune {cfg['lafortune_iters']} LM iterations, "
+        f"{cfg['epochs']} epochs"
+        + (f" with weight averaging (--ema {cfg['ema']:g})" if cfg.get("ema") else "")
+        + f", Lafortune {cfg['lafortune_iters']} LM iterations, "
         f"{seeds}; CPU, 1 torch thread. Total {doc['total_seconds'] / 60:.1f} min.",
         "",
         "| method | " + " | ".join(presets) + " | storage (bytes) | MLP MACs / texel |",
