@@ -43,6 +43,11 @@ class TrainConfig:
     max_test_slices: int = opt(64, "test slices used for the per-epoch test L1 (0 = all)")
     jitter: bool = opt(True, "stratified (jittered within the texel) neural-texture lookups")
     space: str = opt("linear", "output and loss space: linear, or log (log(1+y))", choices=SPACES)
+    device: str = opt(
+        "cpu",
+        "train on cpu, cuda or cuda:N (CUDA: same result to float tolerance, not bit-exact; "
+        "see README: Training)",
+    )
     threads: int = opt(1, "torch CPU threads (1 was 15-70x faster than 2 on the shared 2-core box)")
     progress: bool = opt(True, "show a tqdm progress bar")
     force: bool = opt(False, "overwrite existing outputs")

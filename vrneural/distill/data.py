@@ -10,6 +10,7 @@ share of the blocks, so the averaged gradient equals the full-slice gradient.
 
 from __future__ import annotations
 
+import copy
 import hashlib
 from pathlib import Path
 
@@ -53,7 +54,9 @@ def split_pairs(n_light: int, n_view: int, fraction: float, seed: int) -> tuple[
 class SliceData:
     """All slices of a BTF in memory (float16) plus block UVs; see the module docstring."""
 
-    def __init__(self, btf: Btf, test: list[int], rank: int = 0, world: int = 1):
+    def __init__(
+        self, btf: Btf, test: list[int], rank: int = 0, world: int = 1, device: str = "cpu"
+    ):
         L, V, H, W = btf.shape
         if H % 2 or W % 2:
             raise VrnError(f"{btf.path}: resolution {H}x{W} must be even (2x2 blocks)")
@@ -73,6 +76,8 @@ class SliceData:
             )
         self.light = torch.from_numpy(np.array(btf.light_dirs, np.float32))
         self.view = torch.from_numpy(np.array(btf.view_dirs, np.float32))
+        self.device = torch.device("cpu")
+        self._on = (self.values, self.light, self.view)  # the tensors on self.device
         test_set = set(test)
         self.test = sorted(test_set)
         self.train = [p for p in range(L * V) if p not in test_set]
@@ -82,13 +87,25 @@ class SliceData:
         self.centres = to_blocks(centre)  # [N, 4, 2]
         share = nb // world
         self.shard = slice(rank * share, (rank + 1) * share)
+        if torch.device(device) != self.device:
+            self.__dict__.update(self.on(device).__dict__)
+
+    def on(self, device) -> SliceData:
+        """The same data serving tensors on ``device`` (the CPU copy is kept and shared):
+        training reads slices on the GPU, export and the numpy checks read them on the CPU."""
+        d = torch.device(device)
+        new = copy.copy(self)
+        new.device = d
+        new._on = tuple(t.to(d) for t in (self.values, self.light, self.view))
+        return new
 
     def dirs(self, pair: int) -> tuple[torch.Tensor, torch.Tensor]:
-        return self.light[pair // self.n_view], self.view[pair % self.n_view]
+        _, light, view = self._on
+        return light[pair // self.n_view], view[pair % self.n_view]
 
     def target(self, pair: int, shard: bool = True) -> torch.Tensor:
         """Ground truth ``[N, 4, 3]`` float32 of one slice (this rank's blocks)."""
-        v = self.values[pair // self.n_view, pair % self.n_view].float()
+        v = self._on[0][pair // self.n_view, pair % self.n_view].float()
         y = to_blocks(v)
         return y[self.shard] if shard else y
 
@@ -102,7 +119,7 @@ class SliceData:
             H, W = self.res
             j = torch.rand(uv.shape, generator=gen) - 0.5
             uv = uv + j * torch.tensor([1.0 / W, 1.0 / H])
-        return uv[self.shard] if shard else uv
+        return (uv[self.shard] if shard else uv).to(self.device)
 
 
 def to_blocks(a: torch.Tensor) -> torch.Tensor:

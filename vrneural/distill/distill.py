@@ -21,7 +21,7 @@ from vrneural.distill.data import SliceData, btf_fingerprint
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
 from vrneural.distill.models import NeuralModel, apply_output, make_spec
 from vrneural.distill.teach import check_train_config, finish_outputs, outputs_of, prepare_outputs
-from vrneural.distill.train import dist_setup, fit
+from vrneural.distill.train import dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range
 
 
@@ -105,6 +105,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
             teacher=cfg.teacher,
             resume=True,
             progress=cfg.progress,
+            device=cfg.device,
         )
         if cfg.btf:
             old["btf"] = cfg.btf
@@ -123,9 +124,10 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
                 f"{btf_path}: BTF does not match the teacher {cfg.teacher}: {key} is "
                 f"{fp[key]!s:.24}, the teacher was trained on {want[key]!s:.24}"
             )
-    rank, world = dist_setup()
+    dev = train_device(cfg.device)
+    rank, world = dist_setup(cfg.device)
     teacher = model_from_checkpoint(tck)
-    data = SliceData(btf, tck["split"]["test"], rank, world)
+    data = SliceData(btf, tck["split"]["test"], rank, world, device=dev)
     H, W = btf.resolution
     spec = make_spec(
         cfg.method,
@@ -135,7 +137,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         fine_channels=cfg.fine_channels,
     )
     model = NeuralModel(spec, cfg.seed)
-    net = DistillNet(model, teacher, data, cfg)
+    net = DistillNet(model, teacher.to(dev), data, cfg).to(dev)
     pairs = test_pairs(data, cfg.max_test_slices)
     payload = {
         "kind": "student",

@@ -30,7 +30,7 @@ def half_vector(wi: torch.Tensor, wo: torch.Tensor) -> torch.Tensor:
     s = wi + wo
     n2 = (s * s).sum(-1, keepdim=True)
     ok = n2 >= HALF_EPS2
-    up = torch.tensor([0.0, 0.0, 1.0], dtype=s.dtype)
+    up = torch.tensor([0.0, 0.0, 1.0], dtype=s.dtype, device=s.device)
     return torch.where(ok, s / torch.sqrt(torch.where(ok, n2, torch.ones_like(n2))), up)
 
 

@@ -13,7 +13,7 @@ from vrneural.distill.config import TeachConfig
 from vrneural.distill.data import SliceData, btf_fingerprint, split_pairs
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
-from vrneural.distill.train import dist_setup, fit
+from vrneural.distill.train import dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range
 
 
@@ -73,22 +73,28 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
             raise VrnError(f"{cfg.output}: is not a teacher checkpoint; cannot --resume teach")
         old = dict(resume["config"])
         old.update(
-            epochs=cfg.epochs, output=cfg.output, btf=cfg.btf, resume=True, progress=cfg.progress
+            epochs=cfg.epochs,
+            output=cfg.output,
+            btf=cfg.btf,
+            resume=True,
+            progress=cfg.progress,
+            device=cfg.device,
         )
         cfg = TeachConfig(**old)
     btf = read_btf(cfg.btf)
     fp = btf_fingerprint(btf)
     if resume is not None and resume["btf"]["sha256"] != fp["sha256"]:
         raise VrnError(f"{cfg.btf}: BTF differs from the one {cfg.output} was trained on")
-    rank, world = dist_setup()
+    dev = train_device(cfg.device)
+    rank, world = dist_setup(cfg.device)
     L, V, H, W = btf.shape
     train, test = split_pairs(L, V, cfg.test_fraction, cfg.split_seed)
-    data = SliceData(btf, test, rank, world)
+    data = SliceData(btf, test, rank, world, device=dev)
     spec = make_spec(
         "teacher", (H, W), cfg.space, width=cfg.width, layers=cfg.layers, channels=cfg.channels
     )
     model = NeuralModel(spec, cfg.seed)
-    net = GroundTruthNet(model, data, cfg.space)
+    net = GroundTruthNet(model, data, cfg.space).to(dev)
     pairs = test_pairs(data, cfg.max_test_slices)
     payload = {
         "kind": "teacher",
@@ -125,5 +131,5 @@ def finish_outputs(ck: dict, cfg, data: SliceData) -> None:
         from vrneural.distill.export import export_checkpoint
 
         pack = outputs_of(cfg.output, True)[1]
-        _, meta = export_checkpoint(ck, pack, data=data, force=True, source=cfg.output)
+        _, meta = export_checkpoint(ck, pack, data=data.on("cpu"), force=True, source=cfg.output)
         write_config(pack, cfg, {**extra, "metrics": meta["metrics"]})

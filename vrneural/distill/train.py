@@ -3,7 +3,11 @@ held-out test L1, an atomic checkpoint every epoch, Ctrl-C saves, exact resume, 
 
 Determinism: the data order and the jitter of epoch ``e`` come from generators seeded with
 ``(seed, e)``; the jitter generator's state is checkpointed, so resuming (also mid-epoch)
-replays the uninterrupted run bit for bit on CPU. Under ``torchrun`` every rank draws the same
+replays the uninterrupted run bit for bit on CPU. With ``--device cuda`` the same streams are
+drawn on the CPU and the initialisation is made there, so a GPU run sees the same data, jitter
+and initial weights; it agrees with the CPU run to float tolerance, not bit for bit (the
+texture gradient is summed with atomic adds), and so does a resumed GPU run with the straight
+one. Under ``torchrun`` every rank draws the same
 jitter for the whole slice and trains on its equal share of the 2x2 blocks; DDP averages the
 gradients, which equals the full-slice gradient (the loss is a mean over equal shares).
 """
@@ -12,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import signal
 import time
 
@@ -21,16 +26,39 @@ from torch import nn
 
 from vrneural.distill.checkpoint import save_checkpoint
 from vrneural.distill.data import SliceData
+from vrneural.errors import VrnError
 
 
-def dist_setup() -> tuple[int, int]:
-    """``(rank, world)``; initialises a gloo (CPU) process group under ``torchrun``."""
+def dist_setup(device: str = "cpu") -> tuple[int, int]:
+    """``(rank, world)``; under ``torchrun`` initialises the process group: gloo for CPU
+    training, NCCL for CUDA (one GPU per rank, ``cuda:LOCAL_RANK``)."""
     world = int(os.environ.get("WORLD_SIZE", "1"))
     if world > 1 and not dist.is_initialized():
-        dist.init_process_group("gloo")
+        dist.init_process_group("nccl" if device.startswith("cuda") else "gloo")
     if dist.is_initialized():
         return dist.get_rank(), dist.get_world_size()
     return 0, 1
+
+
+def train_device(name: str) -> torch.device:
+    """The ``--device`` to train on (``cpu``, ``cuda``, ``cuda:N``), checked; under
+    ``torchrun`` with CUDA each rank takes ``cuda:LOCAL_RANK``. One-line error if absent."""
+    m = re.fullmatch(r"cpu|cuda(:\d+)?", name)
+    if m is None:
+        raise VrnError(f"--device {name!r}: expected cpu, cuda or cuda:N")
+    if name == "cpu":
+        return torch.device("cpu")
+    if not torch.cuda.is_available():
+        raise VrnError(
+            f"--device {name}: CUDA is not available here (torch {torch.__version__}, "
+            f"built for CUDA {torch.version.cuda or 'none'}); use --device cpu"
+        )
+    n = torch.cuda.device_count()
+    index = int(os.environ.get("LOCAL_RANK", "0")) if name == "cuda" else int(name[5:])
+    if index >= n:
+        raise VrnError(f"--device {name}: CUDA device {index} requested, {n} present")
+    torch.cuda.set_device(index)
+    return torch.device("cuda", index)
 
 
 def _seed(seed: int, epoch: int, salt: int) -> int:
@@ -160,7 +188,13 @@ def fit(
         seconds = float(resume.get("train_seconds", 0.0))
         if step:
             gen.set_state(resume["gen_state"])
-    model = nn.parallel.DistributedDataParallel(net) if world > 1 else net
+    dev = data.device
+    if world > 1:
+        model = nn.parallel.DistributedDataParallel(
+            net, device_ids=[dev.index] if dev.type == "cuda" else None
+        )
+    else:
+        model = net
 
     def save(finished: bool) -> dict:
         ck = {
@@ -218,7 +252,7 @@ def fit(
                         )
                 if on_step is not None:
                     on_step(epoch, step)
-                if _stopping(stop.flag, world):
+                if _stopping(stop.flag, world, dev):
                     seconds += time.perf_counter() - t0
                     save(False)
                     raise Interrupted(f"epoch {epoch + 1} step {step}/{n}")
@@ -247,10 +281,10 @@ def fit(
     return save(epoch >= cfg.epochs)
 
 
-def _stopping(flag: bool, world: int) -> bool:
+def _stopping(flag: bool, world: int, device: torch.device) -> bool:
     """All ranks agree to stop when any rank saw Ctrl-C."""
     if world == 1:
         return flag
-    t = torch.tensor([1.0 if flag else 0.0])
+    t = torch.tensor([1.0 if flag else 0.0], device=device)
     dist.all_reduce(t)
     return bool(t.item() > 0)

@@ -1,0 +1,74 @@
+"""``--device``: a bad or absent device is a one-line error; on CUDA (where present) the
+trainers give the CPU result to float tolerance and the pack is exported from the CPU copy."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import torch
+from distill_helpers import FAST, analytic_btf, run_cli
+
+from vrneural.btf.format import read_btf
+from vrneural.distill.checkpoint import load_checkpoint
+from vrneural.distill.data import SliceData
+
+has_cuda = torch.cuda.is_available()
+
+
+def _one_line_error(argv, needle):
+    code, err = run_cli(*argv)
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0], err
+
+
+@pytest.mark.parametrize(
+    ("device", "needle"),
+    [
+        ("gpu", "expected cpu, cuda or cuda:N"),
+        ("cuda:x", "expected cpu, cuda or cuda:N"),
+        ("cuda:99", "CUDA device 99 requested" if has_cuda else "CUDA is not available"),
+    ],
+)
+def test_bad_device_is_one_line_and_writes_nothing(tmp_path, device, needle):
+    btf = analytic_btf(tmp_path / "m.btf", res=8, n_dirs=3)
+    out = tmp_path / "t.pt"
+    _one_line_error(["teach", btf, "-o", out, "--device", device, *FAST], needle)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.btf"]
+
+
+def test_slice_data_on_shares_the_cpu_copy(tmp_path):
+    data = SliceData(read_btf(analytic_btf(tmp_path / "m.btf", res=8, n_dirs=3)), [0, 4])
+    same = data.on("cpu")
+    assert same.values is data.values and same.train == data.train
+    for pair in (1, 7):
+        assert torch.equal(same.target(pair), data.target(pair))
+        assert all(torch.equal(a, b) for a, b in zip(same.dirs(pair), data.dirs(pair), strict=True))
+    gen = [torch.Generator().manual_seed(3) for _ in range(2)]
+    assert torch.equal(same.uv(gen[0]), data.uv(gen[1]))
+
+
+@pytest.mark.skipif(not has_cuda, reason="no CUDA device (run on a GPU machine)")
+def test_cuda_matches_cpu_and_exports(tmp_path):
+    btf = analytic_btf(tmp_path / "m.btf", res=16, n_dirs=5)
+    hist = {}
+    for dev in ("cpu", "cuda"):
+        t, s = tmp_path / f"teacher-{dev}.pt", tmp_path / f"student-{dev}.pt"
+        code, err = run_cli("teach", btf, "-o", t, "--epochs", 2, "--device", dev, *FAST)
+        assert code == 0, err
+        code, err = run_cli("distill", t, "-o", s, "--epochs", 2, "--device", dev, *FAST)
+        assert code == 0, err
+        hist[dev] = [load_checkpoint(p)["history"] for p in (t, s)]
+        meta = json.loads(s.with_name(f"student-{dev}.vrnm.config.json").read_text())
+        assert meta["metrics"]["pack_vs_torch_max_abs"] < 1e-5
+    for a, b in zip(hist["cpu"], hist["cuda"], strict=True):
+        for ha, hb in zip(a, b, strict=True):
+            assert hb["test_l1"] == pytest.approx(ha["test_l1"], rel=0.02)
+    # a CUDA run resumes on the device given now (the default: the CPU)
+    s = tmp_path / "student-cuda.pt"
+    code, err = run_cli("distill", tmp_path / "teacher-cuda.pt", "-o", s, "--resume", "--epochs", 4)
+    assert code == 0, err
+    ck = load_checkpoint(s)
+    assert ck["epoch"] == 4 and ck["config"]["device"] == "cpu"
+    assert ck["history"][-1]["test_l1"] < ck["history"][1]["test_l1"] * 1.5
