@@ -54,6 +54,7 @@ def test_frames_records_and_amortisation(results):
         f = r["frame_ms"]
         assert _finite(f["median"], f["p95"], f["p99"], r["shading_ms_per_frame"], r["forward_ms"])
         assert 0 < f["median"] <= f["p99"] and r["lights"] == 1 and r["materials"] == 2
+        assert r["warmup_frames"] >= 1  # 0.5 s of unmeasured frames, at least one
     for res in (128, 256):
         for sched in ("burst", "staggered"):
             by_n = {

@@ -29,6 +29,9 @@ class FramesConfig:
     eyes: int = opt(2, "eyes (1 or 2)")
     lights: int = opt(1, "point lights")
     cycles: int = opt(1, "update cycles measured per configuration (N + 1 frames each)")
+    warmup: float = opt(
+        0.5, "seconds of unmeasured frames before each configuration (GPU clocks; 0 = none)"
+    )
     min_frames: int = opt(3, "at least this many measured frames per configuration")
     screen: bool = opt(True, "also measure per-pixel screen-space shading")
     quick: bool = opt(False, "CI-sized: textures 128,256; N 0,2,4; eyes 258x276; >= 2 frames")
@@ -57,6 +60,7 @@ def run_frames(cfg: FramesConfig) -> dict:
     check_range("--eyes", c.eyes, 1, 2)
     check_range("--lights", c.lights, 1, 8)
     check_range("--cycles", c.cycles, 1, 100)
+    check_range("--warmup", c.warmup, 0.0, 60.0)
     check_range("--min-frames", c.min_frames, 1, 1000)
     root = rp.prepare_out(cfg.out, cfg.force)
     t0 = time.perf_counter()
@@ -71,13 +75,15 @@ def run_frames(cfg: FramesConfig) -> dict:
         r = timing.make_renderer(scene, texture_res=res, **kw)
         for sched in scheds:
             for n in reuses:
-                rec = timing.measured_record(r, n, sched, c.cycles, c.min_frames, bar.update)
+                rec = timing.measured_record(
+                    r, n, sched, c.cycles, c.min_frames, bar.update, c.warmup
+                )
                 rec["schedule"], rec["reuse"] = sched, n
                 doc["records"].append(rec)
         del r
     if c.screen:
         r = timing.make_renderer(scene, mode="screen", texture_res=texs[0], **kw)
-        rec = timing.measured_record(r, 0, "burst", 1, c.min_frames, bar.update)
+        rec = timing.measured_record(r, 0, "burst", 1, c.min_frames, bar.update, c.warmup)
         doc["records"].append(rec)
     bar.close()
     md = markdown(doc)
@@ -102,8 +108,9 @@ def markdown(doc: dict) -> list[str]:
         rp.adapter_line(doc),
         "Benchmark scene (2 neural objects with random student weights + plain floor), "
         f"{c['lights']} light(s), {c['eyes']} eye(s) at {c['eye_res']}; >= {c['min_frames']} "
-        f"frames and {c['cycles']} update cycle(s) per configuration (frame 0 of each renderer "
-        "excluded)." + (" **Quick run: reduced grid.**" if c["quick"] else ""),
+        f"frames and {c['cycles']} update cycle(s) per configuration after "
+        f"{c.get('warmup', 0)} s of unmeasured frames (frame 0 of each renderer excluded)."
+        + (" **Quick run: reduced grid.**" if c["quick"] else ""),
         "Cells: FPS from the mean frame time (median / p99 frame ms, wall clock incl. GPU wait).",
     ]
     for sched in dict.fromkeys(r["schedule"] for r in tex):

@@ -29,6 +29,9 @@ class LightsConfig:
     eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
     eyes: int = opt(2, "eyes (1 or 2)")
     cycles: int = opt(1, "update cycles measured per light count (N + 1 frames each)")
+    warmup: float = opt(
+        0.5, "seconds of unmeasured frames before each configuration (GPU clocks; 0 = none)"
+    )
     quick: bool = opt(False, "CI-sized: lights 1,2,4; texture 256; eyes 258x276")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
@@ -50,6 +53,7 @@ def run_lights(cfg: LightsConfig) -> dict:
     check_range("--reuse", c.reuse, 0, 64)
     check_range("--eyes", c.eyes, 1, 2)
     check_range("--cycles", c.cycles, 1, 100)
+    check_range("--warmup", c.warmup, 0.0, 60.0)
     eye_res = parse_res(c.eye_res)
     root = rp.prepare_out(cfg.out, cfg.force)
     t0 = time.perf_counter()
@@ -70,7 +74,7 @@ def run_lights(cfg: LightsConfig) -> dict:
             fps=prof.fps,
             fov_y=prof.fov_y,
         )
-        rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update)
+        rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update, c.warmup)
         doc["records"].append(rec)
         del r
     bar.close()
@@ -81,7 +85,8 @@ def run_lights(cfg: LightsConfig) -> dict:
         "",
         rp.adapter_line(doc),
         f"Benchmark scene, {c.eyes} eye(s) at {c.eye_res}, texture {c.texture_res}^2, "
-        f"N = {c.reuse} ({c.schedule}), {n} frames per light count after frame 0."
+        f"N = {c.reuse} ({c.schedule}), {n} frames per light count after frame 0 "
+        f"and {c.warmup} s of unmeasured frames."
         + (" **Quick run: reduced grid.**" if c.quick else ""),
         "",
     ]

@@ -29,6 +29,9 @@ class MaterialsConfig:
     eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
     eyes: int = opt(2, "eyes (1 or 2)")
     cycles: int = opt(1, "update cycles measured per count (N + 1 frames each)")
+    warmup: float = opt(
+        0.5, "seconds of unmeasured frames before each configuration (GPU clocks; 0 = none)"
+    )
     quick: bool = opt(False, "CI-sized: materials 1,2,3; texture 256; eyes 258x276")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
@@ -66,6 +69,7 @@ def run_materials(cfg: MaterialsConfig) -> dict:
     check_range("--lights", c.lights, 1, 8)
     check_range("--eyes", c.eyes, 1, 2)
     check_range("--cycles", c.cycles, 1, 100)
+    check_range("--warmup", c.warmup, 0.0, 60.0)
     eye_res = parse_res(c.eye_res)
     root = rp.prepare_out(cfg.out, cfg.force)
     t0 = time.perf_counter()
@@ -85,7 +89,7 @@ def run_materials(cfg: MaterialsConfig) -> dict:
             fps=prof.fps,
             fov_y=prof.fov_y,
         )
-        rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update)
+        rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update, c.warmup)
         rec["radiance_texture_mb"] = c.texture_res**2 * 8 * c.eyes / 2**20
         doc["records"].append(rec)
         del r
@@ -97,7 +101,8 @@ def run_materials(cfg: MaterialsConfig) -> dict:
         rp.adapter_line(doc),
         f"k squares with distinct materials, {c.lights} lights, {c.eyes} eye(s) at {c.eye_res}, "
         f"texture {c.texture_res}^2 per material, N = {c.reuse} ({c.schedule}), {n} frames per "
-        "count after frame 0." + (" **Quick run: reduced grid.**" if c.quick else ""),
+        f"count after frame 0 and {c.warmup} s of unmeasured frames."
+        + (" **Quick run: reduced grid.**" if c.quick else ""),
         "",
     ]
     rows = [

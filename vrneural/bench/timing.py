@@ -5,10 +5,15 @@ reused across update intervals and schedules (``reuse`` and ``schedule`` are rea
 settings every frame), so pipelines and atlases are built once. Frame 0 of a renderer (shader
 compilation and every object's first full update) is never measured. A configuration is measured
 over ``cycles * (N + 1)`` frames (at least ``min_frames``), so every radiance-texture block is
-updated exactly ``cycles`` times in it under either schedule.
+updated exactly ``cycles`` times in it under either schedule. Before it, unmeasured frames are
+rendered for ``warmup`` seconds (at least one): a GPU lowers its clocks while the host builds
+the next configuration and needs tens of frames to raise them again (on an H100, frame times
+fell from 27 to 7.6 ms over the first dozen frames of a run); a CPU adapter spends one frame.
 """
 
 from __future__ import annotations
+
+import time
 
 import numpy as np
 
@@ -58,7 +63,9 @@ def frames_for(reuse: int, cycles: int, min_frames: int) -> int:
     return n1 * max(cycles, -(-min_frames // n1))
 
 
-def measure(r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=None) -> dict:
+def measure(
+    r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=None, warmup: float = 0.0
+) -> dict:
     """Render one configuration's frames on renderer ``r``; returns the record's timing fields.
 
     ``frame_ms``: wall time per displayed frame (CPU encode + GPU wait; on a CPU adapter this is
@@ -69,6 +76,11 @@ def measure(r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=Non
     """
     r.s.reuse, r.s.schedule = reuse, schedule
     n = frames_for(reuse, cycles, min_frames)
+    warm, t0 = 0, time.perf_counter()
+    while warmup > 0 and (warm == 0 or time.perf_counter() - t0 < warmup):
+        r.frame(r.next_frame)
+        r.next_frame += 1
+        warm += 1
     f0 = r.next_frame
     f0 += (-f0) % (reuse + 1)  # start on a cycle boundary: same phases for every run
     walls, gpu, shade, fwd, evals, blocks = [], [], [], [], [], []
@@ -87,6 +99,7 @@ def measure(r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=Non
     return {
         "frames": n,
         "first_frame": f0,
+        "warmup_frames": warm,
         "frame_ms": fs,
         "fps": 1e3 / fs["mean"],
         "gpu_ms": stats(gpu),
@@ -99,10 +112,12 @@ def measure(r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=Non
     }
 
 
-def measured_record(r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=None) -> dict:
+def measured_record(
+    r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=None, warmup: float = 0.0
+) -> dict:
     """:func:`base_record` of renderer ``r`` with the timing fields of :func:`measure`."""
     rec = base_record(r)
-    rec.update(measure(r, reuse, schedule, cycles, min_frames, tick))
+    rec.update(measure(r, reuse, schedule, cycles, min_frames, tick, warmup))
     return rec
 
 
