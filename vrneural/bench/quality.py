@@ -59,6 +59,7 @@ class QualityConfig:
         1, "train every network but the teacher with this many seeds (seed, seed+1, ...)"
     )
     ema: float = opt(0.0, "weight-average decay of every network but the teacher (distill --ema)")
+    device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
     quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
@@ -109,7 +110,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     t0 = time.perf_counter()
     btf_path = make_btf(preset, cfg, root / "btf" / f"{preset}.btf")
     synth_s = time.perf_counter() - t0
-    common = dict(progress=cfg.progress, max_test_slices=0)
+    common = dict(progress=cfg.progress, max_test_slices=0, device=cfg.device)
     tcfg = TeachConfig(
         btf=str(btf_path),
         output=str(d / "teacher.pt"),
@@ -139,6 +140,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
                 DistillConfig(
                     teacher=str(d / "teacher.pt"),
                     output=str(d / f"{stem}.pt"),
+                    btf=str(btf_path),  # not the teacher's record: OUT may have moved
                     epochs=cfg.epochs,
                     seed=seed,
                     ema=cfg.ema,
@@ -173,6 +175,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
                 h["seconds"] for ck in cks for h in ck["history"]
             ),
             "epochs": cks[0]["epoch"],
+            "devices": sorted({str(ck["config"].get("device", "cpu")) for ck in cks}),
             "curve": [h["test_l1"] for h in cks[0]["history"]],
             "curves": [[h["test_l1"] for h in ck["history"]] for ck in cks],
             "weight_bytes": mat.weight_bytes,
@@ -191,7 +194,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
 
 # Fields that may differ between a reusable checkpoint and this run: paths and workflow flags
 # (the BTF and the teacher are compared by content), and the epochs (a shorter run continues).
-_FREE = {"btf", "output", "teacher", "epochs", "progress", "force", "resume"}
+_FREE = {"btf", "output", "teacher", "epochs", "progress", "force", "resume", "device"}
 
 
 def _reusable(cfg, btf_sha: str | None = None, teacher_sha: str | None = None) -> bool:

@@ -74,7 +74,7 @@ def markdown(doc: dict) -> str:
         f"{cfg['epochs']} epochs"
         + (f" with weight averaging (--ema {cfg['ema']:g})" if cfg.get("ema") else "")
         + f", Lafortune {cfg['lafortune_iters']} LM iterations, "
-        f"{seeds}; CPU, 1 torch thread. Total {doc['total_seconds'] / 60:.1f} min.",
+        f"{seeds}; {_trained_on(doc)}. Total {doc['total_seconds'] / 60:.1f} min.",
         "",
         "| method | " + " | ".join(presets) + " | storage (bytes) | MLP MACs / texel |",
         "|---|" + "---|" * (len(presets) + 2),
@@ -231,3 +231,18 @@ def write_report(doc: dict, slices: dict, root: Path) -> None:
         tmp.write_text(markdown(doc))
     curves_png(doc, root / "curves.png")
     slices_png(doc, slices, root / "slices.png")
+
+
+def _trained_on(doc: dict) -> str:
+    """Where the networks were (last) trained: the devices their checkpoints record."""
+    devs = sorted(
+        {
+            d
+            for r in doc["results"].values()
+            for m in r["methods"].values()
+            for d in m.get("devices", [])
+        }
+    )
+    if devs in ([], ["cpu"]):  # records from before devices were stored: CPU only
+        return "CPU, 1 torch thread"
+    return "networks trained on " + ", ".join(devs) + " (Lafortune on the CPU)"
