@@ -72,3 +72,18 @@ def test_cuda_matches_cpu_and_exports(tmp_path):
     ck = load_checkpoint(s)
     assert ck["epoch"] == 4 and ck["config"]["device"] == "cpu"
     assert ck["history"][-1]["test_l1"] < ck["history"][1]["test_l1"] * 1.5
+
+
+def test_compiled_training_equals_eager(tmp_path):
+    """``--compile default`` fuses kernels (inductor's C++ backend on the CPU) without changing
+    the result beyond float reassociation; the pack is exported from the plain network."""
+    btf = analytic_btf(tmp_path / "m.btf", res=8, n_dirs=4)
+    hist = {}
+    for mode in ("off", "default"):
+        t = tmp_path / f"t-{mode}.pt"
+        code, err = run_cli("teach", btf, "-o", t, "--epochs", 2, "--compile", mode, *FAST)
+        assert code == 0, err
+        hist[mode] = [h["test_l1"] for h in load_checkpoint(t)["history"]]
+        meta = json.loads(t.with_name(f"t-{mode}.vrnm.config.json").read_text())
+        assert meta["metrics"]["pack_vs_torch_max_abs"] < 1e-5
+    assert hist["default"] == pytest.approx(hist["off"], rel=1e-3)

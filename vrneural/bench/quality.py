@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vrneural.config import config_dict, opt
+from vrneural.distill.config import COMPILE_MODES
 from vrneural.errors import VrnError, check_range
 from vrneural.versions import package_versions
 
@@ -60,6 +61,9 @@ class QualityConfig:
     )
     ema: float = opt(0.0, "weight-average decay of every network but the teacher (distill --ema)")
     device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
+    compile: str = opt(
+        "off", "torch.compile the networks (teach/distill --compile)", choices=COMPILE_MODES
+    )
     quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
@@ -110,7 +114,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     t0 = time.perf_counter()
     btf_path = make_btf(preset, cfg, root / "btf" / f"{preset}.btf")
     synth_s = time.perf_counter() - t0
-    common = dict(progress=cfg.progress, max_test_slices=0, device=cfg.device)
+    common = dict(progress=cfg.progress, max_test_slices=0, device=cfg.device, compile=cfg.compile)
     tcfg = TeachConfig(
         btf=str(btf_path),
         output=str(d / "teacher.pt"),
@@ -194,7 +198,8 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
 
 # Fields that may differ between a reusable checkpoint and this run: paths and workflow flags
 # (the BTF and the teacher are compared by content), and the epochs (a shorter run continues).
-_FREE = {"btf", "output", "teacher", "epochs", "progress", "force", "resume", "device"}
+# fields that do not change what is trained (where, how fast, how shown)
+_FREE = {"btf", "output", "teacher", "epochs", "progress", "force", "resume", "device", "compile"}
 
 
 def _reusable(cfg, btf_sha: str | None = None, teacher_sha: str | None = None) -> bool:

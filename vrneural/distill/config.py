@@ -12,6 +12,7 @@ from vrneural.config import opt
 
 SPACES = ("linear", "log")
 METHODS = ("student", "single8", "neumip")
+COMPILE_MODES = ("off", "default", "reduce-overhead")
 
 
 @dataclass
@@ -47,6 +48,12 @@ class TrainConfig:
         "cpu",
         "train on cpu, cuda or cuda:N (CUDA: same result to float tolerance, not bit-exact; "
         "see README: Training)",
+    )
+    compile: str = opt(
+        "off",
+        "torch.compile the networks: off, default, or reduce-overhead (adds CUDA graphs); "
+        "fewer kernel launches per step, paid for with a compile at the start (see README)",
+        choices=COMPILE_MODES,
     )
     threads: int = opt(1, "torch CPU threads (1 was 15-70x faster than 2 on the shared 2-core box)")
     progress: bool = opt(True, "show a tqdm progress bar")

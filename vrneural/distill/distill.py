@@ -21,7 +21,7 @@ from vrneural.distill.data import SliceData, btf_fingerprint
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
 from vrneural.distill.models import NeuralModel, apply_output, make_spec
 from vrneural.distill.teach import check_train_config, finish_outputs, outputs_of, prepare_outputs
-from vrneural.distill.train import dist_setup, fit, train_device
+from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range
 
 
@@ -106,6 +106,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
             resume=True,
             progress=cfg.progress,
             device=cfg.device,
+            compile=cfg.compile,
         )
         if cfg.btf:
             old["btf"] = cfg.btf
@@ -138,6 +139,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     )
     model = NeuralModel(spec, cfg.seed)
     net = DistillNet(model, teacher.to(dev), data, cfg).to(dev)
+    compile_networks(cfg.compile, model, teacher)
     pairs = test_pairs(data, cfg.max_test_slices)
     payload = {
         "kind": "student",

@@ -13,7 +13,7 @@ from vrneural.distill.config import TeachConfig
 from vrneural.distill.data import SliceData, btf_fingerprint, split_pairs
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
-from vrneural.distill.train import dist_setup, fit, train_device
+from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range
 
 
@@ -79,6 +79,7 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
             resume=True,
             progress=cfg.progress,
             device=cfg.device,
+            compile=cfg.compile,
         )
         cfg = TeachConfig(**old)
     btf = read_btf(cfg.btf)
@@ -95,6 +96,7 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
     )
     model = NeuralModel(spec, cfg.seed)
     net = GroundTruthNet(model, data, cfg.space).to(dev)
+    compile_networks(cfg.compile, model)
     pairs = test_pairs(data, cfg.max_test_slices)
     payload = {
         "kind": "teacher",
