@@ -153,3 +153,22 @@ def test_quality_targets_use_seed_means_and_flag_overlapping_ranges():
     md = markdown(doc)
     assert "seeds 3-4" in md and "1.50000 (1.40000-1.60000)" in md
     assert "**no** *(seeds overlap)*" in md  # below no-distillation: 1.5 vs 1.275, overlapping
+
+
+def test_bench_quality_jobs_equals_sequential(tmp_path):
+    """``--jobs 2`` trains in worker processes (spawned) and gives the sequential table: on the
+    CPU every network is bit-identical, so every L1 matches exactly."""
+    args = ["bench", "quality", "--presets", "leather,wood", "--res", 8, "--dirs", 4]
+    args += ["--teacher-epochs", 1, "--epochs", 1, "--lafortune-iters", 2, "--no-progress"]
+    docs = []
+    for jobs in (1, 2):
+        out = tmp_path / f"j{jobs}"
+        code, err = run_cli(*args, "--out", out, "--jobs", jobs)
+        assert code == 0, err
+        docs.append(json.loads((out / "results.json").read_text())["results"])
+    for preset in ("leather", "wood"):
+        seq, par = docs[0][preset]["methods"], docs[1][preset]["methods"]
+        assert set(seq) == set(par)
+        for name in seq:
+            assert par[name]["whole_l1"] == seq[name]["whole_l1"], (preset, name)
+            assert par[name]["curve"] == seq[name]["curve"], (preset, name)

@@ -64,6 +64,11 @@ class QualityConfig:
     compile: str = opt(
         "off", "torch.compile the networks (teach/distill --compile)", choices=COMPILE_MODES
     )
+    jobs: int = opt(
+        1,
+        "train this many networks at once, each in its own process (teachers first, then "
+        "every network and seed of every preset; with --device cuda see README on MPS)",
+    )
     quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
@@ -99,44 +104,44 @@ def make_btf(preset: str, cfg: QualityConfig, path: Path) -> Path:
     return path
 
 
-def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
-    """Train and evaluate every method on one preset; returns its records."""
-    from vrneural.btf.format import read_btf
-    from vrneural.distill.checkpoint import file_sha256
-    from vrneural.distill.config import DistillConfig, TeachConfig
-    from vrneural.distill.data import SliceData, btf_fingerprint
-    from vrneural.distill.distill import model_from_checkpoint, resolve_method, run_distill
-    from vrneural.distill.evaluate import mean_l1, predict_slice
-    from vrneural.distill.teach import run_teach
+RUNS = {
+    "neumip": dict(method="neumip", distill=False),
+    "single8": dict(method="single8"),
+    "student_nodistill": dict(method="student", distill=False),
+    "student": dict(method="student"),
+}
 
-    d = root / preset
-    d.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
-    btf_path = make_btf(preset, cfg, root / "btf" / f"{preset}.btf")
-    synth_s = time.perf_counter() - t0
-    common = dict(progress=cfg.progress, max_test_slices=0, device=cfg.device, compile=cfg.compile)
+
+def _common(cfg: QualityConfig) -> dict:
+    return dict(progress=cfg.progress, max_test_slices=0, device=cfg.device, compile=cfg.compile)
+
+
+def _teach_config(preset: str, cfg: QualityConfig, root: Path, btf_path: Path, btf_sha: str):
+    """The teacher's config; ``resume`` where ``--resume`` and its checkpoint matches."""
+    from vrneural.distill.config import TeachConfig
+
     tcfg = TeachConfig(
         btf=str(btf_path),
-        output=str(d / "teacher.pt"),
+        output=str(root / preset / "teacher.pt"),
         epochs=cfg.teacher_epochs,
         seed=cfg.seed,
-        **common,
+        **_common(cfg),
     )
-    btf = read_btf(btf_path)
-    tcfg.resume = cfg.resume and _reusable(tcfg, btf_sha=btf_fingerprint(btf)["sha256"])
+    tcfg.resume = cfg.resume and _reusable(tcfg, btf_sha=btf_sha)
     tcfg.force = not tcfg.resume
-    tck = run_teach(tcfg)
-    records = {"teacher": [tck]}
-    log(f"{preset}: teacher  {tck['train_seconds']:.0f} s")
-    runs = {
-        "neumip": dict(method="neumip", distill=False),
-        "single8": dict(method="single8"),
-        "student_nodistill": dict(method="student", distill=False),
-        "student": dict(method="student"),
-    }
+    return tcfg
+
+
+def _distill_configs(preset: str, cfg: QualityConfig, root: Path, btf_path: Path) -> list:
+    """``(name, stem, config)`` of every network and seed of a preset (its teacher trained)."""
+    from vrneural.distill.checkpoint import file_sha256
+    from vrneural.distill.config import DistillConfig
+    from vrneural.distill.distill import resolve_method
+
+    d = root / preset
     tsha = file_sha256(d / "teacher.pt")
-    for name, kw in runs.items():
-        records[name] = []
+    out = []
+    for name, kw in RUNS.items():
         for seed in range(cfg.seed, cfg.seed + cfg.repeats):
             # the first seed keeps the plain name, so a one-seed run's checkpoints are reused
             stem = name if seed == cfg.seed else f"{name}.seed{seed}"
@@ -149,14 +154,91 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
                     seed=seed,
                     ema=cfg.ema,
                     **kw,
-                    **common,
+                    **_common(cfg),
                 )
             )
             dcfg.resume = cfg.resume and _reusable(dcfg, teacher_sha=tsha)
             dcfg.force = not dcfg.resume
-            ck = run_distill(dcfg)
-            records[name].append(ck)
-            log(f"{preset}: {stem}  {ck['train_seconds']:.0f} s")
+            out.append((name, stem, dcfg))
+    return out
+
+
+def _job(kind: str, job_cfg) -> float:
+    """One step of ``--jobs`` in a worker process; returns its training seconds."""
+    if kind == "synth":
+        preset, qcfg, path = job_cfg
+        make_btf(preset, qcfg, path)
+        return 0.0
+    if kind == "teach":
+        from vrneural.distill.teach import run_teach
+
+        return float(run_teach(job_cfg)["train_seconds"])
+    from vrneural.distill.distill import run_distill
+
+    return float(run_distill(job_cfg)["train_seconds"])
+
+
+def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> None:
+    """``--jobs N``: synthesise, then train every teacher, then every other network, N
+    processes at a time; the evaluation afterwards finds them finished and reuses them."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    from vrneural.btf.format import read_btf
+    from vrneural.distill.data import btf_fingerprint
+
+    quiet = dataclasses.replace(cfg, progress=False)
+    btfs = {p: root / "btf" / f"{p}.btf" for p in presets}
+    ctx = multiprocessing.get_context("spawn")  # CUDA-safe; no forked torch thread pools
+    with ProcessPoolExecutor(max_workers=cfg.jobs, mp_context=ctx) as pool:
+
+        def run(jobs: list) -> None:
+            futures = {pool.submit(_job, kind, c): label for label, kind, c in jobs}
+            try:
+                for f in as_completed(futures):
+                    log(f"{futures[f]}  {f.result():.0f} s")
+            except BaseException:
+                pool.shutdown(wait=True, cancel_futures=True)  # Ctrl-C: workers save first
+                raise
+
+        run([(f"{p}: btf", "synth", (p, quiet, btfs[p])) for p in presets])
+        teach = []
+        for p in presets:
+            (root / p).mkdir(parents=True, exist_ok=True)
+            sha = btf_fingerprint(read_btf(btfs[p]))["sha256"]
+            teach.append((f"{p}: teacher", "teach", _teach_config(p, quiet, root, btfs[p], sha)))
+        run(teach)
+        run(
+            [
+                (f"{p}: {stem}", "distill", c)
+                for p in presets
+                for _, stem, c in _distill_configs(p, quiet, root, btfs[p])
+            ]
+        )
+
+
+def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
+    """Train and evaluate every method on one preset; returns its records."""
+    from vrneural.btf.format import read_btf
+    from vrneural.distill.data import SliceData, btf_fingerprint
+    from vrneural.distill.distill import model_from_checkpoint, run_distill
+    from vrneural.distill.evaluate import mean_l1, predict_slice
+    from vrneural.distill.teach import run_teach
+
+    d = root / preset
+    d.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    btf_path = make_btf(preset, cfg, root / "btf" / f"{preset}.btf")
+    synth_s = time.perf_counter() - t0
+    btf = read_btf(btf_path)
+    tcfg = _teach_config(preset, cfg, root, btf_path, btf_fingerprint(btf)["sha256"])
+    tck = run_teach(tcfg)
+    records = {"teacher": [tck]}
+    log(f"{preset}: teacher  {tck['train_seconds']:.0f} s")
+    for name, stem, dcfg in _distill_configs(preset, cfg, root, btf_path):
+        ck = run_distill(dcfg)
+        records.setdefault(name, []).append(ck)
+        log(f"{preset}: {stem}  {ck['train_seconds']:.0f} s")
     data = SliceData(btf, tck["split"]["test"])
     every = list(range(len(data.train) + len(data.test)))
     slices = _slice_pairs(data)
@@ -305,6 +387,7 @@ def run_quality(cfg: QualityConfig) -> dict:
         raise VrnError("--presets is empty")
     for k in ("res", "dirs", "teacher_epochs", "epochs", "repeats"):
         check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 1, 10_000)
+    check_range("--jobs", cfg.jobs, 1, 256)
     if cfg.res % 2:
         raise VrnError(f"--res = {cfg.res} must be even (2x2 texel blocks)")
     root = Path(cfg.out)
@@ -315,6 +398,9 @@ def run_quality(cfg: QualityConfig) -> dict:
         )
     root.mkdir(parents=True, exist_ok=True)
     results, slices, t_all = {}, {}, time.perf_counter()
+    if cfg.jobs > 1:
+        _train_parallel(presets, cfg, root, print)
+        cfg = dataclasses.replace(cfg, resume=True)  # evaluate what was just trained
     doc: dict = {}
     for preset in presets:
         r = bench_material(preset, cfg, root, print)
