@@ -279,8 +279,8 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
 
 
 # Fields that may differ between a reusable checkpoint and this run: paths and workflow flags
-# (the BTF and the teacher are compared by content), and the epochs (a shorter run continues).
-# fields that do not change what is trained (where, how fast, how shown)
+# (the BTF and the teacher are compared by content), the epochs (a shorter run continues), and
+# where and how fast it trains (device, compile), which do not change what is trained.
 _FREE = {"btf", "output", "teacher", "epochs", "progress", "force", "resume", "device", "compile"}
 
 

@@ -76,8 +76,6 @@ class SliceData:
             )
         self.light = torch.from_numpy(np.array(btf.light_dirs, np.float32))
         self.view = torch.from_numpy(np.array(btf.view_dirs, np.float32))
-        self.device = torch.device("cpu")
-        self._on = (self.values, self.light, self.view)  # the tensors on self.device
         test_set = set(test)
         self.test = sorted(test_set)
         self.train = [p for p in range(L * V) if p not in test_set]
@@ -87,16 +85,18 @@ class SliceData:
         self.centres = to_blocks(centre)  # [N, 4, 2]
         share = nb // world
         self.shard = slice(rank * share, (rank + 1) * share)
-        if torch.device(device) != self.device:
-            self.__dict__.update(self.on(device).__dict__)
+        self._place(device)
+
+    def _place(self, device) -> None:
+        """Serve slices on ``device``: ``_on`` holds the tensors there (the CPU ones on a CPU)."""
+        self.device = torch.device(device)
+        self._on = tuple(t.to(self.device) for t in (self.values, self.light, self.view))
 
     def on(self, device) -> SliceData:
         """The same data serving tensors on ``device`` (the CPU copy is kept and shared):
         training reads slices on the GPU, export and the numpy checks read them on the CPU."""
-        d = torch.device(device)
         new = copy.copy(self)
-        new.device = d
-        new._on = tuple(t.to(d) for t in (self.values, self.light, self.view))
+        new._place(device)
         return new
 
     def dirs(self, pair: int) -> tuple[torch.Tensor, torch.Tensor]:
