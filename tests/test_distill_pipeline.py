@@ -95,6 +95,12 @@ def test_baselines_train_and_export(trained, tmp_path):  # noqa: F811
         assert worst <= 1e-5
         assert mat.output == ("log1p" if method == "neumip" else "linear")
         assert ck["config"]["distill"] == (method != "neumip")
+        w = mat.networks["mlp"][0].weight
+        if method == "neumip":  # NeuMIP's inputs: wi.xy, wo.xy; trained, the rest stay exactly 0
+            assert np.all(w[:, [0, 1, 3, 4]] != 0) and not np.any(w[:, [2, 5, 6, 7, 8]])
+            assert mat.macs_per_texel == (4 + 7) * 25 + 2 * 25 * 25 + 25 * 3
+        else:
+            assert np.all(w != 0)
 
 
 def test_blocks_are_2x2():

@@ -75,8 +75,9 @@ def mlp_forward(x: np.ndarray, layers: list[Layer], precision: str = "f32") -> n
 
 
 def macs(layers: list[Layer]) -> int:
-    """Multiply-adds per evaluation."""
-    return sum(layer.n_in * layer.n_out for layer in layers)
+    """Multiply-adds per evaluation: the non-zero weights, which is what the generated kernels
+    execute (they skip zero weights; a dense network has ``n_in * n_out`` per layer)."""
+    return sum(int(np.count_nonzero(layer.weight)) for layer in layers)
 
 
 def pack_weights(layers: list[Layer]) -> np.ndarray:

@@ -4,7 +4,8 @@ For each preset: synthesise a BTF, train the teacher, then the five methods at o
 (the same epochs for every network, all from the same seed and data split):
 
 - ``lafortune``: diffuse + 4 Lafortune lobes per texel, Levenberg-Marquardt (analytic baseline);
-- ``neumip``: 7-channel texture, 4 x 25 MLP, log(1+y) output, ground truth only;
+- ``neumip``: 7-channel texture, 4 x 25 MLP, log(1+y) output, ground truth only, directions
+  as NeuMIP has them (wi.xy, wo.xy; ``--neumip-dirs full`` adds wi.z, wo.z and h);
 - ``single8``: one 8-wide 4-layer MLP, distilled (the Fig. 13 ablation);
 - ``student_nodistill``: the coarse-to-fine student on ground truth only (the Fig. 11 ablation);
 - ``student``: the coarse-to-fine student distilled from the teacher (paper Eq. 5).
@@ -58,6 +59,11 @@ class QualityConfig:
     seed: int = opt(0, "seed of synthesis, initialisation and data order")
     repeats: int = opt(
         1, "train every network but the teacher with this many seeds (seed, seed+1, ...)"
+    )
+    neumip_dirs: str = opt(
+        "xy",
+        "NeuMIP's direction inputs: xy (NeuMIP's own) or full (wi, wo, h, as the student)",
+        choices=("xy", "full"),
     )
     ema: float = opt(0.0, "weight-average decay of every network but the teacher (distill --ema)")
     device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
@@ -153,6 +159,7 @@ def _distill_configs(preset: str, cfg: QualityConfig, root: Path, btf_path: Path
                     epochs=cfg.epochs,
                     seed=seed,
                     ema=cfg.ema,
+                    neumip_dirs=cfg.neumip_dirs,
                     **kw,
                     **_common(cfg),
                 )
@@ -281,6 +288,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
 # Fields that may differ between a reusable checkpoint and this run: paths and workflow flags
 # (the BTF and the teacher are compared by content), the epochs (a shorter run continues), and
 # where and how fast it trains (device, compile), which do not change what is trained.
+_BEFORE = {"neumip_dirs": "full"}  # NeuMIP read wi, wo and h before the option existed
 _FREE = {"btf", "output", "teacher", "epochs", "progress", "force", "resume", "device", "compile"}
 
 
@@ -296,9 +304,11 @@ def _reusable(cfg, btf_sha: str | None = None, teacher_sha: str | None = None) -
     except VrnError:
         return False
     want, have = dataclasses.asdict(cfg), ck["config"]
-    # a field newer than the checkpoint counts as its default (what that run used)
-    default = {f.name: f.default for f in dataclasses.fields(cfg)}
-    if any(have.get(k, default[k]) != v for k, v in want.items() if k not in _FREE):
+    # a field newer than the checkpoint counts as what that run used: its default, or the
+    # behaviour from before the field where the default changed it
+    default = {f.name: f.default for f in dataclasses.fields(cfg)} | _BEFORE
+    free = _FREE if want.get("method") == "neumip" else _FREE | {"neumip_dirs"}
+    if any(have.get(k, default[k]) != v for k, v in want.items() if k not in free):
         return False
     if int(ck["epoch"]) > cfg.epochs:
         return False

@@ -85,6 +85,12 @@ class DistillConfig(TrainConfig):
     sigma: float = opt(0.1, "weight of L1(y_s, y_t)")
     lambda1: float = opt(0.1, "weight of L2(z_s1, T1 z_t1)")
     lambda2: float = opt(0.1, "weight of L2(z_s2, T2 z_t2)")
+    neumip_dirs: str = opt(
+        "xy",
+        "NeuMIP's direction inputs: xy (wi.xy, wo.xy, as NeuMIP has them) or full (wi, wo, h "
+        "like the student; a stronger baseline than the paper's, see README: Training)",
+        choices=("xy", "full"),
+    )
     coarse_channels: int = opt(8, "student U_c channels (one texel per 2x2 block)")
     fine_channels: int = opt(8, "student U_f channels (full BTF resolution)")
     export: bool = opt(True, "also write <output>.vrnm (the runtime pack)")

@@ -99,6 +99,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         if resume.get("kind") != "student":
             raise VrnError(f"{cfg.output}: is not a student checkpoint; cannot --resume distill")
         old = dict(resume["config"])
+        old.setdefault("neumip_dirs", "full")  # checkpoints from before the option read all 9
         old.update(
             epochs=cfg.epochs,
             output=cfg.output,  # where it is now (the directory may have moved)
@@ -136,6 +137,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         cfg.space,
         coarse_channels=cfg.coarse_channels,
         fine_channels=cfg.fine_channels,
+        neumip_dirs=cfg.neumip_dirs,
     )
     model = NeuralModel(spec, cfg.seed)
     net = DistillNet(model, teacher.to(dev), data, cfg).to(dev)

@@ -120,6 +120,8 @@ class NeuralModel(nn.Module):
             c = spec["channels"]
             self.mlp = MLP([DIR_INPUTS + c, *spec["hidden"], 3])
             self.tex = nn.ParameterDict({"features": tex(spec["tex_res"], c)})
+            with torch.no_grad():  # unused direction inputs: zero weights, never updated
+                self.mlp.layers[0].weight[:, :DIR_INPUTS] *= dir_mask(spec)
         elif self.arch == "coarse_fine":
             cc, cf = spec["coarse_channels"], spec["fine_channels"]
             self.coarse = MLP([DIR_INPUTS + cc, *spec["coarse_hidden"]], last_act="relu")
@@ -130,10 +132,11 @@ class NeuralModel(nn.Module):
         else:
             raise ValueError(f"unknown arch {self.arch!r}")
         self.latent_layers = spec["latent_layers"]
+        self.register_buffer("dir_mask", dir_mask(spec), persistent=False)
 
     def forward(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor):
         n = uv.shape[0]
-        dirs = torch.cat([wi, wo, half_vector(wi, wo)])  # [9]
+        dirs = torch.cat([wi, wo, half_vector(wi, wo)]) * self.dir_mask  # [9]
         if self.arch == "single":
             f = sample_bilinear_wrap(f16_round(self.tex["features"]), uv)  # [N, 4, C]
             x = torch.cat([dirs.expand(n, 4, DIR_INPUTS), f], -1)
@@ -156,16 +159,41 @@ class NeuralModel(nn.Module):
         texs = {k: v.detach().half().numpy() for k, v in self.tex.items()}
         if self.arch == "single":
             nets = {"mlp": self.mlp.to_layers()}
+            nets["mlp"][0].weight[:, :DIR_INPUTS] *= self.dir_mask.cpu().numpy()  # unread: 0
         else:
             nets = {"coarse": self.coarse.to_layers(), "fine": self.fine.to_layers()}
         return NeuralMaterial(self.arch, nets, texs, self.output, meta or {})
+
+
+DIR_MODES = {
+    # which of the 9 direction inputs (wi, wo, h) a network reads
+    "full": [1, 1, 1, 1, 1, 1, 1, 1, 1],
+    # NeuMIP's own input: wi and wo as 2D points on the projected hemisphere (x, y)
+    "xy": [1, 1, 0, 1, 1, 0, 0, 0, 0],
+}
+
+
+def dir_mask(spec: dict) -> torch.Tensor:
+    """``[9]`` 0/1 mask of the direction inputs a model reads (``spec["dir_inputs"]``).
+
+    A masked input is multiplied by zero; its first-layer weights start at zero, get exactly
+    zero gradient (Adam never moves them) and are exported as zeros, so the runtime pack
+    format is unchanged and the generated shaders skip them.
+    Only ``single`` networks take a mask; specs without the field read all nine inputs.
+    """
+    mode = spec.get("dir_inputs", "full")
+    if mode not in DIR_MODES or (mode != "full" and spec["arch"] != "single"):
+        raise ValueError(f"dir_inputs {mode!r} not supported for arch {spec['arch']!r}")
+    return torch.tensor(DIR_MODES[mode], dtype=torch.float32)
 
 
 def make_spec(method: str, res: tuple[int, int], space: str = "linear", **kw) -> dict:
     """Architecture of each method, as a plain dict. ``res = (H, W)`` of the BTF.
 
     teacher: 4 linear layers, 128 wide, 8-channel full-res texture (``single``);
-    neumip: 4 x 25, 7 channels, log(1+y) output (``single``); single8: 4 x 8, 8 channels;
+    neumip: 4 x 25, 7 channels, log(1+y) output, direction inputs ``kw["neumip_dirs"]``
+    (default ``xy``: wi.xy and wo.xy as in NeuMIP, no half vector; ``full``: wi, wo, h)
+    (``single``); single8: 4 x 8, 8 channels;
     student: M_c 2 x 8 (the second layer's output is z_c), M_f 8 -> 3, U_c 8 ch at half
     resolution (one texel per 2x2 block), U_f 8 ch at full resolution (``coarse_fine``).
     """
@@ -195,6 +223,7 @@ def make_spec(method: str, res: tuple[int, int], space: str = "linear", **kw) ->
             hidden=[width] * 3,
             latent_layers=[1, 2],
             tex_init=0.1,
+            dir_inputs=kw.get("neumip_dirs", "xy") if method == "neumip" else "full",
         )
     if method == "student":
         return dict(
