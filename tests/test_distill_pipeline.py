@@ -10,7 +10,7 @@ import torch
 from distill_helpers import FAST, run_cli, trained  # noqa: F401 (fixture)
 
 from vrneural.btf.format import read_btf
-from vrneural.distill.checkpoint import load_checkpoint
+from vrneural.distill.checkpoint import load_checkpoint, save_checkpoint
 from vrneural.distill.data import SliceData, to_blocks
 from vrneural.distill.distill import model_from_checkpoint
 from vrneural.formats.vrnm import read_vrnm
@@ -101,6 +101,24 @@ def test_baselines_train_and_export(trained, tmp_path):  # noqa: F811
             assert mat.macs_per_texel == (4 + 7) * 25 + 2 * 25 * 25 + 25 * 3
         else:
             assert np.all(w != 0)
+
+
+def test_neumip_checkpoint_from_before_the_option_resumes_with_nine_inputs(trained, tmp_path):  # noqa: F811
+    """A NeuMIP checkpoint without ``neumip_dirs`` read wi, wo and h; it resumes as such."""
+    out = tmp_path / "nm.pt"
+    args = ["--method", "neumip", "--no-distill", *FAST]
+    code, err = run_cli(
+        "distill", trained["teacher"], "-o", out, "--epochs", 1, *args, "--neumip-dirs", "full"
+    )
+    assert code == 0, err
+    ck = load_checkpoint(out)
+    del ck["config"]["neumip_dirs"]
+    save_checkpoint(out, ck)
+    code, err = run_cli("distill", trained["teacher"], "-o", out, "--epochs", 2, "--resume", *args)
+    assert code == 0, err
+    ck = load_checkpoint(out)
+    assert ck["epoch"] == 2 and ck["config"]["neumip_dirs"] == "full"
+    assert np.all(read_vrnm(out.with_suffix(".vrnm")).networks["mlp"][0].weight != 0)
 
 
 def test_blocks_are_2x2():

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vrneural.config import config_dict, opt
-from vrneural.distill.config import COMPILE_MODES
+from vrneural.distill.config import BEFORE_FIELD, COMPILE_MODES, NEUMIP_DIRS
 from vrneural.errors import VrnError, check_range
 from vrneural.versions import package_versions
 
@@ -63,7 +63,7 @@ class QualityConfig:
     neumip_dirs: str = opt(
         "xy",
         "NeuMIP's direction inputs: xy (NeuMIP's own) or full (wi, wo, h, as the student)",
-        choices=("xy", "full"),
+        choices=NEUMIP_DIRS,
     )
     ema: float = opt(0.0, "weight-average decay of every network but the teacher (distill --ema)")
     device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
@@ -288,7 +288,6 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
 # Fields that may differ between a reusable checkpoint and this run: paths and workflow flags
 # (the BTF and the teacher are compared by content), the epochs (a shorter run continues), and
 # where and how fast it trains (device, compile), which do not change what is trained.
-_BEFORE = {"neumip_dirs": "full"}  # NeuMIP read wi, wo and h before the option existed
 _FREE = {"btf", "output", "teacher", "epochs", "progress", "force", "resume", "device", "compile"}
 
 
@@ -304,9 +303,9 @@ def _reusable(cfg, btf_sha: str | None = None, teacher_sha: str | None = None) -
     except VrnError:
         return False
     want, have = dataclasses.asdict(cfg), ck["config"]
-    # a field newer than the checkpoint counts as what that run used: its default, or the
-    # behaviour from before the field where the default changed it
-    default = {f.name: f.default for f in dataclasses.fields(cfg)} | _BEFORE
+    # a field newer than the checkpoint counts as what that run used: its default, or
+    # BEFORE_FIELD where the default changed the behaviour
+    default = {f.name: f.default for f in dataclasses.fields(cfg)} | BEFORE_FIELD
     free = _FREE if want.get("method") == "neumip" else _FREE | {"neumip_dirs"}
     if any(have.get(k, default[k]) != v for k, v in want.items() if k not in free):
         return False

@@ -13,6 +13,10 @@ from vrneural.config import opt
 SPACES = ("linear", "log")
 METHODS = ("student", "single8", "neumip")
 COMPILE_MODES = ("off", "default", "reduce-overhead")
+NEUMIP_DIRS = ("xy", "full")
+# What a checkpoint written before a field existed used for it, where that differs from the
+# field's default (resuming or reusing such a checkpoint must train what it trained).
+BEFORE_FIELD = {"neumip_dirs": "full"}  # NeuMIP read wi, wo and h before the option existed
 
 
 @dataclass
@@ -89,7 +93,7 @@ class DistillConfig(TrainConfig):
         "xy",
         "NeuMIP's direction inputs: xy (wi.xy, wo.xy, as NeuMIP has them) or full (wi, wo, h "
         "like the student; a stronger baseline than the paper's, see README: Training)",
-        choices=("xy", "full"),
+        choices=NEUMIP_DIRS,
     )
     coarse_channels: int = opt(8, "student U_c channels (one texel per 2x2 block)")
     fine_channels: int = opt(8, "student U_f channels (full BTF resolution)")

@@ -16,7 +16,7 @@ from torch import nn
 
 from vrneural.btf.format import read_btf
 from vrneural.distill.checkpoint import file_sha256, load_checkpoint
-from vrneural.distill.config import DistillConfig
+from vrneural.distill.config import BEFORE_FIELD, DistillConfig
 from vrneural.distill.data import SliceData, btf_fingerprint
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
 from vrneural.distill.models import NeuralModel, apply_output, make_spec
@@ -98,8 +98,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     if resume is not None:
         if resume.get("kind") != "student":
             raise VrnError(f"{cfg.output}: is not a student checkpoint; cannot --resume distill")
-        old = dict(resume["config"])
-        old.setdefault("neumip_dirs", "full")  # checkpoints from before the option read all 9
+        old = BEFORE_FIELD | resume["config"]
         old.update(
             epochs=cfg.epochs,
             output=cfg.output,  # where it is now (the directory may have moved)
