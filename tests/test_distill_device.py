@@ -87,3 +87,30 @@ def test_compiled_training_equals_eager(tmp_path):
         meta = json.loads(t.with_name(f"t-{mode}.vrnm.config.json").read_text())
         assert meta["metrics"]["pack_vs_torch_max_abs"] < 1e-5
     assert hist["default"] == pytest.approx(hist["off"], rel=1e-3)
+
+
+def test_compiling_many_networks_in_one_process_stays_compiled():
+    """``bench quality --jobs 1 --compile`` trains every network in one process. They share
+    ``NeuralModel.forward``'s code; its compiled variants must not pile up to dynamo's limit
+    (8), past which the later networks silently ran eagerly. Tracing with the "eager" backend
+    exercises the same caches and guards as inductor, without its code generation."""
+    from torch._dynamo.eval_frame import _debug_get_cache_entry_list
+
+    from vrneural.distill.models import NeuralModel, make_spec
+    from vrneural.distill.train import compile_networks
+
+    code = NeuralModel.forward.__code__
+    wi = torch.tensor([0.0, 0.6, 0.8])
+    wo = torch.tensor([0.6, 0.0, 0.8])
+    uv = torch.rand(16, 4, 2)
+    teacher = NeuralModel(make_spec("teacher", (8, 8)), 0)
+    for seed, method in enumerate(["neumip", "single8", "student", "student", "single8"]):
+        model = NeuralModel(make_spec(method, (8, 8)), seed)
+        compile_networks("default", model, teacher, backend="eager")
+        for _ in range(2):
+            model(wi, wo, uv)[0].sum().backward()  # training step
+            with torch.no_grad():
+                model(wi, wo, uv)  # per-epoch test
+                teacher(wi, wo, uv)  # the teacher's hints
+        assert len(_debug_get_cache_entry_list(code)) <= 3, method
+    torch.compiler.reset()

@@ -29,16 +29,27 @@ from vrneural.distill.data import SliceData
 from vrneural.errors import VrnError
 
 
-def compile_networks(mode: str, *models: nn.Module) -> None:
+def compile_networks(mode: str, *models: nn.Module, backend: str = "inductor") -> None:
     """``torch.compile`` each network in place (``--compile``; state dicts keep their keys).
 
     Every step of one slice is a few hundred small kernels; on a GPU their launches, not the
     arithmetic, bound the step, and fusing them is what compiling buys (README: Training).
+
+    The compiler's caches are reset first. Every network shares the code of
+    ``NeuralModel.forward``, and each one trained adds two or three entries to that code's
+    cache (with and without grad, the teacher), so a process that trains several networks one
+    after another (``bench quality --jobs 1``) reached dynamo's limit of 8 at the third or
+    fourth network and silently ran the rest uncompiled. ``backend`` is for tests ("eager"
+    traces and guards like inductor without generating code).
     """
     if mode == "off":
         return
+    torch.compiler.reset()
     for m in models:
-        m.compile(mode=mode, dynamic=False)
+        if backend == "inductor":
+            m.compile(mode=mode, dynamic=False)
+        else:
+            m.compile(backend=backend, dynamic=False)
 
 
 def dist_setup(device: str = "cpu") -> tuple[int, int]:
