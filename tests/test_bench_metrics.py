@@ -99,3 +99,14 @@ def test_int_list_errors_are_one_line():
 def test_stats_percentiles():
     s = stats([1.0, 2.0, 3.0, 4.0])
     assert s["median"] == 2.5 and s["max"] == 4.0 and s["p99"] <= 4.0
+
+
+def test_quick_keeps_explicit_flags():
+    from vrneural.bench.frames import FramesConfig
+    from vrneural.bench.quality import QualityConfig
+
+    c = FramesConfig(quick=True, texture_res="64").resolved()
+    assert c.texture_res == "64" and c.reuse == "0,2,4"  # given: kept; left at default: quick
+    q = QualityConfig(quick=True, epochs=3).resolved()
+    assert (q.epochs, q.res, q.teacher_epochs) == (3, 16, 2)
+    assert FramesConfig(texture_res="64").resolved().reuse == FramesConfig().reuse

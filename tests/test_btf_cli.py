@@ -125,6 +125,10 @@ def test_bad_inputs_are_one_line_errors_and_touch_nothing(small_btf, tmp_path, v
     _one_line_error(vrn(*synth[:2], "--res", "0", "-o", str(existing), "--force"), "--res", "0")
     _one_line_error(vrn(*synth[:2], "--res", "-3", "-o", str(existing), "--force"), "--res")
     _one_line_error(vrn(*synth, "--dirs", "0", "-o", str(existing), "--force"), "--dirs")
+    _one_line_error(vrn(*synth, "--dirs", "1", "-o", str(existing), "--force"), "--dirs")
+    _one_line_error(
+        vrn(*synth[:2], "--res", "5", "-o", str(existing), "--force"), "--res = 5", "even"
+    )
     _one_line_error(vrn(*synth, "-o", str(existing)), "exists", "--force")
     _one_line_error(vrn(*synth, "-o", str(existing), "--resume"), "exists", "--force")
     assert _snapshot(existing) == before
@@ -191,6 +195,9 @@ def test_interrupted_partial_is_never_discarded_silently(tmp_path, vrn_inproc):
     synth = ["btf", "synth", "--preset", "wood", "--res", "4", "--dirs", "3", "--no-progress"]
     _one_line_error(vrn_inproc(*synth, "-o", str(out)), "--resume", "--force")
     assert partial.read_bytes() == b"hours of work" and not out.exists()
-    r = vrn_inproc(*synth, "-o", str(out), "--resume")  # not ours to continue: starts over
-    assert r.returncode == 0 and "starting over" in r.stderr
+    # not a partial BTF: --resume cannot continue it and does not discard it either
+    _one_line_error(vrn_inproc(*synth, "-o", str(out), "--resume"), str(partial), "--force")
+    assert partial.read_bytes() == b"hours of work" and not out.exists()
+    r = vrn_inproc(*synth, "-o", str(out), "--resume", "--force")  # asked for: starts over
+    assert r.returncode == 0, r.stderr
     assert read_btf(out).shape == (3, 3, 4, 4) and not partial.exists()

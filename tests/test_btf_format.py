@@ -100,11 +100,16 @@ def test_writer_streams_and_resumes(tmp_path, rng):
     w.finalize()
     assert not (tmp_path / "s.btf.partial").exists()
     np.testing.assert_array_equal(read_btf(out).values, vals.astype(np.float16))
-    # a different header does not resume: it starts over
+    # a different header is not resumed, and the interrupted write is not overwritten
     w = BtfWriter(out.with_name("t.btf"), ld, vd, (5, 6), {"name": "s"})
     w.mark_done(0)
     del w
-    w = BtfWriter(out.with_name("t.btf"), ld, vd, (5, 6), {"name": "other"}, resume=True)
+    before = (tmp_path / "t.btf.partial").read_bytes()
+    with pytest.raises(VrnError, match="cannot be continued"):
+        BtfWriter(out.with_name("t.btf"), ld, vd, (5, 6), {"name": "other"}, resume=True)
+    assert (tmp_path / "t.btf.partial").read_bytes() == before
+    # without resume it starts over
+    w = BtfWriter(out.with_name("t.btf"), ld, vd, (5, 6), {"name": "other"})
     assert w.done == set()
 
 

@@ -7,6 +7,7 @@ import vrneural.btf.render as render
 from vrneural.btf import read_btf
 from vrneural.btf.presets import PRESETS
 from vrneural.btf.synth import BtfConfig, synthesize
+from vrneural.errors import VrnError
 
 
 def test_same_seed_same_bytes_other_seed_differs(tmp_path):
@@ -66,3 +67,30 @@ def test_ctrl_c_leaves_a_resumable_partial_and_resume_gives_same_bytes(
     assert "resuming, 3/7" in capsys.readouterr().err
     assert out.read_bytes() == full
     assert not partial.exists()
+
+
+def test_resume_with_other_settings_keeps_the_partial_and_names_them(tmp_path, monkeypatch):
+    cfg = BtfConfig(preset="carpet", res=8, dirs=7, seed=1)
+    out = tmp_path / "r.btf"
+    real = render.render_view
+    calls = {"n": 0}
+
+    def interrupt_after_two(*a, **k):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(render, "render_view", interrupt_after_two)
+    with pytest.raises(KeyboardInterrupt):
+        synthesize(cfg, out, progress=False)
+    monkeypatch.setattr(render, "render_view", real)
+    partial = tmp_path / "r.btf.partial"
+    before = partial.read_bytes()
+    other = BtfConfig(preset="carpet", res=10, dirs=7, seed=1)
+    with pytest.raises(VrnError, match=r"other settings \(res: 8 there, 10 here\).*--force"):
+        synthesize(other, out, resume=True, progress=False)
+    assert partial.read_bytes() == before  # the two rendered views are still there
+    # --force starts over with the new settings
+    b = read_btf(synthesize(other, out, resume=True, progress=False, force=True))
+    assert b.resolution == (10, 10) and not partial.exists()

@@ -34,7 +34,18 @@ def bad_checkpoints(tmp_path, trained):  # noqa: F811
     junk.write_bytes(b"not a checkpoint at all")
     plain = tmp_path / "plain.pt"
     torch.save({"weights": torch.zeros(3)}, plain)
-    return {"evil": evil, "corrupt": corrupt, "junk": junk, "plain": plain}
+    text = tmp_path / "text.pt"  # the unpickler fails with KeyError on these two
+    text.write_text("hello world\n")
+    short = tmp_path / "short.pt"  # ... and with IndexError on this one
+    short.write_text("abc")
+    return {
+        "evil": evil,
+        "corrupt": corrupt,
+        "junk": junk,
+        "plain": plain,
+        "text": text,
+        "short": short,
+    }
 
 
 @pytest.mark.parametrize(
@@ -44,6 +55,8 @@ def bad_checkpoints(tmp_path, trained):  # noqa: F811
         ("evil", "arbitrary objects"),
         ("corrupt", "corrupt"),
         ("junk", "corrupt"),
+        ("text", "corrupt or not a torch checkpoint (KeyError"),
+        ("short", "corrupt or not a torch checkpoint (IndexError"),
         ("plain", "not a vrneural checkpoint"),
         ("student", "expected a 'teacher'"),
     ],
@@ -107,3 +120,25 @@ def test_bad_values_are_one_line(trained, tmp_path):  # noqa: F811
         ["distill", trained["teacher"], "-o", tmp_path / "x.pt", "--epochs", "0"], "--epochs"
     )
     _expect_error(["teach", tmp_path / "none.btf", "-o", tmp_path / "t.pt"], "no such file")
+    _expect_error(["teach", trained["btf"], "-o", tmp_path / "t.txt", *FAST], "must end in .pt")
+    _expect_error(["export", trained["student"], "-o", tmp_path / "m.txt"], "end in .vrnm")
+    assert not (tmp_path / "t.vrnm").exists() and not (tmp_path / "m.txt").exists()
+
+
+@pytest.mark.parametrize(
+    ("flag", "value"),
+    [
+        ("--coarse-channels", "0"),
+        ("--fine-channels", "0"),
+        ("--tex-lr-scale", "-1"),
+        ("--lr-min", "1"),
+        ("--lr-patience", "-1"),
+        ("--max-test-slices", "-1"),
+        ("--threads", "0"),
+        ("--test-fraction", "0"),
+    ],
+)
+def test_bad_training_options_are_one_line(trained, tmp_path, flag, value):  # noqa: F811
+    out = tmp_path / "x.pt"
+    _expect_error(["distill", trained["teacher"], "-o", out, flag, value], flag, "out of range")
+    assert not out.exists()

@@ -12,6 +12,7 @@ from vrneural.distill.checkpoint import load_checkpoint
 from vrneural.distill.config import DistillConfig, TeachConfig
 from vrneural.distill.teach import run_teach
 from vrneural.distill.train import Interrupted
+from vrneural.errors import VrnError
 
 
 def _same(a, b):
@@ -45,6 +46,23 @@ def test_teach_resume_equals_straight_run(btf, tmp_path):
     _same(a, b)
 
 
+def test_resume_refuses_changed_settings_and_fewer_epochs(btf, tmp_path):
+    t = tmp_path / "t.pt"
+    assert run_cli("teach", btf, "-o", t, "--epochs", 2, "--width", 32, *FAST)[0] == 0
+    before = t.read_bytes()
+    again = ("teach", btf, "-o", t, "--resume", "--no-progress")
+    code, err = run_cli(*again, "--epochs", 3, "--width", 64)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "--width = 64, but" in err and "trained with 32" in err
+    code, err = run_cli(*again, "--epochs", 1)
+    assert code == 2 and "already has 2 epochs" in err, err
+    assert t.read_bytes() == before
+    # without --epochs a resume continues to the run's own target: here finished, so a no-op
+    code, err = run_cli(*again)
+    assert code == 0, err
+    assert t.read_bytes() == before and load_checkpoint(t)["epoch"] == 2
+
+
 def test_ctrl_c_saves_and_resume_continues_mid_epoch(btf, tmp_path):
     a, b = tmp_path / "a.pt", tmp_path / "b.pt"
     kw = dict(btf=str(btf), epochs=2, width=32, progress=False, max_test_slices=4, export=False)
@@ -58,6 +76,8 @@ def test_ctrl_c_saves_and_resume_continues_mid_epoch(btf, tmp_path):
         run_teach(TeachConfig(output=str(b), **kw), on_step=ctrl_c)
     ck = load_checkpoint(b)
     assert (ck["epoch"], ck["step"], ck["finished"]) == (1, 5, False)
+    with pytest.raises(VrnError, match=r"interrupted run \(epoch 1 of 2\); pass --resume"):
+        run_teach(TeachConfig(output=str(b), **kw))  # the hint points at --resume, not --force
     run_teach(TeachConfig(output=str(b), resume=True, **kw))
     _same(a, b)
 

@@ -74,7 +74,11 @@ def test_streaming_writer_resume(tmp_path):
     _, got, _ = read_container(tmp_path / "s.bin", MAGIC, (1,))
     assert got["v"][0, 0] == 1.0 and got["v"][3, 7] == 2.0
     w3 = ContainerWriter(tmp_path / "t.bin", MAGIC, 1, {"k": 2}, specs, resume=True)
-    assert not w3.resumed
+    assert not w3.resumed  # nothing to resume: a fresh write
+    before = w3.partial.read_bytes()
+    with pytest.raises(VrnError, match="cannot be continued"):  # another header: kept
+        ContainerWriter(tmp_path / "t.bin", MAGIC, 1, {"k": 3}, specs, resume=True)
+    assert w3.partial.read_bytes() == before
 
 
 def test_check_output_refuses_overwrite(tmp_path):

@@ -78,3 +78,50 @@ def test_tiny_run_writes_summary_and_frames(capsys, tmp_path):
     assert {"texture", "forward"} <= set(sm["gpu_ms"])
     assert (out / "frame0000_eye1.png").is_file() and (out / "frame0005_eye0.exr").is_file()
     assert "frame ms" in capsys.readouterr().out
+
+
+@pytest.mark.gpu
+def test_force_replaces_only_vrneurals_own_output(capsys, tmp_path):
+    tiny = ["--profile", "tiny", "--frames", "2", "--quiet", "--force"]
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep")
+    msg = _err(capsys, [*tiny, "--out", str(mine)])
+    assert "not a vrneural output directory" in msg and (mine / "notes.txt").read_text() == "keep"
+    a_file = tmp_path / "file.txt"
+    a_file.write_text("keep")
+    assert "is not a directory" in _err(capsys, [*tiny, "--out", str(a_file)])
+    assert a_file.read_text() == "keep"
+    out = tmp_path / "o"
+    assert main(["run", *tiny, "--out", str(out)]) == 0
+    (out / "frame0000_eye0.png").unlink()
+    (out / "stale.txt").write_text("from an old run")
+    assert main(["run", *tiny, "--out", str(out)]) == 0  # our own output: replaced
+    assert (out / "frame0000_eye0.png").is_file() and not (out / "stale.txt").exists()
+
+
+@pytest.mark.gpu
+def test_a_run_that_fails_in_setup_writes_nothing(capsys, tmp_path):
+    from vrneural.formats.vrnm import write_vrnm
+    from vrneural.material import random_material
+
+    write_vrnm(tmp_path / "big.vrnm", random_material(0, arch="single", width=160))
+    scene = tmp_path / "scene.toml"
+    text = SCENE.format(scale=1).replace('procedural = "lambertian"', 'pack = "big.vrnm"')
+    scene.write_text(text)
+    out = tmp_path / "o"
+    msg = _err(capsys, [str(scene), "--profile", "tiny", "--frames", "2", "--out", str(out)])
+    assert "objects[0] (" in msg and "big.vrnm" in msg and "MACs/texel" in msg
+    assert not out.exists()  # so the retry the message suggests needs no --force
+
+
+@pytest.mark.gpu
+def test_profile_lights_are_capped_at_the_scenes(capsys, tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text(SCENE.format(scale=1))  # one light; the tiny profile has more
+    out = tmp_path / "o"
+    argv = [str(scene), "--profile", "tiny", "--frames", "2", "--quiet", "--out", str(out)]
+    assert main(["run", *argv]) == 0
+    assert json.loads((out / "summary.json").read_text())["resolved"]["n_lights"] == 1
+    msg = _err(capsys, [str(scene), "--lights", "2", "--out", str(tmp_path / "o2")])
+    assert "--lights = 2 but the scene has 1 lights" in msg

@@ -37,7 +37,9 @@ def add_config_args(
         flag = "--" + prefix + f.name.replace("_", "-")
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
         tp = hints[f.name]
-        help_ = f.metadata.get("help", "") + f" (default: {default})"
+        help_ = f.metadata.get("help", "")
+        if "default" not in help_:  # a help text that explains its default says it once
+            help_ += f" (default: {default})"
         if tp is bool:
             parser.add_argument(
                 flag,
@@ -73,3 +75,13 @@ def write_config(output: str | Path, cfg, extra: dict | None = None) -> Path:
     out = Path(output)
     path = out / "config.json" if out.is_dir() else out.with_name(out.name + ".config.json")
     return write_json(path, {**config_dict(cfg), **(extra or {})})
+
+
+def quick_defaults(cfg, **quick):
+    """``cfg`` with the ``--quick`` sizes in ``quick``, for the fields the user left at their
+    defaults: a flag given explicitly wins over ``--quick`` (and is validated as usual)."""
+    import dataclasses
+
+    default = type(cfg)()
+    keep = {k: v for k, v in quick.items() if getattr(cfg, k) == getattr(default, k)}
+    return dataclasses.replace(cfg, **keep)

@@ -20,9 +20,16 @@ def check_range(name: str, value: float, lo: float | None = None, hi: float | No
     bad = isinstance(value, float) and not math.isfinite(value)
     bad = bad or (lo is not None and value < lo) or (hi is not None and value > hi)
     if bad:
-        lo_s = "-inf" if lo is None else f"{lo:g}"
-        hi_s = "inf" if hi is None else f"{hi:g}"
+        lo_s = "-inf" if lo is None else _num(lo)
+        hi_s = "inf" if hi is None else _num(hi)
         raise VrnError(f"{name} = {value!r} is out of range; allowed [{lo_s}, {hi_s}]")
+
+
+def _num(x: float) -> str:
+    """A bound as people write it: whole numbers in full (16777216, not 1.67772e+07)."""
+    if float(x).is_integer() and abs(x) < 1e15:
+        return str(int(x))
+    return f"{x:g}"
 
 
 def check_choice(name: str, value: object, allowed: tuple | list | set) -> None:

@@ -58,6 +58,9 @@ class NeuralMaterial:
         if set(self.networks) != set(nets) or set(self.textures) != set(texs):
             raise ValueError(f"{self.arch} needs networks {nets} and textures {texs}")
         self.textures = {k: np.asarray(v, np.float16) for k, v in self.textures.items()}
+        for k, t in self.textures.items():
+            if t.ndim != 3 or min(t.shape) < 1:
+                raise ValueError(f"texture '{k}' has shape {list(t.shape)}; expected [H, W, C > 0]")
         first = self.networks[nets[0]][0].n_in
         if first != DIR_INPUTS + self.textures[texs[0]].shape[2]:
             raise ValueError(

@@ -8,13 +8,12 @@ student. Shown as FPS (from the mean frame time) and ms (median, p99).
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt
+from vrneural.config import opt, quick_defaults
 
 
 @dataclass
@@ -41,7 +40,7 @@ class FramesConfig:
     def resolved(self) -> FramesConfig:
         if not self.quick:
             return self
-        return dataclasses.replace(
+        return quick_defaults(
             self, texture_res="128,256", reuse="0,2,4", eye_res="258x276", min_frames=2
         )
 

@@ -11,14 +11,13 @@ GPU times come from timestamps around the dispatches (inputs uploaded beforehand
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from vrneural.bench import report as rp
-from vrneural.config import opt
+from vrneural.config import opt, quick_defaults
 
 NETWORKS = ("student", "single8", "neumip")
 VARIANTS = ("constants", "buffer", "torch")
@@ -41,9 +40,7 @@ class KernelsConfig:
     def resolved(self) -> KernelsConfig:
         if not self.quick:
             return self
-        return dataclasses.replace(
-            self, texels=16384, repeats=2, sgemm_n=256, networks="student,neumip"
-        )
+        return quick_defaults(self, texels=16384, repeats=2, sgemm_n=256, networks="student,neumip")
 
 
 def network(name: str):

@@ -8,13 +8,12 @@ shading work grows linearly with k.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt
+from vrneural.config import opt, quick_defaults
 
 
 @dataclass
@@ -39,7 +38,7 @@ class LightsConfig:
     def resolved(self) -> LightsConfig:
         if not self.quick:
             return self
-        return dataclasses.replace(self, lights="1,2,4", texture_res=256, eye_res="258x276")
+        return quick_defaults(self, lights="1,2,4", texture_res=256, eye_res="258x276")
 
 
 def run_lights(cfg: LightsConfig) -> dict:

@@ -7,13 +7,12 @@ resolution. Radiance textures are RGBA float16 here (8 B/texel): ``res^2 * 8 * e
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt
+from vrneural.config import opt, quick_defaults
 
 
 @dataclass
@@ -39,7 +38,7 @@ class MaterialsConfig:
     def resolved(self) -> MaterialsConfig:
         if not self.quick:
             return self
-        return dataclasses.replace(self, materials="1,2,3", texture_res=256, eye_res="258x276")
+        return quick_defaults(self, materials="1,2,3", texture_res=256, eye_res="258x276")
 
 
 def squares_scene(k: int, n_lights: int):

@@ -29,7 +29,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from vrneural.config import config_dict, opt
+from vrneural.config import config_dict, opt, quick_defaults
 from vrneural.distill.config import BEFORE_FIELD, COMPILE_MODES, NEUMIP_DIRS
 from vrneural.errors import VrnError, check_range
 from vrneural.versions import package_versions
@@ -87,9 +87,7 @@ class QualityConfig:
     def resolved(self) -> QualityConfig:
         if not self.quick:
             return self
-        return dataclasses.replace(
-            self, res=16, dirs=8, teacher_epochs=2, epochs=2, lafortune_iters=5
-        )
+        return quick_defaults(self, res=16, dirs=8, teacher_epochs=2, epochs=2, lafortune_iters=5)
 
 
 def make_btf(preset: str, cfg: QualityConfig, path: Path) -> Path:
@@ -394,6 +392,11 @@ def run_quality(cfg: QualityConfig) -> dict:
     presets = [p.strip() for p in cfg.presets.split(",") if p.strip()]
     if not presets:
         raise VrnError("--presets is empty")
+    from vrneural.btf.presets import PRESETS
+    from vrneural.errors import check_choice
+
+    for p in presets:  # before anything is trained or written
+        check_choice("--presets", p, sorted(PRESETS))
     for k in ("res", "dirs", "teacher_epochs", "epochs", "repeats"):
         check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 1, 10_000)
     check_range("--jobs", cfg.jobs, 1, 256)

@@ -6,28 +6,20 @@ all written atomically into ``--out DIR`` (refused when it exists, unless ``--fo
 from __future__ import annotations
 
 import dataclasses
-import shutil
 import time
 from pathlib import Path
 
 import numpy as np
 
 from vrneural.config import config_dict
-from vrneural.formats.atomic import atomic_path, check_output, write_json
+from vrneural.formats.atomic import atomic_path, check_output_dir, make_output_dir, write_json
 
 
 def prepare_out(out: str | Path, force: bool) -> Path:
-    """Validate and (re)create the output directory. Cached packs under ``packs/`` survive a
+    """Validate and (re)create the output directory (see
+    :func:`vrneural.formats.atomic.check_output_dir`). Cached packs under ``packs/`` survive a
     ``--force`` rerun (they are keyed by their training config)."""
-    p = check_output(out, force)
-    if p.exists() and not p.is_dir():
-        p.unlink()
-    if p.is_dir():
-        for child in p.iterdir():
-            if child.name != "packs":
-                shutil.rmtree(child) if child.is_dir() else child.unlink()
-    p.mkdir(parents=True, exist_ok=True)
-    return p
+    return make_output_dir(check_output_dir(out, force), keep=("packs",))
 
 
 def stats(x) -> dict:

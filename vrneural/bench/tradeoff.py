@@ -14,7 +14,6 @@ Shared (both-eye) radiance textures do not exist in this runtime (it shades per 
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,7 +22,7 @@ import numpy as np
 
 from vrneural.bench import metrics, shimmer
 from vrneural.bench import report as rp
-from vrneural.config import opt
+from vrneural.config import opt, quick_defaults
 
 LABELS = {
     "student": "student (distilled)",
@@ -71,7 +70,7 @@ class TradeoffConfig:
     def resolved(self) -> TradeoffConfig:
         if not self.quick:
             return self
-        return dataclasses.replace(
+        return quick_defaults(
             self,
             eye_res="172x184",
             frames=6,

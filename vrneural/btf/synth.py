@@ -36,8 +36,11 @@ class BtfConfig:
 
     def validate(self) -> None:
         check_choice("--preset", self.preset, sorted(PRESETS))
-        check_range("--res", self.res, 1, 4096)
-        check_range("--dirs", self.dirs, 1, 100_000)
+        check_range("--res", self.res, 2, 4096)
+        if self.res % 2:  # the networks work on 2x2 texel blocks (teach/distill need it)
+            raise VrnError(f"--res = {self.res} must be even (training uses 2x2 texel blocks)")
+        # at least 2 x 2 (light, view) pairs: one can be held out for the test L1
+        check_range("--dirs", self.dirs, 2, 100_000)
         check_range("--spp", self.spp, 1, 256)
         check_range("--seed", self.seed, 0, 2**63 - 1)
         if self.grid != 0:
@@ -67,8 +70,36 @@ def subsamples(cfg: BtfConfig) -> np.ndarray:
     return rng.random((cfg.res, cfg.res, cfg.spp, 2)) - 0.5
 
 
-def synthesize(cfg: BtfConfig, out, resume: bool = False, progress: bool = True) -> Path:
+def check_partial_settings(partial: Path, generator: dict) -> None:
+    """Refuse to continue an interrupted ``.partial`` that was made with other settings, naming
+    them (``--force`` starts over): the hours already rendered are never thrown away silently."""
+    from vrneural.btf.format import BTF_MAGIC, BTF_VERSION
+    from vrneural.formats.container import read_container
+
+    if not partial.exists():
+        return
+    try:
+        old = read_container(partial, BTF_MAGIC, (BTF_VERSION,), "partial BTF", False)[0]
+    except VrnError as e:
+        raise VrnError(f"{e}; pass --force to start over") from None
+    have = old.get("generator", {})
+    diff = [
+        f"{k}: {have.get(k)!r} there, {v!r} here" for k, v in generator.items() if have.get(k) != v
+    ]
+    if diff:
+        raise VrnError(
+            f"{partial}: the interrupted run used other settings ({'; '.join(diff)}); rerun with "
+            "its settings to continue it, or pass --force to start over"
+        )
+
+
+def synthesize(
+    cfg: BtfConfig, out, resume: bool = False, progress: bool = True, force: bool = False
+) -> Path:
     """Render ``cfg`` into ``out`` (a ``.btf``). Returns the path of the finished file.
+
+    ``resume`` continues an interrupted ``<out>.partial`` of the same settings (other settings
+    are an error unless ``force``, which starts over).
 
     Views are rendered one at a time (all lights per view); values are clamped into
     ``[0, 65504]`` (float16) and checked finite before they are written.
@@ -85,10 +116,9 @@ def synthesize(cfg: BtfConfig, out, resume: bool = False, progress: bool = True)
         "seed": cfg.seed,
     }
     out = Path(out)
-    had_partial = out.with_name(out.name + ".partial").exists()
-    w = BtfWriter(out, dirs, dirs, (cfg.res, cfg.res), meta, resume=resume)
-    if resume and had_partial and not w.resumed:
-        print(f"{w.partial}: made with other settings; starting over", file=sys.stderr)
+    if resume and not force:
+        check_partial_settings(out.with_name(out.name + ".partial"), meta["generator"])
+    w = BtfWriter(out, dirs, dirs, (cfg.res, cfg.res), meta, resume=resume and not force)
     todo = [v for v in range(len(dirs)) if v not in w.done]
     if resume and w.done:
         print(f"{out}: resuming, {len(w.done)}/{len(dirs)} views already done", file=sys.stderr)

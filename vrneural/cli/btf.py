@@ -98,7 +98,7 @@ def run_synth(args) -> int:
         raise VrnError(f"{args.output}: output must end in .btf")
     out = check_output(args.output, args.force)
     _check_partial(out, args.resume, args.force)
-    path = synthesize(cfg, out, resume=args.resume, progress=not args.no_progress)
+    path = synthesize(cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force)
     write_config(path, cfg)
     print(path)
     return 0

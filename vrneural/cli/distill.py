@@ -18,7 +18,9 @@ def register(sub) -> None:
         "<output>.vrnm (unless --no-export) and config JSON beside them.",
     )
     p.add_argument("teacher", help="teacher checkpoint from `vrneural teach`")
-    p.add_argument("-o", "--output", default="student.pt", help="output checkpoint (.pt)")
+    p.add_argument(
+        "-o", "--output", default="student.pt", help="output checkpoint (.pt; default: student.pt)"
+    )
     add_config_args(p, DistillConfig)
     p.set_defaults(func=run)
 

@@ -26,8 +26,11 @@ def run(args) -> int:
 
     from vrneural.distill.checkpoint import load_checkpoint
     from vrneural.distill.export import export_checkpoint, ranges_table
+    from vrneural.errors import VrnError
     from vrneural.formats.atomic import check_output, write_json
 
+    if Path(args.output).suffix != ".vrnm":
+        raise VrnError(f"{args.output}: output pack must end in .vrnm")
     check_output(args.output, args.force)
     ck = load_checkpoint(args.checkpoint)
     out, meta = export_checkpoint(

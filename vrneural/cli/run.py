@@ -35,7 +35,8 @@ def main(args) -> int:
     pngs = sorted(Path(f).name for f in sm["files"] if f.endswith(".png"))
     print(f"wrote     {out}/")
     if any(f.endswith(".mp4") for f in sm["files"]):
-        print(f"  video   {out}/stereo.mp4 (left eye | right eye)")
+        what = "left eye | right eye" if cfg.eyes == 2 else "one eye"
+        print(f"  video   {out}/stereo.mp4 ({what})")
     if pngs:
         print(f"  frames  {', '.join(pngs)} (+ .exr)")
     print(f"  summary {out}/summary.json")

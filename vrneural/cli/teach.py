@@ -17,7 +17,9 @@ def register(sub) -> None:
         "--resume continues exactly.",
     )
     p.add_argument("btf", help="input BTF file (.btf)")
-    p.add_argument("-o", "--output", default="teacher.pt", help="output checkpoint (.pt)")
+    p.add_argument(
+        "-o", "--output", default="teacher.pt", help="output checkpoint (.pt; default: teacher.pt)"
+    )
     add_config_args(p, TeachConfig)
     p.set_defaults(func=run)
 

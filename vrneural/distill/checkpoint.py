@@ -22,7 +22,6 @@ import hashlib
 import os
 import pickle
 import re
-import zipfile
 from pathlib import Path
 
 import torch
@@ -66,9 +65,8 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
             f"{p}: refusing to load: it needs unpickling of arbitrary objects ({m.group(1)}), "
             "which weights_only=True forbids"
         ) from None
-    except (RuntimeError, EOFError, OSError, zipfile.BadZipFile, ValueError) as e:
-        msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-        raise VrnError(f"{p}: corrupt or not a torch checkpoint ({msg[:120]})") from None
+    except Exception as e:  # text, truncated or foreign files fail anywhere in the unpickler
+        raise VrnError(f"{p}: corrupt or not a torch checkpoint ({_first_sentence(e)})") from None
     if not isinstance(ck, dict) or ck.get("format") != FORMAT:
         raise VrnError(f"{p}: not a vrneural checkpoint (no format '{FORMAT}')")
     if ck.get("version") != VERSION:
@@ -79,6 +77,16 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
         if key not in ck:
             raise VrnError(f"{p}: checkpoint lacks '{key}'")
     return ck
+
+
+def _first_sentence(e: Exception) -> str:
+    """The first sentence of an exception's message (torch's run on), or its type."""
+    text = str(e).strip()
+    if not text or isinstance(e, (KeyError, IndexError)):
+        return f"{type(e).__name__}: {text}" if text else type(e).__name__
+    first = text.splitlines()[0]
+    cut = first.find(". ")
+    return first[: cut + 1] if 0 < cut < 160 else first[:160]
 
 
 def file_sha256(path) -> str:

@@ -74,7 +74,9 @@ class TeachConfig(TrainConfig):
     width: int = opt(128, "hidden width of the teacher MLP")
     layers: int = opt(4, "linear layers of the teacher MLP (layers - 1 hidden)")
     channels: int = opt(8, "neural-texture channels (full BTF resolution)")
-    export: bool = opt(True, "also write <output>.vrnm (arch single: the per-pixel reference)")
+    export: bool = opt(
+        True, "also write the .vrnm beside the checkpoint (t.pt -> t.vrnm; the per-pixel reference)"
+    )
 
 
 @dataclass
@@ -97,4 +99,4 @@ class DistillConfig(TrainConfig):
     )
     coarse_channels: int = opt(8, "student U_c channels (one texel per 2x2 block)")
     fine_channels: int = opt(8, "student U_f channels (full BTF resolution)")
-    export: bool = opt(True, "also write <output>.vrnm (the runtime pack)")
+    export: bool = opt(True, "also write the runtime pack beside the checkpoint (s.pt -> s.vrnm)")

@@ -47,7 +47,10 @@ def split_pairs(n_light: int, n_view: int, fraction: float, seed: int) -> tuple[
     perm = np.random.default_rng(seed).permutation(n)
     n_test = max(1, round(n * fraction)) if fraction > 0 else 0
     if n - n_test < 1:
-        raise VrnError(f"test fraction {fraction} leaves no training directions ({n} pairs)")
+        raise VrnError(
+            f"--test-fraction = {fraction} leaves no training (light, view) pairs: the BTF has "
+            f"only {n}; use a BTF with more directions"
+        )
     return sorted(perm[n_test:].tolist()), sorted(perm[:n_test].tolist())
 
 

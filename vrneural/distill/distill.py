@@ -20,7 +20,13 @@ from vrneural.distill.config import BEFORE_FIELD, DistillConfig
 from vrneural.distill.data import SliceData, btf_fingerprint
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
 from vrneural.distill.models import NeuralModel, apply_output, make_spec
-from vrneural.distill.teach import check_train_config, finish_outputs, outputs_of, prepare_outputs
+from vrneural.distill.teach import (
+    check_train_config,
+    finish_outputs,
+    outputs_of,
+    prepare_outputs,
+    resumed_config,
+)
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range
 
@@ -92,22 +98,17 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     check_train_config(cfg)
     for k in ("sigma", "lambda1", "lambda2"):
         check_range(f"--{k}", getattr(cfg, k), 0.0, 100.0)
+    check_range("--coarse-channels", cfg.coarse_channels, 1, 64)
+    check_range("--fine-channels", cfg.fine_channels, 1, 64)
     cfg = resolve_method(cfg)
     outs = outputs_of(cfg.output, cfg.export)
     resume = prepare_outputs(cfg, outs)
     if resume is not None:
         if resume.get("kind") != "student":
             raise VrnError(f"{cfg.output}: is not a student checkpoint; cannot --resume distill")
-        old = BEFORE_FIELD | resume["config"]
-        old.update(
-            epochs=cfg.epochs,
-            output=cfg.output,  # where it is now (the directory may have moved)
-            teacher=cfg.teacher,
-            resume=True,
-            progress=cfg.progress,
-            device=cfg.device,
-            compile=cfg.compile,
-        )
+        # output and teacher: where they are now (the directory may have moved)
+        old = resumed_config(cfg, BEFORE_FIELD | resume["config"], resume)
+        old["teacher"] = cfg.teacher
         if cfg.btf:
             old["btf"] = cfg.btf
         cfg = DistillConfig(**old)

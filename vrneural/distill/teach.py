@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import torch
 from torch import nn
@@ -35,16 +36,61 @@ class GroundTruthNet(nn.Module):
 def check_train_config(cfg) -> None:
     check_range("--epochs", cfg.epochs, 1, 100_000)
     check_range("--lr", cfg.lr, 1e-9, 1.0)
-    check_range("--test-fraction", cfg.test_fraction, 0.0, 0.9)
+    # > 0: the held-out test L1 drives the lr schedule and the reports
+    check_range("--test-fraction", cfg.test_fraction, 1e-6, 0.9)
     check_range("--lr-factor", cfg.lr_factor, 1e-3, 0.999)
+    check_range("--lr-min", cfg.lr_min, 0.0, cfg.lr)
+    # rel: a fraction of the best L1; abs: L1 units (a huge one makes every epoch a plateau)
+    check_range(
+        "--lr-threshold", cfg.lr_threshold, 0.0, 1.0 if cfg.lr_threshold_mode == "rel" else 1e6
+    )
+    check_range("--lr-patience", cfg.lr_patience, 0, 10_000)
+    check_range("--tex-lr-scale", cfg.tex_lr_scale, 1e-6, 1e6)
     check_range("--ema", cfg.ema, 0.0, 0.999999)
+    check_range("--max-test-slices", cfg.max_test_slices, 0, 10**9)
+    check_range("--threads", cfg.threads, 1, 1024)
+
+
+# What a --resume takes from the command line; every other field comes from the checkpoint.
+RESUME_FREE = ("epochs", "output", "resume", "progress", "device", "compile", "threads")
+
+
+def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_FREE) -> dict:
+    """The checkpoint's config with the ``free`` fields taken from ``cfg``.
+
+    A flag the user set to something else than the checkpoint used (a value that is neither
+    the checkpoint's nor the default) is an error, not silently ignored; so is an ``--epochs``
+    below the epochs already trained.
+    """
+    default = type(cfg)()
+    for f in dataclasses.fields(cfg):
+        k = f.name
+        if k in free or k in ("force", "btf", "teacher") or k not in stored:
+            continue
+        now = getattr(cfg, k)
+        if now != stored[k] and now != getattr(default, k):
+            raise VrnError(
+                f"--{k.replace('_', '-')} = {now!r}, but {cfg.output} was trained with "
+                f"{stored[k]!r}; --resume continues the checkpoint's settings (drop the flag, "
+                "or start over with --force)"
+            )
+    merged = dict(stored) | {k: getattr(cfg, k) for k in free}
+    if cfg.epochs == default.epochs and "epochs" in stored:  # no --epochs: the run's own target
+        merged["epochs"] = stored["epochs"]
+    done = int(ck["epoch"])
+    if merged["epochs"] < done:
+        raise VrnError(
+            f"--epochs = {merged['epochs']}, but {cfg.output} already has {done} epochs; "
+            f"pass --epochs {done} or more to continue it"
+        )
+    return merged
 
 
 def outputs_of(output: str, export: bool) -> list[str]:
     """Files a stage writes: the checkpoint and (optionally) its ``.vrnm`` beside it."""
-    from pathlib import Path
-
     p = Path(output)
+    if p.suffix != ".pt":  # the pack beside it is <stem>.vrnm: keep the pair unambiguous
+        raise VrnError(f"{p}: output checkpoint must end in .pt")
     return [str(p)] + ([str(p.with_suffix(".vrnm"))] if export else [])
 
 
@@ -55,6 +101,17 @@ def prepare_outputs(cfg, outputs: list[str]) -> dict | None:
     if cfg.resume:
         ck = load_checkpoint(cfg.output)
         return ck
+    if not cfg.force and Path(cfg.output).is_file():
+        try:
+            ck = load_checkpoint(cfg.output)
+        except VrnError:
+            ck = None  # not a checkpoint: the plain "output exists" below
+        if ck is not None and not ck.get("finished", True):
+            raise VrnError(
+                f"{cfg.output}: holds an interrupted run (epoch {ck['epoch']} of "
+                f"{ck['config'].get('epochs', '?')}); pass --resume to continue it or --force "
+                "to start over"
+            )
     for o in outputs:
         check_output(o, cfg.force)
     return None
@@ -71,17 +128,8 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
     if resume is not None:
         if resume.get("kind") != "teacher":
             raise VrnError(f"{cfg.output}: is not a teacher checkpoint; cannot --resume teach")
-        old = dict(resume["config"])
-        old.update(
-            epochs=cfg.epochs,
-            output=cfg.output,
-            btf=cfg.btf,
-            resume=True,
-            progress=cfg.progress,
-            device=cfg.device,
-            compile=cfg.compile,
-        )
-        cfg = TeachConfig(**old)
+        old = resumed_config(cfg, resume["config"], resume)
+        cfg = TeachConfig(**(old | {"btf": cfg.btf}))
     btf = read_btf(cfg.btf)
     fp = btf_fingerprint(btf)
     if resume is not None and resume["btf"]["sha256"] != fp["sha256"]:

@@ -15,6 +15,7 @@ gradients, which equals the full-slice gradient (the loss is a mean over equal s
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import re
 import signal
@@ -244,7 +245,12 @@ def fit(
     if rank == 0 and cfg.progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=(cfg.epochs - epoch) * n - step, unit="slice", dynamic_ncols=True)
+        bar = tqdm(
+            total=(cfg.epochs - epoch) * n - step,
+            desc=str(payload.get("method") or payload.get("kind") or "train"),
+            unit="slice",
+            dynamic_ncols=True,
+        )
     last_test = history[-1]["test_l1"] if history else float("nan")
     with Stop() as stop, bar or contextlib.nullcontext():
         while epoch < cfg.epochs:
@@ -271,7 +277,7 @@ def fit(
                     bar.update(1)
                     if step % 25 == 0:
                         bar.set_postfix(
-                            ep=epoch + 1, loss=f"{loss_sum / step:.4g}", test_l1=f"{last_test:.4g}"
+                            ep=epoch + 1, loss=f"{loss_sum / step:.4g}", test_l1=_l1_text(last_test)
                         )
                 if on_step is not None:
                     on_step(epoch, step)
@@ -296,12 +302,17 @@ def fit(
             epoch, step, loss_sum = epoch + 1, 0, 0.0
             if bar is not None:
                 bar.set_postfix(
-                    ep=epoch, loss=f"{history[-1]['train_loss']:.4g}", test_l1=f"{last_test:.4g}"
+                    ep=epoch, loss=f"{history[-1]['train_loss']:.4g}", test_l1=_l1_text(last_test)
                 )
             save(epoch >= cfg.epochs)
     if resume is not None and resume.get("finished") and int(resume["epoch"]) == epoch:
         return resume  # nothing left to train: the file stays as it is (its hash too)
     return save(epoch >= cfg.epochs)
+
+
+def _l1_text(v: float) -> str:
+    """The progress bar's test L1: ``-`` before the first epoch's evaluation."""
+    return "-" if math.isnan(v) else f"{v:.4g}"
 
 
 def _stopping(flag: bool, world: int, device: torch.device) -> bool:

@@ -29,6 +29,68 @@ def check_output(path: str | os.PathLike, force: bool) -> Path:
     return p
 
 
+OUTPUT_MARK = ".vrneural-output"
+# Result files of output directories written before the marker existed.
+_LEGACY_RESULTS = ("summary.json", "results.json")
+
+
+def check_output_dir(path: str | os.PathLike, force: bool) -> Path:
+    """Validate an output *directory* before any work starts.
+
+    An existing path needs ``force``, and even then it must be a directory that vrneural
+    wrote (it holds :data:`OUTPUT_MARK`, or a result file of an older release) or an empty
+    one: ``--force`` replaces our own output, never a folder of the user's files.
+    """
+    p = Path(path)
+    if p.exists() or p.is_symlink():
+        if not p.is_dir():
+            raise VrnError(f"{p}: output exists and is not a directory; choose another --out")
+        if not force:
+            raise VrnError(f"{p}: output exists; pass --force to overwrite")
+        if not is_output_dir(p):
+            raise VrnError(
+                f"{p}: not a vrneural output directory (no {OUTPUT_MARK}); --force only replaces "
+                "vrneural's own output, so choose another --out"
+            )
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise VrnError(f"{p.parent}: cannot create output directory ({e.strerror})") from None
+    return p
+
+
+def is_output_dir(p: Path) -> bool:
+    """Whether ``p`` is empty or was written by vrneural (see :func:`check_output_dir`)."""
+    if (p / OUTPUT_MARK).exists() or any((p / f).is_file() for f in _LEGACY_RESULTS):
+        return True
+    return not any(p.iterdir())
+
+
+def make_output_dir(path: str | os.PathLike, keep: tuple[str, ...] = ()) -> Path:
+    """Empty a directory passed by :func:`check_output_dir` (except the names in ``keep``),
+    create it and mark it as vrneural's output. Call it once the inputs are validated, so a
+    run that fails early leaves the old output as it was."""
+    import shutil
+
+    p = Path(path)
+    if p.is_dir():
+        if not is_output_dir(p):  # the folder changed since it was checked
+            raise VrnError(f"{p}: not a vrneural output directory; choose another --out")
+        for child in p.iterdir():
+            if child.name in keep:
+                continue
+            if child.is_dir() and not child.is_symlink():
+                shutil.rmtree(child)
+            else:
+                child.unlink()
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        (p / OUTPUT_MARK).write_text("written by vrneural; --force may replace this directory\n")
+    except OSError as e:
+        raise VrnError(f"{p}: cannot create output directory ({e.strerror})") from None
+    return p
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary sibling path; on success it is renamed over ``path`` (atomic on POSIX).

@@ -91,6 +91,11 @@ class ContainerWriter:
                 old = f.read(len(prefix) + hlen)
             if old == prefix + hbytes and self.partial.stat().st_size == self.file_size:
                 self.resumed = True
+            else:  # never overwrite an interrupted write that resume was asked to continue
+                raise VrnError(
+                    f"{self.partial}: an interrupted write with a different header or size; "
+                    "it cannot be continued with these settings"
+                )
         if not self.resumed:
             with open(self.partial, "wb") as f:
                 f.write(prefix + hbytes)

@@ -22,7 +22,9 @@ class RunConfig:
     texture_res: int | None = opt(None, "radiance texture side per eye per object")
     eye_res: str | None = opt(None, "pixels per eye, WIDTHxHEIGHT (profile default)")
     frames: int = opt(90, "display frames to render")
-    lights: int | None = opt(None, "point lights (the first N of the scene; profile default)")
+    lights: int | None = opt(
+        None, "point lights: the first N of the scene (default: the profile's, at most the scene's)"
+    )
     mode: str = opt("texture", "texture | screen | reference", choices=MODES)
     schedule: str = opt("staggered", "reuse schedule: staggered | burst", choices=SCHEDULES)
     precision: str = opt("auto", "auto | f16 | f32", choices=("auto", "f16", "f32"))
@@ -84,10 +86,13 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     eye_res = parse_res(cfg.eye_res) if cfg.eye_res else prof.eye_res
     if max(eye_res) > max_tex:
         raise VrnError(f"--eye-res = {eye_res} is above the adapter maximum {max_tex}")
-    n_lights = prof.lights if cfg.lights is None else cfg.lights
-    check_range("--lights", n_lights, 0, 64)  # 0: neural objects render black
-    if n_lights > len(scene.lights):
-        raise VrnError(f"--lights = {n_lights} but the scene has {len(scene.lights)} lights")
+    if cfg.lights is None:  # the profile's count, capped at what the scene defines
+        n_lights = min(prof.lights, len(scene.lights))
+    else:
+        n_lights = cfg.lights
+        check_range("--lights", n_lights, 0, 64)  # 0: neural objects render black
+        if n_lights > len(scene.lights):
+            raise VrnError(f"--lights = {n_lights} but the scene has {len(scene.lights)} lights")
     precision = resolve_precision(
         cfg.precision, adapter.is_cpu, adapter.features.get("shader-f16", False)
     )

@@ -445,7 +445,9 @@ def measure_all(quick: bool = False) -> dict:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(
+        prog="python -m vrneural.runtime.measure", description=__doc__.splitlines()[0]
+    )
     p.add_argument("out", help="output JSON")
     p.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
     p.add_argument("--only", default="", help="comma-separated subset of measurements")

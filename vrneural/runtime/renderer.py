@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vrneural.errors import VrnError
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
@@ -115,7 +116,11 @@ class Renderer:
                 mat = s.reference or getattr(o.material, "reference", None) or mat
             key = id(mat)
             if key not in passes:
-                passes[key] = self._make_pass(mat)
+                try:
+                    passes[key] = self._make_pass(mat)
+                except VrnError as e:  # name the object and its pack, not the BTF inside
+                    src = o.material.source or "procedural"
+                    raise VrnError(f"objects[{i}] ({o.name}, {src}): {e}") from None
             for e in range(s.eyes):
                 n.targets.append(self._make_target(passes[key], n, e))
             self.neural.append(n)

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import dataclasses
-import shutil
 import time
 from pathlib import Path
 
@@ -12,7 +11,7 @@ import numpy as np
 
 from vrneural.config import config_dict
 from vrneural.errors import VrnError
-from vrneural.formats.atomic import check_output, write_json
+from vrneural.formats.atomic import check_output_dir, make_output_dir, write_json
 from vrneural.runtime.config import RunConfig, resolve
 from vrneural.runtime.output import (
     VideoWriter,
@@ -85,7 +84,6 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
 
     out = Path(cfg.out or default_out())
     cfg = dataclasses.replace(cfg, out=str(out))
-    check_output(out, cfg.force)
     if cfg.scene:
         scene = load_scene(cfg.scene)
     else:
@@ -99,14 +97,13 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     video = None
     if cfg.video:
         check_video()
-    if out.exists() and cfg.force:
-        shutil.rmtree(out) if out.is_dir() else out.unlink()
-    out.mkdir(parents=True, exist_ok=True)
+    check_output_dir(out, cfg.force)
+    t_setup = time.perf_counter()
+    r = Renderer(scene, s)  # validates the packs: a failure here leaves --out untouched
+    setup_s = time.perf_counter() - t_setup
+    make_output_dir(out)
     if cfg.video:
         video = VideoWriter(out / "stereo.mp4", s.fps)
-    t_setup = time.perf_counter()
-    r = Renderer(scene, s)
-    setup_s = time.perf_counter() - t_setup
     stats, files = [], []
     for f in tqdm(range(s.frames), desc="vrneural run", unit="frame", disable=not progress):
         stats.append(r.frame(f))
