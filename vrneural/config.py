@@ -80,8 +80,6 @@ def write_config(output: str | Path, cfg, extra: dict | None = None) -> Path:
 def quick_defaults(cfg, **quick):
     """``cfg`` with the ``--quick`` sizes in ``quick``, for the fields the user left at their
     defaults: a flag given explicitly wins over ``--quick`` (and is validated as usual)."""
-    import dataclasses
-
     default = type(cfg)()
     keep = {k: v for k, v in quick.items() if getattr(cfg, k) == getattr(default, k)}
     return dataclasses.replace(cfg, **keep)

@@ -31,7 +31,7 @@ from pathlib import Path
 
 from vrneural.config import config_dict, opt, quick_defaults
 from vrneural.distill.config import BEFORE_FIELD, COMPILE_MODES, NEUMIP_DIRS
-from vrneural.errors import VrnError, check_range
+from vrneural.errors import VrnError, check_choice, check_range
 from vrneural.versions import package_versions
 
 METHODS = ("lafortune", "neumip", "single8", "student_nodistill", "student")
@@ -393,7 +393,6 @@ def run_quality(cfg: QualityConfig) -> dict:
     if not presets:
         raise VrnError("--presets is empty")
     from vrneural.btf.presets import PRESETS
-    from vrneural.errors import check_choice
 
     for p in presets:  # before anything is trained or written
         check_choice("--presets", p, sorted(PRESETS))

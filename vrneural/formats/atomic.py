@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -22,11 +23,16 @@ def check_output(path: str | os.PathLike, force: bool) -> Path:
         raise VrnError(f"{p}: output exists; pass --force to overwrite")
     if p.exists() and p.is_dir() and p.suffix:
         raise VrnError(f"{p}: output path is a directory")
+    _make_parent(p)
+    return p
+
+
+def _make_parent(p: Path) -> None:
+    """Create the directory an output goes into; failure is a one-line :class:`VrnError`."""
     try:
         p.parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise VrnError(f"{p.parent}: cannot create output directory ({e.strerror})") from None
-    return p
 
 
 OUTPUT_MARK = ".vrneural-output"
@@ -52,10 +58,7 @@ def check_output_dir(path: str | os.PathLike, force: bool) -> Path:
                 f"{p}: not a vrneural output directory (no {OUTPUT_MARK}); --force only replaces "
                 "vrneural's own output, so choose another --out"
             )
-    try:
-        p.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise VrnError(f"{p.parent}: cannot create output directory ({e.strerror})") from None
+    _make_parent(p)
     return p
 
 
@@ -70,8 +73,6 @@ def make_output_dir(path: str | os.PathLike, keep: tuple[str, ...] = ()) -> Path
     """Empty a directory passed by :func:`check_output_dir` (except the names in ``keep``),
     create it and mark it as vrneural's output. Call it once the inputs are validated, so a
     run that fails early leaves the old output as it was."""
-    import shutil
-
     p = Path(path)
     if p.is_dir():
         if not is_output_dir(p):  # the folder changed since it was checked
