@@ -110,3 +110,18 @@ def test_quick_keeps_explicit_flags():
     q = QualityConfig(quick=True, epochs=3).resolved()
     assert (q.epochs, q.res, q.teacher_epochs) == (3, 16, 2)
     assert FramesConfig(texture_res="64").resolved().reuse == FramesConfig().reuse
+
+
+def test_quick_keeps_explicit_flags_even_at_their_default_value():
+    from vrneural.bench.quality import QualityConfig
+    from vrneural.cli import build_parser, explicit_dests
+    from vrneural.config import config_from_args
+
+    default = QualityConfig().epochs
+    argv = ["bench", "quality", "--quick", "--epochs", str(default)]
+    args = build_parser().parse_args(argv)
+    args._explicit = explicit_dests(argv)
+    q = config_from_args(QualityConfig, args).resolved()
+    assert q.epochs == default and q.teacher_epochs == 2  # typed: kept; not typed: --quick
+    args._explicit = explicit_dests(argv[:3])  # the same values, --epochs not typed
+    assert config_from_args(QualityConfig, args).resolved().epochs == 2

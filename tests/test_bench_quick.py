@@ -119,7 +119,8 @@ def _err(capsys, argv):
 def test_bench_user_errors_are_one_line(capsys, tmp_path):
     o = str(tmp_path / "o")
     assert "must be even" in _err(capsys, ["frames", "--texture-res", "801", "--out", o])
-    assert "out of range" in _err(capsys, ["lights", "--lights", "0,9", "--out", o])
+    msg = _err(capsys, ["lights", "--lights", "0,9", "--out", o])
+    assert msg.startswith("vrneural bench lights: error: --lights = '0,9': 0 is out of range; ")
     assert "not allowed" in _err(capsys, ["kernels", "--networks", "resnet", "--out", o])
     assert "WIDTHxHEIGHT" in _err(capsys, ["tradeoff", "--eye-res", "big", "--out", o])
     (tmp_path / "o").mkdir()

@@ -201,3 +201,11 @@ def test_interrupted_partial_is_never_discarded_silently(tmp_path, vrn_inproc):
     r = vrn_inproc(*synth, "-o", str(out), "--resume", "--force")  # asked for: starts over
     assert r.returncode == 0, r.stderr
     assert read_btf(out).shape == (3, 3, 4, 4) and not partial.exists()
+
+
+def test_resume_with_nothing_to_resume_is_an_error_not_a_silent_fresh_start(tmp_path, vrn_inproc):
+    out = tmp_path / "n.btf"
+    synth = ["btf", "synth", "--preset", "wood", "--res", "4", "--dirs", "3", "--no-progress"]
+    r = vrn_inproc(*synth, "-o", str(out), "--resume")
+    _one_line_error(r, "vrneural btf synth: error", "nothing to resume", "n.btf.partial")
+    assert not out.exists() and not (tmp_path / "n.btf.partial").exists()

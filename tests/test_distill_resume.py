@@ -61,6 +61,14 @@ def test_resume_refuses_changed_settings_and_fewer_epochs(btf, tmp_path):
     code, err = run_cli(*again)
     assert code == 0, err
     assert t.read_bytes() == before and load_checkpoint(t)["epoch"] == 2
+    # a flag typed with its default value is still a choice: 128 is the default width, and
+    # --epochs 20 (the default) extends the run instead of being taken for "no --epochs"
+    code, err = run_cli(*again, "--width", 128)
+    assert code == 2 and "--width = 128, but" in err, err
+    assert t.read_bytes() == before
+    code, err = run_cli(*again, "--epochs", 20, "--width", 32)
+    assert code == 0, err
+    assert load_checkpoint(t)["epoch"] == 20
 
 
 def test_ctrl_c_saves_and_resume_continues_mid_epoch(btf, tmp_path):

@@ -52,12 +52,13 @@ def test_missing_pack_file(capsys, tmp_path):
         (["--reuse", "-1"], "--reuse = -1"),
         (["--texture-res", "99999"], "--texture-res = 99999"),
         (["--eye-res", "12xfoo"], "--eye-res"),
-        (["--reference", "missing.vrnm"], "missing.vrnm"),
+        (["--mode", "reference", "--reference", "missing.vrnm"], "'missing.vrnm': file not"),
+        (["--reference", "t.vrnm"], "only used by --mode reference"),
     ],
 )
 def test_bad_flags(capsys, tmp_path, argv, needle):
     msg = _err(capsys, ["--profile", "tiny", "--out", str(tmp_path / "o"), *argv])
-    assert needle in msg
+    assert needle in msg and not (tmp_path / "o").exists()
 
 
 def test_existing_output_needs_force(capsys, tmp_path):
@@ -125,3 +126,31 @@ def test_profile_lights_are_capped_at_the_scenes(capsys, tmp_path):
     assert json.loads((out / "summary.json").read_text())["resolved"]["n_lights"] == 1
     msg = _err(capsys, [str(scene), "--lights", "2", "--out", str(tmp_path / "o2")])
     assert "--lights = 2 but the scene has 1 lights" in msg
+
+
+@pytest.mark.gpu
+def test_ctrl_c_keeps_the_frames_rendered_so_far(capsys, tmp_path, monkeypatch):
+    from vrneural.runtime import renderer
+
+    class Interrupted(renderer.Renderer):
+        def frame(self, f):
+            if f == 3:
+                raise KeyboardInterrupt
+            return super().frame(f)
+
+    monkeypatch.setattr(renderer, "Renderer", Interrupted)
+    out = tmp_path / "o"
+    argv = ["run", "--profile", "tiny", "--frames", "8", "--save-frames", "all", "--quiet"]
+    assert main([*argv, "--out", str(out)]) == 130
+    err = capsys.readouterr().err
+    assert "interrupted after 3 of 8 frames" in err and "--force" in err
+    sm = json.loads((out / "summary.json").read_text())
+    assert sm["interrupted"] is True and sm["frames"] == 3
+    assert (out / "stereo.mp4").stat().st_size > 0
+    assert sorted(p.name for p in out.glob("*.png")) == [
+        f"frame{f:04d}_eye{e}.png" for f in range(3) for e in (0, 1)
+    ]
+    # the interrupted output is vrneural's own: --force replaces it
+    monkeypatch.undo()
+    assert main([*argv, "--frames", "2", "--force", "--out", str(out)]) == 0
+    assert json.loads((out / "summary.json").read_text())["interrupted"] is False

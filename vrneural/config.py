@@ -58,10 +58,43 @@ def add_config_args(
 
 
 def config_from_args(cls, args: argparse.Namespace, **overrides):
-    """Build ``cls`` from parsed args (fields absent from ``args`` keep their defaults)."""
+    """Build ``cls`` from parsed args (fields absent from ``args`` keep their defaults).
+
+    The fields given on the command line (``args._explicit``, set by the CLI) and the
+    ``overrides`` are recorded as explicit (:func:`is_explicit`).
+    """
     kw = {f.name: getattr(args, f.name) for f in dataclasses.fields(cls) if hasattr(args, f.name)}
     kw.update(overrides)
-    return cls(**kw)
+    cfg = cls(**kw)
+    given = getattr(args, "_explicit", None)
+    if given is not None:
+        names = {f.name for f in dataclasses.fields(cls)}
+        mark_explicit(cfg, *(set(given) & names), *overrides)
+    return cfg
+
+
+def mark_explicit(cfg, *names: str):
+    """Record ``names`` as fields the user chose (not defaults); returns ``cfg``."""
+    cfg.__dict__["_explicit"] = frozenset(cfg.__dict__.get("_explicit", ())) | set(names)
+    return cfg
+
+
+def is_explicit(cfg, name: str) -> bool:
+    """Whether the user chose ``cfg.<name>``: given on the command line (or marked with
+    :func:`mark_explicit`). A config built in code without marks counts a field as chosen
+    when it differs from the default."""
+    given = cfg.__dict__.get("_explicit")
+    if given is None:
+        return getattr(cfg, name) != getattr(type(cfg)(), name)
+    return name in given
+
+
+def replace_config(cfg, **changes):
+    """``dataclasses.replace`` that keeps the explicit-field record."""
+    new = dataclasses.replace(cfg, **changes)
+    if "_explicit" in cfg.__dict__:
+        new.__dict__["_explicit"] = cfg.__dict__["_explicit"]
+    return new
 
 
 def config_dict(cfg) -> dict:
@@ -78,8 +111,7 @@ def write_config(output: str | Path, cfg, extra: dict | None = None) -> Path:
 
 
 def quick_defaults(cfg, **quick):
-    """``cfg`` with the ``--quick`` sizes in ``quick``, for the fields the user left at their
-    defaults: a flag given explicitly wins over ``--quick`` (and is validated as usual)."""
-    default = type(cfg)()
-    keep = {k: v for k, v in quick.items() if getattr(cfg, k) == getattr(default, k)}
-    return dataclasses.replace(cfg, **keep)
+    """``cfg`` with the ``--quick`` sizes in ``quick``, for the fields the user did not set:
+    a flag given explicitly wins over ``--quick`` (and is validated as usual)."""
+    keep = {k: v for k, v in quick.items() if not is_explicit(cfg, k)}
+    return replace_config(cfg, **keep)

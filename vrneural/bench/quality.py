@@ -29,7 +29,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from vrneural.config import config_dict, opt, quick_defaults
+from vrneural.config import config_dict, mark_explicit, opt, quick_defaults
 from vrneural.distill.config import BEFORE_FIELD, COMPILE_MODES, NEUMIP_DIRS
 from vrneural.errors import VrnError, check_choice, check_range
 from vrneural.versions import package_versions
@@ -131,6 +131,7 @@ def _teach_config(preset: str, cfg: QualityConfig, root: Path, btf_path: Path, b
         seed=cfg.seed,
         **_common(cfg),
     )
+    mark_explicit(tcfg, "epochs")  # a resumed run goes to the bench's epochs, not its own
     tcfg.resume = cfg.resume and _reusable(tcfg, btf_sha=btf_sha)
     tcfg.force = not tcfg.resume
     return tcfg
@@ -162,6 +163,7 @@ def _distill_configs(preset: str, cfg: QualityConfig, root: Path, btf_path: Path
                     **_common(cfg),
                 )
             )
+            mark_explicit(dcfg, "epochs")
             dcfg.resume = cfg.resume and _reusable(dcfg, teacher_sha=tsha)
             dcfg.force = not dcfg.resume
             out.append((name, stem, dcfg))

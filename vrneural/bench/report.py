@@ -118,7 +118,7 @@ def int_list(field: str, text: str, lo: int, hi: int, even: bool = False) -> lis
         raise VrnError(f"{field} is empty")
     for v in vals:
         if not lo <= v <= hi:
-            raise VrnError(f"{field}: {v} is out of range [{lo}, {hi}]")
+            raise VrnError(f"{field} = {text!r}: {v} is out of range; allowed [{lo}, {hi}]")
         if even and v % 2:
             raise VrnError(f"{field}: {v} must be even (2x2 blocks)")
     return vals

@@ -30,16 +30,48 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: argparse ``dest`` of each command's own subcommand (``vrneural bench quality``, ...)
+SUBCOMMAND_DEST = ("benchmark", "btf_command")
+
+
+def command_name(args: argparse.Namespace) -> str:
+    """The command as typed, for message prefixes: ``vrneural bench quality``."""
+    words = ["vrneural", args.command]
+    words += [getattr(args, d) for d in SUBCOMMAND_DEST if getattr(args, d, None)]
+    return " ".join(words)
+
+
+def explicit_dests(argv: list[str]) -> set[str]:
+    """The ``dest`` of every option given in ``argv``: parsed again by a parser whose
+    defaults are all suppressed, so only what was typed lands in the namespace (argparse's
+    own matching, abbreviations included)."""
+
+    def suppress(parser: argparse.ArgumentParser) -> None:
+        parser._defaults.clear()
+        for a in parser._actions:
+            if isinstance(a, argparse._SubParsersAction):
+                for sp in a.choices.values():
+                    suppress(sp)
+            else:
+                a.default = argparse.SUPPRESS
+
+    p = build_parser()
+    suppress(p)
+    return set(vars(p.parse_args(argv)))
+
+
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
+    args._explicit = explicit_dests(argv)  # "--epochs 20" counts even where 20 is the default
     try:
         return int(args.func(args) or 0)
     except VrnError as e:
-        print(f"vrneural {args.command}: error: {e}", file=sys.stderr)
+        print(f"{command_name(args)}: error: {e}", file=sys.stderr)
         return e.exit_code
     except KeyboardInterrupt:
-        print(f"vrneural {args.command}: interrupted", file=sys.stderr)
+        print(f"{command_name(args)}: interrupted", file=sys.stderr)
         return 130
 
 

@@ -84,6 +84,8 @@ def _check_partial(out: Path, resume: bool, force: bool) -> None:
             f"{partial} exists from an interrupted run; pass --resume to continue it "
             "or --force to start over"
         )
+    if resume and not force and not partial.exists():
+        raise VrnError(f"--resume: nothing to resume, {partial} does not exist; drop --resume")
 
 
 def run_synth(args) -> int:

@@ -15,6 +15,7 @@ import torch
 from torch import nn
 
 from vrneural.btf.format import read_btf
+from vrneural.config import replace_config
 from vrneural.distill.checkpoint import file_sha256, load_checkpoint
 from vrneural.distill.config import BEFORE_FIELD, DistillConfig
 from vrneural.distill.data import SliceData, btf_fingerprint
@@ -90,7 +91,7 @@ def _latent_widths(spec: dict) -> list[int]:
 
 def resolve_method(cfg: DistillConfig) -> DistillConfig:
     """The config as trained: NeuMIP always uses log(1 + y) output, as the paper modified it."""
-    return dataclasses.replace(cfg, space="log") if cfg.method == "neumip" else cfg
+    return replace_config(cfg, space="log") if cfg.method == "neumip" else cfg
 
 
 def run_distill(cfg: DistillConfig, on_step=None) -> dict:

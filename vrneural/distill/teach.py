@@ -9,6 +9,7 @@ import torch
 from torch import nn
 
 from vrneural.btf.format import read_btf
+from vrneural.config import is_explicit
 from vrneural.distill.checkpoint import load_checkpoint
 from vrneural.distill.config import TeachConfig
 from vrneural.distill.data import SliceData, btf_fingerprint, split_pairs
@@ -62,20 +63,19 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
     the checkpoint's nor the default) is an error, not silently ignored; so is an ``--epochs``
     below the epochs already trained.
     """
-    default = type(cfg)()
     for f in dataclasses.fields(cfg):
         k = f.name
         if k in free or k in ("force", "btf", "teacher") or k not in stored:
             continue
         now = getattr(cfg, k)
-        if now != stored[k] and now != getattr(default, k):
+        if now != stored[k] and is_explicit(cfg, k):
             raise VrnError(
                 f"--{k.replace('_', '-')} = {now!r}, but {cfg.output} was trained with "
                 f"{stored[k]!r}; --resume continues the checkpoint's settings (drop the flag, "
                 "or start over with --force)"
             )
     merged = dict(stored) | {k: getattr(cfg, k) for k in free}
-    if cfg.epochs == default.epochs and "epochs" in stored:  # no --epochs: the run's own target
+    if not is_explicit(cfg, "epochs") and "epochs" in stored:  # no --epochs: the run's target
         merged["epochs"] = stored["epochs"]
     done = int(ck["epoch"])
     if merged["epochs"] < done:

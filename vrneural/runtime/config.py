@@ -97,6 +97,11 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         cfg.precision, adapter.is_cpu, adapter.features.get("shader-f16", False)
     )
     ref = None
+    if cfg.reference and cfg.mode != "reference":
+        raise VrnError(
+            f"--reference = {cfg.reference!r} is only used by --mode reference (the mode is "
+            f"{cfg.mode!r}); add --mode reference or drop --reference"
+        )
     if cfg.reference:
         from pathlib import Path
 

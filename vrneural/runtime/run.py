@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+import sys
 import time
 from pathlib import Path
 
@@ -45,7 +46,10 @@ def selected_frames(spec: str, frames: int) -> list[int]:
                     f"--save-frames: {tok!r} is not first, last, all or an index"
                 ) from None
             if not 0 <= k < frames:
-                raise VrnError(f"--save-frames: frame {k} is out of range [0, {frames - 1}]")
+                raise VrnError(
+                    f"--save-frames = {spec!r}: frame {k} is out of range; "
+                    f"allowed [0, {frames - 1}]"
+                )
             out.add(k)
     return sorted(out)
 
@@ -105,21 +109,43 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     if cfg.video:
         video = VideoWriter(out / "stereo.mp4", s.fps)
     stats, files = [], []
-    for f in tqdm(range(s.frames), desc="vrneural run", unit="frame", disable=not progress):
-        stats.append(r.frame(f))
-        if f in save or video is not None:
-            hdr = r.read_eyes()
-            if f in save:
-                for e, img in enumerate(hdr):
-                    name = f"frame{f:04d}_eye{e}"
-                    files.append(str(write_png(out / f"{name}.png", tonemap(img))))
-                    files.append(str(write_exr(out / f"{name}.exr", img)))
-            if video is not None:
-                video.add([tonemap(downscale(img, cfg.video_scale)) for img in hdr])
+    interrupted = False
+    bar = tqdm(range(s.frames), desc="vrneural run", unit="frame", disable=not progress)
+    try:
+        for f in bar:
+            stats.append(r.frame(f))
+            if f in save or video is not None:
+                hdr = r.read_eyes()
+                if f in save:
+                    for e, img in enumerate(hdr):
+                        name = f"frame{f:04d}_eye{e}"
+                        files.append(str(write_png(out / f"{name}.png", tonemap(img))))
+                        files.append(str(write_exr(out / f"{name}.exr", img)))
+                if video is not None:
+                    video.add([tonemap(downscale(img, cfg.video_scale)) for img in hdr])
+    except KeyboardInterrupt:  # keep what was rendered: a playable video and a summary of it
+        interrupted = True
+    finally:
+        bar.close()
+    if interrupted and not stats:
+        raise KeyboardInterrupt  # nothing rendered; the marked --out is replaced by --force
     if video is not None:
-        files.append(str(video.close()))
+        try:
+            files.append(str(video.close()))
+        except Exception:
+            if not interrupted:
+                raise
+            # Ctrl-C in a terminal also reaches ffmpeg: then there is no video to keep
     summary = make_summary(cfg, s, scene, adapter, stats, setup_s, files, r)
+    summary["interrupted"] = interrupted
     write_json(out / "summary.json", summary)
+    if interrupted:
+        print(
+            f"{out}: interrupted after {len(stats)} of {s.frames} frames; their summary.json, "
+            "frames and video are kept (--force replaces them)",
+            file=sys.stderr,
+        )
+        raise KeyboardInterrupt
     return summary
 
 
