@@ -119,6 +119,11 @@ def _err(capsys, argv):
 def test_bench_user_errors_are_one_line(capsys, tmp_path):
     o = str(tmp_path / "o")
     assert "must be even" in _err(capsys, ["frames", "--texture-res", "801", "--out", o])
+    for bench in ("frames", "lights", "materials", "tradeoff"):  # the adapter's bound, as `run`
+        msg = _err(capsys, [bench, "--texture-res", "1000000", "--out", o])
+        assert "--texture-res" in msg and "out of range; allowed [8, " in msg, msg
+    for bench in ("lights", "materials"):
+        assert "must be even" in _err(capsys, [bench, "--texture-res", "257", "--out", o])
     msg = _err(capsys, ["lights", "--lights", "0,9", "--out", o])
     assert msg.startswith("vrneural bench lights: error: --lights = '0,9': 0 is out of range; ")
     assert "not allowed" in _err(capsys, ["kernels", "--networks", "resnet", "--out", o])

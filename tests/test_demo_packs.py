@@ -70,8 +70,13 @@ def test_demo_scene_toml_matches_the_builtin_scene():
     for a, b in zip(toml.objects, ref.objects, strict=True):
         np.testing.assert_allclose(a.model, b.model, atol=1e-9, err_msg=b.name)
         assert a.material.kind == b.material.kind and a.material.tiling == b.material.tiling
+        assert (a.texture_res, a.min_texture_res) == (b.texture_res, b.min_texture_res), b.name
         if a.material.kind == "neural":
             assert Path(a.material.source).name == f"{b.material.source}.vrnm"
+            ra, rb = a.material.reference, b.material.reference  # what --mode reference shades
+            assert ra is not None and rb is not None, b.name
+            for k, t in rb.textures.items():
+                np.testing.assert_array_equal(ra.textures[k], t)
         else:
             assert a.material.albedo == b.material.albedo
     for a, b in zip(toml.lights, ref.lights, strict=True):

@@ -154,3 +154,137 @@ def test_ctrl_c_keeps_the_frames_rendered_so_far(capsys, tmp_path, monkeypatch):
     monkeypatch.undo()
     assert main([*argv, "--frames", "2", "--force", "--out", str(out)]) == 0
     assert json.loads((out / "summary.json").read_text())["interrupted"] is False
+
+
+def _scene(tmp_path, text: str, name: str = "s.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return str(p)
+
+
+OBJ = """
+[[objects]]
+mesh = "{mesh}"
+{extra}
+[objects.material]
+{mat}
+[[lights]]
+{light}
+"""
+
+
+@pytest.mark.parametrize(
+    "fields, needle",
+    [
+        (
+            {"extra": "position = [0, 1e300, 0]"},
+            "s.toml: objects[0].position = [0, 1e+300, 0] is out",
+        ),
+        ({"extra": "scale = 1e300"}, "s.toml: objects[0].scale = 1e+300 is out of range"),
+        (
+            {"light": "radius = 1e9"},
+            "s.toml: lights[0].radius = 1000000000.0 is out of range; allowed [0, 1e+07]",
+        ),
+        (
+            {"extra": "texture_res = 6"},
+            "objects[0].texture_res = 6 is out of range; allowed [8, 8192]",
+        ),
+        ({"extra": "min_texture_res = 130000"}, "objects[0].min_texture_res = 130000 is out"),
+        ({"extra": "min_texture_res = 255"}, "objects[0].min_texture_res = 255 must be even"),
+        ({"mat": 'pack = "leather.vrnm"\nprocedural = "random"'}, "procedural and pack are both"),
+        ({"mat": 'pack = "leather.vrnm"\nseed = 3'}, "material.seed only applies to procedural"),
+        (
+            {"mat": "seed = 3\nalbedo = [1, 1, 1]"},
+            'material.albedo only applies to procedural = "lambertian"',
+        ),
+        ({"mat": 'pack = "nope.vrnm"'}, "material.pack = 'nope.vrnm': file not found"),
+        ({"mat": 'reference = "nope.vrnm"'}, "material.reference = 'nope.vrnm': file not found"),
+        ({"light": "colour = [1, 1, 1]\ncolor = [1, 0, 0]"}, "lights[0].color and colour are both"),
+        ({"mesh": "two.glb"}, "objects[0].mesh = 'two.glb' holds 2 meshes"),
+        ({"mesh": "two.glb:teapot"}, "two.glb has no mesh 'teapot'"),
+    ],
+)
+def test_bad_scene_fields(capsys, tmp_path, fields, needle):
+    import trimesh
+
+    trimesh.Scene({"box": trimesh.creation.box(), "ball": trimesh.creation.icosphere(1)}).export(
+        tmp_path / "two.glb"
+    )
+    f = {"mesh": "plane", "extra": "", "mat": 'procedural = "random"'} | fields
+    f["light"] = "position = [0, 1, 0]\n" + f.get("light", "")
+    msg = _err(
+        capsys,
+        [_scene(tmp_path, OBJ.format(**f)), "--profile", "tiny", "--out", str(tmp_path / "o")],
+    )
+    assert needle in msg and not (tmp_path / "o").exists()
+
+
+def test_scene_profile_is_checked_as_a_scene_field_even_under_a_cli_profile(capsys, tmp_path):
+    text = 'profile = "vive"\n' + OBJ.format(
+        mesh="plane", extra="", mat="", light="position = [0, 1, 0]"
+    )
+    for extra in ([], ["--profile", "tiny"]):
+        msg = _err(capsys, [_scene(tmp_path, text), *extra, "--out", str(tmp_path / "o")])
+        assert "s.toml: profile = 'vive' is not allowed; choose one of: quest3" in msg
+
+
+def test_scene_mesh_files_by_name_or_index_and_bundled_packs(tmp_path):
+    import trimesh
+
+    from vrneural.runtime.assets import get_mesh
+    from vrneural.runtime.scene import load_scene
+
+    trimesh.Scene({"box": trimesh.creation.box(), "ball": trimesh.creation.icosphere(1)}).export(
+        tmp_path / "two.glb"
+    )
+    by_name = {n: len(get_mesh(f"two.glb:{n}", tmp_path).faces) for n in ("box", "ball")}
+    assert by_name == {"box": 12, "ball": 80}
+    assert len(get_mesh("two.glb:1", tmp_path).faces) in by_name.values()
+    mat = 'pack = "leather.vrnm"\nreference = "leather.teacher.vrnm"'
+    sc = load_scene(
+        _scene(
+            tmp_path,
+            OBJ.format(
+                mesh="two.glb:box",
+                extra="min_texture_res = 64",
+                mat=mat,
+                light="position = [0, 1, 0]",
+            ),
+        )
+    )
+    o = sc.objects[0]
+    assert o.min_texture_res == 64 and o.texture_res is None and o.name == "two"
+    assert o.material.source.endswith("vrneural/data/materials/leather.vrnm")
+    assert o.material.reference.arch == "single" and sc.src == "s.toml"
+
+
+@pytest.mark.gpu
+def test_video_scale_that_leaves_no_pixels_is_refused_before_rendering(capsys, tmp_path):
+    msg = _err(capsys, ["--profile", "tiny", "--video-scale", "1000", "--out", str(tmp_path / "o")])
+    assert "--video-scale = 1000 is out of range; allowed [1, " in msg
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.gpu
+def test_reference_mode_needs_a_teacher_for_a_pack(capsys, tmp_path):
+    text = OBJ.format(
+        mesh="sphere", extra="", mat='pack = "leather.vrnm"', light="position = [0, 1, 0]"
+    )
+    msg = _err(capsys, [_scene(tmp_path, text), "--profile", "tiny", "--mode", "reference",
+                        "--frames", "1", "--out", str(tmp_path / "o")])  # fmt: skip
+    assert "objects[0] (sphere): --mode reference needs a teacher for leather.vrnm" in msg
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.gpu
+def test_triangles_without_texels_are_reported_not_hidden(capsys, tmp_path):
+    text = OBJ.format(mesh="sphere", extra="texture_res = 64", mat="", light="position = [0, 1, 0]")
+    out = tmp_path / "o"
+    argv = ["run", _scene(tmp_path, text), "--profile", "tiny", "--frames", "1", "--no-video"]
+    assert main([*argv, "--quiet", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "warning: s.toml: objects[0] (sphere): " in err and "own no texel at 64^2" in err
+    sm = json.loads((out / "summary.json").read_text())
+    obj = sm["scene"]["objects"][0]
+    assert obj["texture_res"] == 64 and obj["triangles_without_texels"] > 0.1 * obj["triangles"]
+    assert len(sm["warnings"]) == 1

@@ -52,7 +52,7 @@ def run_frames(cfg: FramesConfig) -> dict:
     from vrneural.runtime.schedule import SCHEDULES
 
     c = cfg.resolved()
-    texs = rp.int_list("--texture-res", c.texture_res, 2, 8192, even=True)
+    texs = rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True)
     reuses = rp.int_list("--reuse", c.reuse, 0, 64)
     scheds = rp.choice_list("--schedules", c.schedules, SCHEDULES)
     eye_res = parse_res(c.eye_res)

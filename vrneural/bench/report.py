@@ -106,6 +106,15 @@ def replace(cfg, **kw):
     return dataclasses.replace(cfg, **kw)
 
 
+def texture_res_range() -> tuple[int, int]:
+    """``[lo, hi]`` of a radiance texture side on this adapter (the same bounds as `run`)."""
+    from vrneural.atlas.build import MIN_RESOLUTION
+    from vrneural.gpu.device import adapter_summary
+    from vrneural.runtime.config import max_texture_res
+
+    return MIN_RESOLUTION, max_texture_res(adapter_summary())
+
+
 def int_list(field: str, text: str, lo: int, hi: int, even: bool = False) -> list[int]:
     """Parse a comma-separated list of integers in ``[lo, hi]`` (one-line VrnError if not)."""
     from vrneural.errors import VrnError

@@ -100,7 +100,7 @@ def settings(c: TradeoffConfig, has_f16: bool) -> list[dict]:
         material="student",
     )
     out = [base]
-    for t in rp.int_list("--texture-res", c.texture_res, 2, 8192, even=True):
+    for t in rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True):
         if t != c.base_res:
             out.append({**base, "knob": "texture_res", "value": t, "texture_res": t})
     for n in rp.int_list("--reuse", c.reuse, 0, 64):

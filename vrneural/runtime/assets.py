@@ -34,13 +34,25 @@ def builtin_names() -> tuple[str, ...]:
 
 
 def get_mesh(spec: str, base: Path | None = None, field: str = "mesh") -> Mesh:
-    """A built-in mesh by name, or the first mesh of a file (relative to ``base``)."""
+    """A built-in mesh by name, or a mesh file (relative to ``base``).
+
+    A file holding several meshes (a glTF scene, say) needs the one to use named after a
+    colon, ``"room.glb:chair"`` (the names ``vrneural atlas`` prints), or its index,
+    ``"room.glb:0"``.
+    """
     a = _atlas_api()
     if spec in builtin_names():
         return a.builtin_mesh(spec) if a is not None else fallback_mesh(spec)
-    p = Path(spec)
-    if base is not None and not p.is_absolute():
-        p = base / p
+
+    def where(s: str) -> Path:
+        p = Path(s)
+        return base / p if base is not None and not p.is_absolute() else p
+
+    p, part = where(spec), None
+    if not p.is_file() and ":" in spec:
+        head, tail = spec.rsplit(":", 1)
+        if where(head).is_file():
+            p, part = where(head), tail
     if not p.is_file():
         raise VrnError(
             f"{field} = {spec!r}: no such file and not a built-in mesh "
@@ -48,7 +60,24 @@ def get_mesh(spec: str, base: Path | None = None, field: str = "mesh") -> Mesh:
         )
     if a is None:
         raise VrnError(f"{field} = {spec!r}: mesh files need vrneural.atlas (not available)")
-    return a.load_mesh(p)[0]
+    meshes = a.load_mesh(p)
+    names = [m.name.split(":", 1)[1] if ":" in m.name else str(i) for i, m in enumerate(meshes)]
+    if part is None:
+        if len(meshes) == 1:
+            return meshes[0]
+        raise VrnError(
+            f"{field} = {spec!r} holds {len(meshes)} meshes ({', '.join(names[:6])}"
+            f"{', ...' if len(names) > 6 else ''}); name one, e.g. "
+            f"{spec + ':' + names[0]!r}, one object each"
+        )
+    if part in names:
+        return meshes[names.index(part)]
+    if part.isdigit() and int(part) < len(meshes):
+        return meshes[int(part)]
+    raise VrnError(
+        f"{field} = {spec!r}: {p.name} has no mesh {part!r}; it has {', '.join(names[:6])}"
+        f"{', ...' if len(names) > 6 else ''} (or an index 0-{len(meshes) - 1})"
+    )
 
 
 def get_atlas(mesh: Mesh, resolution: int, padding: int = 2) -> Atlas:

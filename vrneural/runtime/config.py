@@ -28,7 +28,11 @@ class RunConfig:
     mode: str = opt("texture", "texture | screen | reference", choices=MODES)
     schedule: str = opt("staggered", "reuse schedule: staggered | burst", choices=SCHEDULES)
     precision: str = opt("auto", "auto | f16 | f32", choices=("auto", "f16", "f32"))
-    reference: str | None = opt(None, "teacher pack (.vrnm) for --mode reference")
+    reference: str | None = opt(
+        None,
+        "teacher pack (.vrnm) for --mode reference, for every neural object "
+        "(default: each material's own reference pack)",
+    )
     out: str = opt("", "output directory (default: a new out/run-YYYYmmdd-HHMMSS per run)")
     video: bool = opt(True, "write OUT/stereo.mp4, both eyes side by side (imageio-ffmpeg)")
     video_scale: int = opt(4, "video downscale factor (integer)")
@@ -63,7 +67,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     """Profile < scene < CLI; validates ranges against the adapter (``AdapterSummary``)."""
     from vrneural.runtime.codegen import resolve_precision
 
-    prof = get_profile(cfg.profile or scene.profile or "quest3")
+    prof = get_profile(cfg.profile or scene.profile or "quest3")  # the scene's is checked
     if cfg.eyes not in (1, 2):
         raise VrnError(f"--eyes = {cfg.eyes} is not allowed; choose 1 or 2")
     reuse = prof.reuse if cfg.reuse is None else cfg.reuse
@@ -76,11 +80,13 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     # [8, max_texture_res]: the atlas stage's bounds and the adapter's; odd is rejected below
     check_range("--texture-res", tex, MIN_RESOLUTION, max_texture_res(adapter))
     for i, o in enumerate(scene.objects):
-        if o.texture_res and o.texture_res > max_texture_res(adapter):
-            raise VrnError(
-                f"objects[{i}].texture_res = {o.texture_res} is above the maximum "
-                f"{max_texture_res(adapter)} (atlas stage and adapter limits)"
-            )
+        for key in ("texture_res", "min_texture_res"):
+            v = getattr(o, key)
+            if v and v > max_texture_res(adapter):
+                raise VrnError(
+                    f"{scene.src}: objects[{i}].{key} = {v} is above the maximum "
+                    f"{max_texture_res(adapter)} (atlas stage and adapter limits)"
+                )
     if tex % 2:
         raise VrnError(f"--texture-res = {tex} must be even (2x2 blocks)")
     eye_res = parse_res(cfg.eye_res) if cfg.eye_res else prof.eye_res

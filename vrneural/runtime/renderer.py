@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -24,6 +25,8 @@ from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget, screen_r
 from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
 
 MODES = ("texture", "screen", "reference")
+#: Fraction of an object's triangles that may own no atlas texel before `run` warns
+LOST_TRIANGLES = 0.1
 
 
 @dataclass
@@ -96,24 +99,46 @@ class Renderer:
         self.counters = CounterBuffer(max(1, n_neural * s.eyes))
         self.timer = GpuTimer(max_passes=2 * n_neural * s.eyes + 2 * s.eyes + 2)
         self.neural: list[_Neural] = []
+        self.warnings: list[str] = []  # one line each; `run` prints them and keeps them
         self.draws = []
         passes: dict = {}
         for i, o in enumerate(scene.objects):
             if progress:
                 progress(f"object {o.name}")
-            mesh = get_mesh(o.mesh, scene.base, f"objects[{i}].mesh")
+            mesh = get_mesh(o.mesh, scene.base, f"{scene.src}: objects[{i}].mesh")
             if o.material.kind == "plain":
                 m = o.material
                 plain = (m.albedo, m.specular, m.shininess)
                 self.draws.append((fw.DrawObject(mesh, None, self.rebase(o.model), i, plain), None))
                 continue
             res = o.texture_res or max(s.texture_res, o.min_texture_res or 0)
-            atlas = get_atlas(mesh, res)
+            try:
+                atlas = get_atlas(mesh, res)
+            except VrnError as e:  # the atlas stage speaks of --res; here it is texture_res
+                raise VrnError(
+                    f"{scene.src}: objects[{i}] ({o.name}) at {res}^2 texels: "
+                    f"{str(e).replace('a larger --res', 'a larger texture_res / min_texture_res')}"
+                ) from None
+            lost = int(atlas.stats.get("triangles_without_texels", 0))
+            n_tri = len(atlas.mesh.faces)
+            if lost > LOST_TRIANGLES * n_tri:
+                self.warnings.append(
+                    f"{scene.src}: objects[{i}] ({o.name}): {lost} of {n_tri} triangles own no "
+                    f"texel at {res}^2 (too small in the atlas; they show their neighbours' "
+                    "shading); raise texture_res / min_texture_res"
+                )
             c, r = bounding_sphere(atlas.mesh)
             n = _Neural(i, o, atlas, GpuAtlas(atlas), c, r)
             mat = o.material.neural
             if s.mode == "reference":
-                mat = s.reference or getattr(o.material, "reference", None) or mat
+                ref = s.reference or o.material.reference
+                if ref is None and o.material.source.endswith(".vrnm"):
+                    raise VrnError(
+                        f"{scene.src}: objects[{i}] ({o.name}): --mode reference needs a teacher "
+                        f"for {Path(o.material.source).name}: set material.reference in the "
+                        "scene or pass --reference TEACHER.vrnm"
+                    )
+                mat = ref or mat  # a procedural material is its own ground truth
             key = id(mat)
             if key not in passes:
                 try:

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.config import config_dict
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, check_range
 from vrneural.formats.atomic import check_output_dir, make_output_dir, write_json
 from vrneural.runtime.config import RunConfig, resolve
 from vrneural.runtime.output import (
@@ -52,6 +52,19 @@ def selected_frames(spec: str, frames: int) -> list[int]:
                 )
             out.add(k)
     return sorted(out)
+
+
+def atlas_summary(atlas) -> dict:
+    """Per-object atlas facts for summary.json (neural objects; plain ones have no atlas)."""
+    if atlas is None:
+        return {}
+    st = atlas.stats
+    return {
+        "texture_res": int(atlas.resolution),
+        "triangles": len(atlas.mesh.faces),
+        "triangles_without_texels": int(st.get("triangles_without_texels", 0)),
+        "coverage_pct": st.get("coverage_pct"),
+    }
 
 
 def default_out() -> str:
@@ -96,8 +109,9 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     adapter = adapter_summary()
     s = resolve(cfg, scene, adapter)
     save = selected_frames(cfg.save_frames, s.frames)
-    if cfg.video_scale < 1:
-        raise VrnError(f"--video-scale = {cfg.video_scale} must be >= 1")
+    if cfg.video:  # every eye keeps at least 16 x 16 pixels in the video
+        w, h = s.eye_res
+        check_range("--video-scale", cfg.video_scale, 1, max(1, min(w, h) // 16))
     video = None
     if cfg.video:
         check_video()
@@ -105,6 +119,8 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     t_setup = time.perf_counter()
     r = Renderer(scene, s)  # validates the packs: a failure here leaves --out untouched
     setup_s = time.perf_counter() - t_setup
+    for w in r.warnings:
+        print(f"warning: {w}", file=sys.stderr)
     make_output_dir(out)
     if cfg.video:
         video = VideoWriter(out / "stereo.mp4", s.fps)
@@ -153,6 +169,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
     settings = dataclasses.asdict(dataclasses.replace(s, reference=None))
     settings["reference"] = cfg.reference
     warm = stats[1:] if len(stats) > 1 else stats  # frame 0 includes shader compilation
+    atlases = {n.idx: n.atlas for n in r.neural}
     gpu_names = sorted({k for st in stats for k in st.gpu_ms})
     per_frame = {
         "wall_ms": [round(st.wall_ms, 3) for st in stats],
@@ -178,8 +195,9 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
                     "material": o.material.kind,
                     "source": o.material.source,
                     "tiling": o.material.tiling,
+                    **atlas_summary(atlases.get(i)),
                 }
-                for o in scene.objects
+                for i, o in enumerate(scene.objects)
             ],
             "lights": len(r.lights),
         },
@@ -194,6 +212,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
         "mlp_evaluations_per_frame": percentiles(
             [a + b for a, b in zip(per_frame["mlp_coarse"], per_frame["mlp_fine"], strict=True)]
         ),
+        "warnings": list(r.warnings),
         "per_frame": per_frame,
         "out": cfg.out,
         "files": files,

@@ -14,8 +14,10 @@ Format (all lengths in metres, angles in degrees)::
     rotation = [0, 30, 0]         # XYZ Euler angles
     scale = 1.0                   # uniform
     texture_res = 1200            # optional, overrides the profile / --texture-res
+    min_texture_res = 256         # optional floor under the profile's / --texture-res
     [objects.material]            # neural: pack = "x.vrnm" | procedural = "random" | "lambertian"
-    pack = "leather.vrnm"
+    pack = "leather.vrnm"         # relative to the scene file, else a bundled pack of that name
+    reference = "leather.teacher.vrnm"  # optional teacher pack for --mode reference (same rule)
     scale = 4.0                   # material tiling (BTF tiles per material-UV unit)
     # ordinary: kind = "plain", albedo = [r, g, b], specular = 0.04, shininess = 32
     [[lights]]
@@ -70,6 +72,13 @@ class Scene:
     ipd: float | None = None
     head: str = "orbit"  # "orbit" or a pose-log path
     base: Path = field(default_factory=Path.cwd)
+    src: str = "built-in scene"  # what errors name: the scene file, or the built-in scene
+
+
+#: Largest |coordinate| of an object or light position and the largest object scale (metres):
+#: far beyond any VR scene, and far inside float32 (what the GPU gets, after the floating origin)
+MAX_COORD = 1e7
+MAX_SCALE = 1e6
 
 
 def euler_matrix(deg) -> np.ndarray:
@@ -113,11 +122,12 @@ class _Fields:
             hi_s = "inf" if hi is None else f"{hi:g}"
             br = "(" if lo_open else "["
             raise self.err(
-                key, f"= {v!r} is out of range {br}{lo_s}, {hi_s}{')' if hi is None else ']'}"
+                key,
+                f"= {v!r} is out of range; allowed {br}{lo_s}, {hi_s}{')' if hi is None else ']'}",
             )
         return int(v) if integer else float(v)
 
-    def vec(self, key, default=None, n=3, lo=None):
+    def vec(self, key, default=None, n=3, lo=None, bound=None):
         v = self.t.get(key, default)
         if v is None:
             raise self.err(key, "is missing")
@@ -127,7 +137,34 @@ class _Fields:
             raise self.err(key, f"= {v!r} must be a list of {n} finite numbers")
         if lo is not None and min(v) < lo:
             raise self.err(key, f"= {v!r} has a value below {lo:g}")
+        if bound is not None and max(abs(x) for x in v) > bound:
+            raise self.err(key, f"= {v!r} is out of range; each value in [-{bound:g}, {bound:g}]")
         return tuple(float(x) for x in v)
+
+    def one_of(self, *keys) -> None:
+        """At most one of ``keys`` (synonyms or exclusive choices) may be given."""
+        given = [k for k in keys if k in self.t]
+        if len(given) > 1:
+            raise self.err(given[1], f"and {given[0]} are both given; keep one")
+
+    def pack(self, key: str, base: Path) -> Path:
+        """A .vrnm path: relative to the scene file, else a bundled pack of that name."""
+        from importlib.resources import files
+
+        name = self.str(key)
+        p = Path(name)
+        if p.is_absolute() or (base / p).is_file():
+            p = p if p.is_absolute() else base / p
+        elif (
+            p.parent == Path(".")
+            and Path(str(files("vrneural") / "data" / "materials" / name)).is_file()
+        ):
+            p = Path(str(files("vrneural") / "data" / "materials" / name))
+        else:
+            p = base / p
+        if not p.is_file():
+            raise self.err(key, f"= {name!r}: file not found ({p}, nor a bundled pack)")
+        return p
 
     def str(self, key, default=None, choices=None):
         v = self.t.get(key, default)
@@ -156,28 +193,38 @@ def _material(src: str, path: str, t: dict, base: Path) -> MaterialDesc:
             specular=f.num("specular", 0.04, 0.0, 1.0),
             shininess=f.num("shininess", 32.0, 0.0, 1e4, lo_open=True),
         )
-    f.unknown(("kind", "pack", "procedural", "seed", "albedo", "scale"))
+    f.unknown(("kind", "pack", "procedural", "seed", "albedo", "scale", "reference"))
+    f.one_of("pack", "procedural")
     tiling = f.num("scale", 1.0, 0.0, lo_open=True)
-    if "pack" in t:
-        from vrneural.formats.vrnm import read_vrnm
+    from vrneural.formats.vrnm import read_vrnm
 
-        p = Path(f.str("pack"))
-        p = p if p.is_absolute() else base / p
-        if not p.is_file():
-            raise f.err("pack", f"= {t['pack']!r}: file not found ({p})")
-        return MaterialDesc("neural", read_vrnm(p), str(p), tiling)
+    ref = None
+    if "reference" in t:
+        ref = read_vrnm(f.pack("reference", base))
+    if "pack" in t:
+        for k in ("seed", "albedo"):
+            if k in t:
+                raise f.err(k, "only applies to procedural materials, not to a pack")
+        p = f.pack("pack", base)
+        return MaterialDesc("neural", read_vrnm(p), str(p), tiling, reference=ref)
     proc = f.str("procedural", "random", ("random", "lambertian"))
     if proc == "random":
+        if "albedo" in t:
+            raise f.err("albedo", 'only applies to procedural = "lambertian"')
         mat = random_material(f.num("seed", 0, 0, integer=True))
     else:
+        if "seed" in t:
+            raise f.err("seed", 'only applies to procedural = "random"')
         mat = lambertian_material(f.vec("albedo", (0.8, 0.5, 0.2), lo=0.0))
-    return MaterialDesc("neural", mat, proc, tiling)
+    return MaterialDesc("neural", mat, proc, tiling, reference=ref)
 
 
 def parse_scene(data: dict, src: str, base: Path) -> Scene:
     top = _Fields(src, "", data)
     top.unknown(("name", "profile", "ipd", "head", "objects", "lights"))
-    profile = top.str("profile", "") or None
+    from vrneural.runtime.profiles import PROFILES
+
+    profile = top.str("profile", None, tuple(PROFILES)) if "profile" in data else None
     ipd = top.num("ipd", 0.063, 0.0, 0.2) if "ipd" in data else None
     head = "orbit"
     if "head" in data:
@@ -196,40 +243,64 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
     objects = []
     for i, o in enumerate(objs_raw):
         f = _Fields(src, f"objects[{i}]", o)
-        f.unknown(("name", "mesh", "position", "rotation", "scale", "material", "texture_res"))
+        f.unknown(
+            (
+                "name",
+                "mesh",
+                "position",
+                "rotation",
+                "scale",
+                "material",
+                "texture_res",
+                "min_texture_res",
+            )
+        )
         mesh = f.str("mesh")
         model = model_matrix(
-            f.vec("position", (0, 0, 0)),
-            f.vec("rotation", (0, 0, 0)),
-            f.num("scale", 1.0, 0.0, lo_open=True),
+            f.vec("position", (0, 0, 0), bound=MAX_COORD),
+            f.vec("rotation", (0, 0, 0), bound=1e6),
+            f.num("scale", 1.0, 0.0, MAX_SCALE, lo_open=True),
         )
         mat = _material(src, f"objects[{i}].material", o.get("material", {}), base)
-        tres = f.num("texture_res", 0, 2, 16384, integer=True) if "texture_res" in o else None
-        if tres is not None and tres % 2:
-            raise f.err("texture_res", f"= {tres} must be even (2x2 blocks)")
-        objects.append(ObjectDesc(str(o.get("name", f"{mesh}{i}")), mesh, model, mat, tres))
+        tres, floor = (_texture_res(f, k) for k in ("texture_res", "min_texture_res"))
+        name = f.str("name", Path(mesh).stem)
+        objects.append(ObjectDesc(name, mesh, model, mat, tres, floor))
     lights = []
     for i, lt in enumerate(data.get("lights", [])):
         f = _Fields(src, f"lights[{i}]", lt)
         f.unknown(
             ("position", "colour", "color", "intensity", "motion", "radius", "period", "phase")
         )
+        f.one_of("colour", "color")
         colour = f.vec("colour" if "colour" in lt else "color", (1, 1, 1), lo=0.0)
         intensity = f.num("intensity", 1.0, 0.0, MAX_INTENSITY)
         if max(colour) * intensity > MAX_INTENSITY:  # README: numerical behaviour at extremes
             raise f.err("intensity", f"* colour = {max(colour) * intensity:g} W/sr is above 1e6")
         lights.append(
             PointLight(
-                f.vec("position"),
+                f.vec("position", bound=MAX_COORD),
                 colour,
                 intensity,
                 f.str("motion", "none", MOTIONS),
-                f.num("radius", 0.0, 0.0),
+                f.num("radius", 0.0, 0.0, MAX_COORD),
                 f.num("period", 8.0, 0.0, lo_open=True),
                 f.num("phase", 0.0),
             )
         )
-    return Scene(str(data.get("name", Path(src).stem)), objects, lights, profile, ipd, head, base)
+    name = top.str("name", Path(src).stem)
+    return Scene(name, objects, lights, profile, ipd, head, base, src)
+
+
+def _texture_res(f: _Fields, key: str) -> int | None:
+    """An object's ``texture_res`` / ``min_texture_res``: even, in the atlas stage's range."""
+    from vrneural.atlas.build import MAX_RESOLUTION, MIN_RESOLUTION
+
+    if key not in f.t:
+        return None
+    v = f.num(key, None, MIN_RESOLUTION, MAX_RESOLUTION, integer=True)
+    if v % 2:
+        raise f.err(key, f"= {v} must be even (2x2 blocks)")
+    return v
 
 
 def load_scene(path: str | Path) -> Scene:
