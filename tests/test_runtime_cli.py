@@ -29,6 +29,8 @@ def _err(capsys, argv):
 def test_missing_scene_file(capsys, tmp_path):
     msg = _err(capsys, [str(tmp_path / "nope.toml"), "--out", str(tmp_path / "o")])
     assert "nope.toml" in msg and "not found" in msg
+    msg = _err(capsys, [str(tmp_path), "--out", str(tmp_path / "o")])
+    assert "is a directory, expected a scene file" in msg
 
 
 def test_bad_scene_field_is_named_by_path(capsys, tmp_path):

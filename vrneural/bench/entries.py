@@ -54,7 +54,7 @@ def _load(name: str):
 
 
 def _summary(name: str, doc: dict, out: str) -> None:
-    files = sorted(p.name for p in Path(out).iterdir() if p.is_file())
+    files = sorted(p.name for p in Path(out).iterdir() if p.is_file() and p.name[0] != ".")
     print(f"bench {name}: {out}/ {', '.join(files)} ({doc['total_seconds']:.0f} s)")
 
 
@@ -63,7 +63,9 @@ def _entry(name: str):
         cls, _ = _load(name)
         help_ = SPECS[name][3]
         p = sub.add_parser(name, help=help_, description=help_ + ". " + (cls.__doc__ or ""))
-        p.add_argument("--out", default=f"bench-{name}", help="output directory")
+        p.add_argument(
+            "--out", default=f"bench-{name}", help=f"output directory (default: bench-{name})"
+        )
         add_config_args(p, cls)
         p.set_defaults(func=lambda args: _run(name, args))
 
@@ -84,7 +86,11 @@ def _register_all(sub) -> None:
         description="Every timing and trade-off benchmark (not `quality`, which trains its own "
         "baselines; run it separately). --quick: each at its CI size.",
     )
-    p.add_argument("--out", default="bench-all", help="output directory (one folder per bench)")
+    p.add_argument(
+        "--out",
+        default="bench-all",
+        help="output directory, one folder per bench (default: bench-all)",
+    )
     p.add_argument("--quick", action="store_true", help="CI-sized runs")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bars")

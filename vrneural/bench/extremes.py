@@ -77,7 +77,11 @@ class ExtremesConfig:
     quick: bool = opt(
         False, "small sizes for the heavy cases (1M triangles -> 20k, max texture -> 1024)"
     )
-    only: str = opt("", "comma-separated case names or groups to run (default: all)")
+    only: str = opt(
+        "",
+        "comma-separated case names or groups to run: "
+        f"{', '.join(sorted({c[1] for c in CASES}))} (default: all)",
+    )
     force: bool = opt(False, "overwrite an existing --out directory")
 
 
@@ -90,7 +94,11 @@ def selected(only: str) -> list:
     known = {c[0] for c in CASES} | {c[1] for c in CASES}
     bad = sorted(keys - known)
     if bad:
-        raise VrnError(f"--only: unknown case or group {bad[0]!r}; see results.md for names")
+        groups = ", ".join(sorted({c[1] for c in CASES}))
+        raise VrnError(
+            f"--only = {only!r}: unknown case or group {bad[0]!r}; groups: {groups} "
+            f"({len(CASES)} cases, named in results.md of a full run)"
+        )
     return [c for c in CASES if c[0] in keys or c[1] in keys]
 
 

@@ -18,9 +18,14 @@ def register(sub) -> None:
         "--texels",
         type=int,
         default=1 << 20,
-        help="texels per throughput dispatch (default 1048576)",
+        help="texels per throughput dispatch, [1024, 16777216]; f32 and f16 alternate, best "
+        "of 3 rounds of 4 dispatches each (default 1048576)",
     )
     p.set_defaults(func=run)
+
+
+#: Alternating rounds of the f32 / f16 throughput measurement (best of each is reported)
+ROUNDS = 3
 
 
 def collect(texels: int) -> dict:
@@ -32,9 +37,17 @@ def collect(texels: int) -> dict:
 
     check_range("--texels", texels, 1024, 1 << 24)
     summary = adapter_summary().to_dict()
-    thr = [mlp_throughput("f32", texels)]
-    if has_feature("shader-f16"):
-        thr.append(mlp_throughput("f16", texels))
+    # f32 and f16 alternate, best of ROUNDS each: a busy CPU or GPU only ever slows a
+    # measurement down, so the best is the least disturbed (one sample of a few ms on
+    # lavapipe could call emulated f16 "native")
+    precisions = ["f32", "f16"] if has_feature("shader-f16") else ["f32"]
+    best: dict = {}
+    for _ in range(ROUNDS):
+        for p in precisions:
+            t = mlp_throughput(p, texels)
+            if p not in best or t["evals_per_s"] > best[p]["evals_per_s"]:
+                best[p] = t
+    thr = [best[p] for p in precisions]
     f32 = thr[0]["evals_per_s"]
     f16 = thr[1]["evals_per_s"] if len(thr) > 1 else None
     return {

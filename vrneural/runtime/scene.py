@@ -305,6 +305,8 @@ def _texture_res(f: _Fields, key: str) -> int | None:
 
 def load_scene(path: str | Path) -> Scene:
     p = Path(path)
+    if p.is_dir():
+        raise VrnError(f"{p}: is a directory, expected a scene file (TOML)")
     if not p.is_file():
         raise VrnError(f"{p}: scene file not found")
     try:
