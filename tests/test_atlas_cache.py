@@ -91,6 +91,25 @@ def test_corrupt_entry_is_rebuilt(cache_env, damage):
     assert build_atlas(mesh, 64, 2).stats["cache"] == "hit"  # rewritten, usable again
 
 
+def test_corrupt_entry_warning_is_one_grammatical_line(cache_env):
+    """The warning names the file and the problem on one line: "not a vrneural atlas cache"
+    (was "not a atlas cache"), formatted as ``warning: <message>`` (vrneural.warn)."""
+    import warnings
+
+    mesh = builtin_mesh("plane")
+    build_atlas(mesh, 32, 1)
+    (path,) = cache_env.glob("*.vrna")
+    path.write_bytes(b"junk" * 10)
+    with pytest.warns(CacheWarning) as rec:
+        build_atlas(mesh, 32, 1)
+    (w,) = rec
+    msg = str(w.message)
+    assert f"atlas cache: {path}: wrong magic" in msg and "rebuilding" in msg
+    assert "not a vrneural atlas cache" in msg and "a atlas" not in msg
+    text = warnings.formatwarning(w.message, w.category, w.filename, w.lineno)
+    assert text == f"warning: {msg}\n"
+
+
 def test_unwritable_cache_dir_warns(tmp_path, monkeypatch):
     blocker = tmp_path / "file"
     blocker.write_text("x")

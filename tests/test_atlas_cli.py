@@ -52,11 +52,16 @@ def test_text_output_and_force(tmp_path, capsys):
     assert "off" in capsys.readouterr().out
 
 
-def test_mesh_file_with_two_meshes(tmp_path, capsys):
+def _two_mesh_file(path):
     scene = trimesh.Scene()
     scene.add_geometry(trimesh.creation.box(extents=(0.2, 0.3, 0.1)), node_name="a")
     scene.add_geometry(trimesh.creation.icosphere(1, 0.1), node_name="b")
-    scene.export(tmp_path / "s.glb")
+    scene.export(path)
+    return path
+
+
+def test_mesh_file_with_two_meshes(tmp_path, capsys):
+    _two_mesh_file(tmp_path / "s.glb")
     assert (
         main(
             [
@@ -84,7 +89,13 @@ def test_mesh_file_with_two_meshes(tmp_path, capsys):
         (["sphere", "--res", "0"], "a.png", "--res = 0 is out of range; allowed [8, 8192]"),
         (["sphere", "--res", "-5"], "a.png", "--res = -5 is out of range"),
         (["sphere", "--res", "100000"], "a.png", "--res = 100000 is out of range"),
-        (["sphere", "--padding", "-1"], "a.png", "--padding = -1 is out of range"),
+        (["sphere", "--res", "4"], "a.png", "--res = 4 is out of range; allowed [8, 8192]"),
+        (
+            ["sphere", "--res", "33"],
+            "a.png",
+            "--res = 33 must be even (2x2 blocks); allowed: even values in [8, 8192]",
+        ),
+        (["sphere", "--padding", "-1"], "a.png", "--padding = -1 is out of range; allowed [0, 64]"),
         (["sphere"], "a.txt", "output must be a .png file"),
         (["teapot"], "a.png", "teapot: no such file, and not a built-in mesh (sphere, torus"),
     ],
@@ -97,3 +108,62 @@ def test_errors_are_one_line_exit_2(tmp_path, capsys, args, out_name, message):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "Traceback" not in err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("mesh", "existing"),
+    [
+        ("two", "o-0.png"),  # the first per-mesh PNG (was overwritten)
+        ("two", "o-1.png"),
+        ("two", "o.png.config.json"),  # the sidecar (was overwritten)
+        ("plane", "o.png.config.json"),  # the sidecar of a new single-mesh PNG
+        ("plane", "o.png"),
+    ],
+)
+def test_no_existing_output_is_overwritten_without_force(tmp_path, capsys, mesh, existing):
+    """Every file the command writes is checked before any is written."""
+    spec = str(_two_mesh_file(tmp_path / "s.glb")) if mesh == "two" else mesh
+    out = tmp_path / "o.png"
+    (tmp_path / existing).write_text("precious")
+    assert main(["atlas", spec, "--res", "64", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{tmp_path / existing}: output exists; pass --force" in err
+    assert (tmp_path / existing).read_text() == "precious"
+    written = {p.name for p in tmp_path.iterdir()} - {existing, "s.glb"}
+    assert not written, "nothing is written when one output exists"
+    assert main(["atlas", spec, "--res", "64", "-o", str(out), "--force"]) == 0
+    assert (tmp_path / existing).read_bytes() != b"precious"
+
+
+def test_multi_mesh_file_does_not_need_force_for_out_itself(tmp_path, capsys):
+    """OUT itself is not written for a file of several meshes (OUT-<k>.png are), so an
+    existing OUT is left alone and needs no --force."""
+    spec = str(_two_mesh_file(tmp_path / "s.glb"))
+    (tmp_path / "o.png").write_text("precious")
+    assert main(["atlas", spec, "--res", "64", "-o", str(tmp_path / "o.png"), "--json"]) == 0
+    assert [r["output"] for r in json.loads(capsys.readouterr().out)] == [
+        str(tmp_path / "o-0.png"),
+        str(tmp_path / "o-1.png"),
+    ]
+    assert (tmp_path / "o.png").read_text() == "precious"
+
+
+def test_json_stays_valid_with_warnings_on_stderr(tmp_path, capsys):
+    """A mesh warning (skipped degenerate triangles) goes to stderr as one line; stdout is
+    the JSON alone; the sidecar records the warning too."""
+    obj = tmp_path / "degen.obj"
+    obj.write_text(
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 0 0\n"
+        "f 1 2 3\nf 2 4 3\nf 1 2 5\nf 1 1 2\n"  # the last two: collinear, repeated index
+    )
+    out = tmp_path / "d.png"
+    assert main(["atlas", str(obj), "--res", "64", "-o", str(out), "--json"]) == 0
+    cap = capsys.readouterr()
+    stats = json.loads(cap.out)
+    assert stats["triangles"] == 2
+    note = "degen.obj: skipped 2 degenerate triangles of 4"
+    assert f"warning: {note}\n" in cap.err and "MeshWarning" not in cap.err
+    assert json.loads((tmp_path / "d.png.config.json").read_text())["warnings"] == [note]
+    assert main(["atlas", str(obj), "--res", "64", "-o", str(out), "--force"]) == 0
+    cap = capsys.readouterr()
+    assert "warning" not in cap.out and f"warning: {note}\n" in cap.err

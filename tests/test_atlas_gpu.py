@@ -66,3 +66,16 @@ def test_gpu_top_left_rule_on_a_grid_through_centres():
     cpu = cpu_raster_coverage(uv, faces, R)
     gpu = raster_coverage(uv, faces, R)
     np.testing.assert_array_equal(gpu, cpu)
+
+
+@pytest.mark.gpu
+def test_gpu_raster_states_the_allowed_resolution_range():
+    from vrneural.atlas.gpu_raster import raster_coverage
+    from vrneural.errors import VrnError
+    from vrneural.gpu import get_device
+
+    limit = get_device().limits["max-texture-dimension-2d"]
+    uv = np.float32([[0.1, 0.1], [0.9, 0.1], [0.1, 0.9]])
+    with pytest.raises(VrnError) as e:
+        raster_coverage(uv, np.uint32([[0, 1, 2]]), limit + 2)
+    assert str(e.value) == f"resolution = {limit + 2} is out of range; allowed [1, {limit}]"

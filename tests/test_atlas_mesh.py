@@ -79,6 +79,28 @@ def test_validation_errors_and_degenerate_warning():
         make_mesh("m", pos, [[0, 1, 3]])
 
 
+def test_mesh_warning_prints_as_one_line(tmp_path):
+    """vrneural's warnings print as ``warning: <message>`` on stderr, without Python's
+    file:line prefix and source line; other warnings keep Python's format. A fresh process,
+    as a user's script sees it (pytest records warnings instead of printing them)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import warnings\n"
+        "from vrneural.atlas import make_mesh\n"
+        "make_mesh('m', [[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], [[0, 1, 2], [0, 1, 3]])\n"
+        "warnings.warn('plain', UserWarning)\n"
+    )
+    r = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=tmp_path
+    )
+    assert r.returncode == 0, r.stderr
+    lines = r.stderr.splitlines()
+    assert lines[0] == "warning: m: skipped 1 degenerate triangles of 2"
+    assert lines[1] == "<string>:4: UserWarning: plain"
+
+
 def test_box_uv_splits_vertices_and_is_planar():
     box = trimesh.creation.box(extents=(0.4, 0.2, 0.1))
     pos, faces, uv, _ = box_uv(np.asarray(box.vertices), np.asarray(box.faces), None)

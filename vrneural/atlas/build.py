@@ -26,9 +26,24 @@ MAX_PADDING = 64
 class AtlasConfig:
     """Settings of the atlas stage (the CLI parses into this)."""
 
-    res: int = opt(1200, "atlas resolution R: the radiance texture is R x R texels")
+    res: int = opt(
+        1200, "atlas resolution R, even, in [8, 8192]: the radiance texture is R x R texels"
+    )
     padding: int = opt(2, "gutter width in texels around charts (>= 1 for bilinear sampling)")
     cache: bool = opt(True, "reuse atlases cached on disk ($VRNEURAL_CACHE/atlas)")
+
+
+def check_texture_resolution(name: str, resolution: int) -> None:
+    """Raise :class:`VrnError` unless ``resolution`` is in [:data:`MIN_RESOLUTION`,
+    :data:`MAX_RESOLUTION`] and even: the radiance texture the runtime shades on this atlas
+    works in 2x2 texel blocks (``vrneural run --texture-res`` rejects odd values too).
+    :func:`build_atlas` itself accepts any resolution in range."""
+    check_range(name, resolution, MIN_RESOLUTION, MAX_RESOLUTION)
+    if resolution % 2:
+        raise VrnError(
+            f"{name} = {resolution} must be even (2x2 blocks); allowed: even values in "
+            f"[{MIN_RESOLUTION}, {MAX_RESOLUTION}]"
+        )
 
 
 def validate_mesh(mesh: Mesh) -> None:

@@ -23,14 +23,16 @@ import numpy as np
 from vrneural.atlas.types import Atlas, Mesh
 from vrneural.errors import VrnError
 from vrneural.formats.container import read_container, write_container
+from vrneural.warn import VrnWarning
 
 ATLAS_CODE_VERSION = 3
 MAGIC = b"VRNATLAS"
 FORMAT_VERSION = 1
 
 
-class CacheWarning(UserWarning):
-    """A cache entry could not be used (it is rebuilt)."""
+class CacheWarning(VrnWarning):
+    """A cache entry could not be used (it is rebuilt), or could not be written; printed as one
+    line, ``warning: <message>`` (:mod:`vrneural.warn`)."""
 
 
 def cache_dir() -> Path:
@@ -61,7 +63,9 @@ def load_cached(mesh: Mesh, key: str, resolution: int, padding: int) -> Atlas | 
     if not path.exists():
         return None
     try:
-        header, arrays, _ = read_container(path, MAGIC, (FORMAT_VERSION,), what="atlas cache")
+        header, arrays, _ = read_container(
+            path, MAGIC, (FORMAT_VERSION,), what="vrneural atlas cache"
+        )
         vmap = np.asarray(arrays["vmap"], dtype=np.int64)
         faces = np.array(arrays["faces"])
         uv = np.array(arrays["uv_atlas"])

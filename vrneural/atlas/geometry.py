@@ -22,13 +22,15 @@ import numpy as np
 
 from vrneural.atlas.types import Mesh
 from vrneural.errors import VrnError
+from vrneural.warn import VrnWarning
 
 #: Relative 3D area below which a triangle counts as degenerate (times the mean edge^2).
 DEGENERATE_REL_AREA = 1e-12
 
 
-class MeshWarning(UserWarning):
-    """A recoverable mesh problem (e.g. skipped degenerate triangles), with a count."""
+class MeshWarning(VrnWarning):
+    """A recoverable mesh problem (e.g. skipped degenerate triangles), with a count; printed as
+    one line, ``warning: <message>`` (:mod:`vrneural.warn`)."""
 
 
 def check_geometry(name: str, pos: np.ndarray, fac: np.ndarray) -> None:

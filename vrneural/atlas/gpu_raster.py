@@ -20,14 +20,13 @@ def raster_coverage(uv: np.ndarray, faces: np.ndarray, R: int) -> np.ndarray:
     atlas UVs ``uv`` [V, 2], EMPTY elsewhere (GPU)."""
     import wgpu
 
-    from vrneural.errors import VrnError
+    from vrneural.errors import check_range
     from vrneural.gpu import get_device, load_wgsl, read_texture, upload_buffer
     from vrneural.gpu.pipelines import pipeline_cache
 
     dev = get_device()
     limit = dev.limits["max-texture-dimension-2d"]
-    if R > limit:
-        raise VrnError(f"resolution = {R} is out of range; the adapter allows [1, {limit}]")
+    check_range("resolution", R, 1, limit)  # the adapter's 2D texture limit
     verts = np.ascontiguousarray(uv.astype(np.float32)[np.asarray(faces, np.int64).reshape(-1)])
     vbuf = upload_buffer(verts, wgpu.BufferUsage.VERTEX, label="atlas uv")
     target = dev.create_texture(

@@ -32,12 +32,15 @@ shutdown can lose its wake-up (it sets the flag and notifies without holding the
 mutex): the join then waits forever, with the GIL held. We saw it once in CI, in a test that
 builds many atlases. So :func:`unwrap` runs the work in a forked child process, which sends
 the arrays back and ends with ``os._exit`` before any xatlas object is destroyed; every atlas
-object stays referenced until then.
+object stays referenced until then. A child that dies instead (xatlas segfaults on some meshes,
+e.g. finely subdivided icospheres, jpcy/xatlas#146) is reported in one line naming the signal
+and what to do (:func:`died_message`).
 """
 
 from __future__ import annotations
 
 import os
+import signal
 
 import numpy as np
 
@@ -92,10 +95,9 @@ def unwrap(mesh: Mesh, resolution: int, padding: int) -> tuple[np.ndarray, np.nd
         if not recv.poll(CHILD_TIMEOUT_S):
             raise VrnError(f"{mesh.name}: xatlas did not finish in {CHILD_TIMEOUT_S:.0f} s")
         kind, payload = recv.recv()
-    except EOFError:
-        raise VrnError(
-            f"{mesh.name}: the xatlas process died (exit code {proc.exitcode})"
-        ) from None
+    except EOFError:  # the child ended without a result: its exit code says how
+        proc.join(10.0)  # before the join, ``exitcode`` may still read None
+        raise VrnError(died_message(mesh.name, len(mesh.faces), proc.exitcode)) from None
     finally:
         recv.close()
         if proc.is_alive():
@@ -108,8 +110,52 @@ def unwrap(mesh: Mesh, resolution: int, padding: int) -> tuple[np.ndarray, np.nd
     return payload
 
 
+#: signals of a crash inside xatlas itself (as opposed to being killed from outside)
+CRASH_SIGNALS = ("SIGSEGV", "SIGBUS", "SIGABRT", "SIGILL", "SIGFPE")
+
+
+def died_message(name: str, n_faces: int, exitcode: int | None) -> str:
+    """One line for a child unwrap that ended without a result (``exitcode`` as
+    :attr:`multiprocessing.Process.exitcode`: ``-N`` = killed by signal ``N``)."""
+    what = f"{name} ({n_faces} triangles)"
+    if exitcode is None:
+        return f"{what}: the xatlas process closed its pipe without a result and did not end"
+    if exitcode >= 0:
+        return f"{what}: the xatlas process exited with code {exitcode} without sending a result"
+    sig = -exitcode
+    try:
+        sig_name = signal.Signals(sig).name
+    except ValueError:
+        sig_name = "unknown signal"
+    if sig_name in CRASH_SIGNALS:
+        # The atlas is always unwrapped from the positions and faces (a file's own UVs are
+        # material UVs, never used for it), so no flag avoids the bug. Measured on the
+        # 81920-triangle icosphere of jpcy/xatlas#146: every --res from 64 to 4096 crashes,
+        # and so do other chart options and a rotated copy; the same sphere triangulated
+        # differently (an icosphere of 20480 faces split flat once) and a copy with vertices
+        # moved 1e-4 unwrap fine.
+        return (
+            f"{what}: xatlas crashed ({sig_name}, signal {sig}), a known xatlas bug for some "
+            "meshes such as finely subdivided icospheres (jpcy/xatlas#146); the atlas is "
+            "unwrapped from the triangles themselves (the file's UVs are not used), so "
+            "re-triangulate the mesh (remesh or decimate it) and try again"
+        )
+    if sig_name == "SIGKILL":
+        return (
+            f"{what}: the xatlas process was killed (SIGKILL, signal 9), most likely by the "
+            "out-of-memory killer"
+        )
+    return f"{what}: the xatlas process was stopped by {sig_name} (signal {sig})"
+
+
 def _child(conn, mesh: Mesh, resolution: int, padding: int) -> None:
     """Child process: unwrap, send ``(kind, payload)``, exit without destroying xatlas objects."""
+    import faulthandler
+
+    # a crash inside xatlas is reported by the parent in one line (died_message); a
+    # faulthandler inherited from the parent (pytest, python -X faulthandler) would add a
+    # multi-line "Fatal Python error" dump to stderr first
+    faulthandler.disable()
     keep: list = []  # every xatlas.Atlas, alive until os._exit
     try:
         msg = ("ok", _unwrap(mesh, resolution, padding, keep))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 import warnings
 from pathlib import Path
 
@@ -44,7 +45,11 @@ def register(sub) -> None:
         help="colour per triangle or per chart (default: triangle)",
     )
     p.add_argument("--json", action="store_true", help="print the stats as JSON")
-    p.add_argument("--force", action="store_true", help="overwrite an existing output")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="overwrite existing outputs (PNGs and the .config.json sidecar)",
+    )
     p.set_defaults(func=run)
 
 
@@ -63,35 +68,37 @@ def _meshes(spec: str):
 
 
 def run(args) -> int:
-    from vrneural.atlas.build import MAX_RESOLUTION, MIN_RESOLUTION, AtlasConfig, build_atlas
+    from vrneural.atlas.build import (
+        MAX_PADDING,
+        AtlasConfig,
+        build_atlas,
+        check_texture_resolution,
+    )
     from vrneural.config import config_from_args
     from vrneural.errors import VrnError, check_range
     from vrneural.formats.atomic import check_output
 
     cfg = config_from_args(AtlasConfig, args)
-    check_range("--res", cfg.res, MIN_RESOLUTION, MAX_RESOLUTION)
-    check_range("--padding", cfg.padding, 0, 64)
+    check_texture_resolution("--res", cfg.res)
+    check_range("--padding", cfg.padding, 0, MAX_PADDING)
     out = Path(args.output)
     if out.suffix.lower() != ".png":
         raise VrnError(f"{out}: output must be a .png file")
-    check_output(out, args.force)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         meshes = _meshes(args.mesh)
-        outs = (
-            [out]
-            if len(meshes) == 1
-            else [out.with_name(f"{out.stem}-{k}{out.suffix}") for k in range(len(meshes))]
-        )
-        for o in outs[1:] if len(outs) > 1 else []:
+        outs = output_paths(out, len(meshes))
+        for o in [*outs, sidecar_path(out)]:  # every file written, before any is
             check_output(o, args.force)
         results = []
         for mesh, o in zip(meshes, outs, strict=True):
             atlas = build_atlas(mesh, cfg.res, cfg.padding, cache=cfg.cache, progress=True)
             _write_png(o, atlas, args.color)
             results.append({"output": str(o), **atlas.stats})
-    notes = [str(w.message) for w in caught]
+    notes = [" ".join(str(w.message).splitlines()) for w in caught]
     _write_sidecar(out, cfg, results, notes)
+    for n in notes:  # stderr: stdout is the stats alone (valid JSON with --json)
+        print(f"warning: {n}", file=sys.stderr)
     if args.json:
         print(json.dumps(results[0] if len(results) == 1 else results, indent=2))
     else:
@@ -105,9 +112,21 @@ def run(args) -> int:
                 f"raster {r['raster_s']:.2f} s, slivers {r['sliver_s']:.3f} s, "
                 f"dilate {r['dilate_s']:.2f} s{when}"
             )
-    for n in notes:
-        print(f"warning: {n}")
     return 0
+
+
+def output_paths(out: Path, n_meshes: int) -> list[Path]:
+    """The PNGs written for a file of ``n_meshes`` meshes: ``out`` itself for one mesh, else
+    ``OUT-<k>.png`` per mesh (``out`` itself is then not written)."""
+    if n_meshes == 1:
+        return [out]
+    return [out.with_name(f"{out.stem}-{k}{out.suffix}") for k in range(n_meshes)]
+
+
+def sidecar_path(out: Path) -> Path:
+    """``<out>.config.json``: config, stats and warnings of every mesh (the name
+    :func:`vrneural.config.write_config` gives it beside a file)."""
+    return out.with_name(out.name + ".config.json")
 
 
 def _write_png(path: Path, atlas, color: str) -> None:
@@ -122,6 +141,9 @@ def _write_png(path: Path, atlas, color: str) -> None:
 
 
 def _write_sidecar(out: Path, cfg, results: list[dict], notes: list[str]) -> None:
-    from vrneural.config import write_config
+    from vrneural.config import config_dict
+    from vrneural.formats.atomic import write_json
 
-    write_config(out, cfg, extra={"stats": results, "warnings": notes})
+    # what write_config writes, at the path checked before anything was written (even where
+    # OUT of a multi-mesh file is a directory: it is not written then)
+    write_json(sidecar_path(out), {**config_dict(cfg), "stats": results, "warnings": notes})

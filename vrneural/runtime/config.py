@@ -36,7 +36,9 @@ class RunConfig:
     out: str = opt("", "output directory (default: a new out/run-YYYYmmdd-HHMMSS per run)")
     video: bool = opt(True, "write OUT/stereo.mp4, both eyes side by side (imageio-ffmpeg)")
     video_scale: int = opt(4, "video downscale factor (integer)")
-    save_frames: str = opt("first,last", "frames saved as PNG + EXR: 'first,last', 'all', 'none', '0,45'")
+    save_frames: str = opt(
+        "first,last", "frames saved as PNG + EXR: 'first,last', 'all', 'none', '0,45'"
+    )
     force: bool = opt(False, "overwrite an existing output directory")
 
 

@@ -1,0 +1,80 @@
+"""The xatlas child process: a child that dies gives one actionable line, never a traceback."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+import trimesh
+
+from vrneural.atlas import builtin_mesh
+from vrneural.atlas import unwrap as unwrap_mod
+from vrneural.errors import VrnError
+
+
+def test_xatlas_segfault_on_an_icosphere_is_one_actionable_line(tmp_path):
+    """The real crash (jpcy/xatlas#146; about 1 s of xatlas): xatlas segfaults on the
+    81920-face icosphere at every --res. Run as a user would, with Python's faulthandler on:
+    stderr is still the one error line (plus the progress bar's carriage-return frames).
+    If a new xatlas no longer crashes, this test fails: then drop it (the fake-child tests
+    below still cover the message)."""
+    trimesh.creation.icosphere(subdivisions=6).export(tmp_path / "ico6.ply")
+    out = tmp_path / "ico.png"
+    cli = [sys.executable, "-X", "faulthandler", "-m", "vrneural", "atlas"]
+    r = subprocess.run(
+        [*cli, str(tmp_path / "ico6.ply"), "--res", "64", "-o", str(out), "--no-cache"],
+        capture_output=True,  # bytes: text mode would turn the bar's "\r" into newlines
+        timeout=300,
+    )
+    err = r.stderr.decode()
+    assert r.returncode == 2 and r.stdout == b""
+    assert err.count("\n") == 1 and "Fatal Python error" not in err
+    msg = err.split("\r")[-1].strip()  # the line after the cleared progress bar
+    assert msg.startswith(
+        "vrneural atlas: error: ico6.ply (81920 triangles): xatlas crashed (SIGSEGV, signal 11)"
+    )
+    assert "jpcy/xatlas#146" in msg and "re-triangulate the mesh" in msg
+    assert "--res" not in msg  # no other --res avoids it (unwrap.py)
+    assert not out.exists() and not (tmp_path / "ico.png.config.json").exists()
+
+
+def _dies(how, delay: float = 0.0):
+    """A stand-in for ``unwrap._child`` that closes its pipe, waits ``delay`` s, then ends
+    by ``how``: a signal number, or ``("exit", code)``."""
+
+    def child(conn, *_args):
+        conn.close()
+        time.sleep(delay)
+        if isinstance(how, tuple):
+            os._exit(how[1])
+        if how != signal.SIGKILL:  # the default action, not pytest's faulthandler dump
+            signal.signal(how, signal.SIG_DFL)
+        os.kill(os.getpid(), how)
+        os._exit(0)  # not reached
+
+    return child
+
+
+@pytest.mark.parametrize(
+    ("how", "delay", "message"),
+    [
+        # pipe closed 0.3 s before the crash: the exit code is read only after the join
+        # (read before it, it was None: "the xatlas process died (exit code None)")
+        (signal.SIGSEGV, 0.3, "xatlas crashed (SIGSEGV, signal 11), a known xatlas bug"),
+        (signal.SIGABRT, 0.0, "xatlas crashed (SIGABRT, signal 6)"),
+        (signal.SIGKILL, 0.0, "killed (SIGKILL, signal 9), most likely by the out-of-memory"),
+        (signal.SIGTERM, 0.0, "the xatlas process was stopped by SIGTERM (signal 15)"),
+        (("exit", 3), 0.0, "the xatlas process exited with code 3 without sending a result"),
+    ],
+)
+def test_a_dead_child_is_named_with_its_signal(monkeypatch, how, delay, message):
+    monkeypatch.setattr(unwrap_mod, "_child", _dies(how, delay))
+    mesh = builtin_mesh("plane")
+    with pytest.raises(VrnError) as e:
+        unwrap_mod.unwrap(mesh, 64, 2)
+    assert str(e.value).startswith(f"plane ({len(mesh.faces)} triangles): ")
+    assert message in str(e.value) and "None" not in str(e.value)
