@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.config import config_dict
+from vrneural.config import config_dict, is_explicit, replace_config
 from vrneural.errors import VrnError, check_range
 from vrneural.formats.atomic import check_output_dir, make_output_dir, write_json
 from vrneural.runtime.config import RunConfig, resolve
@@ -100,7 +100,7 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     from vrneural.runtime.scene import builtin_scene, load_scene
 
     out = Path(cfg.out or default_out())
-    cfg = dataclasses.replace(cfg, out=str(out))
+    cfg = replace_config(cfg, out=str(out))
     if cfg.scene:
         scene = load_scene(cfg.scene)
     else:
@@ -109,9 +109,11 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     adapter = adapter_summary()
     s = resolve(cfg, scene, adapter)
     save = selected_frames(cfg.save_frames, s.frames)
-    if cfg.video:  # every eye keeps at least 16 x 16 pixels in the video
-        w, h = s.eye_res
-        check_range("--video-scale", cfg.video_scale, 1, max(1, min(w, h) // 16))
+    if cfg.video:  # every eye keeps at least 2 x 2 pixels (libx264's minimum, 2x2 blocks)
+        top = max(1, min(s.eye_res) // 2)
+        if not is_explicit(cfg, "video_scale"):  # the default adapts to small eyes
+            cfg = replace_config(cfg, video_scale=min(cfg.video_scale, top))
+        check_range("--video-scale", cfg.video_scale, 1, top)
     video = None
     if cfg.video:
         check_video()
