@@ -1,8 +1,8 @@
 """An analytic, spatially varying BTF for the distillation tests (no synthesiser needed).
 
 ``BTF(u, wi, wo) = (albedo(u) / pi + ks(u) D_ggx(h; alpha(u)) / (4 wi.z wo.z)) * wi.z`` with a
-smooth tileable albedo / specular / roughness pattern: a Lambert + GGX patch (ARCHITECTURE.md
-section 2 convention: cos(theta_i) inside the BTF).
+smooth tileable albedo / specular / roughness pattern: a Lambert + GGX patch (docs/conventions.md
+section 2: cos(theta_i) inside the BTF).
 """
 
 from __future__ import annotations

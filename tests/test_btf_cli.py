@@ -44,6 +44,7 @@ def test_synth_writes_btf_and_config(small_btf):
     assert b.shape == (6, 6, 8, 8)
     cfg = json.loads(small_btf.with_name("leather.btf.config.json").read_text())
     assert cfg["config"] == "BtfConfig" and cfg["preset"] == "leather" and cfg["res"] == 8
+    assert cfg["grid"] == 64  # resolved: 2 x res, at least 64
 
 
 def test_info_text_and_json(small_btf, capsys):

@@ -1,5 +1,5 @@
 """Physics of the synthetic BTFs: flat patches match analytic BRDF x cos(theta_i) (the
-convention of ARCHITECTURE.md section 2), energy stays below the white-furnace bound,
+convention of docs/conventions.md section 2), energy stays below the white-furnace bound,
 reciprocity holds, tiles continue across their edges."""
 
 import numpy as np

@@ -172,3 +172,16 @@ def test_bench_quality_jobs_equals_sequential(tmp_path):
         for name in seq:
             assert par[name]["whole_l1"] == seq[name]["whole_l1"], (preset, name)
             assert par[name]["curve"] == seq[name]["curve"], (preset, name)
+
+
+def test_bench_quality_never_writes_into_a_folder_of_the_users_files(tmp_path):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "a.txt").write_text("keep")
+    args = ["bench", "quality", "--presets", "leather", "--res", 8, "--dirs", 4, "--out", mine]
+    code, err = run_cli(*args)
+    assert code == 2 and "output exists; pass --resume" in err, err
+    for flag in ("--force", "--resume"):
+        code, err = run_cli(*args, flag)
+        assert code == 2 and "not a vrneural output directory" in err, err
+    assert sorted(p.name for p in mine.iterdir()) == ["a.txt"]

@@ -98,3 +98,30 @@ def test_atomic_path_leaves_original_on_failure(tmp_path):
         raise RuntimeError("boom")
     assert f.read_text() == "keep"
     assert list(tmp_path.iterdir()) == [f]
+
+
+def test_force_replaces_only_directories_vrneural_wrote(tmp_path):
+    import json
+
+    from vrneural.formats.atomic import OUTPUT_MARK, check_output_dir, make_output_dir
+
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "thesis.tex").write_text("keep")
+    (mine / "results.json").write_text(json.dumps({"accuracy": 0.9}))  # a results.json, not ours
+    with pytest.raises(VrnError, match="not a vrneural output directory"):
+        check_output_dir(mine, force=True)
+    (mine / "summary.json").write_text("not json")
+    with pytest.raises(VrnError, match="not a vrneural output directory"):
+        check_output_dir(mine, force=True)
+    assert (mine / "thesis.tex").read_text() == "keep"
+    # an older release's bench output (no marker yet) is recognised by its content
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "results.json").write_text(json.dumps({"benchmark": "frames", "records": []}))
+    (old / "plot.png").write_bytes(b"png")
+    check_output_dir(old, force=True)
+    make_output_dir(old)
+    assert sorted(p.name for p in old.iterdir()) == [OUTPUT_MARK]
+    with pytest.raises(VrnError, match="pass --force"):
+        check_output_dir(old, force=False)

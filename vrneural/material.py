@@ -1,7 +1,7 @@
 """Neural materials as plain data, and their numpy evaluation (the reference every other
 implementation, torch or WGSL, must match).
 
-A material maps ``(u, wi, wo)`` to a BTF value (RGB, ARCHITECTURE.md section 2 convention).
+A material maps ``(u, wi, wo)`` to a BTF value (RGB, docs/conventions.md section 2 convention).
 
 Architectures (``arch``):
 

@@ -1,6 +1,6 @@
 """The data the atlas stage hands to the runtime. Conventions (shared with the runtime shaders):
 
-- positions in metres, object space; normals unit; directions follow ARCHITECTURE.md section 2.
+- positions in metres, object space; normals unit; directions follow docs/conventions.md section 1.
 - ``tangents[:, :3]`` is the unit tangent along increasing *material* u, orthogonalised against
   the normal; ``tangents[:, 3]`` is +-1 and the bitangent is ``w * cross(n, t)``.
 - Atlas UVs are in [0, 1]; radiance texel ``(x, y)`` (column x, row y, row 0 first in memory)

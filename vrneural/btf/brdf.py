@@ -12,7 +12,7 @@ Every term is symmetric in ``(wi, wo)``, so ``f`` is reciprocal. Directions are 
 frame (x = tangent, y = bitangent, z = normal), given as separate component arrays so that
 callers broadcast ``[lights, 1]`` against ``[1, samples]`` without building ``[..., 3]`` stacks.
 
-The BTF value (ARCHITECTURE.md section 2) is ``f * cos_i``: :func:`btf_value`.
+The BTF value (docs/conventions.md section 2) is ``f * cos_i``: :func:`btf_value`.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Container: :mod:`vrneural.formats.container` with magic ``b"VRNBTF"``. Arrays:
 
-- ``values``      ``[L, V, H, W, 3]`` float16, BTF value (ARCHITECTURE.md section 2: outgoing
+- ``values``      ``[L, V, H, W, 3]`` float16, BTF value (docs/conventions.md section 2: outgoing
   radiance per unit irradiance measured perpendicular to ``wi``; cos(theta_i) is inside)
 - ``light_dirs``  ``[L, 3]`` float32 unit vectors, local frame, pointing away from the surface
 - ``view_dirs``   ``[V, 3]`` float32 unit vectors

@@ -11,6 +11,8 @@ without ``--force``.
 
 from __future__ import annotations
 
+import dataclasses
+
 import json
 from pathlib import Path
 
@@ -101,7 +103,7 @@ def run_synth(args) -> int:
     out = check_output(args.output, args.force)
     _check_partial(out, args.resume, args.force)
     path = synthesize(cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force)
-    write_config(path, cfg)
+    write_config(path, dataclasses.replace(cfg, grid=cfg.grid_size))  # resolved: grid 0 -> N
     print(path)
     return 0
 

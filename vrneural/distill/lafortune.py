@@ -3,7 +3,7 @@
 ``BTF(u, wi, wo) ~= wi.z * (rho_d(u) + sum_j rho_s,j(u) * max(wo^T M_j(u) wi, 0)^n_j(u))`` with
 ``j = 1..4`` lobes, a full 3x3 ``M_j`` (shape, orientation, anisotropy; paper Eq. 6-7) and
 independent RGB colours: 3 + 4 * (3 + 9 + 1) = 55 parameters per texel (220 bytes as float32,
-the paper's 35.2 MB at 400^2). ``wi.z`` carries the BTF's cos(theta_i) (ARCHITECTURE.md sec. 2).
+the paper's 35.2 MB at 400^2). ``wi.z`` carries the BTF's cos(theta_i) (docs/conventions.md sec. 2).
 
 Fitted by Levenberg-Marquardt on the training directions, batched over texels, with
 an analytic Jacobian (checked against autograd in the tests), least squares in linear space.

@@ -36,16 +36,21 @@ def _make_parent(p: Path) -> None:
 
 
 OUTPUT_MARK = ".vrneural-output"
-# Result files of output directories written before the marker existed.
-_LEGACY_RESULTS = ("summary.json", "results.json")
+#: Result files of output directories written before the marker existed, with keys that only
+#: vrneural's own files carry (a folder that merely holds *a* results.json is not ours)
+_LEGACY_RESULTS = {
+    "summary.json": ("adapter", "resolved", "per_frame"),
+    "results.json": ("benchmark",),
+}
 
 
 def check_output_dir(path: str | os.PathLike, force: bool) -> Path:
     """Validate an output *directory* before any work starts.
 
     An existing path needs ``force``, and even then it must be a directory that vrneural
-    wrote (it holds :data:`OUTPUT_MARK`, or a result file of an older release) or an empty
-    one: ``--force`` replaces our own output, never a folder of the user's files.
+    wrote (it holds :data:`OUTPUT_MARK`, or a result file of an older release, recognised
+    by its content) or an empty one: ``--force`` replaces our own output, never a folder of
+    the user's files.
     """
     p = Path(path)
     if p.exists() or p.is_symlink():
@@ -64,9 +69,31 @@ def check_output_dir(path: str | os.PathLike, force: bool) -> Path:
 
 def is_output_dir(p: Path) -> bool:
     """Whether ``p`` is empty or was written by vrneural (see :func:`check_output_dir`)."""
-    if (p / OUTPUT_MARK).exists() or any((p / f).is_file() for f in _LEGACY_RESULTS):
+    if (p / OUTPUT_MARK).exists() or any(_ours(p / f, k) for f, k in _LEGACY_RESULTS.items()):
         return True
     return not any(p.iterdir())
+
+
+def _ours(f: Path, keys: tuple[str, ...]) -> bool:
+    """Whether ``f`` is a JSON result file of an older vrneural (an object with ``keys``)."""
+    if not f.is_file():
+        return False
+    try:
+        doc = json.loads(f.read_text())
+    except (OSError, ValueError):  # UnicodeDecodeError is a ValueError
+        return False
+    return isinstance(doc, dict) and all(k in doc for k in keys)
+
+
+def mark_output_dir(path: str | os.PathLike) -> Path:
+    """Create ``path`` (and parents) and mark it as vrneural's output, keeping its contents."""
+    p = Path(path)
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        (p / OUTPUT_MARK).write_text("written by vrneural; --force may replace this directory\n")
+    except OSError as e:
+        raise VrnError(f"{p}: cannot create output directory ({e.strerror})") from None
+    return p
 
 
 def make_output_dir(path: str | os.PathLike, keep: tuple[str, ...] = ()) -> Path:
@@ -84,12 +111,7 @@ def make_output_dir(path: str | os.PathLike, keep: tuple[str, ...] = ()) -> Path
                 shutil.rmtree(child)
             else:
                 child.unlink()
-    try:
-        p.mkdir(parents=True, exist_ok=True)
-        (p / OUTPUT_MARK).write_text("written by vrneural; --force may replace this directory\n")
-    except OSError as e:
-        raise VrnError(f"{p}: cannot create output directory ({e.strerror})") from None
-    return p
+    return mark_output_dir(p)
 
 
 @contextlib.contextmanager

@@ -1,6 +1,6 @@
 """Point lights: position (m), colour (linear RGB), intensity ``I`` (W/sr), optional motion.
 
-A point light contributes ``L = BTF(u, wi, wo) * colour * I / d^2`` (ARCHITECTURE.md section 2).
+A point light contributes ``L = BTF(u, wi, wo) * colour * I / d^2`` (docs/conventions.md section 2).
 """
 
 from __future__ import annotations

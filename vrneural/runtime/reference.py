@@ -3,7 +3,7 @@
 shared with ``shaders/screen_space.wgsl`` (:func:`shade_points`).
 
 Units: positions metres (world), light radiance ``colour * intensity`` in W/sr; a point light
-contributes ``L = BTF(u, wi, wo) * I / d^2`` (ARCHITECTURE.md section 2). Output radiance is
+contributes ``L = BTF(u, wi, wo) * I / d^2`` (docs/conventions.md section 2). Output radiance is
 clamped to ``[0, 65504]`` (the f16 range) and is never NaN. This module never imports wgpu.
 """
 
