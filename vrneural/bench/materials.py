@@ -57,15 +57,13 @@ def squares_scene(k: int, n_lights: int):
 
 
 def run_materials(cfg: MaterialsConfig) -> dict:
-    from vrneural.errors import VrnError, check_range
+    from vrneural.errors import check_range
     from vrneural.runtime.config import parse_res
     from vrneural.runtime.profiles import get_profile
 
     c = cfg.resolved()
     counts = rp.int_list("--materials", c.materials, 1, 8)
-    check_range("--texture-res", c.texture_res, *rp.texture_res_range())
-    if c.texture_res % 2:
-        raise VrnError(f"--texture-res = {c.texture_res} must be even (2x2 blocks)")
+    rp.check_texture_res(c.texture_res)
     check_range("--reuse", c.reuse, 0, 64)
     check_range("--lights", c.lights, 1, 8)
     check_range("--eyes", c.eyes, 1, 2)

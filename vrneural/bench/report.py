@@ -115,6 +115,16 @@ def texture_res_range() -> tuple[int, int]:
     return MIN_RESOLUTION, max_texture_res(adapter_summary())
 
 
+def check_texture_res(value: int, field: str = "--texture-res") -> int:
+    """One radiance texture side: in :func:`texture_res_range` and even (one-line VrnError)."""
+    from vrneural.errors import VrnError, check_range
+
+    check_range(field, value, *texture_res_range())
+    if value % 2:
+        raise VrnError(f"{field} = {value} must be even (2x2 blocks)")
+    return value
+
+
 def int_list(field: str, text: str, lo: int, hi: int, even: bool = False) -> list[int]:
     """Parse a comma-separated list of integers in ``[lo, hi]`` (one-line VrnError if not)."""
     from vrneural.errors import VrnError
