@@ -26,7 +26,7 @@ from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, Textu
 
 MODES = ("texture", "screen", "reference")
 #: Fraction of an object's triangles that may own no atlas texel before `run` warns
-LOST_TRIANGLES = 0.1
+LOST_TRIANGLES = 0.5
 
 
 @dataclass

@@ -237,4 +237,18 @@ def human_summary(sm: dict) -> str:
         f"per frame blocks shaded {sm['blocks_shaded_per_frame'].get('median', 0):.0f}, MLP evals "
         f"{sm['mlp_evaluations_per_frame'].get('median', 0):.0f} (median)",
     ]
+    objs = [o for o in sm["scene"]["objects"] if "texture_res" in o]
+    if objs:  # each neural object's own texture (texture_res / min_texture_res) and atlas
+        lines.append(
+            "objects   "
+            + ", ".join(
+                f"{o['name']} {o['texture_res']}^2 {o['coverage_pct']:.0f}% texels"
+                + (
+                    f" ({o['triangles_without_texels']} tris w/o texel)"
+                    if o["triangles_without_texels"]
+                    else ""
+                )
+                for o in objs
+            )
+        )
     return "\n".join(lines)
