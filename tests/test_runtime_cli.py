@@ -164,6 +164,15 @@ def _scene(tmp_path, text: str, name: str = "s.toml"):
     return str(p)
 
 
+def _two_meshes(path):
+    """A glTF file holding two meshes, "box" (12 triangles) and "ball" (80)."""
+    import trimesh
+
+    trimesh.Scene({"box": trimesh.creation.box(), "ball": trimesh.creation.icosphere(1)}).export(
+        path
+    )
+
+
 OBJ = """
 [[objects]]
 mesh = "{mesh}"
@@ -207,11 +216,7 @@ mesh = "{mesh}"
     ],
 )
 def test_bad_scene_fields(capsys, tmp_path, fields, needle):
-    import trimesh
-
-    trimesh.Scene({"box": trimesh.creation.box(), "ball": trimesh.creation.icosphere(1)}).export(
-        tmp_path / "two.glb"
-    )
+    _two_meshes(tmp_path / "two.glb")
     f = {"mesh": "plane", "extra": "", "mat": 'procedural = "random"'} | fields
     f["light"] = "position = [0, 1, 0]\n" + f.get("light", "")
     msg = _err(
@@ -231,14 +236,10 @@ def test_scene_profile_is_checked_as_a_scene_field_even_under_a_cli_profile(caps
 
 
 def test_scene_mesh_files_by_name_or_index_and_bundled_packs(tmp_path):
-    import trimesh
-
     from vrneural.runtime.assets import get_mesh
     from vrneural.runtime.scene import load_scene
 
-    trimesh.Scene({"box": trimesh.creation.box(), "ball": trimesh.creation.icosphere(1)}).export(
-        tmp_path / "two.glb"
-    )
+    _two_meshes(tmp_path / "two.glb")
     by_name = {n: len(get_mesh(f"two.glb:{n}", tmp_path).faces) for n in ("box", "ball")}
     assert by_name == {"box": 12, "ball": 80}
     assert len(get_mesh("two.glb:1", tmp_path).faces) in by_name.values()

@@ -219,7 +219,7 @@ def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list):
     if best is None:
         raise VrnError(
             f"{mesh.name}: xatlas could not pack {len(faces)} triangles into {R}x{R} texels "
-            f"in {MAX_PACKS} tries; use a larger --res"
+            f"in {MAX_PACKS} tries; use a larger resolution"
         )
     uv, W, H, tpu, util = best
     scale = R / max(W, H)

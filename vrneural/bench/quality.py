@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vrneural.config import config_dict, mark_explicit, opt, quick_defaults
-from vrneural.formats.atomic import OUTPUT_MARK, is_output_dir, mark_output_dir
+from vrneural.formats.atomic import check_output_dir, mark_output_dir
 from vrneural.distill.config import BEFORE_FIELD, COMPILE_MODES, NEUMIP_DIRS
 from vrneural.errors import VrnError, check_choice, check_range
 from vrneural.versions import package_versions
@@ -405,20 +405,12 @@ def run_quality(cfg: QualityConfig) -> dict:
     if cfg.res % 2:
         raise VrnError(f"--res = {cfg.res} must be even (2x2 texel blocks)")
     root = Path(cfg.out)
-    if root.exists() or root.is_symlink():
-        if not root.is_dir():
-            raise VrnError(f"{root}: output exists and is not a directory; choose another --out")
-        if any(root.iterdir()):
-            if not (cfg.force or cfg.resume):
-                raise VrnError(
-                    f"{root}: output exists; pass --resume to reuse its checkpoints "
-                    "or --force to retrain"
-                )
-            if not is_output_dir(root):
-                raise VrnError(
-                    f"{root}: not a vrneural output directory (no {OUTPUT_MARK}); --force and "
-                    "--resume only work on vrneural's own output, so choose another --out"
-                )
+    if not (root.is_dir() and not any(root.iterdir())):  # an empty directory needs no flag
+        check_output_dir(
+            root,
+            cfg.force or cfg.resume,
+            remedy="pass --resume to reuse its checkpoints or --force to retrain",
+        )
     mark_output_dir(root)  # checkpoints stay: --resume reuses them, --force retrains each
     results, slices, t_all = {}, {}, time.perf_counter()
     if cfg.jobs > 1:

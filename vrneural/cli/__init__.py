@@ -41,10 +41,11 @@ def command_name(args: argparse.Namespace) -> str:
     return " ".join(words)
 
 
-def explicit_dests(argv: list[str]) -> set[str]:
-    """The ``dest`` of every option given in ``argv``: parsed again by a parser whose
-    defaults are all suppressed, so only what was typed lands in the namespace (argparse's
-    own matching, abbreviations included)."""
+def explicit_dests(argv: list[str], parser: argparse.ArgumentParser | None = None) -> set[str]:
+    """The ``dest`` of every option given in ``argv``: parsed again with every default
+    suppressed, so only what was typed lands in the namespace (argparse's own matching,
+    abbreviations included). ``parser``, a :func:`build_parser` that has done its parse, is
+    reused (its defaults are cleared); without one a new parser is built."""
 
     def suppress(parser: argparse.ArgumentParser) -> None:
         parser._defaults.clear()
@@ -55,7 +56,7 @@ def explicit_dests(argv: list[str]) -> set[str]:
             else:
                 a.default = argparse.SUPPRESS
 
-    p = build_parser()
+    p = parser or build_parser()
     suppress(p)
     return set(vars(p.parse_args(argv)))
 
@@ -64,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
-    args._explicit = explicit_dests(argv)  # "--epochs 20" counts even where 20 is the default
+    args._explicit = explicit_dests(argv, parser)  # "--epochs 20" counts even at the default
     try:
         return int(args.func(args) or 0)
     except VrnError as e:

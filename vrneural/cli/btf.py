@@ -12,7 +12,6 @@ without ``--force``.
 from __future__ import annotations
 
 import dataclasses
-
 import json
 from pathlib import Path
 

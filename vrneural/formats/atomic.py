@@ -44,24 +44,26 @@ _LEGACY_RESULTS = {
 }
 
 
-def check_output_dir(path: str | os.PathLike, force: bool) -> Path:
+def check_output_dir(
+    path: str | os.PathLike, force: bool, remedy: str = "pass --force to overwrite"
+) -> Path:
     """Validate an output *directory* before any work starts.
 
-    An existing path needs ``force``, and even then it must be a directory that vrneural
-    wrote (it holds :data:`OUTPUT_MARK`, or a result file of an older release, recognised
-    by its content) or an empty one: ``--force`` replaces our own output, never a folder of
-    the user's files.
+    An existing path needs ``force`` (else the error says ``remedy``), and even then it must
+    be a directory that vrneural wrote (it holds :data:`OUTPUT_MARK`, or a result file of an
+    older release, recognised by its content) or an empty one: ``--force`` replaces our own
+    output, never a folder of the user's files.
     """
     p = Path(path)
     if p.exists() or p.is_symlink():
         if not p.is_dir():
             raise VrnError(f"{p}: output exists and is not a directory; choose another --out")
         if not force:
-            raise VrnError(f"{p}: output exists; pass --force to overwrite")
+            raise VrnError(f"{p}: output exists; {remedy}")
         if not is_output_dir(p):
             raise VrnError(
-                f"{p}: not a vrneural output directory (no {OUTPUT_MARK}); --force only replaces "
-                "vrneural's own output, so choose another --out"
+                f"{p}: not a vrneural output directory (no {OUTPUT_MARK}); vrneural only replaces "
+                "or reuses its own output, so choose another --out"
             )
     _make_parent(p)
     return p

@@ -114,10 +114,10 @@ class Renderer:
             res = o.texture_res or max(s.texture_res, o.min_texture_res or 0)
             try:
                 atlas = get_atlas(mesh, res)
-            except VrnError as e:  # the atlas stage speaks of --res; here it is texture_res
+            except VrnError as e:  # name the object and the knobs that set its resolution
                 raise VrnError(
-                    f"{scene.src}: objects[{i}] ({o.name}) at {res}^2 texels: "
-                    f"{str(e).replace('a larger --res', 'a larger texture_res / min_texture_res')}"
+                    f"{scene.src}: objects[{i}] ({o.name}) at {res}^2 texels "
+                    f"(texture_res / min_texture_res): {e}"
                 ) from None
             lost = int(atlas.stats.get("triangles_without_texels", 0))
             n_tri = len(atlas.mesh.faces)

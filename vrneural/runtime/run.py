@@ -109,13 +109,12 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     adapter = adapter_summary()
     s = resolve(cfg, scene, adapter)
     save = selected_frames(cfg.save_frames, s.frames)
+    video = None
     if cfg.video:  # every eye keeps at least 2 x 2 pixels (libx264's minimum, 2x2 blocks)
         top = max(1, min(s.eye_res) // 2)
         if not is_explicit(cfg, "video_scale"):  # the default adapts to small eyes
             cfg = replace_config(cfg, video_scale=min(cfg.video_scale, top))
         check_range("--video-scale", cfg.video_scale, 1, top)
-    video = None
-    if cfg.video:
         check_video()
     check_output_dir(out, cfg.force)
     t_setup = time.perf_counter()

@@ -149,22 +149,14 @@ class _Fields:
 
     def pack(self, key: str, base: Path) -> Path:
         """A .vrnm path: relative to the scene file, else a bundled pack of that name."""
-        from importlib.resources import files
-
         name = self.str(key)
         p = Path(name)
-        if p.is_absolute() or (base / p).is_file():
-            p = p if p.is_absolute() else base / p
-        elif (
-            p.parent == Path(".")
-            and Path(str(files("vrneural") / "data" / "materials" / name)).is_file()
-        ):
-            p = Path(str(files("vrneural") / "data" / "materials" / name))
-        else:
-            p = base / p
-        if not p.is_file():
-            raise self.err(key, f"= {name!r}: file not found ({p}, nor a bundled pack)")
-        return p
+        here = p if p.is_absolute() else base / p
+        if not here.is_file() and p.parent == Path(".") and bundled_path(name).is_file():
+            return bundled_path(name)
+        if not here.is_file():
+            raise self.err(key, f"= {name!r}: file not found ({here}, nor a bundled pack)")
+        return here
 
     def str(self, key, default=None, choices=None):
         v = self.t.get(key, default)
@@ -328,11 +320,16 @@ BUILTIN_MATERIALS = {
 }
 
 
-def builtin_pack(name: str) -> Path:
-    """Path of a bundled pack (``name`` like ``"leather.vrnm"``); one-line error if missing."""
+def bundled_path(name: str) -> Path:
+    """Where the bundled pack ``name`` (like ``"leather.vrnm"``) lives, present or not."""
     from importlib.resources import files
 
-    p = Path(str(files("vrneural") / "data" / "materials" / name))
+    return Path(str(files("vrneural") / "data" / "materials" / name))
+
+
+def builtin_pack(name: str) -> Path:
+    """Path of a bundled pack (``name`` like ``"leather.vrnm"``); one-line error if missing."""
+    p = bundled_path(name)
     if not p.is_file():
         raise VrnError(
             f"built-in scene: material pack {p} is missing; rebuild the bundled packs with "
