@@ -108,3 +108,45 @@ procedural = "random"
     assert two.blocks_shaded == one.blocks_shaded > 0
     assert two.mlp_fine == one.mlp_fine
     assert not r.radiance(1, 0).any() and not r.radiance(1, 1).any()
+
+
+@pytest.mark.gpu
+def test_reference_mode_shades_a_wide_teacher_like_the_unrolled_kernel(tmp_path):
+    """--mode reference streams a wide single-level net from uniform buffers; the same pack in
+    --mode screen is unrolled with constant weights. Same pixels, same values. (At 128 wide the
+    storage-buffer variant it replaces was wrong per pixel on lavapipe, by up to 2.6; unrolling
+    128 wide takes minutes to compile, so this runs at 64; the texture twin test covers 128.)"""
+    import tomllib
+
+    from vrneural.formats.vrnm import write_vrnm
+    from vrneural.material import random_material
+    from vrneural.runtime.renderer import Renderer, Settings
+
+    write_vrnm(tmp_path / "w64.vrnm", random_material(5, "single", 64, 8, 32, 3, "log1p"))
+    toml = """
+[head]
+path = "orbit"
+[[objects]]
+mesh = "sphere"
+position = [0, 1.5, 0]
+[objects.material]
+pack = "w64.vrnm"
+reference = "w64.vrnm"
+[[lights]]
+position = [1, 2, 1]
+intensity = 2.0
+[[lights]]
+position = [-1, 2.5, 1.5]
+"""
+    scene = parse_scene(tomllib.loads(toml), "wide.toml", tmp_path)
+    imgs, stats = [], []
+    for mode in ("screen", "reference"):
+        s = Settings(eyes=1, reuse=0, eye_res=(96, 96), fov_y=60.0, n_lights=2, mode=mode)
+        r = Renderer(scene, s)
+        code = r.neural[0].targets[0].spass.code
+        assert ("var<uniform> wl0" in code) == (mode == "reference")
+        stats.append(r.frame(0))
+        imgs.append(r.read_eyes()[0][..., :3])
+    assert stats[0].pixels_shaded == stats[1].pixels_shaded > 300
+    assert imgs[0].mean() > 0.005  # lit (0.0077 measured)
+    np.testing.assert_allclose(imgs[1], imgs[0], rtol=2e-3, atol=1e-5)

@@ -37,11 +37,12 @@ def test_twin_lambertian_plane_is_analytic():
 @pytest.mark.gpu
 @pytest.mark.parametrize("arch", ["coarse_fine", "single"])
 @pytest.mark.parametrize(
-    "precision, buffer_weights",
-    [("f32", False), ("f16", False), ("f32", True)],  # buffer weights: the f32 reference path
-    ids=["f32-constants", "f16-constants", "f32-buffer"],
+    "precision, weights",
+    # storage weights: the comparison baseline (streamed ones: the test after next)
+    [("f32", "constants"), ("f16", "constants"), ("f32", "storage")],
+    ids=["f32-constants", "f16-constants", "f32-storage"],
 )
-def test_gpu_matches_twin(arch, precision, buffer_weights):
+def test_gpu_matches_twin(arch, precision, weights):
     from vrneural.runtime import texture_pass
 
     at = quad_atlas(32)
@@ -49,7 +50,7 @@ def test_gpu_matches_twin(arch, precision, buffer_weights):
     model = np.eye(4, dtype=np.float32)
     model[:3, 3] = [0.05, -0.02, 0.0]
     args = (at, mat, model, EYE, LP, LC, TILING, precision)
-    got, cg = texture_pass.shade_texture_space(*args, buffer_weights=buffer_weights)
+    got, cg = texture_pass.shade_texture_space(*args, weights=weights)
     want, cw = reference.shade_texture_space(*args)
     np.testing.assert_array_equal(cg, cw)
     assert np.isfinite(got).all()
@@ -262,3 +263,65 @@ def test_gpu_repeated_updates_of_one_target_give_the_same_result():
     # the last update (from -EYE) left the blocks seen only from EYE as they were
     got = read_texture(tgt.texture).astype(np.float32)
     assert (got[..., 3] > 0).sum() > 4 * cw[0]
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("weights, width", [("uniform", 128), ("streamed", 64), ("uniform", 8)])
+def test_wide_net_with_streamed_weights_matches_twin(weights, width):
+    """The reference path: a 128-wide, 3-hidden-layer single net (each 128 x 128 matrix is
+    exactly one 64 KiB uniform binding) streamed from uniform buffers, and a 64-wide one from
+    the storage buffer. The "storage" variant (local arrays) got exactly these wrong on lavapipe:
+    one block of 64 shaded at 64 wide, and wrong values per pixel at 128."""
+    from vrneural.runtime import texture_pass
+    from vrneural.runtime.codegen import uniform_weights_fit
+
+    mat = random_material(5, "single", width=width, layers=3, output="log1p")
+    assert uniform_weights_fit(mat)
+    args = (quad_atlas(16), mat, np.eye(4, dtype=np.float32), EYE, LP, LC, TILING, "f32")
+    got, cg = texture_pass.shade_texture_space(*args, weights=weights)
+    want, cw = reference.shade_texture_space(*args)
+    np.testing.assert_array_equal(cg, cw)
+    np.testing.assert_array_equal(got[..., 3], want[..., 3])
+    err = np.abs(got[..., :3] - _f16(want[..., :3])) / (np.abs(want[..., :3]) + 1e-2)
+    assert err.max() <= 2 * 2.0**-10
+
+
+def test_uniform_weights_fit_and_refusal():
+    from vrneural.errors import VrnError
+    from vrneural.runtime.codegen import (
+        reference_weights,
+        texture_space_wgsl,
+        uniform_weights,
+        uniform_weights_fit,
+    )
+
+    wide = random_material(0, "single", width=129, layers=2)  # 129 x 129 x 4 B > 64 KiB
+    deep = random_material(0, "single", width=8, layers=9)  # 10 layers + biases > 12 - 2
+    ok = random_material(0, "coarse_fine")
+    assert not uniform_weights_fit(wide) and not uniform_weights_fit(deep)
+    assert uniform_weights_fit(ok)
+    for m in (wide, deep):
+        with pytest.raises(VrnError, match="does not fit uniform-buffer weights"):
+            texture_space_wgsl(m, weights="uniform")
+    with pytest.raises(VrnError, match="weights = 'buffer' is not allowed"):
+        texture_space_wgsl(ok, weights="buffer")
+    with pytest.raises(VrnError, match="needs a single-level network"):
+        texture_space_wgsl(ok, weights="streamed")
+    with pytest.raises(VrnError, match="storage weights take layers up to 32 wide"):
+        texture_space_wgsl(random_material(0, "single", width=33), weights="storage")
+    # what --mode reference picks
+    teacher = random_material(0, "single", width=128, layers=3)
+    assert [reference_weights(m) for m in (ok, teacher, wide, deep)] == [
+        "storage",
+        "uniform",
+        "streamed",
+        "streamed",
+    ]
+    code = texture_space_wgsl(wide, weights="streamed")
+    assert "var<uniform> wl0" not in code and "var<storage, read> weights" in code
+    # layout: one vec4-padded array per layer, then the biases
+    parts = uniform_weights(ok)
+    layers = [*ok.networks["coarse"], *ok.networks["fine"]]
+    assert len(parts) == len(layers) + 1 and all(len(p) % 4 == 0 for p in parts)
+    np.testing.assert_array_equal(parts[1][: layers[1].weight.size], layers[1].weight.ravel())
+    np.testing.assert_array_equal(parts[-1][:8], layers[0].bias)

@@ -2,9 +2,15 @@
 
 The templates live in ``vrneural/shaders/`` (``texture_space.wgsl``, ``screen_space.wgsl``, both
 importing ``neural_material.wgsl``, which reuses the ``mlp_body`` macro of ``mlp.wgsl``). The
-network weights become WGSL constants in fully unrolled code (zero weights skipped), or, with
-``buffer_weights=True``, they are read from a storage buffer in loops (the comparison baseline,
-and the only sane choice for wide teachers such as a 128-wide reference network).
+network weights become WGSL constants in fully unrolled code (zero weights skipped:
+``weights="constants"``), or they are read in loops from buffers:
+
+- ``"storage"``: one storage buffer, layer by layer over local arrays (the comparison baseline;
+  narrow networks only: lavapipe gets large dynamically indexed local arrays wrong);
+- ``"uniform"`` / ``"streamed"``: single-level networks of any width (the reference teacher),
+  layers streamed in pairs with every activation a named value, weights from one uniform buffer
+  per layer plus one of the biases (dynamically uniform loads: 8x cheaper than storage loads on
+  lavapipe), or, where the layers do not fit uniform bindings, from the storage buffer.
 
 Specialisation: precision (``T`` = f32 | f16), the light count, the material's own layer sizes
 and texture channel counts are template parameters; the radiance texture side ``R`` is a WGSL
@@ -24,6 +30,17 @@ from vrneural.mlp import pack_weights
 
 _ACT_CODE = {"relu": 0, "leaky_relu": 1, "none": 2}
 PRECISIONS = ("auto", "f16", "f32")
+WEIGHTS = ("constants", "storage", "uniform", "streamed")
+#: WebGPU's guaranteed uniform limits: bytes per binding, uniform buffers per shader stage; the
+#: passes bind two of their own (params, lights).
+UNIFORM_BINDING_BYTES = 65536
+UNIFORM_BUFFERS_PER_STAGE = 12
+PASS_UNIFORMS = 2
+#: widest layer the "storage" variant takes: lavapipe computed wrong results for a 64-wide
+#: single-level net in the texture pass (dynamically indexed local arrays of 4 x 64 floats)
+STORAGE_MAX_WIDTH = 32
+#: first binding of the uniform weight buffers (one per layer, then the biases)
+UNIFORM_WEIGHTS_BINDING = 20
 #: Unrolled code above this many multiply-adds per texel is refused (compile time explodes).
 MAX_UNROLLED_MACS = 20000
 
@@ -38,7 +55,7 @@ class MaterialSpec:
     ca: int  # channels of texture a (coarse / features)
     cb: int  # channels of texture b (fine), 0 for "single"
     z: int  # latent size (coarse_fine), 0 otherwise
-    buffer_weights: bool
+    weights: str  # constants | storage | uniform
     net_order: list
     n_layers: list
     max_width: int
@@ -46,9 +63,60 @@ class MaterialSpec:
     buf_dims_out: list
     buf_offsets: list
     buf_acts: list
+    buf_bias_offsets: list  # per layer, into the uniform bias buffer (uniform weights)
+    uniform_binding: int
+
+    @property
+    def buffer_weights(self) -> bool:
+        return self.weights != "constants"
 
 
-def material_spec(mat: NeuralMaterial, buffer_weights: bool = False) -> MaterialSpec:
+def reference_weights(mat: NeuralMaterial) -> str:
+    """The buffer-weight variant for a per-pixel reference network: streamed from uniform
+    buffers where they hold it, else streamed from the storage buffer; a coarse-to-fine pack
+    (narrow by design) layer by layer from the storage buffer."""
+    if mat.arch != "single":
+        return "storage"
+    return "uniform" if uniform_weights_fit(mat) else "streamed"
+
+
+def uniform_weights_fit(mat: NeuralMaterial) -> bool:
+    """Whether ``weights="uniform"`` can hold ``mat``: every layer's matrix within one uniform
+    binding, and a binding per layer plus one for the biases within the per-stage limit."""
+    layers = [lay for n in ARCHS[mat.arch][0] for lay in mat.networks[n]]
+    biases = sum(lay.n_out for lay in layers)
+    return (
+        all(lay.n_in * lay.n_out * 4 <= UNIFORM_BINDING_BYTES for lay in layers)
+        and biases * 4 <= UNIFORM_BINDING_BYTES
+        and len(layers) + 1 + PASS_UNIFORMS <= UNIFORM_BUFFERS_PER_STAGE
+    )
+
+
+def _check_weights(mat: NeuralMaterial, weights: str) -> None:
+    if weights not in WEIGHTS:
+        raise VrnError(f"weights = {weights!r} is not allowed; choose one of {', '.join(WEIGHTS)}")
+    if weights == "storage" and material_spec(mat).max_width > STORAGE_MAX_WIDTH:
+        raise VrnError(
+            f"material {mat.meta.get('name', '?')!r}: storage weights take layers up to "
+            f"{STORAGE_MAX_WIDTH} wide (wider ones: streamed or uniform weights)"
+        )
+    if weights in ("uniform", "streamed") and mat.arch != "single":
+        raise VrnError(f"weights = {weights!r} needs a single-level network, not {mat.arch!r}")
+    if weights == "uniform" and not uniform_weights_fit(mat):
+        raise VrnError(
+            f"material {mat.meta.get('name', '?')!r} does not fit uniform-buffer weights (a layer "
+            f"over {UNIFORM_BINDING_BYTES} bytes, or over "
+            f"{UNIFORM_BUFFERS_PER_STAGE - PASS_UNIFORMS - 1} layers); use streamed weights"
+        )
+    if weights == "constants" and mat.macs_per_texel > MAX_UNROLLED_MACS:
+        raise VrnError(
+            f"material {mat.meta.get('name', '?')!r} has {mat.macs_per_texel:.0f} MACs/texel; "
+            f"unrolling is limited to {MAX_UNROLLED_MACS} (use buffer weights, e.g. --mode "
+            "reference)"
+        )
+
+
+def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSpec:
     """Shapes and (for the buffer variant) layer tables of ``mat``."""
     nets, texs = ARCHS[mat.arch]
     layers = [lay for n in nets for lay in mat.networks[n]]
@@ -58,6 +126,7 @@ def material_spec(mat: NeuralMaterial, buffer_weights: bool = False) -> Material
     for lay in layers:
         offs.append(off)
         off += lay.n_in * lay.n_out + lay.n_out
+    boffs = np.concatenate([[0], np.cumsum(dims_out)[:-1]]).astype(int).tolist()
     ca = mat.textures[texs[0]].shape[2]
     cb = mat.textures["fine"].shape[2] if mat.arch == "coarse_fine" else 0
     z = mat.networks["coarse"][-1].n_out if mat.arch == "coarse_fine" else 0
@@ -68,7 +137,7 @@ def material_spec(mat: NeuralMaterial, buffer_weights: bool = False) -> Material
         ca=ca,
         cb=cb,
         z=z,
-        buffer_weights=buffer_weights,
+        weights=weights,
         net_order=list(nets),
         n_layers=[len(mat.networks[n]) for n in nets],
         max_width=max([*dims_in, *dims_out]),
@@ -76,6 +145,8 @@ def material_spec(mat: NeuralMaterial, buffer_weights: bool = False) -> Material
         buf_dims_out=dims_out,
         buf_offsets=offs,
         buf_acts=[_ACT_CODE[lay.act] for lay in layers],
+        buf_bias_offsets=boffs,
+        uniform_binding=UNIFORM_WEIGHTS_BINDING,
     )
 
 
@@ -99,6 +170,15 @@ def packed_weights(mat: NeuralMaterial) -> np.ndarray:
     return np.concatenate([pack_weights(mat.networks[n]) for n in ARCHS[mat.arch][0]])
 
 
+def uniform_weights(mat: NeuralMaterial) -> list[np.ndarray]:
+    """The uniform-buffer layout: one float32 array per layer (``W [out, in]`` row-major), then
+    one of all biases in layer order; each zero-padded to whole ``vec4``s."""
+    layers = [lay for n in ARCHS[mat.arch][0] for lay in mat.networks[n]]
+    parts = [np.asarray(lay.weight, np.float32).ravel() for lay in layers]
+    parts.append(np.concatenate([np.asarray(lay.bias, np.float32) for lay in layers]))
+    return [np.concatenate([p, np.zeros(-len(p) % 4, np.float32)]) for p in parts]
+
+
 def resolve_precision(precision: str, is_cpu: bool, has_f16: bool) -> str:
     """``auto`` -> f32 on CPU adapters (f16 is emulated) or without shader-f16, else f16."""
     if precision not in PRECISIONS:
@@ -110,15 +190,6 @@ def resolve_precision(precision: str, is_cpu: bool, has_f16: bool) -> str:
     return precision
 
 
-def _check_unroll(mat: NeuralMaterial, buffer_weights: bool) -> None:
-    if not buffer_weights and mat.macs_per_texel > MAX_UNROLLED_MACS:
-        raise VrnError(
-            f"material {mat.meta.get('name', '?')!r} has {mat.macs_per_texel:.0f} MACs/texel; "
-            f"unrolling is limited to {MAX_UNROLLED_MACS} (use buffer weights, e.g. --mode "
-            "reference)"
-        )
-
-
 RADIANCE_FORMATS = ("rgba16float", "rgba32float")
 
 
@@ -126,19 +197,19 @@ def texture_space_wgsl(
     mat: NeuralMaterial,
     precision: str = "f32",
     n_lights: int = 1,
-    buffer_weights: bool = False,
+    weights: str = "constants",
     radiance_format: str = "rgba16float",
     subgroups: bool = False,
 ) -> str:
     """WGSL of the texture-space pass for ``mat`` (see shaders/texture_space.wgsl);
     ``subgroups``: compaction with subgroup operations (device feature "subgroup")."""
-    _check_unroll(mat, buffer_weights)
+    _check_weights(mat, weights)
     if radiance_format not in RADIANCE_FORMATS:
         raise VrnError(f"radiance format {radiance_format!r} not in {RADIANCE_FORMATS}")
     return render_wgsl(
         "texture_space",
         T="f16" if precision == "f16" else "f32",
-        mat=material_spec(mat, buffer_weights),
+        mat=material_spec(mat, weights),
         n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
         fmt=radiance_format,
@@ -150,15 +221,15 @@ def screen_space_wgsl(
     mat: NeuralMaterial,
     precision: str = "f32",
     n_lights: int = 1,
-    buffer_weights: bool = False,
+    weights: str = "constants",
     subgroups: bool = False,
 ) -> str:
     """WGSL of the per-pixel screen-space pass for ``mat`` (see shaders/screen_space.wgsl)."""
-    _check_unroll(mat, buffer_weights)
+    _check_weights(mat, weights)
     return render_wgsl(
         "screen_space",
         T="f16" if precision == "f16" else "f32",
-        mat=material_spec(mat, buffer_weights),
+        mat=material_spec(mat, weights),
         n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
         subgroups=subgroups,

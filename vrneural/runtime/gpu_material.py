@@ -5,8 +5,9 @@
   low half, 2k + 1 in the high half; zero-padded), read by ``textureLoad`` and
   ``unpack2x16float``. One 128-bit load brings 8 channels: half the loads of 4-channel
   ``rgba16float`` layers (measured on llvmpipe: see README, Runtime), same values.
-- Weights: constants in the generated code, or (buffer variant) one float32 storage buffer in
-  :func:`vrneural.runtime.codegen.packed_weights` layout.
+- Weights: constants in the generated code; or one float32 storage buffer in
+  :func:`vrneural.runtime.codegen.packed_weights` layout (``"storage"``, ``"streamed"``); or uniform
+  buffers in :func:`vrneural.runtime.codegen.uniform_weights` layout (``"uniform"``).
 - An atlas becomes two storage buffers: ``verts`` (4 vec4 per vertex: ``pos.xyz, atlas_u``;
   ``normal.xyz, atlas_v``; ``tangent.xyzw``; ``material_uv.xy, 0, 0``) and ``faces`` ``[F*3]``
   u32 (the screen pass), plus, built once on first use by
@@ -23,7 +24,7 @@ from vrneural.atlas.types import Atlas, Mesh
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import upload_buffer
 from vrneural.material import ARCHS, NeuralMaterial
-from vrneural.runtime.codegen import packed_weights
+from vrneural.runtime.codegen import UNIFORM_WEIGHTS_BINDING, packed_weights, uniform_weights
 from vrneural.runtime.reference import block_geometry
 
 
@@ -56,20 +57,28 @@ def upload_feature_texture(tex: np.ndarray, label: str = ""):
 
 
 class GpuMaterial:
-    """Textures (and optionally the weight buffer) of one material on the device."""
+    """Textures (and the weight buffers, for buffer weights) of one material on the device."""
 
-    def __init__(self, mat: NeuralMaterial, buffer_weights: bool = False):
+    def __init__(self, mat: NeuralMaterial, weights: str = "constants"):
         import wgpu
 
         self.mat = mat
-        self.buffer_weights = buffer_weights
+        self.weights_mode = weights
         names = ARCHS[mat.arch][1]
         self.textures = [upload_feature_texture(mat.textures[n], f"neural.{n}") for n in names]
         self.views = [t.create_view(dimension="2d-array") for t in self.textures]
         self.weights = (
             upload_buffer(packed_weights(mat), wgpu.BufferUsage.STORAGE, "weights")
-            if buffer_weights
+            if weights in ("storage", "streamed")
             else None
+        )
+        self.uniforms = (
+            [
+                upload_buffer(w, wgpu.BufferUsage.UNIFORM, f"weights.{i}")
+                for i, w in enumerate(uniform_weights(mat))
+            ]
+            if weights == "uniform"
+            else []
         )
 
     def entries(self, first_binding: int) -> list[dict]:
@@ -77,6 +86,8 @@ class GpuMaterial:
         out = [{"binding": first_binding + i, "resource": v} for i, v in enumerate(self.views)]
         if self.weights is not None:
             out.append({"binding": first_binding + 2, "resource": {"buffer": self.weights}})
+        for i, b in enumerate(self.uniforms):
+            out.append({"binding": UNIFORM_WEIGHTS_BINDING + i, "resource": {"buffer": b}})
         return out
 
 

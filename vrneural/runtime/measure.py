@@ -109,12 +109,12 @@ class _PassTimer:
     """One texture-space target on a case of :func:`_plane_case`; ``once()`` runs a full pass and
     returns its GPU ms (timestamps; wall ms where the adapter has none)."""
 
-    def __init__(self, atlas, mat, model, eye, lp, lc, buffer_weights):
+    def __init__(self, atlas, mat, model, eye, lp, lc, weights):
         from vrneural.gpu.timing import GpuTimer
         from vrneural.runtime.gpu_material import GpuAtlas
         from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
 
-        tp = TextureSpacePass(mat, "f32", len(lp), buffer_weights)
+        tp = TextureSpacePass(mat, "f32", len(lp), weights)
         self.cnt = CounterBuffer(1)
         self.tgt = TextureTarget(tp, GpuAtlas(atlas), self.cnt)
         self.tgt.update(model, eye, (1, 1, 0, 0), lp, lc)
@@ -137,16 +137,16 @@ class _PassTimer:
         return self.cnt.read()[0].tolist()
 
 
-def _gpu_pass_ms(atlas, mat, model, eye, lp, lc, buffer_weights, repeats) -> tuple[float, list]:
-    pt = _PassTimer(atlas, mat, model, eye, lp, lc, buffer_weights)
+def _gpu_pass_ms(atlas, mat, model, eye, lp, lc, weights, repeats) -> tuple[float, list]:
+    pt = _PassTimer(atlas, mat, model, eye, lp, lc, weights)
     ms = [pt.once() for _ in range(repeats)]
     return float(np.median(ms)), pt.counters()
 
 
 def constants_vs_buffer(res=512, repeats=3) -> dict:
     case = _plane_case(res)
-    c_ms, cnt = _gpu_pass_ms(*case, False, repeats)
-    b_ms, cnt_b = _gpu_pass_ms(*case, True, max(1, repeats - 1))
+    c_ms, cnt = _gpu_pass_ms(*case, "constants", repeats)
+    b_ms, cnt_b = _gpu_pass_ms(*case, "storage", max(1, repeats - 1))
     assert cnt == cnt_b
     return {
         "texture_res": res,
@@ -176,7 +176,7 @@ def vs_torch(res=512, repeats=7, n_lights=3) -> dict:
 
     case = _plane_case(res, n_lights)
     mat = case[1]
-    pt = _PassTimer(*case, False)
+    pt = _PassTimer(*case, "constants")
     cnt = pt.counters()
     n = int(cnt[2])  # coarse evaluations (blocks x lit lights); fine: 4 n
     rng = np.random.default_rng(0)

@@ -17,6 +17,7 @@ from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
 from vrneural.runtime import forward as fw
 from vrneural.runtime.assets import get_atlas, get_mesh
+from vrneural.runtime.codegen import reference_weights
 from vrneural.runtime.camera import OrbitPath, PoseLogPath, eyes_from_pose, sphere_in_frustum
 from vrneural.runtime.gpu_material import GpuAtlas
 from vrneural.runtime.lights import light_arrays
@@ -164,7 +165,7 @@ class Renderer:
             return TextureSpacePass(mat, s.precision, len(self.lights))
         if s.mode == "screen":
             return ScreenSpacePass(mat, s.precision, len(self.lights))
-        return ScreenSpacePass(mat, "f32", len(self.lights), buffer_weights=True)
+        return ScreenSpacePass(mat, "f32", len(self.lights), weights=reference_weights(mat))
 
     def _make_target(self, p, n: _Neural, eye: int):
         if self.s.mode == "texture":

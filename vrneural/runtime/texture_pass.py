@@ -73,7 +73,7 @@ class TextureSpacePass:
         mat: NeuralMaterial,
         precision: str = "f32",
         n_lights: int = 1,
-        buffer_weights: bool = False,
+        weights: str = "constants",
         gmat: GpuMaterial | None = None,
         radiance_format: str = "rgba16float",
         subgroups: bool | None = None,
@@ -83,9 +83,9 @@ class TextureSpacePass:
         self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
         self.subgroups = has_feature("subgroup") if subgroups is None else subgroups
         self.code = texture_space_wgsl(
-            mat, precision, n_lights, buffer_weights, radiance_format, self.subgroups
+            mat, precision, n_lights, weights, radiance_format, self.subgroups
         )
-        self.gmat = gmat or GpuMaterial(mat, buffer_weights)
+        self.gmat = gmat or GpuMaterial(mat, weights)
 
     def pipeline(self, resolution: int, entry: str = "main"):
         return compute_pipeline(
@@ -226,7 +226,7 @@ def shade_texture_space(
     precision: str = "f32",
     phase: int = 0,
     period: int = 1,
-    buffer_weights: bool = False,
+    weights: str = "constants",
     radiance_format: str = "rgba16float",
     subgroups: bool | None = None,
 ):
@@ -238,7 +238,7 @@ def shade_texture_space(
         mat,
         precision,
         len(lp),
-        buffer_weights,
+        weights,
         radiance_format=radiance_format,
         subgroups=subgroups,
     )

@@ -7,7 +7,7 @@
 // (rgba32uint: 8 float16 channels per texel and layer, two per u32, see gpu_material.py)
 // sampled by manual bilinear wrap (4 textureLoads per 8 channels, unpack2x16float),
 // exactly like sample_bilinear_wrap. Weights are WGSL constants in unrolled code, or read from
-// a storage buffer in loops (buffer_weights; wide teachers and the >=10x comparison).
+// buffers in loops (storage or uniform weights; wide teachers and the >=10x comparison).
 {% import 'mlp.wgsl' as m %}
 
 {% macro bindings(mat, first_binding) %}
@@ -15,8 +15,13 @@
 {% if mat.arch == 'coarse_fine' %}
 @group(0) @binding({{ first_binding + 1 }}) var tex_b: texture_2d_array<u32>;  // fine
 {% endif %}
-{% if mat.buffer_weights %}
+{% if mat.weights in ('storage', 'streamed') %}
 @group(0) @binding({{ first_binding + 2 }}) var<storage, read> weights: array<f32>;
+{% elif mat.weights == 'uniform' %}
+{% for l in range(mat.buf_dims_in|length) %}
+@group(0) @binding({{ mat.uniform_binding + loop.index0 }}) var<uniform> wl{{ l }}: array<vec4<f32>, {{ (mat.buf_dims_in[l] * mat.buf_dims_out[l] + 3) // 4 }}>;
+{% endfor %}
+@group(0) @binding({{ mat.uniform_binding + mat.buf_dims_in|length }}) var<uniform> wbias: array<vec4<f32>, {{ (mat.buf_dims_out|sum + 3) // 4 }}>;
 {% endif %}
 {% endmacro %}
 
@@ -121,62 +126,150 @@ fn {{ fname }}({{ arg_decls }}) -> {{ 'vec3<f32>' if ret == 'rgb' else 'array<' 
 {% endmacro %}
 
 {% macro buffer_net_lib(mat, T) %}
-// Storage-buffer weights: per layer W[out, in] row-major then b[out] (mlp.pack_weights), all
-// networks concatenated in order {{ mat.net_order|join(', ') }}. The first layers are split
+// Storage-buffer weights, networks in order {{ mat.net_order|join(', ') }}: per layer W[out, in]
+// row-major then b[out] (mlp.pack_weights). The first layers are split
 // exactly as in the constant-weight code (loop-invariant part hoisted), so the two variants do
-// the same arithmetic and differ only in where the weights come from.
+// the same arithmetic and differ only in where the weights come from. Layer shapes, offsets
+// and activations are template constants; activations ping-pong between two local arrays. Only
+// for narrow networks: lavapipe computes wrong results once an invocation's dynamically indexed
+// arrays grow large (a 64-wide net in the texture pass; see streamed_single for wide ones).
 const MAXW: u32 = {{ mat.max_width }}u;
-const L_IN = array<u32, {{ mat.buf_dims_in|length }}>({{ mat.buf_dims_in|join('u, ') }}u);
-const L_OUT = array<u32, {{ mat.buf_dims_out|length }}>({{ mat.buf_dims_out|join('u, ') }}u);
-const L_OFF = array<u32, {{ mat.buf_offsets|length }}>({{ mat.buf_offsets|join('u, ') }}u);
-const L_ACT = array<u32, {{ mat.buf_acts|length }}>({{ mat.buf_acts|join('u, ') }}u);  // 0 relu, 1 leaky, 2 none
+{% endmacro %}
 
-fn buf_act(l: u32, s: {{ T }}) -> {{ T }} {
-    if (L_ACT[l] == 0u) { return max(s, {{ T }}(0)); }
-    if (L_ACT[l] == 1u) { return max(s, {{ T }}(0.01) * s); }
-    return s;
-}
-
-// Pre-activation part of layer l over its input columns [c0, c0 + n) (x[k] feeds column c0 + k),
-// plus the bias when with_bias.
-fn buf_affine(l: u32, x: array<{{ T }}, MAXW>, c0: u32, n: u32, with_bias: bool) -> array<{{ T }}, MAXW> {
-    var y: array<{{ T }}, MAXW>;
-    let n_in = L_IN[l];
-    let n_out = L_OUT[l];
-    let off = L_OFF[l];
-    for (var o = 0u; o < n_out; o++) {
+{# dst[o] = act(base + sum_k W_l[o, c0 + k] * src[k]) for o < n_out(l), k < n; base is the bias
+   (with_bias), or pre[o] when `pre` names an array, or 0. #}
+{% macro buf_layer(mat, T, l, dst, src, c0, n, with_bias, act=true, pre=none) %}
+{% set n_in = mat.buf_dims_in[l] %}
+{% set n_out = mat.buf_dims_out[l] %}
+{% set off = mat.buf_offsets[l] %}
+    for (var o = 0u; o < {{ n_out }}u; o++) {
+{% if pre is not none %}
+        var s = {{ pre }}[o];
+{% elif with_bias %}
+        var s = {{ T }}(weights[{{ off + n_out * n_in }}u + o]);
+{% else %}
         var s = {{ T }}(0);
-        if (with_bias) { s = {{ T }}(weights[off + n_out * n_in + o]); }
-        for (var k = 0u; k < n; k++) {
-            s += {{ T }}(weights[off + o * n_in + c0 + k]) * x[k];
-        }
-        y[o] = s;
+{% endif %}
+        let row = {{ off + c0 }}u + o * {{ n_in }}u;
+        for (var k = 0u; k < {{ n }}u; k++) { s += {{ T }}(weights[row + k]) * {{ src }}[k]; }
+{% if act and mat.buf_acts[l] == 0 %}
+        {{ dst }}[o] = max(s, {{ T }}(0));
+{% elif act and mat.buf_acts[l] == 1 %}
+        {{ dst }}[o] = max(s, {{ T }}(0.01) * s);
+{% else %}
+        {{ dst }}[o] = s;
+{% endif %}
     }
-    return y;
-}
+{% endmacro %}
 
-fn run_buffer_net(x_in: array<{{ T }}, MAXW>, first: u32, count: u32) -> array<{{ T }}, MAXW> {
-    var a = x_in;
-    for (var l = first; l < first + count; l++) {
-        let y = buf_affine(l, a, 0u, L_IN[l], true);
-        for (var o = 0u; o < L_OUT[l]; o++) { a[o] = buf_act(l, y[o]); }
-    }
-    return a;
-}
+{# Layers first .. last - 1 on `a` (their input), ping-ponging between a and b; ends with
+   `let y = <the array holding the last output>;`. #}
+{% macro buf_rest(mat, T, first, last) %}
+    var b: array<{{ T }}, MAXW>;
+{% set names = ['a', 'b'] %}
+{% for l in range(first, last) %}
+{{ buf_layer(mat, T, l, names[(loop.index0 + 1) % 2], names[loop.index0 % 2], 0, mat.buf_dims_in[l], true) }}
+{% endfor %}
+    let y = {{ names[(last - first) % 2] }};
+{% endmacro %}
 
-// Layer l from its full pre-activation, then layers l + 1 .. last - 1.
-fn buf_finish(l: u32, pre: array<{{ T }}, MAXW>, last: u32) -> array<{{ T }}, MAXW> {
-    var a: array<{{ T }}, MAXW>;
-    for (var o = 0u; o < L_OUT[l]; o++) { a[o] = buf_act(l, pre[o]); }
-    return run_buffer_net(a, l + 1u, last - l - 1u);
-}
-
-fn buf_dirs_part(l: u32, d: array<f32, 9>, base: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
-    var x: array<{{ T }}, MAXW>;
+{# First layer's direction part on top of its hoisted part `base`, with the activation -> a. #}
+{% macro dirs_first(mat, T, l) %}
+    var x: array<{{ T }}, 9>;
     for (var k = 0u; k < 9u; k++) { x[k] = {{ T }}(d[k]); }
-    var y = buf_affine(l, x, 0u, 9u, false);
-    for (var o = 0u; o < L_OUT[l]; o++) { y[o] += base[o]; }
-    return y;
+    var a: array<{{ T }}, MAXW>;
+{{ buf_layer(mat, T, l, 'a', 'x', 0, 9, false, true, 'base') }}
+{% endmacro %}
+
+{# One weight / bias of layer l at a (dynamic) index expression, from the uniform buffers
+   (codegen.uniform_weights) or the storage buffer (mlp.pack_weights). #}
+{% macro wld(mat, l, idx) -%}
+{% if mat.weights == 'uniform' -%}
+wl{{ l }}[({{ idx }}) >> 2u][({{ idx }}) & 3u]
+{%- else -%}
+weights[{{ mat.buf_offsets[l] }}u + {{ idx }}]
+{%- endif %}
+{%- endmacro %}
+{% macro bld(mat, l, idx) -%}
+{% if mat.weights == 'uniform' -%}
+wbias[({{ mat.buf_bias_offsets[l] }}u + {{ idx }}) >> 2u][({{ mat.buf_bias_offsets[l] }}u + {{ idx }}) & 3u]
+{%- else -%}
+weights[{{ mat.buf_offsets[l] + mat.buf_dims_in[l] * mat.buf_dims_out[l] }}u + {{ idx }}]
+{%- endif %}
+{%- endmacro %}
+{% macro act_expr(a, e, T) -%}
+{% if a == 0 %}max({{ e }}, {{ T }}(0)){% elif a == 1 %}max({{ e }}, {{ T }}(0.01) * {{ e }}){% else %}{{ e }}{% endif %}
+{%- endmacro %}
+
+{# Streamed evaluation of a single-level net from buffer weights (weights "uniform" | "streamed"),
+   for wide networks (the 128-wide reference teacher). Layers are taken in pairs (A, B): one loop
+   over A's units o computes unit o from all of A's inputs, then adds its contribution to every
+   output of B (B's column o). Every activation is a named value with a constant index; the loops
+   index only the weights (the same index in every invocation: one scalar load per step from a
+   uniform buffer on a CPU adapter). An odd last layer is unrolled (it is 3 wide). No hoisting:
+   pre_a returns the features and the first layer reads all its inputs each time (for the teacher
+   8 x 128 more multiply-adds per light, 3%). #}
+{% macro streamed_single(mat, T) %}
+fn pre_a(f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, {{ mat.ca }}> {
+    var x: array<{{ T }}, {{ mat.ca }}>;
+{% for k in range(mat.ca) %}
+    x[{{ k }}] = {{ T }}(f[{{ k }}]);
+{% endfor %}
+    return x;
+}
+fn eval_single(d: array<f32, 9>, f: array<{{ T }}, {{ mat.ca }}>) -> vec3<f32> {
+{% set cur = [] %}
+{% for k in range(9) %}
+    let v0_{{ k }} = {{ T }}(d[{{ k }}]);
+{% set _ = cur.append('v0_' ~ k) %}
+{% endfor %}
+{% for k in range(mat.ca) %}
+    let v0_{{ 9 + k }} = f[{{ k }}];
+{% set _ = cur.append('v0_' ~ (9 + k)) %}
+{% endfor %}
+{% set L = mat.buf_dims_in|length %}
+{% set ns = namespace(l=0, cur=cur) %}
+{% for step in range(L) %}
+{% if ns.l < L %}
+{% set l = ns.l %}
+{% set nxt = [] %}
+{% if l + 1 < L %}
+{% set H = mat.buf_dims_out[l] %}
+{% set nb = mat.buf_dims_out[l + 1] %}
+{% for j in range(nb) %}
+    var acc{{ l }}_{{ j }} = {{ T }}({{ bld(mat, l + 1, j ~ 'u') }});
+{% endfor %}
+    for (var o = 0u; o < {{ H }}u; o++) {
+        let r = o * {{ mat.buf_dims_in[l] }}u;
+        var s = {{ T }}({{ bld(mat, l, 'o') }});
+{% for k in range(mat.buf_dims_in[l]) %}
+        s += {{ T }}({{ wld(mat, l, 'r + ' ~ k ~ 'u') }}) * {{ ns.cur[k] }};
+{% endfor %}
+        let h = {{ act_expr(mat.buf_acts[l], 's', T) }};
+{% for j in range(nb) %}
+        acc{{ l }}_{{ j }} += {{ T }}({{ wld(mat, l + 1, (j * H) ~ 'u + o') }}) * h;
+{% endfor %}
+    }
+{% for j in range(nb) %}
+    let v{{ l + 2 }}_{{ j }} = {{ act_expr(mat.buf_acts[l + 1], 'acc' ~ l ~ '_' ~ j, T) }};
+{% set _ = nxt.append('v' ~ (l + 2) ~ '_' ~ j) %}
+{% endfor %}
+{% set ns.l = l + 2 %}
+{% else %}
+{% for j in range(mat.buf_dims_out[l]) %}
+    var p{{ l }}_{{ j }} = {{ T }}({{ bld(mat, l, j ~ 'u') }});
+{% for k in range(mat.buf_dims_in[l]) %}
+    p{{ l }}_{{ j }} += {{ T }}({{ wld(mat, l, (j * mat.buf_dims_in[l] + k) ~ 'u') }}) * {{ ns.cur[k] }};
+{% endfor %}
+    let v{{ l + 1 }}_{{ j }} = {{ act_expr(mat.buf_acts[l], 'p' ~ l ~ '_' ~ j, T) }};
+{% set _ = nxt.append('v' ~ (l + 1) ~ '_' ~ j) %}
+{% endfor %}
+{% set ns.l = l + 1 %}
+{% endif %}
+{% set ns.cur = nxt %}
+{% endif %}
+{% endfor %}
+    return apply_output(vec3<f32>(f32({{ ns.cur[0] }}), f32({{ ns.cur[1] }}), f32({{ ns.cur[2] }})));
 }
 {% endmacro %}
 
@@ -194,36 +287,55 @@ fn buf_dirs_part(l: u32, d: array<f32, 9>, base: array<{{ T }}, MAXW>) -> array<
 //   coarse_fine: z = eval_coarse(dirs, pre_a(U_c(u_c))); zz = fine_z(z);
 //                rgb_k = eval_fine(zz, pre_b(U_f(u_k)))
 //   single:      rgb_k = eval_single(dirs, pre_a(U(u_k)))
-{% if mat.buffer_weights %}
+{% if mat.weights in ('uniform', 'streamed') %}
+{{ streamed_single(mat, T) }}
+{% elif mat.buffer_weights %}
 {{ buffer_net_lib(mat, T) }}
 fn pre_a(f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, MAXW> {
-    var x: array<{{ T }}, MAXW>;
+    var x: array<{{ T }}, {{ mat.ca }}>;
     for (var k = 0u; k < {{ mat.ca }}u; k++) { x[k] = {{ T }}(f[k]); }
-    return buf_affine(0u, x, 9u, {{ mat.ca }}u, true);
+    var p: array<{{ T }}, MAXW>;
+{{ buf_layer(mat, T, 0, 'p', 'x', 9, mat.ca, true, false) }}
+    return p;
 }
 {% if mat.arch == 'coarse_fine' %}
 {% set nc = mat.n_layers[0] %}
 {% set nf = mat.n_layers[1] %}
-fn eval_coarse(d: array<f32, 9>, pa: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
-    return buf_finish(0u, buf_dirs_part(0u, d, pa), {{ nc }}u);
+fn eval_coarse(d: array<f32, 9>, base: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
+{{ dirs_first(mat, T, 0) }}
+{{ buf_rest(mat, T, 1, nc) }}
+    return y;
 }
 fn pre_b(f: array<f32, {{ mat.cb }}>) -> array<{{ T }}, MAXW> {
-    var x: array<{{ T }}, MAXW>;
+    var x: array<{{ T }}, {{ mat.cb }}>;
     for (var k = 0u; k < {{ mat.cb }}u; k++) { x[k] = {{ T }}(f[k]); }
-    return buf_affine({{ nc }}u, x, {{ mat.z }}u, {{ mat.cb }}u, true);
+    var p: array<{{ T }}, MAXW>;
+{{ buf_layer(mat, T, nc, 'p', 'x', mat.z, mat.cb, true, false) }}
+    return p;
 }
 fn fine_z(z: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
-    return buf_affine({{ nc }}u, z, 0u, {{ mat.z }}u, false);
+    var p: array<{{ T }}, MAXW>;
+{{ buf_layer(mat, T, nc, 'p', 'z', 0, mat.z, false, false) }}
+    return p;
 }
 fn eval_fine(zz: array<{{ T }}, MAXW>, pb: array<{{ T }}, MAXW>) -> vec3<f32> {
-    var pre: array<{{ T }}, MAXW>;
-    for (var o = 0u; o < MAXW; o++) { pre[o] = zz[o] + pb[o]; }
-    let y = buf_finish({{ nc }}u, pre, {{ nc + nf }}u);
+    var a: array<{{ T }}, MAXW>;
+    for (var o = 0u; o < {{ mat.buf_dims_out[nc] }}u; o++) {
+{% if mat.buf_acts[nc] == 0 %}
+        a[o] = max(zz[o] + pb[o], {{ T }}(0));
+{% elif mat.buf_acts[nc] == 1 %}
+        a[o] = max(zz[o] + pb[o], {{ T }}(0.01) * (zz[o] + pb[o]));
+{% else %}
+        a[o] = zz[o] + pb[o];
+{% endif %}
+    }
+{{ buf_rest(mat, T, nc + 1, nc + nf) }}
     return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
 }
 {% else %}
-fn eval_single(d: array<f32, 9>, pa: array<{{ T }}, MAXW>) -> vec3<f32> {
-    let y = buf_finish(0u, buf_dirs_part(0u, d, pa), {{ mat.n_layers[0] }}u);
+fn eval_single(d: array<f32, 9>, base: array<{{ T }}, MAXW>) -> vec3<f32> {
+{{ dirs_first(mat, T, 0) }}
+{{ buf_rest(mat, T, 1, mat.n_layers[0]) }}
     return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
 }
 {% endif %}
