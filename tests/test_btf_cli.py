@@ -199,7 +199,10 @@ def test_interrupted_partial_is_never_discarded_silently(tmp_path, vrn_inproc):
     # not a partial BTF: --resume cannot continue it and does not discard it either
     _one_line_error(vrn_inproc(*synth, "-o", str(out), "--resume"), str(partial), "--force")
     assert partial.read_bytes() == b"hours of work" and not out.exists()
-    r = vrn_inproc(*synth, "-o", str(out), "--resume", "--force")  # asked for: starts over
+    # --resume with --force contradict: an error, the partial stays
+    _one_line_error(vrn_inproc(*synth, "-o", str(out), "--resume", "--force"), "contradict")
+    assert partial.read_bytes() == b"hours of work" and not out.exists()
+    r = vrn_inproc(*synth, "-o", str(out), "--force")  # asked for: starts over
     assert r.returncode == 0, r.stderr
     assert read_btf(out).shape == (3, 3, 4, 4) and not partial.exists()
 
@@ -210,3 +213,96 @@ def test_resume_with_nothing_to_resume_is_an_error_not_a_silent_fresh_start(tmp_
     r = vrn_inproc(*synth, "-o", str(out), "--resume")
     _one_line_error(r, "vrneural btf synth: error", "nothing to resume", "n.btf.partial")
     assert not out.exists() and not (tmp_path / "n.btf.partial").exists()
+
+
+def test_synth_refuses_a_file_larger_than_the_free_disk_space(tmp_path, vrn_inproc, monkeypatch):
+    import shutil
+    from collections import namedtuple
+
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(10**9, 0, 10**6))
+    out = tmp_path / "huge.btf"
+    r = vrn_inproc("btf", "synth", "--res", "4", "--dirs", "300", "-o", str(out), "--no-progress")
+    _one_line_error(r, "needs 8.6 MB", "only 1.0 MB is free")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupted_partial_file_is_refused_by_readers(tmp_path, vrn_inproc):
+    import shutil
+
+    from vrneural.btf import BtfWriter, direction_set
+    from vrneural.errors import VrnError
+
+    d = direction_set(3)
+    w = BtfWriter(tmp_path / "p.btf", d, d, (4, 4), {"name": "p"})
+    w.values[:] = 0.25
+    w.mark_done(0)
+    copied = tmp_path / "copied.btf"
+    shutil.copy(w.partial, copied)  # a .partial renamed by hand: the header says so
+    for f in (copied, w.partial):
+        _one_line_error(vrn_inproc("btf", "info", str(f)), str(f), "unfinished BTF file")
+    with pytest.raises(VrnError, match="unfinished"):
+        read_btf(copied)
+    assert read_btf(w.finalize()).meta["name"] == "p"  # finished: the mark is gone
+
+
+def test_header_records_the_resolved_grid(small_btf):
+    gen = read_btf(small_btf).meta["generator"]
+    cfg = json.loads(small_btf.with_name("leather.btf.config.json").read_text())
+    assert gen["grid"] == cfg["grid"] == 64
+
+
+def test_grid_help_matches_the_check(vrn_inproc, tmp_path, capsys):
+    from vrneural.cli import build_parser
+
+    sub = build_parser()._subparsers._group_actions[0].choices["btf"]
+    synth = sub._subparsers._group_actions[0].choices["synth"]
+    grid = next(a for a in synth._actions if a.dest == "grid")
+    assert "8 to 4096" in grid.help
+    args = ["btf", "synth", "--res", "4", "--dirs", "3", "-o", str(tmp_path / "g.btf")]
+    _one_line_error(vrn_inproc(*args, "--grid", "7"), "--grid = 7", "allowed [8, 4096]")
+
+
+def test_help_shows_defaults(capsys):
+    for argv, needle in (
+        (["teach", "--help"], "(default: off)"),
+        (["distill", "--help"], "(default: off)"),
+        (["bench", "quality", "--help"], "(default: bench-quality)"),
+    ):
+        with pytest.raises(SystemExit):
+            main(argv)
+        assert needle in " ".join(capsys.readouterr().out.split()), argv
+
+
+def test_unknown_argument_names_the_subcommand(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["export", "a.pt", "-o", "b.vrnm", "--no-progress"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and "usage: vrneural export" in err
+    assert "vrneural export: error: unrecognized arguments: --no-progress" in err
+
+
+def test_info_into_a_closed_pipe_is_quiet(small_btf):
+    r = subprocess.run(
+        f"{sys.executable} -m vrneural btf info {small_btf} --json | true",
+        shell=True,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert "Traceback" not in r.stderr and "BrokenPipe" not in r.stderr, r.stderr
+
+
+def test_info_warns_about_nan_values(tmp_path, capsys):
+    from vrneural.btf import direction_set
+    from vrneural.btf.sheet import BtfWarning
+    from vrneural.formats.container import write_container
+
+    d = direction_set(3)
+    v = np.full((3, 3, 4, 4, 3), 0.5, np.float16)
+    v[1, 2, 0, 0, 0] = np.nan
+    f = tmp_path / "nan.btf"
+    write_container(f, b"VRNBTF", 1, {"name": "n"}, {"values": v, "light_dirs": d, "view_dirs": d})
+    with pytest.warns(BtfWarning, match="1 NaN/Inf values"):
+        assert main(["btf", "info", str(f)]) == 0
+    assert "max 0.5" in capsys.readouterr().out

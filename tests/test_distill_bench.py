@@ -9,7 +9,7 @@ import pytest
 from distill_helpers import run_cli
 
 
-def test_bench_quality_smoke(tmp_path):
+def test_bench_quality_smoke(tmp_path, capsys):
     out = tmp_path / "q"
     args = [
         "bench",
@@ -53,8 +53,11 @@ def test_bench_quality_smoke(tmp_path):
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     code, err = run_cli(*args)  # results exist: refuse without --force
     assert code == 2 and "--force" in err
+    capsys.readouterr()
     code, err = run_cli(*args, "--resume")  # every checkpoint matches: nothing is retrained
     assert code == 0, err
+    log = capsys.readouterr().out
+    assert "leather: teacher  reused" in log and "leather: student  reused" in log, log
     again = json.loads((out / "results.json").read_text())["results"]["leather"]["methods"]
     for name, m in methods.items():
         for key in ("whole_l1", "train_seconds", "epochs"):
@@ -179,9 +182,28 @@ def test_bench_quality_never_writes_into_a_folder_of_the_users_files(tmp_path):
     mine.mkdir()
     (mine / "a.txt").write_text("keep")
     args = ["bench", "quality", "--presets", "leather", "--res", 8, "--dirs", 4, "--out", mine]
-    code, err = run_cli(*args)
-    assert code == 2 and "output exists; pass --resume" in err, err
-    for flag in ("--force", "--resume"):
-        code, err = run_cli(*args, flag)
+    for flag in ((), ("--force",), ("--resume",)):  # no flag helps, and none is suggested
+        code, err = run_cli(*args, *flag)
         assert code == 2 and "not a vrneural output directory" in err, err
+        assert "--resume" not in err and "--force" not in err, err
     assert sorted(p.name for p in mine.iterdir()) == ["a.txt"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["--ema", "1"], "--ema = 1.0 is out of range"),
+        (["--out", ""], "--out is empty"),
+        (["--dirs", "0"], "--dirs = 0 is out of range; allowed [2, 100000]"),
+        (["--dirs", "1"], "--dirs = 1 is out of range; allowed [2, 100000]"),
+        (["--presets", "leather,leather"], "--presets names leather more than once"),
+        (["--resume", "--force"], "contradict"),
+        (["--device", "tpu"], "--device 'tpu'"),
+    ],
+)
+def test_bench_quality_checks_every_option_before_any_work(tmp_path, monkeypatch, argv, needle):
+    monkeypatch.chdir(tmp_path)
+    out = ["--out", "q"] if "--out" not in argv else []
+    code, err = run_cli("bench", "quality", "--res", 8, "--dirs", 4, *out, *argv, "--no-progress")
+    assert code == 2 and err.count("\n") == 1 and needle in err, err
+    assert list(tmp_path.iterdir()) == []

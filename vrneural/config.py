@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import re
 import types
 import typing
 from pathlib import Path
@@ -38,7 +39,7 @@ def add_config_args(
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
         tp = hints[f.name]
         help_ = f.metadata.get("help", "")
-        if "default" not in help_:  # a help text that explains its default says it once
+        if not re.search(r"default\s*[:)]", help_):  # a help that explains its default: once
             help_ += f" (default: {default})"
         if tp is bool:
             parser.add_argument(
@@ -103,11 +104,16 @@ def config_dict(cfg) -> dict:
     return {"config": type(cfg).__name__, **json.loads(json.dumps(d, default=str))}
 
 
+def config_path(output: str | Path) -> Path:
+    """Where :func:`write_config` puts the config of ``output``: ``<output>.config.json``
+    beside an output file (``config.json`` inside an output directory)."""
+    out = Path(output)
+    return out / "config.json" if out.is_dir() else out.with_name(out.name + ".config.json")
+
+
 def write_config(output: str | Path, cfg, extra: dict | None = None) -> Path:
     """Write ``<output>.config.json`` beside an output file (or ``config.json`` in a dir)."""
-    out = Path(output)
-    path = out / "config.json" if out.is_dir() else out.with_name(out.name + ".config.json")
-    return write_json(path, {**config_dict(cfg), **(extra or {})})
+    return write_json(config_path(output), {**config_dict(cfg), **(extra or {})})
 
 
 def quick_defaults(cfg, **quick):

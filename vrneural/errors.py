@@ -25,6 +25,17 @@ def check_range(name: str, value: float, lo: float | None = None, hi: float | No
         raise VrnError(f"{name} = {value!r} is out of range; allowed [{lo_s}, {hi_s}]")
 
 
+#: Every seed option (teach, distill, btf synth, bench quality, split seeds) takes [0, SEED_MAX]:
+#: numpy and torch take 32-bit seeds without surprises (torch wraps larger ones, and refuses
+#: negative ones or ones beyond 64 bits with a traceback).
+SEED_MAX = 2**32 - 1
+
+
+def check_seed(name: str, value: int) -> None:
+    """Raise :class:`VrnError` unless ``value`` is a seed in ``[0, SEED_MAX]``."""
+    check_range(name, value, 0, SEED_MAX)
+
+
 def _num(x: float) -> str:
     """A bound as people write it: whole numbers in full (16777216, not 1.67772e+07)."""
     if float(x).is_integer() and abs(x) < 1e15:

@@ -30,9 +30,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vrneural.config import config_dict, mark_explicit, opt, quick_defaults
-from vrneural.formats.atomic import check_output_dir, mark_output_dir
 from vrneural.distill.config import BEFORE_FIELD, COMPILE_MODES, NEUMIP_DIRS
-from vrneural.errors import VrnError, check_choice, check_range
+from vrneural.errors import VrnError, check_range, check_seed
+from vrneural.formats.atomic import check_output_dir, check_resume_force, mark_output_dir
 from vrneural.versions import package_versions
 
 METHODS = ("lafortune", "neumip", "single8", "student_nodistill", "student")
@@ -240,13 +240,15 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     synth_s = time.perf_counter() - t0
     btf = read_btf(btf_path)
     tcfg = _teach_config(preset, cfg, root, btf_path, btf_fingerprint(btf)["sha256"])
+    reused = _finished(tcfg)
     tck = run_teach(tcfg)
     records = {"teacher": [tck]}
-    log(f"{preset}: teacher  {tck['train_seconds']:.0f} s")
+    log(f"{preset}: teacher  {_took(tck, reused)}")
     for name, stem, dcfg in _distill_configs(preset, cfg, root, btf_path):
+        reused = _finished(dcfg)
         ck = run_distill(dcfg)
         records.setdefault(name, []).append(ck)
-        log(f"{preset}: {stem}  {ck['train_seconds']:.0f} s")
+        log(f"{preset}: {stem}  {_took(ck, reused)}")
     data = SliceData(btf, tck["split"]["test"])
     every = list(range(len(data.train) + len(data.test)))
     slices = _slice_pairs(data)
@@ -315,6 +317,21 @@ def _reusable(cfg, btf_sha: str | None = None, teacher_sha: str | None = None) -
     if btf_sha is not None and ck["btf"].get("sha256") != btf_sha:
         return False
     return teacher_sha is None or ck.get("teacher", {}).get("sha256") == teacher_sha
+
+
+def _finished(cfg) -> bool:
+    """Whether ``--resume`` finds ``cfg.output`` finished at ``cfg.epochs`` (nothing to train)."""
+    from vrneural.distill.checkpoint import load_checkpoint
+
+    if not cfg.resume:
+        return False
+    ck = load_checkpoint(cfg.output)
+    return bool(ck.get("finished")) and int(ck["epoch"]) == cfg.epochs
+
+
+def _took(ck: dict, reused: bool) -> str:
+    """The log's time of one network: ``reused`` for a checkpoint taken as it was."""
+    return "reused" if reused else f"{ck['train_seconds']:.0f} s"
 
 
 def _img(blocks, res):
@@ -386,24 +403,44 @@ def _lafortune(data, every, slices, cfg: QualityConfig, out: dict, path: Path, b
     }
 
 
+def validate(cfg: QualityConfig) -> list[str]:
+    """Check every option before anything is synthesised, trained or written (the checks the
+    stages would make later, with their ranges); returns the presets."""
+    from vrneural.btf.synth import BtfConfig
+    from vrneural.distill.config import DistillConfig
+    from vrneural.distill.teach import check_train_config
+    from vrneural.distill.train import train_device
+
+    if not cfg.out:
+        raise VrnError("--out is empty; pass an output directory")
+    check_resume_force(cfg.resume, cfg.force)
+    presets = [p.strip() for p in cfg.presets.split(",") if p.strip()]
+    if not presets:
+        raise VrnError("--presets is empty")
+    twice = sorted({p for p in presets if presets.count(p) > 1})
+    if twice:
+        raise VrnError(f"--presets names {', '.join(twice)} more than once")
+    for k in ("teacher_epochs", "epochs", "repeats"):
+        check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 1, 10_000)
+    check_range("--lafortune-iters", cfg.lafortune_iters, 1, 10_000)
+    check_range("--jobs", cfg.jobs, 1, 256)
+    for p in presets:  # --preset, --res, --dirs, --seed as `btf synth` checks them
+        BtfConfig(preset=p, res=cfg.res, dirs=cfg.dirs, seed=cfg.seed).validate()
+    check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
+    check_train_config(  # --ema and the like, as `distill` checks them
+        DistillConfig(epochs=cfg.epochs, seed=cfg.seed, ema=cfg.ema, device=cfg.device)
+    )
+    train_device(cfg.device)
+    return presets
+
+
 def run_quality(cfg: QualityConfig) -> dict:
     """Run the benchmark; writes results.json, results.md, curves.png, slices.png in ``out``."""
     from vrneural.bench.quality_report import write_report
     from vrneural.formats.atomic import write_json
 
     cfg = cfg.resolved()
-    presets = [p.strip() for p in cfg.presets.split(",") if p.strip()]
-    if not presets:
-        raise VrnError("--presets is empty")
-    from vrneural.btf.presets import PRESETS
-
-    for p in presets:  # before anything is trained or written
-        check_choice("--presets", p, sorted(PRESETS))
-    for k in ("res", "dirs", "teacher_epochs", "epochs", "repeats"):
-        check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 1, 10_000)
-    check_range("--jobs", cfg.jobs, 1, 256)
-    if cfg.res % 2:
-        raise VrnError(f"--res = {cfg.res} must be even (2x2 texel blocks)")
+    presets = validate(cfg)
     root = Path(cfg.out)
     if not (root.is_dir() and not any(root.iterdir())):  # an empty directory needs no flag
         check_output_dir(

@@ -14,6 +14,12 @@ import numpy as np
 
 from vrneural.btf.dirs import spherical
 from vrneural.btf.format import Btf
+from vrneural.warn import VrnWarning
+
+
+class BtfWarning(VrnWarning):
+    """A BTF that reads but holds values training refuses (``vrneural btf info``)."""
+
 
 #: (label, light theta/phi, view theta/phi) in degrees.
 PAIRS = (
@@ -44,14 +50,19 @@ def tonemap(x: np.ndarray, exposure: float) -> np.ndarray:
 
 def summary(btf: Btf, max_slices: int = 256) -> dict:
     """Shape, directions, value range and metadata. The value range is exact for files up to
-    ``max_slices`` slices, else taken over ``max_slices`` evenly spread slices (``sampled``)."""
+    ``max_slices`` slices, else taken over ``max_slices`` evenly spread slices (``sampled``);
+    it covers the finite values, and ``nonfinite_values`` counts the NaN/Inf ones seen."""
     L, V, H, W = btf.shape
     n = L * V
     idx = np.arange(n) if n <= max_slices else np.linspace(0, n - 1, max_slices).astype(int)
-    lo, hi, total, count = np.inf, -np.inf, 0.0, 0
+    lo, hi, total, count, bad = np.inf, -np.inf, 0.0, 0, 0
     for k in idx:
         s = btf.slice(int(k) // V, int(k) % V)
-        lo, hi = min(lo, float(s.min())), max(hi, float(s.max()))
+        ok = np.isfinite(s)
+        bad += int(s.size - ok.sum())
+        s = s[ok]  # the range of the finite values; the others are counted
+        if s.size:
+            lo, hi = min(lo, float(s.min())), max(hi, float(s.max()))
         total += float(s.sum(dtype=np.float64))
         count += s.size
     theta = np.degrees(np.arccos(np.clip(btf.light_dirs[:, 2], -1, 1)))
@@ -68,6 +79,7 @@ def summary(btf: Btf, max_slices: int = 256) -> dict:
         "value_max": hi,
         "value_mean": total / max(count, 1),
         "value_range_sampled": bool(n > max_slices),
+        "nonfinite_values": bad,
         "meta": btf.meta,
     }
 

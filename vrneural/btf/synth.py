@@ -8,6 +8,7 @@ sidecar, so an interrupted run continues with ``resume=True`` (the CLI's ``--res
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,7 +19,7 @@ from vrneural.btf.dirs import direction_set
 from vrneural.btf.format import BtfWriter
 from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt
-from vrneural.errors import VrnError, check_choice, check_range
+from vrneural.errors import VrnError, check_choice, check_range, check_seed
 
 GENERATOR = "vrneural.btf.synth v1"
 
@@ -32,7 +33,9 @@ class BtfConfig:
     dirs: int = opt(151, "light and view directions (151 = UBO2014 layout, else quasi-uniform)")
     seed: int = opt(0, "random seed (same seed, same bytes)")
     spp: int = opt(4, "jittered sub-samples per texel (a square number is stratified)")
-    grid: int = opt(0, "heightfield grid size N per side (0 = 2 x res, at least 64, at most 512)")
+    grid: int = opt(
+        0, "heightfield grid size N per side, 8 to 4096 (0 = 2 x res clamped to [64, 512])"
+    )
 
     def validate(self) -> None:
         check_choice("--preset", self.preset, sorted(PRESETS))
@@ -42,13 +45,17 @@ class BtfConfig:
         # at least 2 x 2 (light, view) pairs: one can be held out for the test L1
         check_range("--dirs", self.dirs, 2, 100_000)
         check_range("--spp", self.spp, 1, 256)
-        check_range("--seed", self.seed, 0, 2**63 - 1)
+        check_seed("--seed", self.seed)
         if self.grid != 0:
             check_range("--grid", self.grid, 8, 4096)
 
     @property
     def grid_size(self) -> int:
         return self.grid or int(min(512, max(64, 2 * self.res)))
+
+    def resolved(self) -> BtfConfig:
+        """The config as rendered (``grid`` 0 replaced by the size used), as files record it."""
+        return dataclasses.replace(self, grid=self.grid_size)
 
 
 def build_maps(cfg: BtfConfig):
@@ -79,9 +86,9 @@ def check_partial_settings(partial: Path, generator: dict) -> None:
     if not partial.exists():
         return
     try:
-        old = read_container(partial, BTF_MAGIC, (BTF_VERSION,), "partial BTF", False)[0]
+        old = read_container(partial, BTF_MAGIC, (BTF_VERSION,), "partial BTF", False, True)[0]
     except VrnError as e:
-        raise VrnError(f"{e}; pass --force to start over") from None
+        raise VrnError(f"{e}; pass --force instead of --resume to start over") from None
     have = old.get("generator", {})
     diff = [
         f"{k}: {have.get(k)!r} there, {v!r} here" for k, v in generator.items() if have.get(k) != v
@@ -89,7 +96,7 @@ def check_partial_settings(partial: Path, generator: dict) -> None:
     if diff:
         raise VrnError(
             f"{partial}: the interrupted run used other settings ({'; '.join(diff)}); rerun with "
-            "its settings to continue it, or pass --force to start over"
+            "its settings to continue it, or pass --force instead of --resume to start over"
         )
 
 
@@ -112,7 +119,7 @@ def synthesize(
     dirs = direction_set(cfg.dirs)
     meta = {
         "name": cfg.preset,
-        "generator": {**config_dict(cfg), "tool": GENERATOR},
+        "generator": {**config_dict(cfg.resolved()), "tool": GENERATOR},
         "seed": cfg.seed,
     }
     out = Path(out)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 from vrneural import __version__
@@ -61,13 +62,33 @@ def explicit_dests(argv: list[str], parser: argparse.ArgumentParser | None = Non
     return set(vars(p.parse_args(argv)))
 
 
+def _command_parser(
+    parser: argparse.ArgumentParser, args: argparse.Namespace
+) -> argparse.ArgumentParser:
+    """The parser of the (sub)command in ``args`` (``vrneural bench quality``'s own)."""
+    names = [args.command] + [getattr(args, d) for d in SUBCOMMAND_DEST if getattr(args, d, None)]
+    p = parser
+    for name in names:
+        sub = next(a for a in p._actions if isinstance(a, argparse._SubParsersAction))
+        p = sub.choices[name]
+    return p
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # named by the subcommand's parser: its usage line, not the top level's
+        _command_parser(parser, args).error(f"unrecognized arguments: {' '.join(extra)}")
     args._explicit = explicit_dests(argv, parser)  # "--epochs 20" counts even at the default
     try:
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        sys.stdout.flush()  # a closed pipe (`| head`) shows here, not at interpreter exit
+        return code
+    except BrokenPipeError:  # the reader went away: stop quietly, as `cat` does
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141  # 128 + SIGPIPE, what a shell reports for a command killed by it
     except VrnError as e:
         print(f"{command_name(args)}: error: {e}", file=sys.stderr)
         return e.exit_code

@@ -19,7 +19,9 @@ def _register_quality(sub) -> None:
         "(Lafortune, NeuMIP, single-level 8-wide, student without and with distillation) at "
         "one fixed budget, and write results.json, results.md, curves.png and slices.png.",
     )
-    p.add_argument("--out", default="bench-quality", help="output directory")
+    p.add_argument(
+        "--out", default="bench-quality", help="output directory (default: bench-quality)"
+    )
     add_config_args(p, QualityConfig)
     p.set_defaults(func=_run_quality)
 

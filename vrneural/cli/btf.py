@@ -11,7 +11,6 @@ without ``--force``.
 
 from __future__ import annotations
 
-import dataclasses
 import json
 from pathlib import Path
 
@@ -70,10 +69,6 @@ def register(sub) -> None:
     im.set_defaults(func=run_import)
 
 
-def _same_file(a, b) -> bool:
-    return Path(a).resolve() == Path(b).resolve()
-
-
 def _check_partial(out: Path, resume: bool, force: bool) -> None:
     """An interrupted run's ``<out>.partial`` is only continued (--resume) or discarded (--force)
     on request: a long render is never thrown away by accident."""
@@ -91,18 +86,19 @@ def _check_partial(out: Path, resume: bool, force: bool) -> None:
 
 def run_synth(args) -> int:
     from vrneural.btf.synth import BtfConfig, synthesize
-    from vrneural.config import config_from_args, write_config
+    from vrneural.config import config_from_args, config_path, write_config
     from vrneural.errors import VrnError
-    from vrneural.formats.atomic import check_output
+    from vrneural.formats.atomic import check_outputs, check_resume_force
 
     cfg = config_from_args(BtfConfig, args)
     cfg.validate()
+    check_resume_force(args.resume, args.force)
     if not args.output.endswith(".btf"):
         raise VrnError(f"{args.output}: output must end in .btf")
-    out = check_output(args.output, args.force)
+    out, _ = check_outputs([args.output, config_path(args.output)], args.force)
     _check_partial(out, args.resume, args.force)
     path = synthesize(cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force)
-    write_config(path, dataclasses.replace(cfg, grid=cfg.grid_size))  # resolved: grid 0 -> N
+    write_config(path, cfg.resolved())  # grid 0 -> the size used, as in the header
     print(path)
     return 0
 
@@ -112,6 +108,18 @@ def run_info(args) -> int:
     from vrneural.btf.sheet import summary
 
     s = summary(read_btf(args.file))
+    if s["nonfinite_values"]:
+        import warnings
+
+        from vrneural.btf.sheet import BtfWarning
+
+        warnings.warn(
+            f"{args.file}: {s['nonfinite_values']} NaN/Inf values"
+            f"{' in the sampled slices' if s['value_range_sampled'] else ''}; training refuses "
+            "them (re-synthesise or re-import the BTF)",
+            BtfWarning,
+            stacklevel=1,
+        )
     if args.json:
         print(json.dumps(s, indent=2, default=str))
         return 0
@@ -156,14 +164,12 @@ def run_show(args) -> int:
 
 def run_import(args) -> int:
     from vrneural.btf.ubo2014 import import_ubo, load_extractor, parse_header
-    from vrneural.errors import VrnError
-    from vrneural.formats.atomic import check_output
+    from vrneural.formats.atomic import check_outputs, check_resume_force
 
+    check_resume_force(args.resume, args.force)
     load_extractor()
     parse_header(args.file)
-    if _same_file(args.file, args.output):
-        raise VrnError(f"{args.output}: output would overwrite the input")
-    out = check_output(args.output, args.force)
+    (out,) = check_outputs([args.output], args.force, inputs=[args.file])
     _check_partial(out, args.resume, args.force)
     print(import_ubo(args.file, out, resume=args.resume, progress=not args.no_progress))
     return 0

@@ -2,6 +2,12 @@
 
 from __future__ import annotations
 
+from vrneural.warn import VrnWarning
+
+
+class UnfinishedRunWarning(VrnWarning):
+    """`vrneural export` of a checkpoint whose training did not finish."""
+
 
 def register(sub) -> None:
     p = sub.add_parser(
@@ -24,20 +30,24 @@ def run(args) -> int:
     import json
     from pathlib import Path
 
+    from vrneural.config import config_path
     from vrneural.distill.checkpoint import load_checkpoint
     from vrneural.distill.export import export_checkpoint, ranges_table
     from vrneural.errors import VrnError
-    from vrneural.formats.atomic import check_output, write_json
+    from vrneural.formats.atomic import check_outputs, write_json
 
     if Path(args.output).suffix != ".vrnm":
         raise VrnError(f"{args.output}: output pack must end in .vrnm")
-    check_output(args.output, args.force)
+    sidecar = config_path(args.output)
+    check_outputs([args.output, sidecar], args.force, inputs=[args.checkpoint, args.btf])
     ck = load_checkpoint(args.checkpoint)
+    if not ck.get("finished", True):
+        _warn_unfinished(args.checkpoint, ck)
     out, meta = export_checkpoint(
         ck, args.output, force=args.force, source=args.checkpoint, btf=args.btf or None
     )
     write_json(
-        Path(f"{out}.config.json"),
+        sidecar,
         {
             "config": "export",
             "checkpoint": str(args.checkpoint),
@@ -57,3 +67,18 @@ def run(args) -> int:
             f"{m['test_l1']:.5f}  numpy-vs-torch {m['pack_vs_torch_max_abs']:.2e}"
         )
     return 0
+
+
+def _warn_unfinished(path, ck: dict) -> None:
+    """One-line warning: the checkpoint is an interrupted run, and how to finish it."""
+    import warnings
+
+    cmd = "teach BTF" if ck.get("kind") == "teacher" else "distill TEACHER"
+    step = int(ck.get("step", 0))
+    warnings.warn(
+        f"{path}: an unfinished run ({ck['epoch']} of {ck['config'].get('epochs', '?')} epochs "
+        f"done{f' and {step} steps of the next' if step else ''}); exporting it as it is; "
+        f"finish it with `vrneural {cmd} -o {path} --resume`",
+        UnfinishedRunWarning,
+        stacklevel=1,
+    )

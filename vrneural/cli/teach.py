@@ -14,7 +14,7 @@ def register(sub) -> None:
         description="Train the 128-wide teacher (neural texture + MLP, arch 'single') on a "
         "BTF. Writes the checkpoint, <output>.config.json and (unless --no-export) the "
         "teacher's .vrnm beside it (the runtime's per-pixel reference). Ctrl-C saves; "
-        "--resume continues exactly.",
+        "--resume continues exactly (config JSON and pack are written when the run finishes).",
     )
     p.add_argument("btf", help="input BTF file (.btf)")
     p.add_argument(
@@ -33,19 +33,25 @@ def run(args) -> int:
 
 
 def _report(fn, output: str) -> int:
-    """Run a training stage; report the result or the interruption (exit 130)."""
+    """Run a training stage; report the result or the interruption (exit 130). Under
+    ``torchrun`` only rank 0 reports (it alone writes the files)."""
+    import os
     import sys
 
     from vrneural.distill.train import Interrupted
 
+    rank0 = int(os.environ.get("RANK", "0")) == 0
     try:
         ck = fn()
     except Interrupted as e:
-        print(
-            f"interrupted at {e}; checkpoint saved to {output}; continue with --resume",
-            file=sys.stderr,
-        )
+        if rank0:
+            print(
+                f"interrupted at {e}; checkpoint saved to {output}; continue with --resume",
+                file=sys.stderr,
+            )
         return 130
+    if not rank0:
+        return 0
     h = ck["history"][-1] if ck["history"] else {}
     test = h.get("test_l1", float("nan"))
     print(

@@ -8,6 +8,7 @@ imported by these modules, so the CLI imports them only inside its handlers.
 - :mod:`.data`      BTF slices -> batches, held-out test directions, jittered lookups, sharding
 - :mod:`.train`     the shared trainer loop (checkpoint/resume/Ctrl-C/DDP/progress bar)
 - :mod:`.checkpoint` safe ``weights_only`` checkpoint loading and validation
+- :mod:`.outputs`   the files a stage writes, checked before any work (inputs, --force, --resume)
 - :mod:`.teach`, :mod:`.distill`  the two stages; :mod:`.lafortune` the analytic baseline
 - :mod:`.export`    checkpoint -> :class:`~vrneural.material.NeuralMaterial` -> ``.vrnm``
 """

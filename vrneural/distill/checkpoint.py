@@ -22,6 +22,7 @@ import hashlib
 import os
 import pickle
 import re
+import warnings
 from pathlib import Path
 
 import torch
@@ -30,15 +31,20 @@ from vrneural.errors import VrnError
 
 FORMAT = "vrneural-checkpoint"
 VERSION = 1
+KINDS = ("teacher", "student")
+ARCHS = ("single", "coarse_fine")  # models.NeuralModel
 
 
 def save_checkpoint(path, payload: dict) -> None:
-    """``torch.save`` to a temporary sibling, then ``os.replace`` (atomic)."""
+    """``torch.save`` to a temporary sibling, then ``os.replace`` (atomic): a failed write
+    (one-line :class:`VrnError`) leaves the previous checkpoint as it was."""
     p = Path(path)
     tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
     try:
         torch.save({"format": FORMAT, "version": VERSION, **payload}, tmp)
         os.replace(tmp, p)
+    except (OSError, RuntimeError) as e:  # torch reports a failed open as a RuntimeError
+        raise VrnError(f"{p}: cannot write the checkpoint ({_first_sentence(e)})") from None
     finally:
         if tmp.exists():
             tmp.unlink()
@@ -56,7 +62,9 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
     if p.is_dir():
         raise VrnError(f"{p}: is a directory, expected a checkpoint (.pt)")
     try:
-        ck = torch.load(p, map_location="cpu", weights_only=True)
+        with warnings.catch_warnings():  # torch warns about legacy/foreign files before failing
+            warnings.simplefilter("ignore")
+            ck = torch.load(p, map_location="cpu", weights_only=True)
     except pickle.UnpicklingError as e:
         m = re.search(r"GLOBAL ([\w.]+)", str(e))
         if m is None:
@@ -65,18 +73,38 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
             f"{p}: refusing to load: it needs unpickling of arbitrary objects ({m.group(1)}), "
             "which weights_only=True forbids"
         ) from None
-    except Exception as e:  # text, truncated or foreign files fail anywhere in the unpickler
+    except (KeyError, IndexError):  # a text file: the unpickler reads its bytes as opcodes
+        msg = "not a PyTorch checkpoint (corrupt, or another kind of file)"
+        raise VrnError(f"{p}: {msg}") from None
+    except Exception as e:  # truncated or foreign files fail anywhere in the unpickler
         raise VrnError(f"{p}: corrupt or not a torch checkpoint ({_first_sentence(e)})") from None
     if not isinstance(ck, dict) or ck.get("format") != FORMAT:
         raise VrnError(f"{p}: not a vrneural checkpoint (no format '{FORMAT}')")
     if ck.get("version") != VERSION:
         raise VrnError(f"{p}: checkpoint version {ck.get('version')!r} unsupported (reads 1)")
+    if ck.get("kind") not in KINDS:
+        kinds = ", ".join(KINDS)
+        raise VrnError(f"{p}: checkpoint kind {ck.get('kind')!r} unknown (reads {kinds})")
     if kind is not None and ck.get("kind") != kind:
         raise VrnError(f"{p}: is a {ck.get('kind')!r} checkpoint, expected a {kind!r} checkpoint")
     for key in ("spec", "net", "config", "btf", "split", "epoch", "history"):
         if key not in ck:
             raise VrnError(f"{p}: checkpoint lacks '{key}'")
+    arch = ck["spec"].get("arch") if isinstance(ck["spec"], dict) else None
+    if arch not in ARCHS:
+        raise VrnError(f"{p}: spec.arch {arch!r} unknown (reads {', '.join(ARCHS)})")
     return ck
+
+
+def recorded_btf(ck: dict, source) -> str:
+    """The BTF path recorded in checkpoint ``ck`` (file ``source``), which must still exist."""
+    path = ck["btf"]["path"]
+    if not Path(path).exists():
+        raise VrnError(
+            f"{path}: the BTF recorded in {source} does not exist (moved or deleted?); "
+            "pass --btf PATH to use another copy"
+        )
+    return path
 
 
 def _first_sentence(e: Exception) -> str:

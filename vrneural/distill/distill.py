@@ -15,35 +15,36 @@ import torch
 from torch import nn
 
 from vrneural.btf.format import read_btf
-from vrneural.config import replace_config
-from vrneural.distill.checkpoint import file_sha256, load_checkpoint
+from vrneural.config import is_explicit, replace_config
+from vrneural.distill.checkpoint import file_sha256, load_checkpoint, recorded_btf
 from vrneural.distill.config import BEFORE_FIELD, DistillConfig
-from vrneural.distill.data import SliceData, btf_fingerprint
+from vrneural.distill.data import SliceData, btf_fingerprint, fingerprint_mismatch
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
 from vrneural.distill.models import NeuralModel, apply_output, make_spec
-from vrneural.distill.teach import (
-    check_train_config,
-    finish_outputs,
-    outputs_of,
-    prepare_outputs,
-    resumed_config,
-)
+from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
+from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range
+from vrneural.formats.atomic import check_not_input
 
 
-def model_from_checkpoint(ck: dict) -> NeuralModel:
+def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
     """The trained :class:`NeuralModel` of a checkpoint (frozen, eval mode): its weight
-    average where it was trained with ``--ema``, else the last step's weights."""
-    model = NeuralModel(ck["spec"])
+    average where it was trained with ``--ema``, else the last step's weights. ``source``
+    (the file) names it in errors."""
+    where = source or "checkpoint"
+    try:
+        model = NeuralModel(ck["spec"])
+    except (KeyError, TypeError, ValueError) as e:
+        raise VrnError(f"{where}: invalid model spec ({type(e).__name__}: {e})") from None
     net = dict(ck["net"])
     if ck.get("ema"):
         net.update(ck["ema"]["avg"])
     state = {k[len("model.") :]: v for k, v in net.items() if k.startswith("model.")}
-    try:
-        model.load_state_dict(state)
-    except RuntimeError as e:
-        raise VrnError(f"checkpoint weights do not match its spec: {str(e)[:120]}") from None
+    problem = _state_mismatch(model.state_dict(), state)
+    if problem:
+        raise VrnError(f"{where}: checkpoint weights do not match its spec: {problem}")
+    model.load_state_dict(state)
     model.eval()
     for p in model.parameters():
         p.requires_grad_(False)
@@ -83,6 +84,20 @@ class DistillNet(nn.Module):
         return loss, {"gt": gt.detach(), "teacher": out.detach()}
 
 
+def _state_mismatch(want: dict, have: dict) -> str | None:
+    """The first difference between a model's state dict and a checkpoint's, in words."""
+    for k, v in have.items():
+        if k not in want:
+            return f"unexpected tensor 'model.{k}'"
+        if tuple(v.shape) != tuple(want[k].shape):
+            return (
+                f"'model.{k}' has shape {list(v.shape)} in the file, the spec needs "
+                f"{list(want[k].shape)}"
+            )
+    missing = [k for k in want if k not in have]
+    return f"tensor 'model.{missing[0]}' is missing" if missing else None
+
+
 def _latent_widths(spec: dict) -> list[int]:
     if spec["arch"] == "single":
         return [spec["hidden"][i] for i in spec["latent_layers"]]
@@ -90,8 +105,33 @@ def _latent_widths(spec: dict) -> list[int]:
 
 
 def resolve_method(cfg: DistillConfig) -> DistillConfig:
-    """The config as trained: NeuMIP always uses log(1 + y) output, as the paper modified it."""
-    return replace_config(cfg, space="log") if cfg.method == "neumip" else cfg
+    """The config as trained: NeuMIP always uses log(1 + y) output, as the paper modified it
+    (a --space linear typed with it is an error, not silently changed)."""
+    if cfg.method != "neumip":
+        return cfg
+    if cfg.space != "log" and is_explicit(cfg, "space"):
+        raise VrnError(
+            f"--space {cfg.space} conflicts with --method neumip, which always trains in log "
+            "space (log(1 + y), as the paper modified NeuMIP); drop --space"
+        )
+    return replace_config(cfg, space="log")
+
+
+def teacher_split(cfg: DistillConfig, tck: dict, resume: bool) -> DistillConfig:
+    """The config with the teacher's split settings, the split every student trains on. A
+    ``--split-seed``/``--test-fraction`` typed with another value is an error."""
+    tc = tck["config"]
+    for k in ("split_seed", "test_fraction"):
+        if k not in tc or getattr(cfg, k) == tc[k]:
+            continue
+        if is_explicit(cfg, k) and not resume:
+            raise VrnError(
+                f"--{k.replace('_', '-')} = {getattr(cfg, k)!r}, but the teacher {cfg.teacher} "
+                f"was trained with {tc[k]!r}; distill reuses the teacher's train/test split "
+                "(drop the flag, or train a teacher with it)"
+            )
+        cfg = replace_config(cfg, **{k: tc[k]})
+    return cfg
 
 
 def run_distill(cfg: DistillConfig, on_step=None) -> dict:
@@ -103,7 +143,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     check_range("--fine-channels", cfg.fine_channels, 1, 64)
     cfg = resolve_method(cfg)
     outs = outputs_of(cfg.output, cfg.export)
-    resume = prepare_outputs(cfg, outs)
+    resume = prepare_outputs(cfg, outs, inputs=[cfg.teacher, cfg.btf])
     if resume is not None:
         if resume.get("kind") != "student":
             raise VrnError(f"{cfg.output}: is not a student checkpoint; cannot --resume distill")
@@ -117,19 +157,21 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     tsha = file_sha256(cfg.teacher)
     if resume is not None and resume["teacher"]["sha256"] != tsha:
         raise VrnError(f"{cfg.teacher}: teacher differs from the one {cfg.output} was trained with")
-    btf_path = cfg.btf or tck["btf"]["path"]
+    cfg = teacher_split(cfg, tck, resume is not None)
+    btf_path = cfg.btf or recorded_btf(tck, cfg.teacher)
+    check_not_input(outs, [btf_path])
     btf = read_btf(btf_path)
     fp = btf_fingerprint(btf)
     want = tck["btf"]
-    for key in ("name", "shape", "sha256"):
-        if fp[key] != want[key]:
-            raise VrnError(
-                f"{btf_path}: BTF does not match the teacher {cfg.teacher}: {key} is "
-                f"{fp[key]!s:.24}, the teacher was trained on {want[key]!s:.24}"
-            )
+    key = fingerprint_mismatch(fp, want)
+    if key:
+        raise VrnError(
+            f"{btf_path}: BTF does not match the teacher {cfg.teacher}: {key} is "
+            f"{fp[key]!s:.24}, the teacher was trained on {want[key]!s:.24}"
+        )
     dev = train_device(cfg.device)
     rank, world = dist_setup(cfg.device)
-    teacher = model_from_checkpoint(tck)
+    teacher = model_from_checkpoint(tck, cfg.teacher)
     data = SliceData(btf, tck["split"]["test"], rank, world, device=dev)
     H, W = btf.resolution
     spec = make_spec(

@@ -82,7 +82,7 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None):
     from vrneural import __version__
     from vrneural.distill.distill import model_from_checkpoint
 
-    model = model_from_checkpoint(ck)
+    model = model_from_checkpoint(ck, source)
     for k, v in model.state_dict().items():
         if not torch.isfinite(v).all():
             raise VrnError(f"{source or 'checkpoint'}: refusing to export: '{k}' has NaN/Inf")
@@ -144,15 +144,19 @@ def export_checkpoint(
 ) -> tuple[Path, dict]:
     """Write the ``.vrnm`` of a loaded checkpoint. Returns ``(path, meta)``."""
     from vrneural.btf.format import read_btf
-    from vrneural.distill.data import btf_fingerprint
-    from vrneural.formats.atomic import check_output
+    from vrneural.distill.checkpoint import recorded_btf
+    from vrneural.distill.data import btf_fingerprint, fingerprint_mismatch
+    from vrneural.formats.atomic import check_not_input, check_output
     from vrneural.formats.vrnm import write_vrnm
 
     out = check_output(out, force)
     if data is None:
-        b = read_btf(btf or ck["btf"]["path"])
-        if btf_fingerprint(b)["sha256"] != ck["btf"]["sha256"]:
-            raise VrnError(f"{b.path}: BTF does not match the one {source} was trained on")
+        path = btf or recorded_btf(ck, source or "the checkpoint")
+        check_not_input([out], [path])
+        b = read_btf(path)
+        key = fingerprint_mismatch(btf_fingerprint(b), ck["btf"])
+        if key:
+            raise VrnError(f"{b.path}: BTF does not match the one {source} was trained on ({key})")
         data = SliceData(b, ck["split"]["test"])
     mat, _ = pack_material(ck, data, source)
     write_vrnm(out, mat)

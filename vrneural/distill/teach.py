@@ -3,20 +3,19 @@
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import torch
 from torch import nn
 
 from vrneural.btf.format import read_btf
 from vrneural.config import is_explicit
-from vrneural.distill.checkpoint import load_checkpoint
 from vrneural.distill.config import TeachConfig
-from vrneural.distill.data import SliceData, btf_fingerprint, split_pairs
+from vrneural.distill.data import SliceData, btf_fingerprint, fingerprint_mismatch, split_pairs
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
+from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
-from vrneural.errors import VrnError, check_range
+from vrneural.errors import VrnError, check_range, check_seed
 
 
 class GroundTruthNet(nn.Module):
@@ -36,6 +35,8 @@ class GroundTruthNet(nn.Module):
 
 def check_train_config(cfg) -> None:
     check_range("--epochs", cfg.epochs, 1, 100_000)
+    check_seed("--seed", cfg.seed)
+    check_seed("--split-seed", cfg.split_seed)
     check_range("--lr", cfg.lr, 1e-9, 1.0)
     # > 0: the held-out test L1 drives the lr schedule and the reports
     check_range("--test-fraction", cfg.test_fraction, 1e-6, 0.9)
@@ -72,7 +73,7 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
             raise VrnError(
                 f"--{k.replace('_', '-')} = {now!r}, but {cfg.output} was trained with "
                 f"{stored[k]!r}; --resume continues the checkpoint's settings (drop the flag, "
-                "or start over with --force)"
+                "or start over: --force instead of --resume)"
             )
     merged = dict(stored) | {k: getattr(cfg, k) for k in free}
     if not is_explicit(cfg, "epochs") and "epochs" in stored:  # no --epochs: the run's target
@@ -86,37 +87,6 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
     return merged
 
 
-def outputs_of(output: str, export: bool) -> list[str]:
-    """Files a stage writes: the checkpoint and (optionally) its ``.vrnm`` beside it."""
-    p = Path(output)
-    if p.suffix != ".pt":  # the pack beside it is <stem>.vrnm: keep the pair unambiguous
-        raise VrnError(f"{p}: output checkpoint must end in .pt")
-    return [str(p)] + ([str(p.with_suffix(".vrnm"))] if export else [])
-
-
-def prepare_outputs(cfg, outputs: list[str]) -> dict | None:
-    """Refuse existing outputs without --force; with --resume return the checkpoint to resume."""
-    from vrneural.formats.atomic import check_output
-
-    if cfg.resume:
-        ck = load_checkpoint(cfg.output)
-        return ck
-    if not cfg.force and Path(cfg.output).is_file():
-        try:
-            ck = load_checkpoint(cfg.output)
-        except VrnError:
-            ck = None  # not a checkpoint: the plain "output exists" below
-        if ck is not None and not ck.get("finished", True):
-            raise VrnError(
-                f"{cfg.output}: holds an interrupted run (epoch {ck['epoch']} of "
-                f"{ck['config'].get('epochs', '?')}); pass --resume to continue it or --force "
-                "to start over"
-            )
-    for o in outputs:
-        check_output(o, cfg.force)
-    return None
-
-
 def run_teach(cfg: TeachConfig, on_step=None) -> dict:
     """Train (or resume) a teacher; returns the final checkpoint dict."""
     check_train_config(cfg)
@@ -124,7 +94,7 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
     check_range("--layers", cfg.layers, 3, 16)
     check_range("--channels", cfg.channels, 1, 64)
     outs = outputs_of(cfg.output, cfg.export)
-    resume = prepare_outputs(cfg, outs)
+    resume = prepare_outputs(cfg, outs, inputs=[cfg.btf])
     if resume is not None:
         if resume.get("kind") != "teacher":
             raise VrnError(f"{cfg.output}: is not a teacher checkpoint; cannot --resume teach")
@@ -132,7 +102,7 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
         cfg = TeachConfig(**(old | {"btf": cfg.btf}))
     btf = read_btf(cfg.btf)
     fp = btf_fingerprint(btf)
-    if resume is not None and resume["btf"]["sha256"] != fp["sha256"]:
+    if resume is not None and fingerprint_mismatch(fp, resume["btf"]):
         raise VrnError(f"{cfg.btf}: BTF differs from the one {cfg.output} was trained on")
     dev = train_device(cfg.device)
     rank, world = dist_setup(cfg.device)
@@ -169,17 +139,3 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
     if rank == 0:
         finish_outputs(ck, cfg, data)
     return ck
-
-
-def finish_outputs(ck: dict, cfg, data: SliceData) -> None:
-    """Write ``<output>.config.json`` and (with export) the ``.vrnm`` pack + its config."""
-    from vrneural.config import write_config
-
-    extra = {"epochs_done": ck["epoch"], "history": ck["history"], "btf": ck["btf"]}
-    write_config(cfg.output, cfg, extra)
-    if cfg.export:
-        from vrneural.distill.export import export_checkpoint
-
-        pack = outputs_of(cfg.output, True)[1]
-        _, meta = export_checkpoint(ck, pack, data=data.on("cpu"), force=True, source=cfg.output)
-        write_config(pack, cfg, {**extra, "metrics": meta["metrics"]})

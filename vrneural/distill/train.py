@@ -266,12 +266,15 @@ def fit(
                 wi, wo = data.dirs(pair)
                 uv = data.uv(gen if cfg.jitter else None)
                 loss, _ = model(wi, wo, uv, pair)
+                value = float(loss.detach())
+                if not math.isfinite(value):  # before the step: the weights stay finite
+                    raise _diverged(f"loss is {value}", epoch, step + 1, n, out)
                 opt.zero_grad(set_to_none=True)
                 loss.backward()
                 opt.step()
                 if ema is not None:
                     ema.update()
-                loss_sum += float(loss.detach())
+                loss_sum += value
                 step += 1
                 if bar is not None:
                     bar.update(1)
@@ -288,6 +291,8 @@ def fit(
             net.eval()
             with torch.no_grad(), ema.applied() if ema else contextlib.nullcontext():
                 last_test = float(test_l1())
+            if not math.isfinite(last_test):  # weights gone non-finite: never checkpoint them
+                raise _diverged(f"test L1 is {last_test}", epoch, n, n, out)
             sched.step(last_test)
             seconds += time.perf_counter() - t0
             history.append(
@@ -308,6 +313,14 @@ def fit(
     if resume is not None and resume.get("finished") and int(resume["epoch"]) == epoch:
         return resume  # nothing left to train: the file stays as it is (its hash too)
     return save(epoch >= cfg.epochs)
+
+
+def _diverged(what: str, epoch: int, step: int, n: int, out: str) -> VrnError:
+    """The one-line error of a run whose loss or test L1 became NaN/Inf (nothing is saved)."""
+    kept = f"{out} is left as it was" if os.path.exists(out) else "no checkpoint was written"
+    return VrnError(
+        f"training diverged: {what} at epoch {epoch + 1} step {step}/{n}; {kept}; try a lower --lr"
+    )
 
 
 def _l1_text(v: float) -> str:

@@ -5,7 +5,9 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import math
 import shutil
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -27,12 +29,78 @@ def check_output(path: str | os.PathLike, force: bool) -> Path:
     return p
 
 
+def check_outputs(
+    paths: list[str | os.PathLike],
+    force: bool,
+    inputs: list[str | os.PathLike] = (),  # type: ignore[assignment]
+) -> list[Path]:
+    """:func:`check_output` for every file a command will write, after refusing any output
+    that is one of its ``inputs`` (:func:`check_not_input`)."""
+    check_not_input(paths, inputs)
+    return [check_output(o, force) for o in paths]
+
+
+def check_not_input(paths: list, inputs: list) -> None:
+    """Refuse an output that is one of the command's inputs, even with ``--force`` (the
+    command would destroy what it reads). Empty inputs are skipped."""
+    for o in paths:
+        for i in inputs:
+            if i and same_file(i, o):
+                raise VrnError(f"{o}: output would overwrite the input {i}; choose another output")
+
+
+def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    """Whether ``a`` and ``b`` name the same file (``samefile`` when both exist, which also
+    sees hard links; else the resolved paths)."""
+    pa, pb = Path(a), Path(b)
+    if pa.exists() and pb.exists():
+        return os.path.samefile(pa, pb)
+    return pa.resolve() == pb.resolve()
+
+
+def check_resume_force(resume: bool, force: bool) -> None:
+    """``--resume`` continues an output and ``--force`` replaces it: together they contradict."""
+    if resume and force:
+        raise VrnError(
+            "--resume and --force contradict (--resume continues the existing output, --force "
+            "starts over and replaces it); pass one of them"
+        )
+
+
+def check_free_space(path: str | os.PathLike, nbytes: int, reclaimed: int = 0) -> None:
+    """Refuse to start writing ``nbytes`` into ``path``'s directory when the disk has less
+    free space (``reclaimed``: bytes of a file the write replaces)."""
+    p = Path(path)
+    try:
+        free = shutil.disk_usage(p.parent).free + reclaimed
+    except OSError:
+        return  # nothing to measure: the write itself reports the problem
+    if nbytes > free:
+        raise VrnError(
+            f"{p}: needs {_size(nbytes)} but only {_size(free)} is free on {p.parent}; "
+            "use smaller settings or another disk"
+        )
+
+
+def _size(n: int) -> str:
+    for unit, k in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= k:
+            return f"{n / k:.1f} {unit}"
+    return f"{n} B"
+
+
 def _make_parent(p: Path) -> None:
-    """Create the directory an output goes into; failure is a one-line :class:`VrnError`."""
+    """Create the directory an output goes into and check that files can be created there;
+    failure is a one-line :class:`VrnError`."""
     try:
         p.parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise VrnError(f"{p.parent}: cannot create output directory ({e.strerror})") from None
+    try:  # a real file, not os.access: root passes access() checks on read-only mounts too
+        with tempfile.TemporaryFile(dir=p.parent, prefix=".vrneural-probe-"):
+            pass
+    except OSError as e:
+        raise VrnError(f"{p.parent}: cannot write here ({e.strerror or e})") from None
 
 
 OUTPUT_MARK = ".vrneural-output"
@@ -49,22 +117,22 @@ def check_output_dir(
 ) -> Path:
     """Validate an output *directory* before any work starts.
 
-    An existing path needs ``force`` (else the error says ``remedy``), and even then it must
-    be a directory that vrneural wrote (it holds :data:`OUTPUT_MARK`, or a result file of an
-    older release, recognised by its content) or an empty one: ``--force`` replaces our own
-    output, never a folder of the user's files.
+    An existing path must be a directory that vrneural wrote (it holds :data:`OUTPUT_MARK`,
+    or a result file of an older release, recognised by its content) or an empty one, and it
+    needs ``force`` (else the error says ``remedy``): ``--force`` replaces our own output,
+    never a folder of the user's files.
     """
     p = Path(path)
     if p.exists() or p.is_symlink():
         if not p.is_dir():
             raise VrnError(f"{p}: output exists and is not a directory; choose another --out")
-        if not force:
-            raise VrnError(f"{p}: output exists; {remedy}")
-        if not is_output_dir(p):
+        if not is_output_dir(p):  # checked first: no flag helps here, so none is suggested
             raise VrnError(
                 f"{p}: not a vrneural output directory (no {OUTPUT_MARK}); vrneural only replaces "
                 "or reuses its own output, so choose another --out"
             )
+        if not force:
+            raise VrnError(f"{p}: output exists; {remedy}")
     _make_parent(p)
     return p
 
@@ -129,17 +197,34 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         with open(tmp, "rb+") as f:
             os.fsync(f.fileno())
         os.replace(tmp, p)
+    except OSError as e:  # a full disk, a directory made read-only meanwhile: one line
+        raise VrnError(f"{p}: cannot write ({e.strerror or e})") from None
     finally:
         if tmp.exists():
             tmp.unlink()
 
 
 def write_json(path: str | os.PathLike, obj: object) -> Path:
-    """Write ``obj`` as indented JSON, atomically."""
+    """Write ``obj`` as indented JSON, atomically. NaN and infinities become ``null``: bare
+    ``NaN``/``Infinity`` are not JSON, and strict readers refuse the whole file."""
     p = Path(path)
+    text = json.dumps(json_safe(obj), indent=2, sort_keys=False, allow_nan=False)
     with atomic_path(p) as tmp:
-        tmp.write_text(json.dumps(obj, indent=2, sort_keys=False, default=_json_default) + "\n")
+        tmp.write_text(text + "\n")
     return p
+
+
+def json_safe(o: object) -> object:
+    """``o`` with numpy values and paths converted and non-finite floats replaced by None."""
+    if isinstance(o, dict):
+        return {k: json_safe(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [json_safe(v) for v in o]
+    if isinstance(o, float):
+        return o if math.isfinite(o) else None
+    if isinstance(o, (str, int, bool)) or o is None:
+        return o
+    return json_safe(_json_default(o))
 
 
 def _json_default(o: object) -> object:

@@ -12,6 +12,11 @@ Layout (little endian)::
 Arrays are memory-mapped on read, so a 22 GB BTF can be read one slice at a time. The reader
 validates magic, version, header checksum, declared shapes against sizes, and the file length
 (truncation), and raises :class:`~vrneural.errors.VrnError` with the file name on any mismatch.
+
+While a file is being written its header carries ``"partial": true`` (its arrays are still
+being filled); :meth:`ContainerWriter.finalize` rewrites the header without it. The reader
+refuses a file so marked (an interrupted write copied or renamed), unless asked to continue it.
+Files written before the marker existed have no such key and read as before.
 """
 
 from __future__ import annotations
@@ -31,8 +36,8 @@ _ALIGN = 64
 _DTYPES = {"float16", "float32", "float64", "uint8", "uint16", "uint32", "int32", "int64"}
 
 
-def _layout(header: dict, specs: dict[str, tuple[tuple[int, ...], str]]) -> tuple[bytes, dict, int]:
-    """Serialise the header and assign array offsets. Returns (header bytes, table, file size).
+def _layout(header: dict, specs: dict[str, tuple[tuple[int, ...], str]]) -> tuple[int, dict, int]:
+    """Reserve the header and assign array offsets. Returns (header length, table, file size).
 
     The header is padded with spaces (valid JSON whitespace) to a reserved length that leaves
     room for the offsets, so offsets can be computed before the final header text is known.
@@ -53,9 +58,14 @@ def _layout(header: dict, specs: dict[str, tuple[tuple[int, ...], str]]) -> tupl
             "nbytes": nbytes,
         }
         off = _align(off + nbytes)
-    raw = json.dumps(dict(header, arrays=table, file_size=off), sort_keys=True).encode()
+    return hlen, table, off
+
+
+def _header_bytes(header: dict, table: dict, file_size: int, hlen: int) -> bytes:
+    """The header text padded to its reserved length ``hlen``."""
+    raw = json.dumps(dict(header, arrays=table, file_size=file_size), sort_keys=True).encode()
     assert len(raw) <= hlen, "header reservation too small"
-    return raw + b" " * (hlen - len(raw)), table, off
+    return raw + b" " * (hlen - len(raw))
 
 
 def _align(n: int) -> int:
@@ -82,14 +92,18 @@ class ContainerWriter:
         self.path = Path(path)
         self.partial = self.path.with_name(self.path.name + ".partial")
         self.magic = magic.ljust(8, b"\0")
-        hbytes, self.table, self.file_size = _layout(header, specs)
-        hlen = len(hbytes)
-        prefix = _PREFIX.pack(self.magic, version, zlib.crc32(hbytes), hlen)
+        self.version = version
+        marked = dict(header, partial=True)  # until finalize (see the module docstring)
+        hlen, self.table, self.file_size = _layout(marked, specs)
+        self._final = _header_bytes(header, self.table, self.file_size, hlen)
+        start = self._prefixed(_header_bytes(marked, self.table, self.file_size, hlen))
         self.resumed = False
         if resume and self.partial.exists():
             with open(self.partial, "rb") as f:
-                old = f.read(len(prefix) + hlen)
-            if old == prefix + hbytes and self.partial.stat().st_size == self.file_size:
+                old = f.read(len(start))
+            # an unmarked header: a partial file of a release before the marker
+            same = old in (start, self._prefixed(self._final))
+            if same and self.partial.stat().st_size == self.file_size:
                 self.resumed = True
             else:  # never overwrite an interrupted write that resume was asked to continue
                 raise VrnError(
@@ -97,9 +111,19 @@ class ContainerWriter:
                     "it cannot be continued with these settings"
                 )
         if not self.resumed:
-            with open(self.partial, "wb") as f:
-                f.write(prefix + hbytes)
-                f.truncate(self.file_size)
+            from vrneural.formats.atomic import check_free_space
+
+            old_size = self.partial.stat().st_size if self.partial.is_file() else 0
+            check_free_space(self.path, self.file_size, reclaimed=old_size)
+            try:
+                with open(self.partial, "wb") as f:
+                    f.write(start)
+                    f.truncate(self.file_size)
+            except OSError as e:
+                raise VrnError(f"{self.partial}: cannot write ({e.strerror or e})") from None
+
+    def _prefixed(self, hbytes: bytes) -> bytes:
+        return _PREFIX.pack(self.magic, self.version, zlib.crc32(hbytes), len(hbytes)) + hbytes
 
     def array(self, name: str) -> np.memmap:
         """A writable memory map of array ``name``."""
@@ -109,10 +133,15 @@ class ContainerWriter:
         )
 
     def finalize(self) -> Path:
-        """Flush and move the finished file into place (atomic rename)."""
-        with open(self.partial, "rb+") as f:
-            os.fsync(f.fileno())
-        os.replace(self.partial, self.path)
+        """Clear the partial mark, flush and move the finished file into place (atomic rename)."""
+        try:
+            with open(self.partial, "rb+") as f:
+                f.write(self._prefixed(self._final))
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(self.partial, self.path)
+        except OSError as e:
+            raise VrnError(f"{self.path}: cannot write ({e.strerror or e})") from None
         return self.path
 
 
@@ -132,17 +161,25 @@ def write_container(
                 f.seek(w.table[k]["offset"])
                 f.write(v.tobytes())
         return w.finalize()
+    except OSError as e:  # a full disk
+        raise VrnError(f"{path}: cannot write ({e.strerror or e})") from None
     finally:
         if w.partial.exists():
             w.partial.unlink()
 
 
 def read_container(
-    path, magic: bytes, versions: tuple[int, ...], what: str = "file", verify_crc: bool = True
+    path,
+    magic: bytes,
+    versions: tuple[int, ...],
+    what: str = "file",
+    verify_crc: bool = True,
+    partial: bool = False,
 ) -> tuple[dict, dict[str, np.ndarray], int]:
     """Open and validate a container. Returns ``(header, arrays, version)``.
 
-    Arrays are read-only memory maps. ``what`` names the format in error messages.
+    Arrays are read-only memory maps. ``what`` names the format in error messages. A file
+    still being written (or left by an interrupted write) is refused unless ``partial``.
     """
     p = Path(path)
     if not p.exists():
@@ -172,6 +209,11 @@ def read_container(
         header = json.loads(hbytes)
     except (UnicodeDecodeError, json.JSONDecodeError):
         raise VrnError(f"{p}: corrupt header (not JSON)") from None
+    if not partial and (header.get("partial") or p.name.endswith(".partial")):
+        raise VrnError(
+            f"{p}: an unfinished {what} (an interrupted write, not all of its data is there); "
+            "finish it with the --resume of the command that wrote it"
+        )
     need = int(header.get("file_size", -1))
     if size < need:
         raise VrnError(f"{p}: truncated: {size} bytes, expected {need}")

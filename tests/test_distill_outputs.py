@@ -1,0 +1,182 @@
+"""Every file teach/distill/export write is checked before any work: inputs are never
+overwritten (even with --force), existing config sidecars and packs need --force, --resume
+replaces only the files its own run wrote, unwritable directories fail up front."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from distill_helpers import FAST, run_cli, trained  # noqa: F401 (fixture)
+
+from vrneural.distill.checkpoint import load_checkpoint, save_checkpoint
+from vrneural.distill.outputs import outputs_of, written_by
+
+
+def _expect_error(argv, *needles):
+    code, err = run_cli(*argv)
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    for n in needles:
+        assert n in lines[0], lines[0]
+
+
+def _copy(trained, tmp_path, name):  # noqa: F811
+    dst = tmp_path / name
+    shutil.copy(trained[name.split(".")[0]], dst)
+    return dst
+
+
+def test_output_equal_to_an_input_is_refused_even_with_force(trained, tmp_path):  # noqa: F811
+    t = _copy(trained, tmp_path, "teacher.pt")
+    before = t.read_bytes()
+    _expect_error(["distill", t, "-o", t, "--force", *FAST], "would overwrite the input")
+    btf = tmp_path / "m.pt"  # a BTF that happens to be named like a checkpoint
+    shutil.copy(trained["btf"], btf)
+    btf_bytes = btf.read_bytes()
+    _expect_error(["teach", btf, "-o", btf, "--force", *FAST], "would overwrite the input")
+    _expect_error(["distill", t, "--btf", btf, "-o", btf, "--force", *FAST], "overwrite the input")
+    s = _copy(trained, tmp_path, "student.pt")
+    pack = tmp_path / "s.vrnm"
+    shutil.copy(s, pack)  # export's input named .vrnm (-o equal to the input)
+    _expect_error(["export", pack, "-o", pack, "--force"], "would overwrite the input")
+    assert t.read_bytes() == before and btf.read_bytes() == btf_bytes
+
+
+def test_the_recorded_btf_is_an_input_too(trained, tmp_path):  # noqa: F811
+    t = _copy(trained, tmp_path, "teacher.pt")
+    out = tmp_path / "x.pt"
+    shutil.copy(trained["btf"], out)
+    ck = load_checkpoint(t)
+    ck["btf"]["path"] = str(out)  # a teacher whose recorded BTF sits where -o points
+    save_checkpoint(t, ck)
+    _expect_error(["distill", t, "-o", out, "--force", *FAST], "would overwrite the input")
+    assert out.read_bytes() == trained["btf"].read_bytes()
+
+
+@pytest.mark.parametrize("which", ["pt", "vrnm"])
+def test_existing_config_sidecars_need_force(trained, tmp_path, which):  # noqa: F811
+    side = tmp_path / f"q.{which}.config.json"
+    side.write_text("keep")
+    _expect_error(["distill", trained["teacher"], "-o", tmp_path / "q.pt", *FAST], str(side))
+    _expect_error(["teach", trained["btf"], "-o", tmp_path / "q.pt", *FAST], "--force")
+    assert side.read_text() == "keep" and not (tmp_path / "q.pt").exists()
+    if which == "vrnm":
+        _expect_error(["export", trained["student"], "-o", tmp_path / "q.vrnm"], "--force")
+        assert not (tmp_path / "q.vrnm").exists() and side.read_text() == "keep"
+
+
+def test_btf_synth_checks_its_config_sidecar(tmp_path):
+    side = tmp_path / "s.btf.config.json"
+    side.write_text("keep")
+    argv = ["btf", "synth", "--res", "4", "--dirs", "3", "--no-progress"]
+    _expect_error([*argv, "-o", tmp_path / "s.btf"], str(side), "--force")
+    assert side.read_text() == "keep" and not (tmp_path / "s.btf").exists()
+
+
+def test_resume_never_replaces_files_it_did_not_write(trained, tmp_path):  # noqa: F811
+    foo = tmp_path / "foo.pt"
+    shutil.copy(trained["teacher"], foo)
+    (tmp_path / "foo.vrnm").write_text("precious")
+    _expect_error(["teach", trained["btf"], "-o", foo, "--resume", *FAST], "foo.vrnm", "move it")
+    (tmp_path / "foo.vrnm").unlink()
+    side = tmp_path / "foo.pt.config.json"
+    side.write_text(json.dumps({"history": [{"test_l1": 0.5}]}))  # another run's config
+    _expect_error(["teach", trained["btf"], "-o", foo, "--resume", *FAST], str(side))
+    assert json.loads(side.read_text())["history"] == [{"test_l1": 0.5}]
+    # the run's own files (copied with it) are replaced: resuming a finished run works
+    for f in outputs_of(str(trained["teacher"]), True)[1:]:
+        shutil.copy(f, tmp_path / Path(f).name.replace("teacher", "foo"))
+    code, err = run_cli("teach", trained["btf"], "-o", foo, "--resume", *FAST)
+    assert code == 0, err
+
+
+def test_written_by_recognises_the_runs_own_files(trained):  # noqa: F811
+    ck = load_checkpoint(trained["student"])
+    for f in outputs_of(str(trained["student"]), True)[1:]:
+        assert written_by(f, ck), f
+    other = load_checkpoint(trained["teacher"])
+    assert not written_by(outputs_of(str(trained["student"]), True)[2], other)
+
+
+def test_resume_and_force_contradict(trained, tmp_path):  # noqa: F811
+    s = _copy(trained, tmp_path, "student.pt")
+    before = s.read_bytes()
+    _expect_error(["distill", trained["teacher"], "-o", s, "--resume", "--force"], "contradict")
+    assert s.read_bytes() == before
+
+
+@pytest.mark.parametrize("cmd", ["teach", "distill", "export", "synth"])
+def test_unwritable_output_directory_fails_before_any_work(trained, cmd):  # noqa: F811
+    argv = {
+        "teach": ["teach", trained["btf"], "-o", "/proc/x.pt", *FAST],
+        "distill": ["distill", trained["teacher"], "-o", "/proc/x.pt", *FAST],
+        "export": ["export", trained["student"], "-o", "/proc/x.vrnm"],
+        "synth": ["btf", "synth", "--res", "4", "--dirs", "3", "-o", "/proc/x.btf"],
+    }[cmd]
+    _expect_error(argv, "/proc: cannot write here")
+
+
+def test_failed_checkpoint_write_is_one_line(tmp_path, monkeypatch):
+    import torch
+
+    from vrneural.errors import VrnError
+
+    def boom(*a, **k):
+        raise RuntimeError("File x cannot be opened.\nmore torch text")
+
+    monkeypatch.setattr(torch, "save", boom)
+    with pytest.raises(
+        VrnError, match=r"cannot write the checkpoint \(File x cannot be opened"
+    ) as e:
+        save_checkpoint(tmp_path / "c.pt", {})
+    assert "\n" not in str(e.value) and not list(tmp_path.iterdir())
+
+
+def test_export_warns_about_an_unfinished_run(trained, tmp_path):  # noqa: F811
+    ck = load_checkpoint(trained["student"])
+    ck.update(finished=False, epoch=1, step=3)
+    unf = tmp_path / "unf.pt"
+    save_checkpoint(unf, {k: v for k, v in ck.items() if k not in ("format", "version")})
+    from vrneural.cli.export import UnfinishedRunWarning
+
+    with pytest.warns(UnfinishedRunWarning) as rec:
+        code, err = run_cli("export", unf, "-o", tmp_path / "u.vrnm")
+    assert code == 0, err
+    msg = str(rec[0].message)
+    assert "unfinished run (1 of 2 epochs done and 3 steps" in msg and "--resume" in msg
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UnfinishedRunWarning)  # a finished run: no warning
+        code, err = run_cli("export", trained["student"], "-o", tmp_path / "f.vrnm")
+    assert code == 0, err
+
+
+def test_missing_recorded_btf_names_the_teacher_and_btf_flag(trained, tmp_path):  # noqa: F811
+    t = _copy(trained, tmp_path, "teacher.pt")
+    ck = load_checkpoint(t)
+    ck["btf"]["path"] = str(tmp_path / "gone" / "m.btf")
+    save_checkpoint(t, {k: v for k, v in ck.items() if k not in ("format", "version")})
+    out = tmp_path / "s.pt"
+    _expect_error(["distill", t, "-o", out, *FAST], "recorded in", str(t), "--btf PATH")
+    _expect_error(["export", t, "-o", tmp_path / "t.vrnm"], "recorded in", "--btf PATH")
+    assert not out.exists()
+
+
+def test_only_rank_zero_reports(monkeypatch, capsys):
+    from vrneural.cli.teach import _report
+    from vrneural.distill.train import Interrupted
+
+    def stop():
+        raise Interrupted("epoch 1 step 2/9")
+
+    monkeypatch.setenv("RANK", "1")
+    assert _report(stop, "s.pt") == 130
+    assert capsys.readouterr().err == ""
+    monkeypatch.setenv("RANK", "0")
+    assert _report(stop, "s.pt") == 130
+    assert "checkpoint saved to s.pt" in capsys.readouterr().err

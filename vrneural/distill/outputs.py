@@ -1,0 +1,107 @@
+"""The files a training stage writes, checked before any work starts.
+
+``teach`` and ``distill`` write the checkpoint ``x.pt``, its ``x.pt.config.json`` and (unless
+``--no-export``) the pack ``x.vrnm`` with ``x.vrnm.config.json``. A fresh run refuses every
+one that exists without ``--force``; no run writes over one of its inputs, even with
+``--force``. ``--resume`` continues the checkpoint and, when it finishes, replaces the pack and
+config files beside it only where this run wrote them earlier: their recorded test-L1 curve is
+the start of the checkpoint's (for a given config and BTF that curve identifies the run).
+Any other file there is an error, never silently replaced.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from vrneural.config import config_path
+from vrneural.distill.checkpoint import load_checkpoint
+from vrneural.errors import VrnError
+from vrneural.formats.atomic import check_outputs, check_resume_force, json_safe
+
+
+def outputs_of(output: str, export: bool) -> list[str]:
+    """Files a stage writes: the checkpoint, its config and (optionally) the ``.vrnm`` beside
+    it with its config."""
+    p = Path(output)
+    if p.suffix != ".pt":  # the pack beside it is <stem>.vrnm: keep the pair unambiguous
+        raise VrnError(f"{p}: output checkpoint must end in .pt")
+    files = [p, config_path(p)]
+    if export:
+        pack = p.with_suffix(".vrnm")
+        files += [pack, config_path(pack)]
+    return [str(f) for f in files]
+
+
+def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
+    """Check every output before any work; with --resume return the checkpoint to resume.
+
+    Refuses outputs that are ``inputs``, existing outputs without --force (an interrupted run
+    at ``cfg.output`` is named as such), unwritable directories, --resume with --force, and on
+    --resume a pack or config file that this run did not write (see the module docstring).
+    """
+    check_resume_force(cfg.resume, cfg.force)
+    if cfg.resume:
+        check_outputs(outputs, True, inputs)  # inputs and writable directories only
+        ck = load_checkpoint(cfg.output)
+        for o in outputs[1:]:
+            if Path(o).exists() and not written_by(o, ck):
+                raise VrnError(
+                    f"{o}: exists and was not written by the run in {cfg.output}; --resume "
+                    "replaces only its own files, so move it away first"
+                )
+        return ck
+    if not cfg.force and Path(cfg.output).is_file():
+        try:
+            ck = load_checkpoint(cfg.output)
+        except VrnError:
+            ck = None  # not a checkpoint: the plain "output exists" below
+        if ck is not None and not ck.get("finished", True):
+            raise VrnError(
+                f"{cfg.output}: holds an interrupted run (epoch {ck['epoch']} of "
+                f"{ck['config'].get('epochs', '?')}); pass --resume to continue it or --force "
+                "to start over"
+            )
+    check_outputs(outputs, cfg.force, inputs)
+    return None
+
+
+def written_by(path, ck: dict) -> bool:
+    """Whether the pack or config file ``path`` was written by the run of checkpoint ``ck``:
+    the test-L1 curve it records is a non-empty start of the checkpoint's history."""
+    curve = _recorded_curve(Path(path))
+    have = json_safe([h.get("test_l1") for h in ck.get("history", [])])
+    return bool(curve) and json_safe(curve) == have[: len(curve)]
+
+
+def _recorded_curve(p: Path) -> list | None:
+    """The per-epoch test L1 a pack or config file records (None: not one of ours)."""
+    try:
+        if p.suffix == ".vrnm":
+            from vrneural.formats.vrnm import read_vrnm
+
+            doc = {"metrics": read_vrnm(p).meta.get("metrics", {})}
+        else:
+            doc = json.loads(p.read_text())
+        if isinstance(doc.get("history"), list):
+            return [h.get("test_l1") for h in doc["history"]]
+        curve = doc.get("metrics", {}).get("test_l1_curve")
+        return curve if isinstance(curve, list) else None
+    except (VrnError, OSError, ValueError, AttributeError, TypeError):
+        return None
+
+
+def finish_outputs(ck: dict, cfg, data) -> None:
+    """Write ``<output>.config.json`` and (with export) the ``.vrnm`` pack + its config.
+
+    Called when a run finishes: an interrupted run has only its checkpoint until then."""
+    from vrneural.config import write_config
+
+    extra = {"epochs_done": ck["epoch"], "history": ck["history"], "btf": ck["btf"]}
+    write_config(cfg.output, cfg, extra)
+    if cfg.export:
+        from vrneural.distill.export import export_checkpoint
+
+        pack = outputs_of(cfg.output, True)[2]
+        _, meta = export_checkpoint(ck, pack, data=data.on("cpu"), force=True, source=cfg.output)
+        write_config(pack, cfg, {**extra, "metrics": meta["metrics"]})
