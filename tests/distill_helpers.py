@@ -57,6 +57,16 @@ def run_cli(*argv) -> tuple[int, str]:
     return code, err.getvalue()
 
 
+def expect_one_line_error(argv, *needles) -> None:
+    """``vrneural argv`` exits 2 with one line of stderr holding every one of ``needles``."""
+    code, err = run_cli(*argv)
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    for n in needles:
+        assert n in lines[0], lines[0]
+
+
 FAST = ("--no-progress", "--max-test-slices", "4")
 
 

@@ -5,7 +5,13 @@ from __future__ import annotations
 
 import pytest
 import torch
-from distill_helpers import FAST, analytic_btf, run_cli, trained  # noqa: F401 (fixture)
+from distill_helpers import (  # noqa: F401 (fixture)
+    FAST,
+    analytic_btf,
+    expect_one_line_error,
+    run_cli,
+    trained,
+)
 
 from vrneural.distill.checkpoint import load_checkpoint
 
@@ -13,15 +19,6 @@ from vrneural.distill.checkpoint import load_checkpoint
 class Payload:  # pickled inside a .pt: weights_only=True must refuse to rebuild it
     def __reduce__(self):
         return (print, ("arbitrary code ran",))
-
-
-def _expect_error(argv, *needles):
-    code, err = run_cli(*argv)
-    assert code == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    for n in needles:
-        assert n in lines[0], lines[0]
 
 
 @pytest.fixture
@@ -64,12 +61,12 @@ def bad_checkpoints(tmp_path, trained):  # noqa: F811
 def test_bad_teacher(trained, bad_checkpoints, tmp_path, name, needle):  # noqa: F811
     src = {**bad_checkpoints, "missing": tmp_path / "nope.pt", "student": trained["student"]}
     out = tmp_path / "out.pt"
-    _expect_error(["distill", src[name], "-o", out, *FAST], needle)
+    expect_one_line_error(["distill", src[name], "-o", out, *FAST], needle)
     assert not out.exists() and not out.with_suffix(".vrnm").exists()
 
 
 def test_evil_checkpoint_never_runs_code(bad_checkpoints, tmp_path, capsys):
-    _expect_error(["export", bad_checkpoints["evil"], "-o", tmp_path / "x.vrnm"], "forbids")
+    expect_one_line_error(["export", bad_checkpoints["evil"], "-o", tmp_path / "x.vrnm"], "forbids")
     assert "arbitrary code ran" not in capsys.readouterr().out
 
 
@@ -81,7 +78,7 @@ def test_btf_mismatch(trained, tmp_path, change):  # noqa: F811
     )
     other = analytic_btf(tmp_path / "other.btf", **kw)
     out = tmp_path / "s.pt"
-    _expect_error(
+    expect_one_line_error(
         ["distill", trained["teacher"], "--btf", other, "-o", out, *FAST],
         "does not match the teacher",
     )
@@ -91,16 +88,16 @@ def test_btf_mismatch(trained, tmp_path, change):  # noqa: F811
 def test_existing_output_is_kept(trained, tmp_path):  # noqa: F811
     out = tmp_path / "s.pt"
     out.write_bytes(b"precious")
-    _expect_error(["distill", trained["teacher"], "-o", out, *FAST], "--force")
-    _expect_error(["teach", trained["btf"], "-o", out, *FAST], "--force")
+    expect_one_line_error(["distill", trained["teacher"], "-o", out, *FAST], "--force")
+    expect_one_line_error(["teach", trained["btf"], "-o", out, *FAST], "--force")
     assert out.read_bytes() == b"precious"
     pack = tmp_path / "p.vrnm"
     pack.write_bytes(b"precious")
-    _expect_error(["export", trained["student"], "-o", pack], "--force")
+    expect_one_line_error(["export", trained["student"], "-o", pack], "--force")
     assert pack.read_bytes() == b"precious"
     # the pack beside the checkpoint counts as an output too
     out2 = tmp_path / "p.pt"
-    _expect_error(["distill", trained["teacher"], "-o", out2, *FAST], "p.vrnm", "--force")
+    expect_one_line_error(["distill", trained["teacher"], "-o", out2, *FAST], "p.vrnm", "--force")
     assert not out2.exists() and pack.read_bytes() == b"precious"
 
 
@@ -111,17 +108,19 @@ def test_export_refuses_nan(trained, tmp_path):  # noqa: F811
     bad = tmp_path / "nan.pt"
     torch.save(ck, bad)
     out = tmp_path / "nan.vrnm"
-    _expect_error(["export", bad, "-o", out], "NaN")
+    expect_one_line_error(["export", bad, "-o", out], "NaN")
     assert not out.exists()
 
 
 def test_bad_values_are_one_line(trained, tmp_path):  # noqa: F811
-    _expect_error(
+    expect_one_line_error(
         ["distill", trained["teacher"], "-o", tmp_path / "x.pt", "--epochs", "0"], "--epochs"
     )
-    _expect_error(["teach", tmp_path / "none.btf", "-o", tmp_path / "t.pt"], "no such file")
-    _expect_error(["teach", trained["btf"], "-o", tmp_path / "t.txt", *FAST], "must end in .pt")
-    _expect_error(["export", trained["student"], "-o", tmp_path / "m.txt"], "end in .vrnm")
+    expect_one_line_error(["teach", tmp_path / "none.btf", "-o", tmp_path / "t.pt"], "no such file")
+    expect_one_line_error(
+        ["teach", trained["btf"], "-o", tmp_path / "t.txt", *FAST], "must end in .pt"
+    )
+    expect_one_line_error(["export", trained["student"], "-o", tmp_path / "m.txt"], "end in .vrnm")
     assert not (tmp_path / "t.vrnm").exists() and not (tmp_path / "m.txt").exists()
 
 
@@ -140,7 +139,9 @@ def test_bad_values_are_one_line(trained, tmp_path):  # noqa: F811
 )
 def test_bad_training_options_are_one_line(trained, tmp_path, flag, value):  # noqa: F811
     out = tmp_path / "x.pt"
-    _expect_error(["distill", trained["teacher"], "-o", out, flag, value], flag, "out of range")
+    expect_one_line_error(
+        ["distill", trained["teacher"], "-o", out, flag, value], flag, "out of range"
+    )
     assert not out.exists()
 
 
@@ -169,7 +170,7 @@ def test_export_validates_kind_arch_and_shapes(trained, tmp_path, change, needle
         ck["net"][key] = torch.zeros(3, 3)
     bad = tmp_path / "bad.pt"
     _save_like(ck, bad)
-    _expect_error(["export", bad, "-o", tmp_path / "b.vrnm"], str(bad), needle)
+    expect_one_line_error(["export", bad, "-o", tmp_path / "b.vrnm"], str(bad), needle)
     assert not (tmp_path / "b.vrnm").exists()
 
 
@@ -200,7 +201,7 @@ def test_corrupted_values_do_not_match_the_teacher(trained, tmp_path):  # noqa: 
         f.seek(off)
         f.write(bytes([b[0] ^ 0x10]))
     out = tmp_path / "s.pt"
-    _expect_error(
+    expect_one_line_error(
         ["distill", trained["teacher"], "--btf", btf, "-o", out, *FAST],
         "does not match the teacher",
         "values_sha256",
@@ -221,7 +222,9 @@ def test_teacher_from_before_the_value_hash_still_works(trained, tmp_path):  # n
 def test_distill_split_options_other_than_the_teachers_are_errors(trained, tmp_path, flag):  # noqa: F811
     out = tmp_path / "s.pt"
     value = {"--split-seed": "3", "--test-fraction": "0.5"}[flag]
-    _expect_error(["distill", trained["teacher"], "-o", out, flag, value, *FAST], flag, "teacher")
+    expect_one_line_error(
+        ["distill", trained["teacher"], "-o", out, flag, value, *FAST], flag, "teacher"
+    )
     assert not out.exists()
     same = {"--split-seed": "0", "--test-fraction": "0.1"}[flag]  # the teacher's: accepted
     code, err = run_cli("distill", trained["teacher"], "-o", out, flag, same, "--epochs", 1, *FAST)
@@ -235,7 +238,7 @@ def test_distill_split_options_other_than_the_teachers_are_errors(trained, tmp_p
 def test_neumip_with_an_explicit_linear_space_is_an_error(trained, tmp_path):  # noqa: F811
     out = tmp_path / "n.pt"
     argv = ["distill", trained["teacher"], "-o", out, "--method", "neumip", *FAST]
-    _expect_error([*argv, "--space", "linear"], "--space linear", "neumip")
+    expect_one_line_error([*argv, "--space", "linear"], "--space linear", "neumip")
     assert not out.exists()
 
 
@@ -259,7 +262,7 @@ def test_seeds_share_one_range(trained, tmp_path, cmd, flag, value):  # noqa: F8
         "synth": ["btf", "synth", "--res", "4", "--dirs", "3", "-o", tmp_path / "o.btf"],
         "bench": ["bench", "quality", "--out", tmp_path / "bq"],
     }[cmd]
-    _expect_error([*argv, f"{flag}={value}"], flag, "allowed [0, 4294967295]")
+    expect_one_line_error([*argv, f"{flag}={value}"], flag, "allowed [0, 4294967295]")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -285,7 +288,7 @@ def test_non_finite_loss_stops_with_one_line_and_keeps_the_checkpoint(
         return (loss * float("nan") if len(calls) > 3 else loss), parts
 
     monkeypatch.setattr(GroundTruthNet, "forward", forward)
-    _expect_error(
+    expect_one_line_error(
         ["teach", trained["btf"], "-o", out, "--epochs", 2, "--resume", *FAST],
         "training diverged: loss is nan at epoch 2 step 4/",
         "left as it was",
@@ -293,7 +296,9 @@ def test_non_finite_loss_stops_with_one_line_and_keeps_the_checkpoint(
     assert out.read_bytes() == good
     calls.clear()
     fresh = tmp_path / "f.pt"
-    _expect_error(["teach", trained["btf"], "-o", fresh, *FAST], "no checkpoint was written")
+    expect_one_line_error(
+        ["teach", trained["btf"], "-o", fresh, *FAST], "no checkpoint was written"
+    )
     assert not fresh.exists()
     json.loads((tmp_path / "t.pt.config.json").read_text())  # finished run's config: valid
 

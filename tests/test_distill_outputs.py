@@ -9,19 +9,10 @@ import shutil
 from pathlib import Path
 
 import pytest
-from distill_helpers import FAST, run_cli, trained  # noqa: F401 (fixture)
+from distill_helpers import FAST, expect_one_line_error, run_cli, trained  # noqa: F401 (fixture)
 
 from vrneural.distill.checkpoint import load_checkpoint, save_checkpoint
 from vrneural.distill.outputs import outputs_of, written_by
-
-
-def _expect_error(argv, *needles):
-    code, err = run_cli(*argv)
-    assert code == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    for n in needles:
-        assert n in lines[0], lines[0]
 
 
 def _copy(trained, tmp_path, name):  # noqa: F811
@@ -33,16 +24,18 @@ def _copy(trained, tmp_path, name):  # noqa: F811
 def test_output_equal_to_an_input_is_refused_even_with_force(trained, tmp_path):  # noqa: F811
     t = _copy(trained, tmp_path, "teacher.pt")
     before = t.read_bytes()
-    _expect_error(["distill", t, "-o", t, "--force", *FAST], "would overwrite the input")
+    expect_one_line_error(["distill", t, "-o", t, "--force", *FAST], "would overwrite the input")
     btf = tmp_path / "m.pt"  # a BTF that happens to be named like a checkpoint
     shutil.copy(trained["btf"], btf)
     btf_bytes = btf.read_bytes()
-    _expect_error(["teach", btf, "-o", btf, "--force", *FAST], "would overwrite the input")
-    _expect_error(["distill", t, "--btf", btf, "-o", btf, "--force", *FAST], "overwrite the input")
+    expect_one_line_error(["teach", btf, "-o", btf, "--force", *FAST], "would overwrite the input")
+    expect_one_line_error(
+        ["distill", t, "--btf", btf, "-o", btf, "--force", *FAST], "overwrite the input"
+    )
     s = _copy(trained, tmp_path, "student.pt")
     pack = tmp_path / "s.vrnm"
     shutil.copy(s, pack)  # export's input named .vrnm (-o equal to the input)
-    _expect_error(["export", pack, "-o", pack, "--force"], "would overwrite the input")
+    expect_one_line_error(["export", pack, "-o", pack, "--force"], "would overwrite the input")
     assert t.read_bytes() == before and btf.read_bytes() == btf_bytes
 
 
@@ -53,7 +46,7 @@ def test_the_recorded_btf_is_an_input_too(trained, tmp_path):  # noqa: F811
     ck = load_checkpoint(t)
     ck["btf"]["path"] = str(out)  # a teacher whose recorded BTF sits where -o points
     save_checkpoint(t, ck)
-    _expect_error(["distill", t, "-o", out, "--force", *FAST], "would overwrite the input")
+    expect_one_line_error(["distill", t, "-o", out, "--force", *FAST], "would overwrite the input")
     assert out.read_bytes() == trained["btf"].read_bytes()
 
 
@@ -61,11 +54,13 @@ def test_the_recorded_btf_is_an_input_too(trained, tmp_path):  # noqa: F811
 def test_existing_config_sidecars_need_force(trained, tmp_path, which):  # noqa: F811
     side = tmp_path / f"q.{which}.config.json"
     side.write_text("keep")
-    _expect_error(["distill", trained["teacher"], "-o", tmp_path / "q.pt", *FAST], str(side))
-    _expect_error(["teach", trained["btf"], "-o", tmp_path / "q.pt", *FAST], "--force")
+    expect_one_line_error(
+        ["distill", trained["teacher"], "-o", tmp_path / "q.pt", *FAST], str(side)
+    )
+    expect_one_line_error(["teach", trained["btf"], "-o", tmp_path / "q.pt", *FAST], "--force")
     assert side.read_text() == "keep" and not (tmp_path / "q.pt").exists()
     if which == "vrnm":
-        _expect_error(["export", trained["student"], "-o", tmp_path / "q.vrnm"], "--force")
+        expect_one_line_error(["export", trained["student"], "-o", tmp_path / "q.vrnm"], "--force")
         assert not (tmp_path / "q.vrnm").exists() and side.read_text() == "keep"
 
 
@@ -73,7 +68,7 @@ def test_btf_synth_checks_its_config_sidecar(tmp_path):
     side = tmp_path / "s.btf.config.json"
     side.write_text("keep")
     argv = ["btf", "synth", "--res", "4", "--dirs", "3", "--no-progress"]
-    _expect_error([*argv, "-o", tmp_path / "s.btf"], str(side), "--force")
+    expect_one_line_error([*argv, "-o", tmp_path / "s.btf"], str(side), "--force")
     assert side.read_text() == "keep" and not (tmp_path / "s.btf").exists()
 
 
@@ -81,11 +76,13 @@ def test_resume_never_replaces_files_it_did_not_write(trained, tmp_path):  # noq
     foo = tmp_path / "foo.pt"
     shutil.copy(trained["teacher"], foo)
     (tmp_path / "foo.vrnm").write_text("precious")
-    _expect_error(["teach", trained["btf"], "-o", foo, "--resume", *FAST], "foo.vrnm", "move it")
+    expect_one_line_error(
+        ["teach", trained["btf"], "-o", foo, "--resume", *FAST], "foo.vrnm", "move it"
+    )
     (tmp_path / "foo.vrnm").unlink()
     side = tmp_path / "foo.pt.config.json"
     side.write_text(json.dumps({"history": [{"test_l1": 0.5}]}))  # another run's config
-    _expect_error(["teach", trained["btf"], "-o", foo, "--resume", *FAST], str(side))
+    expect_one_line_error(["teach", trained["btf"], "-o", foo, "--resume", *FAST], str(side))
     assert json.loads(side.read_text())["history"] == [{"test_l1": 0.5}]
     # the run's own files (copied with it) are replaced: resuming a finished run works
     for f in outputs_of(str(trained["teacher"]), True)[1:]:
@@ -105,7 +102,9 @@ def test_written_by_recognises_the_runs_own_files(trained):  # noqa: F811
 def test_resume_and_force_contradict(trained, tmp_path):  # noqa: F811
     s = _copy(trained, tmp_path, "student.pt")
     before = s.read_bytes()
-    _expect_error(["distill", trained["teacher"], "-o", s, "--resume", "--force"], "contradict")
+    expect_one_line_error(
+        ["distill", trained["teacher"], "-o", s, "--resume", "--force"], "contradict"
+    )
     assert s.read_bytes() == before
 
 
@@ -117,7 +116,7 @@ def test_unwritable_output_directory_fails_before_any_work(trained, cmd):  # noq
         "export": ["export", trained["student"], "-o", "/proc/x.vrnm"],
         "synth": ["btf", "synth", "--res", "4", "--dirs", "3", "-o", "/proc/x.btf"],
     }[cmd]
-    _expect_error(argv, "/proc: cannot write here")
+    expect_one_line_error(argv, "/proc: cannot write here")
 
 
 def test_failed_checkpoint_write_is_one_line(tmp_path, monkeypatch):
@@ -162,8 +161,8 @@ def test_missing_recorded_btf_names_the_teacher_and_btf_flag(trained, tmp_path):
     ck["btf"]["path"] = str(tmp_path / "gone" / "m.btf")
     save_checkpoint(t, {k: v for k, v in ck.items() if k not in ("format", "version")})
     out = tmp_path / "s.pt"
-    _expect_error(["distill", t, "-o", out, *FAST], "recorded in", str(t), "--btf PATH")
-    _expect_error(["export", t, "-o", tmp_path / "t.vrnm"], "recorded in", "--btf PATH")
+    expect_one_line_error(["distill", t, "-o", out, *FAST], "recorded in", str(t), "--btf PATH")
+    expect_one_line_error(["export", t, "-o", tmp_path / "t.vrnm"], "recorded in", "--btf PATH")
     assert not out.exists()
 
 
