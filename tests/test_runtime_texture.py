@@ -317,6 +317,8 @@ def test_uniform_weights_fit_and_refusal():
         "streamed",
         "streamed",
     ]
+    with pytest.raises(VrnError, match=r"this one has 72 \(.*render it with --mode screen"):
+        reference_weights(random_material(0, "coarse_fine", width=64))
     code = texture_space_wgsl(wide, weights="streamed")
     assert "var<uniform> wl0" not in code and "var<storage, read> weights" in code
     # layout: one vec4-padded array per layer, then the biases

@@ -76,6 +76,13 @@ def reference_weights(mat: NeuralMaterial) -> str:
     buffers where they hold it, else streamed from the storage buffer; a coarse-to-fine pack
     (narrow by design) layer by layer from the storage buffer."""
     if mat.arch != "single":
+        width = material_spec(mat).max_width
+        if width > STORAGE_MAX_WIDTH:
+            raise VrnError(
+                f"--mode reference takes coarse-to-fine packs whose layers have at most "
+                f"{STORAGE_MAX_WIDTH} inputs and outputs; this one has {width} (wide references "
+                "must be single-level networks, e.g. a teacher); render it with --mode screen"
+            )
         return "storage"
     return "uniform" if uniform_weights_fit(mat) else "streamed"
 
