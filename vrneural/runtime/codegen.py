@@ -55,7 +55,7 @@ class MaterialSpec:
     ca: int  # channels of texture a (coarse / features)
     cb: int  # channels of texture b (fine), 0 for "single"
     z: int  # latent size (coarse_fine), 0 otherwise
-    weights: str  # constants | storage | uniform
+    weights: str  # one of WEIGHTS
     net_order: list
     n_layers: list
     max_width: int
@@ -76,7 +76,7 @@ def reference_weights(mat: NeuralMaterial) -> str:
     buffers where they hold it, else streamed from the storage buffer; a coarse-to-fine pack
     (narrow by design) layer by layer from the storage buffer."""
     if mat.arch != "single":
-        width = material_spec(mat).max_width
+        width = _max_width(mat)
         if width > STORAGE_MAX_WIDTH:
             raise VrnError(
                 f"--mode reference takes coarse-to-fine packs whose layers have at most "
@@ -90,7 +90,7 @@ def reference_weights(mat: NeuralMaterial) -> str:
 def uniform_weights_fit(mat: NeuralMaterial) -> bool:
     """Whether ``weights="uniform"`` can hold ``mat``: every layer's matrix within one uniform
     binding, and a binding per layer plus one for the biases within the per-stage limit."""
-    layers = [lay for n in ARCHS[mat.arch][0] for lay in mat.networks[n]]
+    layers = _layers(mat)
     biases = sum(lay.n_out for lay in layers)
     return (
         all(lay.n_in * lay.n_out * 4 <= UNIFORM_BINDING_BYTES for lay in layers)
@@ -102,7 +102,7 @@ def uniform_weights_fit(mat: NeuralMaterial) -> bool:
 def _check_weights(mat: NeuralMaterial, weights: str) -> None:
     if weights not in WEIGHTS:
         raise VrnError(f"weights = {weights!r} is not allowed; choose one of {', '.join(WEIGHTS)}")
-    if weights == "storage" and material_spec(mat).max_width > STORAGE_MAX_WIDTH:
+    if weights == "storage" and _max_width(mat) > STORAGE_MAX_WIDTH:
         raise VrnError(
             f"material {mat.meta.get('name', '?')!r}: storage weights take layers up to "
             f"{STORAGE_MAX_WIDTH} wide (wider ones: streamed or uniform weights)"
@@ -123,10 +123,20 @@ def _check_weights(mat: NeuralMaterial, weights: str) -> None:
         )
 
 
+def _layers(mat: NeuralMaterial) -> list:
+    """Every layer of ``mat``'s networks, in arch order (the buffer layouts' order)."""
+    return [lay for n in ARCHS[mat.arch][0] for lay in mat.networks[n]]
+
+
+def _max_width(mat: NeuralMaterial) -> int:
+    """The most inputs or outputs of any layer (the local arrays' size in "storage")."""
+    return max(max(lay.n_in, lay.n_out) for lay in _layers(mat))
+
+
 def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSpec:
     """Shapes and (for the buffer variant) layer tables of ``mat``."""
     nets, texs = ARCHS[mat.arch]
-    layers = [lay for n in nets for lay in mat.networks[n]]
+    layers = _layers(mat)
     dims_in = [lay.n_in for lay in layers]
     dims_out = [lay.n_out for lay in layers]
     offs, off = [], 0
@@ -147,7 +157,7 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
         weights=weights,
         net_order=list(nets),
         n_layers=[len(mat.networks[n]) for n in nets],
-        max_width=max([*dims_in, *dims_out]),
+        max_width=_max_width(mat),
         buf_dims_in=dims_in,
         buf_dims_out=dims_out,
         buf_offsets=offs,
@@ -180,7 +190,7 @@ def packed_weights(mat: NeuralMaterial) -> np.ndarray:
 def uniform_weights(mat: NeuralMaterial) -> list[np.ndarray]:
     """The uniform-buffer layout: one float32 array per layer (``W [out, in]`` row-major), then
     one of all biases in layer order; each zero-padded to whole ``vec4``s."""
-    layers = [lay for n in ARCHS[mat.arch][0] for lay in mat.networks[n]]
+    layers = _layers(mat)
     parts = [np.asarray(lay.weight, np.float32).ravel() for lay in layers]
     parts.append(np.concatenate([np.asarray(lay.bias, np.float32) for lay in layers]))
     return [np.concatenate([p, np.zeros(-len(p) % 4, np.float32)]) for p in parts]

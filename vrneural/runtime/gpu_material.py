@@ -63,7 +63,6 @@ class GpuMaterial:
         import wgpu
 
         self.mat = mat
-        self.weights_mode = weights
         names = ARCHS[mat.arch][1]
         self.textures = [upload_feature_texture(mat.textures[n], f"neural.{n}") for n in names]
         self.views = [t.create_view(dimension="2d-array") for t in self.textures]

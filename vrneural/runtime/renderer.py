@@ -17,8 +17,8 @@ from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
 from vrneural.runtime import forward as fw
 from vrneural.runtime.assets import get_atlas, get_mesh
-from vrneural.runtime.codegen import reference_weights
 from vrneural.runtime.camera import OrbitPath, PoseLogPath, eyes_from_pose, sphere_in_frustum
+from vrneural.runtime.codegen import reference_weights
 from vrneural.runtime.gpu_material import GpuAtlas
 from vrneural.runtime.lights import light_arrays
 from vrneural.runtime.schedule import frame_slice

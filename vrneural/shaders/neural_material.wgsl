@@ -136,6 +136,11 @@ fn {{ fname }}({{ arg_decls }}) -> {{ 'vec3<f32>' if ret == 'rgb' else 'array<' 
 const MAXW: u32 = {{ mat.max_width }}u;
 {% endmacro %}
 
+{# An activation (codegen._ACT_CODE: 0 relu, 1 leaky relu, 2 none) applied to expression e. #}
+{% macro act_expr(a, e, T) -%}
+{% if a == 0 %}max({{ e }}, {{ T }}(0)){% elif a == 1 %}max({{ e }}, {{ T }}(0.01) * {{ e }}){% else %}{{ e }}{% endif %}
+{%- endmacro %}
+
 {# dst[o] = act(base + sum_k W_l[o, c0 + k] * src[k]) for o < n_out(l), k < n; base is the bias
    (with_bias), or pre[o] when `pre` names an array, or 0. #}
 {% macro buf_layer(mat, T, l, dst, src, c0, n, with_bias, act=true, pre=none) %}
@@ -152,13 +157,7 @@ const MAXW: u32 = {{ mat.max_width }}u;
 {% endif %}
         let row = {{ off + c0 }}u + o * {{ n_in }}u;
         for (var k = 0u; k < {{ n }}u; k++) { s += {{ T }}(weights[row + k]) * {{ src }}[k]; }
-{% if act and mat.buf_acts[l] == 0 %}
-        {{ dst }}[o] = max(s, {{ T }}(0));
-{% elif act and mat.buf_acts[l] == 1 %}
-        {{ dst }}[o] = max(s, {{ T }}(0.01) * s);
-{% else %}
-        {{ dst }}[o] = s;
-{% endif %}
+        {{ dst }}[o] = {{ act_expr(mat.buf_acts[l] if act else 2, 's', T) }};
     }
 {% endmacro %}
 
@@ -196,9 +195,6 @@ wbias[({{ mat.buf_bias_offsets[l] }}u + {{ idx }}) >> 2u][({{ mat.buf_bias_offse
 {%- else -%}
 weights[{{ mat.buf_offsets[l] + mat.buf_dims_in[l] * mat.buf_dims_out[l] }}u + {{ idx }}]
 {%- endif %}
-{%- endmacro %}
-{% macro act_expr(a, e, T) -%}
-{% if a == 0 %}max({{ e }}, {{ T }}(0)){% elif a == 1 %}max({{ e }}, {{ T }}(0.01) * {{ e }}){% else %}{{ e }}{% endif %}
 {%- endmacro %}
 
 {# Streamed evaluation of a single-level net from buffer weights (weights "uniform" | "streamed"),
@@ -321,13 +317,8 @@ fn fine_z(z: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
 fn eval_fine(zz: array<{{ T }}, MAXW>, pb: array<{{ T }}, MAXW>) -> vec3<f32> {
     var a: array<{{ T }}, MAXW>;
     for (var o = 0u; o < {{ mat.buf_dims_out[nc] }}u; o++) {
-{% if mat.buf_acts[nc] == 0 %}
-        a[o] = max(zz[o] + pb[o], {{ T }}(0));
-{% elif mat.buf_acts[nc] == 1 %}
-        a[o] = max(zz[o] + pb[o], {{ T }}(0.01) * (zz[o] + pb[o]));
-{% else %}
-        a[o] = zz[o] + pb[o];
-{% endif %}
+        let s = zz[o] + pb[o];
+        a[o] = {{ act_expr(mat.buf_acts[nc], 's', T) }};
     }
 {{ buf_rest(mat, T, nc + 1, nc + nf) }}
     return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
