@@ -9,6 +9,7 @@ import pytest
 
 from vrneural.btf import read_btf
 from vrneural.cli import main
+from vrneural.distill.data import btf_fingerprint
 
 
 def _vrn(*args, timeout=300):
@@ -246,10 +247,16 @@ def test_an_interrupted_partial_file_is_refused_by_readers(tmp_path, vrn_inproc)
     assert read_btf(w.finalize()).meta["name"] == "p"  # finished: the mark is gone
 
 
-def test_header_records_the_resolved_grid(small_btf):
+def test_header_keeps_the_configured_grid_and_its_hash(small_btf):
+    """The header's SHA-256 is the BTF's identity in every checkpoint trained on it: the same
+    settings must keep writing the same header bytes, or `bench quality --resume` and
+    `distill` stop matching the teachers of older runs (recording the resolved grid in the
+    header once did exactly that). The sidecar records the size used."""
     gen = read_btf(small_btf).meta["generator"]
     cfg = json.loads(small_btf.with_name("leather.btf.config.json").read_text())
-    assert gen["grid"] == cfg["grid"] == 64
+    assert gen["grid"] == 0 and cfg["grid"] == 64
+    fp = btf_fingerprint(read_btf(small_btf))
+    assert fp["sha256"] == "b33a632e82e3823525c55e69ec367fbb1efa6c0f7a651d4852df7f55b7205acb"
 
 
 def test_grid_help_matches_the_check(vrn_inproc, tmp_path, capsys):

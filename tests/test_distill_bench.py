@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from distill_helpers import run_cli
+from distill_helpers import expect_one_line_error, run_cli
 
 
 def test_bench_quality_smoke(tmp_path, capsys):
@@ -99,6 +99,59 @@ def test_bench_quality_smoke(tmp_path, capsys):
         assert ck["config"]["ema"] == 0.9 and ck["ema"]["count"] > 0
     assert load_checkpoint(tmp_path / "e" / "leather" / "teacher.pt")["config"]["ema"] == 0.0
     assert "weight averaging (--ema 0.9)" in (tmp_path / "e" / "results.md").read_text()
+
+
+def _digests(root):
+    import hashlib
+
+    return {
+        f.relative_to(root): hashlib.sha256(f.read_bytes()).hexdigest()
+        for f in sorted(root.rglob("*"))
+        if f.suffix in (".pt", ".btf", ".json") and f.name != "results.json"
+    }
+
+
+def test_bench_quality_resume_never_trains_over_a_checkpoint_it_cannot_reuse(tmp_path):
+    """`--resume` once retrained, silently and over the user's files, every checkpoint it
+    could not reuse: an older release's BTF header made it retrain six 48-epoch teachers and
+    every network. Now each such checkpoint is a one-line error that names why, and nothing
+    is written."""
+    out = tmp_path / "q"
+    args = ["bench", "quality", "--presets", "leather", "--out", out, "--res", 8, "--dirs", 4]
+    args += ["--teacher-epochs", 1, "--epochs", 2, "--lafortune-iters", 2, "--no-progress"]
+    code, err = run_cli(*args)
+    assert code == 0, err
+    before = _digests(out)
+    i = args.index("--epochs")
+    fewer = [*args[: i + 1], 1, *args[i + 2 :]]
+    expect_one_line_error([*fewer, "--resume"], "neumip.pt", "2 epochs, more than the 1")
+    expect_one_line_error([*args, "--resume", "--ema", 0.9], "neumip.pt", "ema 0.0 there, 0.9")
+    assert _digests(out) == before
+    stamp = out / "btf" / "leather.btf.synth.json"
+    good = stamp.read_text()
+    stamp.write_text(good.replace('"spp": 4', '"spp": 9'))  # synthesised by other settings
+    expect_one_line_error([*args, "--resume"], "leather.btf", "cannot reuse this BTF", '"spp": 9')
+    stamp.write_text(good)
+    assert _digests(out) == before
+    student = out / "leather" / "student.pt"
+    kept = student.read_bytes()
+    student.write_bytes(b"not a checkpoint")
+    expect_one_line_error([*args, "--resume"], "student.pt", "corrupt or not a torch checkpoint")
+    assert student.read_bytes() == b"not a checkpoint"
+    student.write_bytes(kept)
+    # a longer teacher is a new teacher: it is continued, then its students are refused
+    j = args.index("--teacher-epochs")
+    longer = [*args[: j + 1], 2, *args[j + 2 :]]
+    expect_one_line_error([*longer, "--resume"], "neumip.pt", "another teacher", "move it away")
+    after, teacher = _digests(out), (out / "leather" / "teacher.pt").relative_to(out)
+    assert after[teacher] != before[teacher]  # the continued teacher (and its sidecars)
+
+    def others(d):
+        return {k: v for k, v in d.items() if not k.name.startswith("teacher.")}
+
+    assert others(after) == others(before)  # and nothing else
+    code, err = run_cli(*longer, "--force")  # --force retrains every network
+    assert code == 0, err
 
 
 def _rec(*seeds):

@@ -218,6 +218,41 @@ def test_teacher_from_before_the_value_hash_still_works(trained, tmp_path):  # n
     assert code == 0, err
 
 
+def test_resume_on_other_values_is_an_error_even_when_the_teacher_cannot_tell(trained, tmp_path):  # noqa: F811
+    """A teacher from before the value hash matches any BTF with its header; the resumed
+    checkpoint's own record still tells that the values changed (a BTF synthesised again on
+    another machine differed in its last bits: a run must not continue on other data)."""
+    import shutil
+
+    from vrneural.btf.format import read_btf
+
+    ck = load_checkpoint(trained["teacher"])
+    del ck["btf"]["values_sha256"]
+    old = tmp_path / "old.pt"
+    _save_like(ck, old)
+    btf = tmp_path / "m.btf"
+    shutil.copy(trained["btf"], btf)
+    out = tmp_path / "s.pt"
+    code, err = run_cli("distill", old, "--btf", btf, "-o", out, "--epochs", 1, *FAST)
+    assert code == 0, err
+    values = read_btf(btf).values
+    off = values.offset + values.nbytes // 2
+    del values
+    with open(btf, "r+b") as f:  # flip one value in place: the header stays as it was
+        f.seek(off)
+        b = f.read(1)
+        f.seek(off)
+        f.write(bytes([b[0] ^ 0x10]))
+    kept = out.read_bytes()
+    expect_one_line_error(
+        ["distill", old, "--btf", btf, "-o", out, "--resume", "--epochs", 2, *FAST],
+        "differs from the one",
+        "values_sha256",
+        "--btf",
+    )
+    assert out.read_bytes() == kept
+
+
 @pytest.mark.parametrize("flag", ["--split-seed", "--test-fraction"])
 def test_distill_split_options_other_than_the_teachers_are_errors(trained, tmp_path, flag):  # noqa: F811
     out = tmp_path / "s.pt"

@@ -92,7 +92,10 @@ class QualityConfig:
 
 
 def make_btf(preset: str, cfg: QualityConfig, path: Path) -> Path:
-    """Synthesise (or reuse an identical, already synthesised) BTF."""
+    """Synthesise (or reuse an identical, already synthesised) BTF.
+
+    With ``--resume`` a BTF synthesised with other settings is an error, not replaced: the
+    teachers there were trained on it, and a file from an older release cannot be remade."""
     try:
         from vrneural.btf.synth import BtfConfig, synthesize
     except ImportError as e:
@@ -102,6 +105,13 @@ def make_btf(preset: str, cfg: QualityConfig, path: Path) -> Path:
     want = json.dumps(config_dict(bcfg), sort_keys=True)
     if path.exists() and stamp.exists() and stamp.read_text() == want:
         return path
+    if cfg.resume and path.exists():
+        have = stamp.read_text().strip() if stamp.exists() else "no record (no .synth.json)"
+        raise VrnError(
+            f"{path}: --resume cannot reuse this BTF: it was synthesised with {have}, this run "
+            f"asks for {want}; move it away (with the checkpoints trained on it) to start "
+            "over, or pass --force to retrain every network"
+        )
     path.unlink(missing_ok=True)
     path.parent.mkdir(parents=True, exist_ok=True)
     synthesize(bcfg, path, progress=cfg.progress)
@@ -121,8 +131,8 @@ def _common(cfg: QualityConfig) -> dict:
     return dict(progress=cfg.progress, max_test_slices=0, device=cfg.device, compile=cfg.compile)
 
 
-def _teach_config(preset: str, cfg: QualityConfig, root: Path, btf_path: Path, btf_sha: str):
-    """The teacher's config; ``resume`` where ``--resume`` and its checkpoint matches."""
+def _teach_config(preset: str, cfg: QualityConfig, root: Path, btf_path: Path, btf_sha: str | None):
+    """The teacher's config; ``resume`` where ``--resume`` finds its checkpoint (it must match)."""
     from vrneural.distill.config import TeachConfig
 
     tcfg = TeachConfig(
@@ -133,19 +143,22 @@ def _teach_config(preset: str, cfg: QualityConfig, root: Path, btf_path: Path, b
         **_common(cfg),
     )
     mark_explicit(tcfg, "epochs")  # a resumed run goes to the bench's epochs, not its own
-    tcfg.resume = cfg.resume and _reusable(tcfg, btf_sha=btf_sha)
-    tcfg.force = not tcfg.resume
+    _set_resume(tcfg, cfg.resume, btf_sha=btf_sha)
     return tcfg
 
 
-def _distill_configs(preset: str, cfg: QualityConfig, root: Path, btf_path: Path) -> list:
-    """``(name, stem, config)`` of every network and seed of a preset (its teacher trained)."""
+def _distill_configs(
+    preset: str, cfg: QualityConfig, root: Path, btf_path: Path, check_teacher: bool = True
+) -> list:
+    """``(name, stem, config)`` of every network and seed of a preset (its teacher trained;
+    ``check_teacher=False`` skips comparing it with the teacher each checkpoint was made from,
+    for the check before any work, when the teacher may not exist yet)."""
     from vrneural.distill.checkpoint import file_sha256
     from vrneural.distill.config import DistillConfig
     from vrneural.distill.distill import resolve_method
 
     d = root / preset
-    tsha = file_sha256(d / "teacher.pt")
+    tsha = file_sha256(d / "teacher.pt") if check_teacher else None
     out = []
     for name, kw in RUNS.items():
         for seed in range(cfg.seed, cfg.seed + cfg.repeats):
@@ -165,8 +178,7 @@ def _distill_configs(preset: str, cfg: QualityConfig, root: Path, btf_path: Path
                 )
             )
             mark_explicit(dcfg, "epochs")
-            dcfg.resume = cfg.resume and _reusable(dcfg, teacher_sha=tsha)
-            dcfg.force = not dcfg.resume
+            _set_resume(dcfg, cfg.resume, teacher_sha=tsha)
             out.append((name, stem, dcfg))
     return out
 
@@ -294,29 +306,60 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
 _FREE = {"btf", "output", "teacher", "epochs", "progress", "force", "resume", "device", "compile"}
 
 
-def _reusable(cfg, btf_sha: str | None = None, teacher_sha: str | None = None) -> bool:
-    """True when ``cfg.output`` holds a checkpoint of this very training run, up to its epochs."""
+def _reuse_problem(cfg, btf_sha: str | None = None, teacher_sha: str | None = None):
+    """Why the existing checkpoint ``cfg.output`` is not this very training run (up to its
+    epochs), or None when it is; a ``None`` hash is not compared."""
     from vrneural.distill.checkpoint import load_checkpoint
 
-    path = Path(cfg.output)
-    if not path.exists():
-        return False
     try:
-        ck = load_checkpoint(path)
-    except VrnError:
-        return False
+        ck = load_checkpoint(cfg.output)
+    except VrnError as e:
+        return str(e).removeprefix(f"{cfg.output}: ")
     want, have = dataclasses.asdict(cfg), ck["config"]
     # a field newer than the checkpoint counts as what that run used: its default, or
     # BEFORE_FIELD where the default changed the behaviour
     default = {f.name: f.default for f in dataclasses.fields(cfg)} | BEFORE_FIELD
     free = _FREE if want.get("method") == "neumip" else _FREE | {"neumip_dirs"}
-    if any(have.get(k, default[k]) != v for k, v in want.items() if k not in free):
-        return False
+    diff = [
+        f"{k} {have.get(k, default[k])!r} there, {v!r} here"
+        for k, v in want.items()
+        if k not in free and have.get(k, default[k]) != v
+    ]
+    if diff:
+        return f"it was trained with other settings ({'; '.join(diff)})"
     if int(ck["epoch"]) > cfg.epochs:
-        return False
+        return f"it has {ck['epoch']} epochs, more than the {cfg.epochs} asked for"
     if btf_sha is not None and ck["btf"].get("sha256") != btf_sha:
-        return False
-    return teacher_sha is None or ck.get("teacher", {}).get("sha256") == teacher_sha
+        return "it was trained on another BTF (the header's SHA-256 differs)"
+    if teacher_sha is not None and ck.get("teacher", {}).get("sha256") != teacher_sha:
+        return "it was distilled from another teacher (teacher.pt's SHA-256 differs)"
+    return None
+
+
+def _set_resume(cfg, resume: bool, **hashes) -> None:
+    """``--resume``: continue (or take as it is) the checkpoint at ``cfg.output`` when it is
+    this run's; one that is not is an error, never silently trained over. Otherwise train
+    from scratch (``force``: the output directory was checked by ``run_quality``)."""
+    exists = Path(cfg.output).exists()
+    if resume and exists:
+        why = _reuse_problem(cfg, **hashes)
+        if why is not None:
+            raise VrnError(
+                f"{cfg.output}: --resume cannot reuse this checkpoint: {why}; move it away to "
+                "retrain it, or pass --force to retrain every network"
+            )
+    cfg.resume = resume and exists
+    cfg.force = not cfg.resume
+
+
+def _check_resumable(presets: list[str], cfg: QualityConfig, root: Path) -> None:
+    """Before any work: every checkpoint that ``--resume`` would meet is readable and was
+    trained with this run's settings (the BTF and teacher hashes are compared later, once
+    the BTFs exist), so a mismatch stops the run before hours of other presets."""
+    for p in presets:
+        btf_path = root / "btf" / f"{p}.btf"
+        _teach_config(p, cfg, root, btf_path, None)
+        _distill_configs(p, cfg, root, btf_path, check_teacher=False)
 
 
 def _finished(cfg) -> bool:
@@ -448,6 +491,8 @@ def run_quality(cfg: QualityConfig) -> dict:
             cfg.force or cfg.resume,
             remedy="pass --resume to reuse its checkpoints or --force to retrain",
         )
+    if cfg.resume:
+        _check_resumable(presets, cfg, root)
     mark_output_dir(root)  # checkpoints stay: --resume reuses them, --force retrains each
     results, slices, t_all = {}, {}, time.perf_counter()
     if cfg.jobs > 1:

@@ -31,7 +31,7 @@ class BtfConfig:
     preset: str = opt("leather", "material preset: " + ", ".join(sorted(PRESETS)))
     res: int = opt(64, "texels per side (the tile is res x res)")
     dirs: int = opt(151, "light and view directions (151 = UBO2014 layout, else quasi-uniform)")
-    seed: int = opt(0, "random seed (same seed, same bytes)")
+    seed: int = opt(0, "random seed (same seed, same bytes on one machine)")
     spp: int = opt(4, "jittered sub-samples per texel (a square number is stratified)")
     grid: int = opt(
         0, "heightfield grid size N per side, 8 to 4096 (0 = 2 x res clamped to [64, 512])"
@@ -54,7 +54,7 @@ class BtfConfig:
         return self.grid or int(min(512, max(64, 2 * self.res)))
 
     def resolved(self) -> BtfConfig:
-        """The config as rendered (``grid`` 0 replaced by the size used), as files record it."""
+        """The config as rendered (``grid`` 0 replaced by the size used), as the sidecar has it."""
         return dataclasses.replace(self, grid=self.grid_size)
 
 
@@ -119,7 +119,10 @@ def synthesize(
     dirs = direction_set(cfg.dirs)
     meta = {
         "name": cfg.preset,
-        "generator": {**config_dict(cfg.resolved()), "tool": GENERATOR},
+        # the config as given (grid 0 = auto), not resolved: the header's SHA-256 is part of
+        # the BTF's identity in every teacher and student checkpoint, so it must not change
+        # for the same data (tests/test_btf_cli.py pins it)
+        "generator": {**config_dict(cfg), "tool": GENERATOR},
         "seed": cfg.seed,
     }
     out = Path(out)

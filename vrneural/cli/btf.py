@@ -98,7 +98,7 @@ def run_synth(args) -> int:
     out, _ = check_outputs([args.output, config_path(args.output)], args.force)
     _check_partial(out, args.resume, args.force)
     path = synthesize(cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force)
-    write_config(path, cfg.resolved())  # grid 0 -> the size used, as in the header
+    write_config(path, cfg.resolved())  # grid 0 -> the size used (the header keeps 0)
     print(path)
     return 0
 

@@ -169,6 +169,15 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
             f"{btf_path}: BTF does not match the teacher {cfg.teacher}: {key} is "
             f"{fp[key]!s:.24}, the teacher was trained on {want[key]!s:.24}"
         )
+    # a resumed run also against its own record: a teacher from before the value hash does
+    # not see values that changed (a BTF synthesised again on another machine can differ)
+    key = fingerprint_mismatch(fp, resume["btf"]) if resume is not None else None
+    if key:
+        raise VrnError(
+            f"{btf_path}: BTF differs from the one {cfg.output} was trained on: {key} is "
+            f"{fp[key]!s:.24}, the run began on {resume['btf'][key]!s:.24}; resume it with "
+            "that BTF (--btf), or start over with --force"
+        )
     dev = train_device(cfg.device)
     rank, world = dist_setup(cfg.device)
     teacher = model_from_checkpoint(tck, cfg.teacher)
