@@ -184,22 +184,27 @@ def test_foreign_pickle_loads_without_torch_warnings(tmp_path, recwarn):
     assert not [w for w in recwarn if "torch" in str(w.filename)], [str(w) for w in recwarn]
 
 
-def test_corrupted_values_do_not_match_the_teacher(trained, tmp_path):  # noqa: F811
-    """The header of a BTF does not cover its values; the fingerprint samples them."""
-    import shutil
-
+def _flip_one_value(btf) -> None:
+    """Flip one bit of one value in the middle of a BTF, in place: the header stays as it was."""
     from vrneural.btf.format import read_btf
 
-    btf = tmp_path / "m.btf"
-    shutil.copy(trained["btf"], btf)
     values = read_btf(btf).values
     off = values.offset + values.nbytes // 2
     del values
-    with open(btf, "r+b") as f:  # flip one value in place: the header stays as it was
+    with open(btf, "r+b") as f:
         f.seek(off)
         b = f.read(1)
         f.seek(off)
         f.write(bytes([b[0] ^ 0x10]))
+
+
+def test_corrupted_values_do_not_match_the_teacher(trained, tmp_path):  # noqa: F811
+    """The header of a BTF does not cover its values; the fingerprint samples them."""
+    import shutil
+
+    btf = tmp_path / "m.btf"
+    shutil.copy(trained["btf"], btf)
+    _flip_one_value(btf)
     out = tmp_path / "s.pt"
     expect_one_line_error(
         ["distill", trained["teacher"], "--btf", btf, "-o", out, *FAST],
@@ -224,8 +229,6 @@ def test_resume_on_other_values_is_an_error_even_when_the_teacher_cannot_tell(tr
     another machine differed in its last bits: a run must not continue on other data)."""
     import shutil
 
-    from vrneural.btf.format import read_btf
-
     ck = load_checkpoint(trained["teacher"])
     del ck["btf"]["values_sha256"]
     old = tmp_path / "old.pt"
@@ -235,14 +238,7 @@ def test_resume_on_other_values_is_an_error_even_when_the_teacher_cannot_tell(tr
     out = tmp_path / "s.pt"
     code, err = run_cli("distill", old, "--btf", btf, "-o", out, "--epochs", 1, *FAST)
     assert code == 0, err
-    values = read_btf(btf).values
-    off = values.offset + values.nbytes // 2
-    del values
-    with open(btf, "r+b") as f:  # flip one value in place: the header stays as it was
-        f.seek(off)
-        b = f.read(1)
-        f.seek(off)
-        f.write(bytes([b[0] ^ 0x10]))
+    _flip_one_value(btf)
     kept = out.read_bytes()
     expect_one_line_error(
         ["distill", old, "--btf", btf, "-o", out, "--resume", "--epochs", 2, *FAST],
