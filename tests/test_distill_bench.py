@@ -209,6 +209,28 @@ def test_quality_targets_use_seed_means_and_flag_overlapping_ranges():
     md = markdown(doc)
     assert "seeds 3-4" in md and "1.50000 (1.40000-1.60000)" in md
     assert "**no** *(seeds overlap)*" in md  # below no-distillation: 1.5 vs 1.275, overlapping
+    assert "| leather | 0 of 2 | 0 of 2 |" in md  # pairs: 1.4, 1.6 vs 1.2, 1.3 and 1.05, 1.5
+
+
+def test_seed_pairs_and_the_seed_picked_by_test_l1():
+    from vrneural.bench.quality_report import picked, seed_pairs
+
+    m = {
+        "neumip": _rec(1.0, 1.2) | {"test_l1_seeds": [2.0, 1.0]},  # picks seed 1 by test L1
+        "single8": _rec(1.3, 1.1) | {"test_l1_seeds": [1.0, 2.0]},
+        "student_nodistill": _rec(1.4, 1.0) | {"test_l1_seeds": [1.0, 1.0]},  # a tie: the first
+        "lafortune": _rec(2.0) | {"test_l1": 3.0},  # one fit, no seeds
+        "student": _rec(1.2, 1.15) | {"test_l1_seeds": [3.0, 1.0]},
+    }
+    # seed 0: 1.2 < 1.3 and < 1.4; seed 1: 1.15 > 1.1 and > 1.0
+    assert seed_pairs(m) == {"single8": (1, 2), "student_nodistill": (1, 2)}
+    assert {k: v["whole_l1"] for k, v in picked(m).items()} == {
+        "neumip": 1.2,
+        "single8": 1.3,
+        "student_nodistill": 1.4,
+        "lafortune": 2.0,
+        "student": 1.15,
+    }
 
 
 def test_bench_quality_jobs_equals_sequential(tmp_path):
