@@ -332,7 +332,10 @@ def _reuse_problem(cfg, btf_sha: str | None = None, teacher_sha: str | None = No
     if btf_sha is not None and ck["btf"].get("sha256") != btf_sha:
         return "it was trained on another BTF (the header's SHA-256 differs)"
     if teacher_sha is not None and ck.get("teacher", {}).get("sha256") != teacher_sha:
-        return "it was distilled from another teacher (teacher.pt's SHA-256 differs)"
+        return (
+            "it was distilled from another teacher (teacher.pt's SHA-256 differs; a teacher "
+            "continued to more --teacher-epochs is another teacher)"
+        )
     return None
 
 
