@@ -77,6 +77,19 @@ def fingerprint_mismatch(have: dict, want: dict) -> str | None:
     return None
 
 
+def check_btf_record(
+    path, fp: dict, want: dict, mismatch: str, recorded: str, remedy: str = ""
+) -> None:
+    """One-line :class:`VrnError` when the BTF at ``path`` (fingerprint ``fp``) is not the one
+    the record ``want`` names: ``"{path}: BTF {mismatch}: KEY is A, {recorded} B{remedy}"``."""
+    key = fingerprint_mismatch(fp, want)
+    if key:
+        raise VrnError(
+            f"{path}: BTF {mismatch}: {key} is {fp[key]!s:.24}, {recorded} {want[key]!s:.24}"
+            + remedy
+        )
+
+
 def split_pairs(n_light: int, n_view: int, fraction: float, seed: int) -> tuple[list, list]:
     """Deterministic train/test split of the ``L * V`` pair indices (``p = l * V + v``)."""
     n = n_light * n_view

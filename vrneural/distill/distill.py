@@ -18,7 +18,7 @@ from vrneural.btf.format import read_btf
 from vrneural.config import is_explicit, replace_config
 from vrneural.distill.checkpoint import file_sha256, load_checkpoint, recorded_btf
 from vrneural.distill.config import BEFORE_FIELD, DistillConfig
-from vrneural.distill.data import SliceData, btf_fingerprint, fingerprint_mismatch
+from vrneural.distill.data import SliceData, btf_fingerprint, check_btf_record
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
 from vrneural.distill.models import NeuralModel, apply_output, make_spec
 from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
@@ -162,22 +162,13 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     check_not_input(outs, [btf_path])
     btf = read_btf(btf_path)
     fp = btf_fingerprint(btf)
-    want = tck["btf"]
-    key = fingerprint_mismatch(fp, want)
-    if key:
-        raise VrnError(
-            f"{btf_path}: BTF does not match the teacher {cfg.teacher}: {key} is "
-            f"{fp[key]!s:.24}, the teacher was trained on {want[key]!s:.24}"
-        )
-    # a resumed run also against its own record: a teacher from before the value hash does
-    # not see values that changed (a BTF synthesised again on another machine can differ)
-    key = fingerprint_mismatch(fp, resume["btf"]) if resume is not None else None
-    if key:
-        raise VrnError(
-            f"{btf_path}: BTF differs from the one {cfg.output} was trained on: {key} is "
-            f"{fp[key]!s:.24}, the run began on {resume['btf'][key]!s:.24}; resume it with "
-            "that BTF (--btf), or start over with --force"
-        )
+    mismatch = f"does not match the teacher {cfg.teacher}"
+    check_btf_record(btf_path, fp, tck["btf"], mismatch, "the teacher was trained on")
+    if resume is not None:  # also its own record: a teacher from before the value hash does
+        # not see values that changed (a BTF synthesised again on another machine can differ)
+        mismatch = f"differs from the one {cfg.output} was trained on"
+        remedy = "; resume it with that BTF (--btf), or start over with --force"
+        check_btf_record(btf_path, fp, resume["btf"], mismatch, "the run began on", remedy)
     dev = train_device(cfg.device)
     rank, world = dist_setup(cfg.device)
     teacher = model_from_checkpoint(tck, cfg.teacher)

@@ -145,7 +145,7 @@ def export_checkpoint(
     """Write the ``.vrnm`` of a loaded checkpoint. Returns ``(path, meta)``."""
     from vrneural.btf.format import read_btf
     from vrneural.distill.checkpoint import recorded_btf
-    from vrneural.distill.data import btf_fingerprint, fingerprint_mismatch
+    from vrneural.distill.data import btf_fingerprint, check_btf_record
     from vrneural.formats.atomic import check_not_input, check_output
     from vrneural.formats.vrnm import write_vrnm
 
@@ -154,9 +154,8 @@ def export_checkpoint(
         path = btf or recorded_btf(ck, source or "the checkpoint")
         check_not_input([out], [path])
         b = read_btf(path)
-        key = fingerprint_mismatch(btf_fingerprint(b), ck["btf"])
-        if key:
-            raise VrnError(f"{b.path}: BTF does not match the one {source} was trained on ({key})")
+        mismatch = f"does not match the one {source} was trained on"
+        check_btf_record(b.path, btf_fingerprint(b), ck["btf"], mismatch, "the checkpoint has")
         data = SliceData(b, ck["split"]["test"])
     mat, _ = pack_material(ck, data, source)
     write_vrnm(out, mat)

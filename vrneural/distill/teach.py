@@ -10,7 +10,7 @@ from torch import nn
 from vrneural.btf.format import read_btf
 from vrneural.config import is_explicit
 from vrneural.distill.config import TeachConfig
-from vrneural.distill.data import SliceData, btf_fingerprint, fingerprint_mismatch, split_pairs
+from vrneural.distill.data import SliceData, btf_fingerprint, check_btf_record, split_pairs
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
 from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
@@ -102,8 +102,9 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
         cfg = TeachConfig(**(old | {"btf": cfg.btf}))
     btf = read_btf(cfg.btf)
     fp = btf_fingerprint(btf)
-    if resume is not None and fingerprint_mismatch(fp, resume["btf"]):
-        raise VrnError(f"{cfg.btf}: BTF differs from the one {cfg.output} was trained on")
+    if resume is not None:
+        mismatch = f"differs from the one {cfg.output} was trained on"
+        check_btf_record(cfg.btf, fp, resume["btf"], mismatch, "the run began on")
     dev = train_device(cfg.device)
     rank, world = dist_setup(cfg.device)
     L, V, H, W = btf.shape
