@@ -16,6 +16,11 @@ if [ -e "$W" ]; then
     echo "full_pipeline.sh: $W already exists; give a new work directory" >&2
     exit 2
 fi
+case "$PRESET" in  # checked before anything is made, so a retry needs no new directory
+    leather|fabric|wood|carpet|metal|stone) ;;
+    *) echo "full_pipeline.sh: preset '$PRESET' is not one of leather, fabric, wood, carpet, metal, stone" >&2
+       exit 2 ;;
+esac
 mkdir -p "$W"
 : > "$W/times.txt"
 step() {  # step NAME CMD...: run, print and record the wall time

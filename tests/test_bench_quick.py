@@ -128,8 +128,32 @@ def test_bench_user_errors_are_one_line(capsys, tmp_path):
     assert msg.startswith("vrneural bench lights: error: --lights = '0,9': 0 is out of range; ")
     assert "not allowed" in _err(capsys, ["kernels", "--networks", "resnet", "--out", o])
     assert "WIDTHxHEIGHT" in _err(capsys, ["tradeoff", "--eye-res", "big", "--out", o])
+    # a training budget out of range: one line under tradeoff's own flag names, and no --out
+    for flag, value in (("--btf-res", "0"), ("--btf-dirs", "1"), ("--teacher-epochs", "0")):
+        msg = _err(capsys, ["tradeoff", "--quick", flag, value, "--out", o])
+        assert msg.startswith(f"vrneural bench tradeoff: error: {flag} = {value} "), msg
+    assert "--preset" in _err(capsys, ["tradeoff", "--preset", "plastic", "--out", o])
+    assert not (tmp_path / "o").exists()
     (tmp_path / "o").mkdir()
-    assert "--force" in _err(capsys, ["materials", "--out", o])
+    (tmp_path / "o" / "mine.txt").write_text("keep")
+    assert "not a vrneural output directory" in _err(capsys, ["materials", "--out", o])
+    msg = _err(capsys, ["all", "--quick", "--out", o])  # bench all checks its folder too
+    assert "not a vrneural output directory" in msg
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["mine.txt"]
+
+
+def test_bench_output_of_one_command_is_not_replaced_by_another(capsys, tmp_path):
+    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+
+    o = tmp_path / "o"
+    make_output_dir(o, "bench materials")
+    (o / "results.json").write_text("{}")
+    seal_output_dir(o, "bench materials")
+    assert "--force" in _err(capsys, ["materials", "--out", str(o)])
+    msg = _err(capsys, ["kernels", "--force", "--out", str(o)])
+    assert "holds the output of `vrneural bench materials`, not of `vrneural bench kernels`" in msg
+    assert "not of `vrneural bench all`" in _err(capsys, ["all", "--force", "--out", str(o)])
+    assert (o / "results.json").exists()
 
 
 def test_tradeoff_missing_packs_is_one_line(capsys, tmp_path):

@@ -267,7 +267,7 @@ def test_grid_help_matches_the_check(vrn_inproc, tmp_path, capsys):
     grid = next(a for a in synth._actions if a.dest == "grid")
     assert "8 to 4096" in grid.help
     args = ["btf", "synth", "--res", "4", "--dirs", "3", "-o", str(tmp_path / "g.btf")]
-    _one_line_error(vrn_inproc(*args, "--grid", "7"), "--grid = 7", "allowed [8, 4096]")
+    _one_line_error(vrn_inproc(*args, "--grid", "7"), "--grid = 7", "allowed 0 (auto) or [8, 4096]")
 
 
 def test_help_shows_defaults(capsys):

@@ -112,3 +112,21 @@ def test_default_run_writes_video_frames_and_summary_to_a_new_dir(capsys, tmp_pa
     assert left.shape == right.shape and left.std() > 5 and not np.array_equal(left, right)
     text = capsys.readouterr().out
     assert "stereo.mp4" in text and "frame ms" in text and "summary.json" in text
+
+
+def test_full_pipeline_script_refuses_an_unknown_preset_before_making_anything(tmp_path):
+    """demo/full_pipeline.sh checks PRESET first (its list is the synthesiser's), so the retry
+    of a typo needs no new work directory."""
+    import re
+    import subprocess
+    from pathlib import Path
+
+    from vrneural.btf.presets import PRESETS
+
+    script = Path(__file__).parents[1] / "demo" / "full_pipeline.sh"
+    listed = re.search(r"^\s+([a-z|]+)\) ;;$", script.read_text(), re.M).group(1).split("|")
+    assert sorted(listed) == sorted(PRESETS)
+    work = tmp_path / "w"
+    r = subprocess.run(["bash", str(script), str(work), "plastic"], capture_output=True, text=True)
+    assert r.returncode == 2 and "preset 'plastic' is not one of" in r.stderr
+    assert not work.exists()

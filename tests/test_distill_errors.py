@@ -65,6 +65,14 @@ def test_bad_teacher(trained, bad_checkpoints, tmp_path, name, needle):  # noqa:
     assert not out.exists() and not out.with_suffix(".vrnm").exists()
 
 
+def test_resume_without_a_checkpoint_says_there_is_nothing_to_resume(trained, tmp_path):  # noqa: F811
+    out = tmp_path / "nothere.pt"
+    expect_one_line_error(
+        ["distill", trained["teacher"], "-o", out, "--resume", *FAST], "nothing to resume"
+    )
+    assert not out.exists()
+
+
 def test_evil_checkpoint_never_runs_code(bad_checkpoints, tmp_path, capsys):
     expect_one_line_error(["export", bad_checkpoints["evil"], "-o", tmp_path / "x.vrnm"], "forbids")
     assert "arbitrary code ran" not in capsys.readouterr().out

@@ -103,25 +103,53 @@ def test_atomic_path_leaves_original_on_failure(tmp_path):
 def test_force_replaces_only_directories_vrneural_wrote(tmp_path):
     import json
 
-    from vrneural.formats.atomic import OUTPUT_MARK, check_output_dir, make_output_dir
+    from vrneural.formats.atomic import (
+        OUTPUT_MARK,
+        check_output_dir,
+        make_output_dir,
+        seal_output_dir,
+    )
 
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "thesis.tex").write_text("keep")
-    (mine / "results.json").write_text(json.dumps({"accuracy": 0.9}))  # a results.json, not ours
+    # result files that look like ours do not make a folder ours: only the marker does
+    (mine / "results.json").write_text(json.dumps({"benchmark": "frames", "records": []}))
+    (mine / "summary.json").write_text(json.dumps({"adapter": 1, "resolved": 1, "per_frame": 1}))
     with pytest.raises(VrnError, match="not a vrneural output directory"):
-        check_output_dir(mine, force=True)
-    (mine / "summary.json").write_text("not json")
-    with pytest.raises(VrnError, match="not a vrneural output directory"):
-        check_output_dir(mine, force=True)
+        check_output_dir(mine, True, "run")
     assert (mine / "thesis.tex").read_text() == "keep"
-    # an older release's bench output (no marker yet) is recognised by its content
-    old = tmp_path / "old"
-    old.mkdir()
-    (old / "results.json").write_text(json.dumps({"benchmark": "frames", "records": []}))
-    (old / "plot.png").write_bytes(b"png")
-    check_output_dir(old, force=True)
-    make_output_dir(old)
-    assert sorted(p.name for p in old.iterdir()) == [OUTPUT_MARK]
+    # our own output: --force replaces it, without --force it is refused
+    run = tmp_path / "run"
+    check_output_dir(run, False, "run")
+    make_output_dir(run, "run")
+    (run / "summary.json").write_text("{}")
+    (run / "frames").mkdir()
+    seal_output_dir(run, "run")
     with pytest.raises(VrnError, match="pass --force"):
-        check_output_dir(old, force=False)
+        check_output_dir(run, False, "run")
+    check_output_dir(run, True, "run")
+    make_output_dir(run, "run")
+    assert sorted(p.name for p in run.iterdir()) == [OUTPUT_MARK]
+    # another command's output is never replaced (a run --force over bench quality checkpoints)
+    (run / "summary.json").write_text("{}")
+    seal_output_dir(run, "run")
+    for command in ("bench quality", "bench frames"):
+        with pytest.raises(VrnError, match="holds the output of `vrneural run`, not of"):
+            check_output_dir(run, True, command)
+    # files added after the command sealed its output: --force refuses and names them
+    (run / "notes.md").write_text("mine")
+    (run / "sub").mkdir()
+    with pytest.raises(VrnError, match=r"2 file\(s\) vrneural did not write there \(notes.md, sub"):
+        check_output_dir(run, True, "run")
+    with pytest.raises(VrnError, match="did not write there"):
+        make_output_dir(run, "run")  # a stale check cannot delete them either
+    assert (run / "notes.md").read_text() == "mine" and (run / "summary.json").exists()
+    # a marker this release cannot read (an older one) is another command's
+    (run / OUTPUT_MARK).write_text("written by vrneural; --force may replace this directory\n")
+    with pytest.raises(VrnError, match="output of an older vrneural release"):
+        check_output_dir(run, True, "run")
+    # an empty directory needs no flag
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    check_output_dir(empty, False, "run")

@@ -64,9 +64,19 @@ def test_bad_flags(capsys, tmp_path, argv, needle):
 
 
 def test_existing_output_needs_force(capsys, tmp_path):
-    (tmp_path / "o").mkdir()
-    msg = _err(capsys, ["--profile", "tiny", "--out", str(tmp_path / "o")])
+    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+
+    o = tmp_path / "o"
+    make_output_dir(o, "run")
+    (o / "summary.json").write_text("{}")
+    seal_output_dir(o, "run")
+    msg = _err(capsys, ["--profile", "tiny", "--out", str(o)])
     assert "--force" in msg
+    # a bench's output is not a run's: --force does not help
+    seal_output_dir(o, "bench quality")
+    msg = _err(capsys, ["--profile", "tiny", "--force", "--out", str(o)])
+    assert "holds the output of `vrneural bench quality`, not of `vrneural run`" in msg
+    assert (o / "summary.json").read_text() == "{}"
 
 
 @pytest.mark.gpu
@@ -98,9 +108,13 @@ def test_force_replaces_only_vrneurals_own_output(capsys, tmp_path):
     out = tmp_path / "o"
     assert main(["run", *tiny, "--out", str(out)]) == 0
     (out / "frame0000_eye0.png").unlink()
-    (out / "stale.txt").write_text("from an old run")
+    (out / "notes.md").write_text("added by the user after the run")
+    msg = _err(capsys, [*tiny, "--out", str(out)])  # --force never deletes what it did not write
+    assert "1 file(s) vrneural did not write there (notes.md)" in msg
+    assert (out / "notes.md").is_file() and (out / "summary.json").is_file()
+    (out / "notes.md").unlink()
     assert main(["run", *tiny, "--out", str(out)]) == 0  # our own output: replaced
-    assert (out / "frame0000_eye0.png").is_file() and not (out / "stale.txt").exists()
+    assert (out / "frame0000_eye0.png").is_file()
 
 
 @pytest.mark.gpu
@@ -156,6 +170,56 @@ def test_ctrl_c_keeps_the_frames_rendered_so_far(capsys, tmp_path, monkeypatch):
     monkeypatch.undo()
     assert main([*argv, "--frames", "2", "--force", "--out", str(out)]) == 0
     assert json.loads((out / "summary.json").read_text())["interrupted"] is False
+
+
+@pytest.mark.gpu
+def test_a_real_ctrl_c_stops_between_frames_and_keeps_them_whole(capsys, tmp_path, monkeypatch):
+    """SIGINT (what a terminal's Ctrl-C sends) during frame 3: that frame is finished, and the
+    summary, the video and the default --save-frames first,last agree on 4 frames."""
+    import os
+    import signal
+
+    import imageio.v2 as iio2
+
+    from vrneural.runtime import renderer
+
+    class Interrupted(renderer.Renderer):
+        def frame(self, f):
+            if f == 3:
+                os.kill(os.getpid(), signal.SIGINT)
+            return super().frame(f)
+
+    monkeypatch.setattr(renderer, "Renderer", Interrupted)
+    out = tmp_path / "o"
+    assert main(["run", "--profile", "tiny", "--frames", "8", "--quiet", "--out", str(out)]) == 130
+    err = capsys.readouterr().err
+    assert "interrupted after 4 of 8 frames" in err and "stereo.mp4 (4 frames)" in err
+    assert json.loads((out / "summary.json").read_text())["frames"] == 4
+    with iio2.get_reader(str(out / "stereo.mp4")) as rd:
+        assert rd.count_frames() == 4
+    assert sorted(p.name for p in out.glob("*.png")) == [
+        f"frame{f:04d}_eye{e}.png" for f in (0, 3) for e in (0, 1)
+    ]
+
+
+@pytest.mark.gpu
+def test_two_runs_in_the_same_second_get_two_directories(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr("time.strftime", lambda fmt, *a: "out/run-20260101-000000")
+    argv = ["run", "--profile", "tiny", "--frames", "1", "--quiet", "--no-video"]
+    assert main(argv) == 0 and main(argv) == 0
+    runs = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert runs == ["run-20260101-000000", "run-20260101-000000-2"]
+    assert all((tmp_path / "out" / r / "summary.json").is_file() for r in runs)
+
+
+def test_a_run_that_fails_at_setup_leaves_no_directory(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "--profile", "tiny", "--eyes", "3", "--quiet"]) == 2
+    assert "--eyes" in capsys.readouterr().err
+    assert list(tmp_path.glob("out/run-*")) == []
+    assert main(["run", "--out", "", "--quiet"]) == 2
+    assert "--out is empty" in capsys.readouterr().err
 
 
 def _scene(tmp_path, text: str, name: str = "s.toml"):
@@ -293,3 +357,30 @@ def test_triangles_without_texels_are_reported_not_hidden(capsys, tmp_path):
     obj = sm["scene"]["objects"][0]
     assert obj["texture_res"] == 64 and obj["triangles_without_texels"] > 0.5 * obj["triangles"]
     assert len(sm["warnings"]) == 1
+
+
+@pytest.mark.gpu
+def test_pack_shows_your_own_material_on_the_builtin_scene(capsys, tmp_path):
+    """`run --pack student.vrnm`: the user's pack on the demo's three objects; a sibling
+    teacher.vrnm is the --mode reference; a checkpoint or a directory is a one-line error."""
+    from vrneural.formats.vrnm import write_vrnm
+    from vrneural.material import random_material
+
+    write_vrnm(tmp_path / "student.vrnm", random_material(3))
+    out = tmp_path / "o"
+    argv = ["--profile", "tiny", "--frames", "1", "--quiet", "--no-video"]
+    assert main(["run", *argv, "--pack", str(tmp_path / "student.vrnm"), "--out", str(out)]) == 0
+    sm = json.loads((out / "summary.json").read_text())
+    sources = [o["source"] for o in sm["scene"]["objects"] if o["material"] == "neural"]
+    assert len(sources) == 3 and all(s.endswith("student.vrnm") for s in sources), sources
+    (tmp_path / "student.pt").write_bytes(b"PK\x03\x04" + bytes(60))
+    msg = _err(
+        capsys, [*argv, "--pack", str(tmp_path / "student.pt"), "--out", str(tmp_path / "x")]
+    )
+    assert "PyTorch checkpoint" in msg and "vrneural export" in msg
+    msg = _err(capsys, [*argv, "--pack", str(tmp_path), "--out", str(tmp_path / "x")])
+    assert "a directory, not a pack file" in msg
+    scene = _scene(tmp_path, SCENE.format(scale=1))
+    msg = _err(capsys, [scene, *argv, "--pack", str(tmp_path / "student.vrnm")])
+    assert "with a SCENE file" in msg
+    assert not (tmp_path / "x").exists()

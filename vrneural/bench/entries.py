@@ -62,7 +62,7 @@ def _entry(name: str):
     def register(sub) -> None:
         cls, _ = _load(name)
         help_ = SPECS[name][3]
-        p = sub.add_parser(name, help=help_, description=help_ + ". " + (cls.__doc__ or ""))
+        p = sub.add_parser(name, help=help_, description=help_ + ".")
         p.add_argument(
             "--out", default=f"bench-{name}", help=f"output directory (default: bench-{name})"
         )
@@ -98,12 +98,18 @@ def _register_all(sub) -> None:
 
 
 def _run_all(args) -> int:
+    from vrneural.formats.atomic import check_output_dir, mark_output_dir, seal_output_dir
+
     t0 = time.perf_counter()
+    # the folder is checked as every bench checks its own: a folder of other files is refused,
+    # and one of ours needs --force (each bench below then replaces only its own sub-folder)
+    mark_output_dir(check_output_dir(args.out, args.force, "bench all"), "bench all")
     for name in SPECS:
         cls, fn = _load(name)
         out = str(Path(args.out) / name)
         doc = fn(cls(out=out, quick=args.quick, force=args.force, progress=args.progress))
         _summary(name, doc, out)
+    seal_output_dir(args.out, "bench all")
     print(f"bench all: {time.perf_counter() - t0:.0f} s")
     return 0
 

@@ -108,7 +108,7 @@ def run_extremes(cfg: ExtremesConfig, out: str) -> dict:
     from vrneural.bench.report import header, prepare_out
 
     cases = selected(cfg.only)
-    root = prepare_out(out, cfg.force)
+    root = prepare_out(out, cfg.force, "extremes")
     t0 = time.perf_counter()
     doc = header("extremes", cfg)
     for name, group, fn, expect, what in tqdm(cases, desc="bench extremes", unit="case"):

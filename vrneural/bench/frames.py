@@ -61,7 +61,7 @@ def run_frames(cfg: FramesConfig) -> dict:
     check_range("--cycles", c.cycles, 1, 100)
     check_range("--warmup", c.warmup, 0.0, 60.0)
     check_range("--min-frames", c.min_frames, 1, 1000)
-    root = rp.prepare_out(cfg.out, cfg.force)
+    root = rp.prepare_out(cfg.out, cfg.force, "frames")
     t0 = time.perf_counter()
     prof = get_profile("quest3")
     doc = rp.header("frames", c)

@@ -121,7 +121,7 @@ def run_kernels(cfg: KernelsConfig) -> dict:
     precs = rp.choice_list("--precisions", c.precisions, ("f32", "f16"))
     if "f16" in precs and not adapter_summary().features.get("shader-f16"):
         raise VrnError("--precisions: f16 needs the shader-f16 feature, which the adapter lacks")
-    root = rp.prepare_out(cfg.out, cfg.force)
+    root = rp.prepare_out(cfg.out, cfg.force, "kernels")
     import torch
 
     t0 = time.perf_counter()

@@ -70,7 +70,7 @@ def run_materials(cfg: MaterialsConfig) -> dict:
     check_range("--cycles", c.cycles, 1, 100)
     check_range("--warmup", c.warmup, 0.0, 60.0)
     eye_res = parse_res(c.eye_res)
-    root = rp.prepare_out(cfg.out, cfg.force)
+    root = rp.prepare_out(cfg.out, cfg.force, "materials")
     t0 = time.perf_counter()
     prof = get_profile("quest3")
     doc = rp.header("materials", c)

@@ -25,6 +25,7 @@ import dataclasses
 import json
 import os
 import statistics
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -482,9 +483,6 @@ def validate(cfg: QualityConfig) -> list[str]:
 
 def run_quality(cfg: QualityConfig) -> dict:
     """Run the benchmark; writes results.json, results.md, curves.png, slices.png in ``out``."""
-    from vrneural.bench.quality_report import write_report
-    from vrneural.formats.atomic import write_json
-
     cfg = cfg.resolved()
     presets = validate(cfg)
     root = Path(cfg.out)
@@ -492,11 +490,29 @@ def run_quality(cfg: QualityConfig) -> dict:
         check_output_dir(
             root,
             cfg.force or cfg.resume,
+            "bench quality",
             remedy="pass --resume to reuse its checkpoints or --force to retrain",
         )
     if cfg.resume:
         _check_resumable(presets, cfg, root)
-    mark_output_dir(root)  # checkpoints stay: --resume reuses them, --force retrains each
+    mark_output_dir(
+        root, "bench quality"
+    )  # checkpoints stay: --resume reuses them, --force retrains each
+    try:
+        return _run(presets, cfg, root)
+    except KeyboardInterrupt:  # finished networks are kept: say how to continue
+        print(
+            f"{root}: interrupted; finished checkpoints are kept, and interrupted ones continue "
+            "where they stopped: rerun the same command with --resume",
+            file=sys.stderr,
+        )
+        raise
+
+
+def _run(presets: list[str], cfg: QualityConfig, root: Path) -> dict:
+    from vrneural.bench.quality_report import write_report
+    from vrneural.formats.atomic import write_json
+
     results, slices, t_all = {}, {}, time.perf_counter()
     if cfg.jobs > 1:
         _train_parallel(presets, cfg, root, print)

@@ -12,14 +12,21 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.config import config_dict
-from vrneural.formats.atomic import atomic_path, check_output_dir, make_output_dir, write_json
+from vrneural.formats.atomic import (
+    atomic_path,
+    check_output_dir,
+    make_output_dir,
+    seal_output_dir,
+    write_json,
+)
 
 
-def prepare_out(out: str | Path, force: bool) -> Path:
-    """Validate and (re)create the output directory (see
+def prepare_out(out: str | Path, force: bool, bench: str) -> Path:
+    """Validate and (re)create the output directory of ``vrneural bench <bench>`` (see
     :func:`vrneural.formats.atomic.check_output_dir`). Cached packs under ``packs/`` survive a
     ``--force`` rerun (they are keyed by their training config)."""
-    return make_output_dir(check_output_dir(out, force), keep=("packs",))
+    command = f"bench {bench}"
+    return make_output_dir(check_output_dir(out, force, command), command, keep=("packs",))
 
 
 def stats(x) -> dict:
@@ -93,12 +100,14 @@ def figure(w: float = 6.4, h: float = 4.0, ncols: int = 1, sharey: bool = False)
 
 
 def finish(root: Path, doc: dict, md: list[str], t0: float) -> dict:
-    """Stamp the run time and write ``results.json`` and ``results.md``."""
+    """Stamp the run time, write ``results.json`` and ``results.md`` and seal ``root`` (a
+    later ``--force`` replaces only what this bench wrote)."""
     doc["total_seconds"] = time.perf_counter() - t0
     md = [*md, "", f"Run time {doc['total_seconds']:.0f} s. Raw records: results.json."]
     write_json(root / "results.json", doc)
     with atomic_path(root / "results.md") as tmp:
         tmp.write_text("\n".join(md) + "\n")
+    seal_output_dir(root, f"bench {doc['bench']}")
     return doc
 
 

@@ -143,6 +143,22 @@ def render(scene, s, frames: list[int], bar=None, keep=None):
     return imgs, st
 
 
+def check_budget(c: TradeoffConfig) -> None:
+    """Validate the packs' training budget before any output exists (``train_packs`` would
+    check it too, but only after the output directory was made, naming its own flags)."""
+    from vrneural.btf.presets import PRESETS
+    from vrneural.errors import VrnError, check_choice, check_range, check_seed
+
+    check_choice("--preset", c.preset, sorted(PRESETS))
+    check_range("--btf-res", c.btf_res, 2, 4096)
+    if c.btf_res % 2:
+        raise VrnError(f"--btf-res = {c.btf_res} must be even (training uses 2x2 texel blocks)")
+    check_range("--btf-dirs", c.btf_dirs, 2, 100_000)
+    check_range("--teacher-epochs", c.teacher_epochs, 1, 10_000)
+    check_range("--epochs", c.epochs, 1, 10_000)
+    check_seed("--seed", c.seed)
+
+
 def run_tradeoff(cfg: TradeoffConfig) -> dict:
     from tqdm import tqdm
 
@@ -164,7 +180,9 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     sets = settings(c, adapter_summary().features.get("shader-f16", False))
     if c.packs:  # fail before any work or output
         load_packs({k: Path(c.packs) / f"{k}.vrnm" for k in PACKS})
-    root = rp.prepare_out(cfg.out, cfg.force)
+    else:  # the training budget, under this command's own flag names
+        check_budget(c)
+    root = rp.prepare_out(cfg.out, cfg.force, "tradeoff")
     t0 = time.perf_counter()
     doc = rp.header("tradeoff", c)
     if c.packs:

@@ -46,8 +46,8 @@ class BtfConfig:
         check_range("--dirs", self.dirs, 2, 100_000)
         check_range("--spp", self.spp, 1, 256)
         check_seed("--seed", self.seed)
-        if self.grid != 0:
-            check_range("--grid", self.grid, 8, 4096)
+        if self.grid != 0 and not 8 <= self.grid <= 4096:
+            raise VrnError(f"--grid = {self.grid} is out of range; allowed 0 (auto) or [8, 4096]")
 
     @property
     def grid_size(self) -> int:

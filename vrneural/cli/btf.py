@@ -42,12 +42,18 @@ def register(sub) -> None:
     s.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     s.set_defaults(func=run_synth)
 
-    i = bsub.add_parser("info", help="shape, directions, value range, size and metadata")
+    i = bsub.add_parser(
+        "info",
+        help="shape, directions, value range, size and metadata",
+        description="shape, directions, value range, size and metadata.",
+    )
     i.add_argument("file", help="a .btf file")
     i.add_argument("--json", action="store_true", help="print machine-readable JSON")
     i.set_defaults(func=run_info)
 
-    sh = bsub.add_parser("show", help="write a contact sheet PNG")
+    sh = bsub.add_parser(
+        "show", help="write a contact sheet PNG", description="write a contact sheet PNG."
+    )
     sh.add_argument("file", help="a .btf file")
     sh.add_argument("-o", "--output", required=True, help="output .png")
     sh.add_argument(
@@ -60,7 +66,11 @@ def register(sub) -> None:
     sh.add_argument("--force", action="store_true", help="overwrite an existing output")
     sh.set_defaults(func=run_show)
 
-    im = bsub.add_parser("import", help="convert a UBO2014 .btf (needs btf-extractor)")
+    im = bsub.add_parser(
+        "import",
+        help="convert a UBO2014 .btf (needs btf-extractor)",
+        description="convert a UBO2014 .btf (needs btf-extractor).",
+    )
     im.add_argument("file", help="a UBO2014 .btf file")
     im.add_argument("-o", "--output", required=True, help="output .btf file (our format)")
     im.add_argument("--force", action="store_true", help="overwrite an existing output")

@@ -19,7 +19,9 @@ def register(sub) -> None:
     )
     p.add_argument("scene", nargs="?", default=None, help="scene file (TOML)")
     add_config_args(p, RunConfig, skip=("scene",))
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--quiet", "--no-progress", dest="quiet", action="store_true", help="no progress bar"
+    )
     p.set_defaults(func=main)
 
 

@@ -54,8 +54,12 @@ def _report(fn, output: str) -> int:
         return 0
     h = ck["history"][-1] if ck["history"] else {}
     test = h.get("test_l1", float("nan"))
+    from pathlib import Path
+
+    pack = Path(output).with_suffix(".vrnm")
+    wrote = f"  + {pack}" if ck.get("config", {}).get("export") and pack.is_file() else ""
     print(
         f"{output}: {ck['method']} epochs {ck['epoch']}  test L1 {test:.5f}"
-        f"  train {ck.get('train_seconds', 0):.1f} s"
+        f"  train {ck.get('train_seconds', 0):.1f} s{wrote}"
     )
     return 0

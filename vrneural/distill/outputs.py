@@ -43,6 +43,11 @@ def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
     check_resume_force(cfg.resume, cfg.force)
     if cfg.resume:
         check_outputs(outputs, True, inputs)  # inputs and writable directories only
+        if not Path(cfg.output).exists():
+            raise VrnError(
+                f"--resume: nothing to resume, {cfg.output} does not exist; drop --resume to "
+                "start a new run"
+            )
         ck = load_checkpoint(cfg.output)
         for o in outputs[1:]:
             if Path(o).exists() and not written_by(o, ck):

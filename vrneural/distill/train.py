@@ -18,7 +18,6 @@ import contextlib
 import math
 import os
 import re
-import signal
 import time
 
 import torch
@@ -27,6 +26,7 @@ from torch import nn
 
 from vrneural.distill.checkpoint import save_checkpoint
 from vrneural.distill.data import SliceData
+from vrneural.interrupt import Stop
 from vrneural.errors import VrnError
 
 
@@ -87,32 +87,6 @@ def train_device(name: str) -> torch.device:
 
 def _seed(seed: int, epoch: int, salt: int) -> int:
     return (seed * 1_000_003 + epoch * 7_919 + salt) % (2**63)
-
-
-class Stop:
-    """Ctrl-C sets a flag; the loop saves a checkpoint at the next step and exits."""
-
-    def __init__(self):
-        self.flag = False
-        self._old = None
-
-    def __enter__(self):
-        if threading_main():
-            self._old = signal.signal(signal.SIGINT, self._handle)
-        return self
-
-    def _handle(self, *_):
-        self.flag = True
-
-    def __exit__(self, *exc):
-        if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
-
-
-def threading_main() -> bool:
-    import threading
-
-    return threading.current_thread() is threading.main_thread()
 
 
 class Ema:

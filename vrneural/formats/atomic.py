@@ -104,84 +104,148 @@ def _make_parent(p: Path) -> None:
 
 
 OUTPUT_MARK = ".vrneural-output"
-#: Result files of output directories written before the marker existed, with keys that only
-#: vrneural's own files carry (a folder that merely holds *a* results.json is not ours)
-_LEGACY_RESULTS = {
-    "summary.json": ("adapter", "resolved", "per_frame"),
-    "results.json": ("benchmark",),
-}
 
 
 def check_output_dir(
-    path: str | os.PathLike, force: bool, remedy: str = "pass --force to overwrite"
+    path: str | os.PathLike,
+    force: bool,
+    command: str,
+    remedy: str = "pass --force to overwrite",
 ) -> Path:
-    """Validate an output *directory* before any work starts.
+    """Validate an output *directory* of ``vrneural <command>`` before any work starts.
 
-    An existing path must be a directory that vrneural wrote (it holds :data:`OUTPUT_MARK`,
-    or a result file of an older release, recognised by its content) or an empty one, and it
-    needs ``force`` (else the error says ``remedy``): ``--force`` replaces our own output,
-    never a folder of the user's files.
+    An existing path must be an empty directory or one that the same command wrote (its
+    :data:`OUTPUT_MARK` names the command), and it needs ``force`` (else the error says
+    ``remedy``). ``--force`` replaces only that command's own output: never a folder of the
+    user's files, never another command's output (a ``bench quality`` directory of trained
+    checkpoints is not a ``run`` directory), and never files added to it after the command
+    sealed it (:func:`seal_output_dir`).
     """
     p = Path(path)
     if p.exists() or p.is_symlink():
         if not p.is_dir():
             raise VrnError(f"{p}: output exists and is not a directory; choose another --out")
-        if not is_output_dir(p):  # checked first: no flag helps here, so none is suggested
-            raise VrnError(
-                f"{p}: not a vrneural output directory (no {OUTPUT_MARK}); vrneural only replaces "
-                "or reuses its own output, so choose another --out"
-            )
-        if not force:
-            raise VrnError(f"{p}: output exists; {remedy}")
+        if any(p.iterdir()):
+            mark = read_mark(p)
+            if mark is None:  # checked first: no flag helps here, so none is suggested
+                raise VrnError(
+                    f"{p}: not a vrneural output directory (no {OUTPUT_MARK}); vrneural only "
+                    "replaces or reuses its own output, so choose another --out"
+                )
+            if mark.get("command") != command:
+                by = mark.get("command")
+                by = f"`vrneural {by}`" if by else "an older vrneural release"
+                raise VrnError(
+                    f"{p}: holds the output of {by}, not of `vrneural {command}`; choose "
+                    "another --out"
+                )
+            if not force:
+                raise VrnError(f"{p}: output exists; {remedy}")
+            foreign = unsealed_entries(p, mark)
+            if foreign:
+                shown = ", ".join(foreign[:3]) + (", ..." if len(foreign) > 3 else "")
+                raise VrnError(
+                    f"{p}: holds {len(foreign)} file(s) vrneural did not write there ({shown}); "
+                    "--force never deletes them: move them away or choose another --out"
+                )
     _make_parent(p)
     return p
 
 
-def is_output_dir(p: Path) -> bool:
-    """Whether ``p`` is empty or was written by vrneural (see :func:`check_output_dir`)."""
-    if (p / OUTPUT_MARK).exists() or any(_ours(p / f, k) for f, k in _LEGACY_RESULTS.items()):
-        return True
-    return not any(p.iterdir())
-
-
-def _ours(f: Path, keys: tuple[str, ...]) -> bool:
-    """Whether ``f`` is a JSON result file of an older vrneural (an object with ``keys``)."""
+def read_mark(p: Path) -> dict | None:
+    """The marker of output directory ``p`` (``{"command", "entries"}``), ``{}`` for a marker
+    this release cannot read (an older one), None when there is none."""
+    f = p / OUTPUT_MARK
     if not f.is_file():
-        return False
+        return None
     try:
         doc = json.loads(f.read_text())
     except (OSError, ValueError):  # UnicodeDecodeError is a ValueError
-        return False
-    return isinstance(doc, dict) and all(k in doc for k in keys)
+        return {}
+    return doc if isinstance(doc, dict) else {}
 
 
-def mark_output_dir(path: str | os.PathLike) -> Path:
-    """Create ``path`` (and parents) and mark it as vrneural's output, keeping its contents."""
+def unsealed_entries(p: Path, mark: dict) -> list[str]:
+    """Names in ``p`` that the command did not write: not in the entries it sealed. A run that
+    never sealed (it was killed) has no list; then everything in it counts as its own."""
+    entries = mark.get("entries")
+    if not isinstance(entries, list):
+        return []
+    ours = {*entries, OUTPUT_MARK}
+    return sorted(c.name for c in p.iterdir() if c.name not in ours)
+
+
+def is_output_dir(p: Path, command: str) -> bool:
+    """Whether ``p`` is empty or holds ``vrneural <command>``'s output."""
+    mark = read_mark(p)
+    return (mark is not None and mark.get("command") == command) or not any(p.iterdir())
+
+
+def _write_mark(p: Path, command: str, entries: list[str] | None) -> None:
+    doc = {"written_by": f"vrneural {command}", "command": command, "entries": entries}
+    doc["note"] = "--force of the same command may replace the entries listed here"
+    try:
+        (p / OUTPUT_MARK).write_text(json.dumps(doc, indent=1) + "\n")
+    except OSError as e:
+        raise VrnError(f"{p}: cannot write {OUTPUT_MARK} ({e.strerror})") from None
+
+
+def mark_output_dir(path: str | os.PathLike, command: str) -> Path:
+    """Create ``path`` (and parents) and mark it as ``vrneural <command>``'s output, keeping
+    its contents; the mark lists no entries until :func:`seal_output_dir` (a run in progress)."""
     p = Path(path)
     try:
         p.mkdir(parents=True, exist_ok=True)
-        (p / OUTPUT_MARK).write_text("written by vrneural; --force may replace this directory\n")
     except OSError as e:
         raise VrnError(f"{p}: cannot create output directory ({e.strerror})") from None
+    _write_mark(p, command, None)
     return p
 
 
-def make_output_dir(path: str | os.PathLike, keep: tuple[str, ...] = ()) -> Path:
+def seal_output_dir(path: str | os.PathLike, command: str) -> Path:
+    """Record what ``vrneural <command>`` wrote in ``path`` (the names now in it), so a later
+    ``--force`` deletes only those and refuses when anything else was added."""
+    p = Path(path)
+    _write_mark(p, command, sorted(c.name for c in p.iterdir() if c.name != OUTPUT_MARK))
+    return p
+
+
+def make_output_dir(path: str | os.PathLike, command: str, keep: tuple[str, ...] = ()) -> Path:
     """Empty a directory passed by :func:`check_output_dir` (except the names in ``keep``),
-    create it and mark it as vrneural's output. Call it once the inputs are validated, so a
-    run that fails early leaves the old output as it was."""
+    create it and mark it as ``vrneural <command>``'s output. Call it once the inputs are
+    validated, so a run that fails early leaves the old output as it was."""
     p = Path(path)
     if p.is_dir():
-        if not is_output_dir(p):  # the folder changed since it was checked
-            raise VrnError(f"{p}: not a vrneural output directory; choose another --out")
+        mark = read_mark(p)
+        # the folder changed since it was checked: check again, never delete on a stale check
+        if not is_output_dir(p, command) or (mark and unsealed_entries(p, mark)):
+            check_output_dir(p, True, command)
+            raise VrnError(f"{p}: changed while starting; choose another --out")
         for child in p.iterdir():
-            if child.name in keep:
+            if child.name in keep or child.name == OUTPUT_MARK:
                 continue
             if child.is_dir() and not child.is_symlink():
                 shutil.rmtree(child)
             else:
                 child.unlink()
-    return mark_output_dir(p)
+    return mark_output_dir(p, command)
+
+
+def new_output_dir(base: str) -> Path:
+    """Create and mark a fresh directory ``base`` (``base-2``, ``base-3``... if taken): the
+    name is claimed with an exclusive ``mkdir``, so two runs started in the same second never
+    share it."""
+    k = 1
+    while True:
+        p = Path(base if k == 1 else f"{base}-{k}")
+        try:
+            p.parent.mkdir(parents=True, exist_ok=True)
+            p.mkdir()
+            return p
+        except FileExistsError:
+            k += 1
+        except OSError as e:
+            raise VrnError(f"{p}: cannot create output directory ({e.strerror})") from None
 
 
 @contextlib.contextmanager

@@ -194,6 +194,12 @@ def read_container(
             raise VrnError(f"{p}: truncated ({size} bytes), not a {what}")
         got_magic, version, crc, hlen = _PREFIX.unpack(pre)
         if got_magic != magic:
+            if got_magic.startswith(b"PK\x03\x04"):  # a zip: what torch.save writes
+                hint = "; `vrneural export CHECKPOINT -o PACK.vrnm` makes one"
+                raise VrnError(
+                    f"{p}: wrong magic (a zip, probably a PyTorch checkpoint), not a {what}"
+                    + (hint if what == "runtime pack" else "")
+                )
             raise VrnError(f"{p}: wrong magic {got_magic!r}, not a {what} (expected {magic!r})")
         if version not in versions:
             raise VrnError(

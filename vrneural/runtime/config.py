@@ -19,7 +19,9 @@ class RunConfig:
     eyes: int = opt(2, "number of eyes (1 or 2)")
     reuse: int | None = opt(None, "N: frames reusing one update (profile default: 4)")
     profile: str | None = opt(None, "device profile: quest3 (default), quest2, preview, tiny")
-    texture_res: int | None = opt(None, "radiance texture side per eye per object")
+    texture_res: int | None = opt(
+        None, "radiance texture side per eye per object (default: the profile's)"
+    )
     eye_res: str | None = opt(None, "pixels per eye, WIDTHxHEIGHT (profile default)")
     frames: int = opt(90, "display frames to render")
     lights: int | None = opt(
@@ -32,6 +34,11 @@ class RunConfig:
         None,
         "teacher pack (.vrnm) for --mode reference, for every neural object "
         "(default: each material's own reference pack)",
+    )
+    pack: str | None = opt(
+        None,
+        "runtime pack (.vrnm, from `vrneural distill` or `export`) shown on the built-in "
+        "scene's three neural objects instead of the bundled materials (default: none)",
     )
     out: str = opt("", "output directory (default: a new out/run-YYYYmmdd-HHMMSS per run)")
     video: bool = opt(True, "write OUT/stereo.mp4, both eyes side by side (imageio-ffmpeg)")

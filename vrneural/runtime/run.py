@@ -12,7 +12,15 @@ import numpy as np
 
 from vrneural.config import config_dict, is_explicit, replace_config
 from vrneural.errors import VrnError, check_range
-from vrneural.formats.atomic import check_output_dir, make_output_dir, write_json
+from vrneural.interrupt import Stop
+from vrneural.formats.atomic import (
+    OUTPUT_MARK,
+    check_output_dir,
+    make_output_dir,
+    new_output_dir,
+    seal_output_dir,
+    write_json,
+)
 from vrneural.runtime.config import RunConfig, resolve
 from vrneural.runtime.output import (
     VideoWriter,
@@ -67,14 +75,28 @@ def atlas_summary(atlas) -> dict:
     }
 
 
-def default_out() -> str:
-    """A new ``out/run-YYYYmmdd-HHMMSS`` (suffixed ``-2``, ``-3``... if taken): no --force."""
-    base = time.strftime("out/run-%Y%m%d-%H%M%S")
-    out, k = base, 1
-    while Path(out).exists():
-        k += 1
-        out = f"{base}-{k}"
-    return out
+def use_pack(scene, path: str) -> None:
+    """Give every neural object of ``scene`` the runtime pack at ``path`` (``--pack``), each
+    object keeping its tiling; a sibling ``teacher.vrnm`` becomes the ``--mode reference``."""
+    from vrneural.formats.vrnm import read_vrnm
+    from vrneural.runtime.scene import MaterialDesc
+
+    p = Path(path)
+    if not p.is_file():
+        what = "a directory, not a pack file" if p.is_dir() else "file not found"
+        raise VrnError(f"--pack = {path!r}: {what}")
+    mat = read_vrnm(p)
+    teacher = p.with_name("teacher.vrnm")
+    ref = read_vrnm(teacher) if teacher.is_file() and teacher != p else None
+    for o in scene.objects:
+        if o.material.kind == "neural":
+            o.material = MaterialDesc("neural", mat, str(p), o.material.tiling, reference=ref)
+
+
+def default_out() -> Path:
+    """Create a new ``out/run-YYYYmmdd-HHMMSS`` (suffixed ``-2``, ``-3``... if taken; claimed
+    by an exclusive mkdir, so two runs started in the same second get two directories)."""
+    return new_output_dir(time.strftime("out/run-%Y%m%d-%H%M%S"))
 
 
 def percentiles(x) -> dict:
@@ -92,6 +114,22 @@ def percentiles(x) -> dict:
 
 def run(cfg: RunConfig, progress: bool = True) -> dict:
     """Render ``cfg``; returns the summary (also written to ``OUT/summary.json``)."""
+    if is_explicit(cfg, "out") and not cfg.out.strip():
+        raise VrnError("--out is empty; name a directory, or leave --out out for out/run-<time>")
+    if cfg.out:
+        return _run(cfg, Path(cfg.out), progress)
+    out = default_out()
+    try:
+        return _run(cfg, out, progress)
+    except BaseException:
+        left = [c for c in out.iterdir() if c.name != OUTPUT_MARK] if out.is_dir() else [1]
+        if not left:  # failed or stopped before it wrote anything: leave nothing behind
+            (out / OUTPUT_MARK).unlink(missing_ok=True)
+            out.rmdir()
+        raise
+
+
+def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
     from tqdm import tqdm
 
     from vrneural.gpu.device import adapter_summary
@@ -99,13 +137,19 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     from vrneural.runtime.renderer import Renderer
     from vrneural.runtime.scene import builtin_scene, load_scene
 
-    out = Path(cfg.out or default_out())
     cfg = replace_config(cfg, out=str(out))
+    if cfg.scene and cfg.pack:
+        raise VrnError(
+            f"--pack = {cfg.pack!r} replaces the built-in scene's materials; with a SCENE file, "
+            "set pack = ... in its [[objects]] instead"
+        )
     if cfg.scene:
         scene = load_scene(cfg.scene)
     else:
         prof = get_profile(cfg.profile or "quest3")
         scene = builtin_scene(cfg.lights if cfg.lights else prof.lights)
+        if cfg.pack:
+            use_pack(scene, cfg.pack)
     adapter = adapter_summary()
     s = resolve(cfg, scene, adapter)
     save = selected_frames(cfg.save_frames, s.frames)
@@ -116,50 +160,70 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
             cfg = replace_config(cfg, video_scale=min(cfg.video_scale, top))
         check_range("--video-scale", cfg.video_scale, 1, top)
         check_video()
-    check_output_dir(out, cfg.force)
+    check_output_dir(out, cfg.force, "run")
     t_setup = time.perf_counter()
     r = Renderer(scene, s)  # validates the packs: a failure here leaves --out untouched
     setup_s = time.perf_counter() - t_setup
     for w in r.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    make_output_dir(out)
+    make_output_dir(out, "run")
     if cfg.video:
         video = VideoWriter(out / "stereo.mp4", s.fps)
     stats, files = [], []
     interrupted = False
     bar = tqdm(range(s.frames), desc="vrneural run", unit="frame", disable=not progress)
+
+    def write_frame(f: int, hdr) -> None:
+        for e, img in enumerate(hdr):
+            name = f"frame{f:04d}_eye{e}"
+            files.append(str(write_png(out / f"{name}.png", tonemap(img))))
+            files.append(str(write_exr(out / f"{name}.exr", img)))
+
+    # Ctrl-C stops between frames (a second one at once): every frame counted in the summary
+    # is in the video and its saved images, and the video stays playable
     try:
-        for f in bar:
-            stats.append(r.frame(f))
-            if f in save or video is not None:
-                hdr = r.read_eyes()
-                if f in save:
-                    for e, img in enumerate(hdr):
-                        name = f"frame{f:04d}_eye{e}"
-                        files.append(str(write_png(out / f"{name}.png", tonemap(img))))
-                        files.append(str(write_exr(out / f"{name}.exr", img)))
-                if video is not None:
-                    video.add([tonemap(downscale(img, cfg.video_scale)) for img in hdr])
-    except KeyboardInterrupt:  # keep what was rendered: a playable video and a summary of it
-        interrupted = True
+        with Stop(second_raises=True) as stop:
+            for f in bar:
+                st = r.frame(f)
+                if f in save or video is not None:
+                    hdr = r.read_eyes()
+                    if f in save:
+                        write_frame(f, hdr)
+                    if video is not None:
+                        video.add([tonemap(downscale(img, cfg.video_scale)) for img in hdr])
+                stats.append(st)
+                if stop.flag:
+                    break
+        interrupted = clean = stop.flag
+    except KeyboardInterrupt:  # the second Ctrl-C, mid-frame: keep what was finished
+        interrupted, clean = True, False
     finally:
         bar.close()
     if interrupted and not stats:
         raise KeyboardInterrupt  # nothing rendered; the marked --out is replaced by --force
+    last = len(stats) - 1
+    if interrupted and clean and "last" in cfg.save_frames.lower() and last not in save:
+        write_frame(last, r.read_eyes())  # --save-frames last: the last frame rendered
     if video is not None:
         try:
             files.append(str(video.close()))
         except Exception:
             if not interrupted:
                 raise
-            # Ctrl-C in a terminal also reaches ffmpeg: then there is no video to keep
+            # a second Ctrl-C inside the encoder: then there is no video to keep
     summary = make_summary(cfg, s, scene, adapter, stats, setup_s, files, r)
     summary["interrupted"] = interrupted
     write_json(out / "summary.json", summary)
+    seal_output_dir(out, "run")
     if interrupted:
+        kept = ["summary.json"]
+        if any(f.endswith(".png") for f in files):
+            kept.append(f"{sum(f.endswith('.png') for f in files)} frame PNG(s) + EXR")
+        if any(f.endswith(".mp4") for f in files):
+            kept.append(f"{Path(video.path).name} ({len(stats)} frames)")
         print(
-            f"{out}: interrupted after {len(stats)} of {s.frames} frames; their summary.json, "
-            "frames and video are kept (--force replaces them)",
+            f"{out}: interrupted after {len(stats)} of {s.frames} frames; kept "
+            f"{', '.join(kept)} (--force replaces them)",
             file=sys.stderr,
         )
         raise KeyboardInterrupt

@@ -1,0 +1,37 @@
+"""Ctrl-C at a safe point: :class:`Stop` turns SIGINT into a flag that a loop checks between
+units of work (a training step, a rendered frame), so what is finished is always whole."""
+
+from __future__ import annotations
+
+import signal
+import threading
+
+
+class Stop:
+    """Within ``with Stop() as stop``, Ctrl-C sets ``stop.flag`` instead of raising; the loop
+    finishes its current unit and stops. With ``second_raises``, a second Ctrl-C raises
+    :class:`KeyboardInterrupt` at once (for units that can take long, such as a frame of the
+    per-pixel reference). Outside the main thread it does nothing (signals go to the main one)."""
+
+    def __init__(self, second_raises: bool = False):
+        self.flag = False
+        self.second_raises = second_raises
+        self._old = None
+
+    def __enter__(self):
+        if threading_main():
+            self._old = signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def _handle(self, *_):
+        if self.flag and self.second_raises:
+            raise KeyboardInterrupt
+        self.flag = True
+
+    def __exit__(self, *exc):
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+
+
+def threading_main() -> bool:
+    return threading.current_thread() is threading.main_thread()
