@@ -55,3 +55,4 @@ def test_cli_accepts_zero_lights(tmp_path):
     argv = ["run", str(scene), "--profile", "tiny", "--lights", "0", "--frames", "1"]
     code = main([*argv, "--eyes", "1", "--eye-res", "32x32", "--out", str(out)])
     assert code == 0 and (out / "summary.json").is_file()
+    assert (out / "mono.mp4").is_file() and not (out / "stereo.mp4").exists()  # one eye

@@ -384,3 +384,15 @@ def test_pack_shows_your_own_material_on_the_builtin_scene(capsys, tmp_path):
     msg = _err(capsys, [scene, *argv, "--pack", str(tmp_path / "student.vrnm")])
     assert "with a SCENE file" in msg
     assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.gpu
+def test_screen_mode_summary_does_not_claim_reuse_or_a_texture(capsys, tmp_path):
+    argv = ["run", "--profile", "tiny", "--frames", "2", "--quiet", "--no-video", "--mode"]
+    assert main([*argv, "screen", "--out", str(tmp_path / "s")]) == 0
+    text = capsys.readouterr().out
+    assert "mode=screen" in text and "(per pixel, every frame)" in text
+    assert "reuse=" not in text and "texture=" not in text and "updates in" not in text
+    assert main([*argv, "texture", "--out", str(tmp_path / "t")]) == 0
+    text = capsys.readouterr().out
+    assert "reuse=4" in text and "texture=" in text and "updates in" in text

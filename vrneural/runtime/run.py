@@ -168,7 +168,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         print(f"warning: {w}", file=sys.stderr)
     make_output_dir(out, "run")
     if cfg.video:
-        video = VideoWriter(out / "stereo.mp4", s.fps)
+        video = VideoWriter(out / ("stereo.mp4" if s.eyes == 2 else "mono.mp4"), s.fps)
     stats, files = [], []
     interrupted = False
     bar = tqdm(range(s.frames), desc="vrneural run", unit="frame", disable=not progress)
@@ -288,12 +288,17 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
 def human_summary(sm: dict) -> str:
     r = sm["resolved"]
     fw = sm["frame_wall_ms"]
+    texture = r["mode"] == "texture"  # reuse, schedule and the texture only exist there
+    space = (
+        f"reuse={r['reuse']} schedule={r['schedule']} " if texture else "(per pixel, every frame) "
+    )
+    tex = f" texture={r['texture_res']}^2" if texture else ""
+    updates = f" (updates in {sm['updates']})" if texture else ""
     lines = [
         f"adapter   {sm['adapter']['name']} ({sm['adapter']['backend']})",
-        f"run       mode={r['mode']} eyes={r['eyes']} reuse={r['reuse']} "
-        f"schedule={r['schedule']} precision={r['precision']} texture={r['texture_res']}^2 "
+        f"run       mode={r['mode']} eyes={r['eyes']} {space}precision={r['precision']}{tex} "
         f"eye={r['eye_res'][0]}x{r['eye_res'][1]} lights={r['n_lights']}",
-        f"frames    {sm['frames']} (updates in {sm['updates']}), setup {sm['setup_s']:.1f} s",
+        f"frames    {sm['frames']}{updates}, setup {sm['setup_s']:.1f} s",
         f"frame ms  median {fw.get('median', 0):.1f}  p95 {fw.get('p95', 0):.1f}  "
         f"p99 {fw.get('p99', 0):.1f} (wall, incl. GPU wait)",
         "gpu ms    " + "  ".join(f"{k} {v['median']:.2f}" for k, v in sm["gpu_ms"].items()),
