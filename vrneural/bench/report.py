@@ -1,6 +1,7 @@
 """Shared output of the timing and trade-off benchmarks: ``results.json`` (adapter, package
 versions, resolved config, one record per configuration), ``results.md`` (tables) and PNG plots,
-all written atomically into ``--out DIR`` (refused when it exists, unless ``--force``).
+all written atomically into ``--out DIR``: new, empty, or this bench's own earlier output with
+``--force`` (see :func:`vrneural.formats.atomic.check_output_dir`).
 """
 
 from __future__ import annotations
