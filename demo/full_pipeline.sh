@@ -2,14 +2,18 @@
 # The whole path on one synthetic material, with small settings (a few minutes on 2 CPU cores):
 #   btf synth -> teach (128-wide teacher) -> distill (8-wide coarse-to-fine student) -> run
 # Usage: bash demo/full_pipeline.sh [WORK_DIR] [PRESET]
-#   WORK_DIR  where everything goes (default: out/pipeline-<date>-<time>); must not exist yet
+#   WORK_DIR  where everything goes, relative to the current directory (default: the repository's
+#             out/pipeline-<date>-<time>); must not exist yet
 #   PRESET    leather (default), fabric, wood, carpet, metal or stone
 # Writes WORK_DIR/{PRESET.btf, teacher.pt, teacher.vrnm, student.pt, student.vrnm, scene.toml,
 # run/ (stereo.mp4, PNG + EXR frames, summary.json)} and WORK_DIR/times.txt (seconds per step).
 set -euo pipefail
+if [ -n "${1:-}" ]; then  # a relative WORK_DIR is relative to where you are, as usual
+    case "$1" in /*) W="$1" ;; *) W="$PWD/$1" ;; esac
+fi
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-W="${1:-out/pipeline-$(date +%Y%m%d-%H%M%S)}"
+W="${W:-out/pipeline-$(date +%Y%m%d-%H%M%S)}"
 PRESET="${2:-leather}"
 VRN="${VRNEURAL:-.venv/bin/vrneural}"
 if [ -e "$W" ]; then

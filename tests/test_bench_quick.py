@@ -142,6 +142,32 @@ def test_bench_user_errors_are_one_line(capsys, tmp_path):
     assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["mine.txt"]
 
 
+def test_a_bench_that_fails_after_making_its_folder_still_tells_your_files_apart(capsys, tmp_path):
+    """tradeoff fails on free space once --out exists; the CLI seals it all the same, so
+    notes added afterwards stop a later --force instead of being deleted by it."""
+    o = tmp_path / "x"
+    msg = _err(capsys, ["tradeoff", "--quick", "--btf-dirs", "100000", "--out", str(o)])
+    assert "needs" in msg and "free" in msg, msg
+    (o / "notes.md").write_text("mine")
+    msg = _err(capsys, ["tradeoff", "--quick", "--force", "--out", str(o)])
+    assert "did not write there (notes.md)" in msg
+    assert (o / "notes.md").read_text() == "mine"
+
+
+def test_bench_all_checks_every_bench_folder_before_running_any(capsys, tmp_path):
+    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+
+    ba = tmp_path / "ba"
+    make_output_dir(ba / "kernels", "bench kernels")
+    (ba / "kernels" / "results.json").write_text("{}")
+    seal_output_dir(ba / "kernels", "bench kernels")
+    seal_output_dir(ba, "bench all")
+    (ba / "kernels" / "notes.md").write_text("mine")
+    msg = _err(capsys, ["all", "--quick", "--force", "--out", str(ba)])
+    assert "kernels: holds 1 file(s) vrneural did not write there (notes.md)" in msg
+    assert sorted(p.name for p in ba.iterdir() if p.name[0] != ".") == ["kernels"]
+
+
 def test_bench_output_of_one_command_is_not_replaced_by_another(capsys, tmp_path):
     from vrneural.formats.atomic import make_output_dir, seal_output_dir
 

@@ -4,6 +4,7 @@ existing is overwritten."""
 from __future__ import annotations
 
 import pytest
+from pathlib import Path
 import torch
 from distill_helpers import (  # noqa: F401 (fixture)
     FAST,
@@ -56,10 +57,14 @@ def bad_checkpoints(tmp_path, trained):  # noqa: F811
         ("short", "not a PyTorch checkpoint"),
         ("plain", "not a vrneural checkpoint"),
         ("student", "expected a 'teacher'"),
+        ("btf", "is a BTF file, expected a checkpoint (.pt); train one with `vrneural teach"),
+        ("pack", "is a runtime pack (.vrnm), expected a checkpoint"),
     ],
 )
 def test_bad_teacher(trained, bad_checkpoints, tmp_path, name, needle):  # noqa: F811
     src = {**bad_checkpoints, "missing": tmp_path / "nope.pt", "student": trained["student"]}
+    src["btf"] = trained["btf"]
+    src["pack"] = Path(trained["teacher"]).with_suffix(".vrnm")
     out = tmp_path / "out.pt"
     expect_one_line_error(["distill", src[name], "-o", out, *FAST], needle)
     assert not out.exists() and not out.with_suffix(".vrnm").exists()

@@ -153,3 +153,31 @@ def test_force_replaces_only_directories_vrneural_wrote(tmp_path):
     empty = tmp_path / "empty"
     empty.mkdir()
     check_output_dir(empty, False, "run")
+
+
+def test_an_unfinished_output_is_refused_and_every_ending_seals(tmp_path):
+    """A command that was killed never sealed its output: --force cannot tell its files from
+    ones added since, so it refuses. Any other ending seals (``seal_marked``, run by the CLI
+    whatever the command's outcome), after which added files are told apart."""
+    from vrneural.formats.atomic import (
+        OUTPUT_MARK,
+        check_output_dir,
+        mark_output_dir,
+        read_mark,
+        seal_marked,
+    )
+
+    out = tmp_path / "o"
+    mark_output_dir(out, "run")
+    (out / "frame0000_eye0.png").write_bytes(b"png")
+    with pytest.raises(VrnError, match="an unfinished `vrneural run` output"):
+        check_output_dir(out, True, "run")
+    assert read_mark(out)["entries"] is None
+    seal_marked()
+    assert read_mark(out)["entries"] == ["frame0000_eye0.png"]
+    (out / "notes.md").write_text("mine")
+    with pytest.raises(VrnError, match=r"did not write there \(notes.md\)"):
+        check_output_dir(out, True, "run")
+    # a caller that deletes nothing (bench quality) is not refused for either reason
+    check_output_dir(out, True, "run", deletes=False)
+    assert sorted(p.name for p in out.iterdir()) == [OUTPUT_MARK, "frame0000_eye0.png", "notes.md"]

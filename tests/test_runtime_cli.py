@@ -380,6 +380,13 @@ def test_pack_shows_your_own_material_on_the_builtin_scene(capsys, tmp_path):
     assert "PyTorch checkpoint" in msg and "vrneural export" in msg
     msg = _err(capsys, [*argv, "--pack", str(tmp_path), "--out", str(tmp_path / "x")])
     assert "a directory, not a pack file" in msg
+    # a teacher pack is its own per-pixel reference
+    teacher = random_material(4, arch="single", width=64)
+    teacher.meta["method"] = "teacher"
+    (tmp_path / "t").mkdir()
+    write_vrnm(tmp_path / "t" / "teacher.vrnm", teacher)
+    ref = [*argv, "--pack", str(tmp_path / "t" / "teacher.vrnm"), "--mode", "reference"]
+    assert main(["run", *ref, "--out", str(tmp_path / "r")]) == 0
     scene = _scene(tmp_path, SCENE.format(scale=1))
     msg = _err(capsys, [scene, *argv, "--pack", str(tmp_path / "student.vrnm")])
     assert "with a SCENE file" in msg

@@ -103,7 +103,10 @@ def _run_all(args) -> int:
     t0 = time.perf_counter()
     # the folder is checked as every bench checks its own: a folder of other files is refused,
     # and one of ours needs --force (each bench below then replaces only its own sub-folder)
-    mark_output_dir(check_output_dir(args.out, args.force, "bench all"), "bench all")
+    check_output_dir(args.out, args.force, "bench all")
+    for name in SPECS:  # every bench's folder before the first bench replaces its own
+        check_output_dir(Path(args.out) / name, args.force, f"bench {name}")
+    mark_output_dir(args.out, "bench all")
     for name in SPECS:
         cls, fn = _load(name)
         out = str(Path(args.out) / name)

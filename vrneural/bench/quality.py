@@ -491,13 +491,12 @@ def run_quality(cfg: QualityConfig) -> dict:
             root,
             cfg.force or cfg.resume,
             "bench quality",
+            deletes=False,  # it keeps its checkpoints: --resume reuses, --force retrains each
             remedy="pass --resume to reuse its checkpoints or --force to retrain",
         )
     if cfg.resume:
         _check_resumable(presets, cfg, root)
-    mark_output_dir(
-        root, "bench quality"
-    )  # checkpoints stay: --resume reuses them, --force retrains each
+    mark_output_dir(root, "bench quality")  # its checkpoints stay in it
     try:
         return _run(presets, cfg, root)
     except KeyboardInterrupt:  # finished networks are kept: say how to continue

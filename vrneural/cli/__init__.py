@@ -95,6 +95,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{command_name(args)}: interrupted", file=sys.stderr)
         return 130
+    finally:  # however the command ended, record what it wrote in its output directories
+        from vrneural.formats.atomic import seal_marked
+
+        seal_marked()
 
 
 if __name__ == "__main__":

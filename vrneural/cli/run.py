@@ -36,9 +36,9 @@ def main(args) -> int:
     out = sm["out"]
     pngs = sorted(Path(f).name for f in sm["files"] if f.endswith(".png"))
     print(f"wrote     {out}/")
-    if any(f.endswith(".mp4") for f in sm["files"]):
+    for mp4 in (Path(f) for f in sm["files"] if f.endswith(".mp4")):
         what = "left eye | right eye" if cfg.eyes == 2 else "one eye"
-        print(f"  video   {out}/stereo.mp4 ({what})")
+        print(f"  video   {out}/{mp4.name} ({what})")
     if pngs:
         print(f"  frames  {', '.join(pngs)} (+ .exr)")
     print(f"  summary {out}/summary.json")

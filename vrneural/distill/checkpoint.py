@@ -61,6 +61,7 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
         raise VrnError(f"{p}: no such checkpoint")
     if p.is_dir():
         raise VrnError(f"{p}: is a directory, expected a checkpoint (.pt)")
+    _refuse_our_other_formats(p)
     try:
         with warnings.catch_warnings():  # torch warns about legacy/foreign files before failing
             warnings.simplefilter("ignore")
@@ -94,6 +95,25 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
     if arch not in ARCHS:
         raise VrnError(f"{p}: spec.arch {arch!r} unknown (reads {', '.join(ARCHS)})")
     return ck
+
+
+def _refuse_our_other_formats(p: Path) -> None:
+    """A BTF or a runtime pack given where a checkpoint belongs: say which it is."""
+    from vrneural.btf.format import BTF_MAGIC
+    from vrneural.formats.vrnm import VRNM_MAGIC
+
+    try:
+        with open(p, "rb") as f:
+            head = f.read(8)
+    except OSError:
+        return  # torch.load reports it
+    if head.startswith(BTF_MAGIC):
+        raise VrnError(
+            f"{p}: is a BTF file, expected a checkpoint (.pt); train one with "
+            f"`vrneural teach {p.name} -o teacher.pt`"
+        )
+    if head.startswith(VRNM_MAGIC):
+        raise VrnError(f"{p}: is a runtime pack (.vrnm), expected a checkpoint (.pt)")
 
 
 def recorded_btf(ck: dict, source) -> str:

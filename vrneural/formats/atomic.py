@@ -111,6 +111,7 @@ def check_output_dir(
     force: bool,
     command: str,
     remedy: str = "pass --force to overwrite",
+    deletes: bool = True,
 ) -> Path:
     """Validate an output *directory* of ``vrneural <command>`` before any work starts.
 
@@ -119,7 +120,9 @@ def check_output_dir(
     ``remedy``). ``--force`` replaces only that command's own output: never a folder of the
     user's files, never another command's output (a ``bench quality`` directory of trained
     checkpoints is not a ``run`` directory), and never files added to it after the command
-    sealed it (:func:`seal_output_dir`).
+    sealed it (:func:`seal_output_dir`). An unsealed output (its command was killed, or is
+    still running in another process) is refused too, since nobody knows what in it is ours.
+    ``deletes=False``: the caller keeps what is there (``bench quality``), so neither applies.
     """
     p = Path(path)
     if p.exists() or p.is_symlink():
@@ -141,6 +144,15 @@ def check_output_dir(
                 )
             if not force:
                 raise VrnError(f"{p}: output exists; {remedy}")
+            if not deletes:
+                _make_parent(p)
+                return p
+            if not isinstance(mark.get("entries"), list):
+                raise VrnError(
+                    f"{p}: an unfinished `vrneural {command}` output (killed, or still running "
+                    "elsewhere), so --force cannot tell its files from others; check it and "
+                    "delete it yourself, or choose another --out"
+                )
             foreign = unsealed_entries(p, mark)
             if foreign:
                 shown = ", ".join(foreign[:3]) + (", ..." if len(foreign) > 3 else "")
@@ -166,12 +178,10 @@ def read_mark(p: Path) -> dict | None:
 
 
 def unsealed_entries(p: Path, mark: dict) -> list[str]:
-    """Names in ``p`` that the command did not write: not in the entries it sealed. A run that
-    never sealed (it was killed) has no list; then everything in it counts as its own."""
+    """Names in ``p`` that the command did not write: not in the entries it sealed (all of
+    them when it never sealed)."""
     entries = mark.get("entries")
-    if not isinstance(entries, list):
-        return []
-    ours = {*entries, OUTPUT_MARK}
+    ours = {*(entries if isinstance(entries, list) else []), OUTPUT_MARK}
     return sorted(c.name for c in p.iterdir() if c.name not in ours)
 
 
@@ -199,7 +209,24 @@ def mark_output_dir(path: str | os.PathLike, command: str) -> Path:
     except OSError as e:
         raise VrnError(f"{p}: cannot create output directory ({e.strerror})") from None
     _write_mark(p, command, None)
+    _MARKED[p.resolve()] = command
     return p
+
+
+#: output directories this process marked and has not sealed yet (see :func:`seal_marked`)
+_MARKED: dict[Path, str] = {}
+
+
+def seal_marked() -> None:
+    """Seal every output this process marked and did not seal: called when a command ends in
+    any way (an error, Ctrl-C), so what it wrote is recorded and a later ``--force`` can still
+    tell it from files added afterwards. Only a killed process leaves an output unsealed."""
+    for p, command in list(_MARKED.items()):
+        mark = read_mark(p) if p.is_dir() else None
+        if mark is not None and mark.get("command") == command and mark.get("entries") is None:
+            with contextlib.suppress(VrnError, OSError):
+                seal_output_dir(p, command)
+        _MARKED.pop(p, None)
 
 
 def seal_output_dir(path: str | os.PathLike, command: str) -> Path:
@@ -207,6 +234,7 @@ def seal_output_dir(path: str | os.PathLike, command: str) -> Path:
     ``--force`` deletes only those and refuses when anything else was added."""
     p = Path(path)
     _write_mark(p, command, sorted(c.name for c in p.iterdir() if c.name != OUTPUT_MARK))
+    _MARKED.pop(p.resolve(), None)
     return p
 
 
@@ -218,7 +246,7 @@ def make_output_dir(path: str | os.PathLike, command: str, keep: tuple[str, ...]
     if p.is_dir():
         mark = read_mark(p)
         # the folder changed since it was checked: check again, never delete on a stale check
-        if not is_output_dir(p, command) or (mark and unsealed_entries(p, mark)):
+        if not is_output_dir(p, command) or (mark is not None and unsealed_entries(p, mark)):
             check_output_dir(p, True, command)
             raise VrnError(f"{p}: changed while starting; choose another --out")
         for child in p.iterdir():

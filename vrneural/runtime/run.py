@@ -77,7 +77,8 @@ def atlas_summary(atlas) -> dict:
 
 def use_pack(scene, path: str) -> None:
     """Give every neural object of ``scene`` the runtime pack at ``path`` (``--pack``), each
-    object keeping its tiling; a sibling ``teacher.vrnm`` becomes the ``--mode reference``."""
+    object keeping its tiling; a sibling ``teacher.vrnm`` becomes the ``--mode reference`` (a
+    teacher pack is its own, so ``--pack teacher.vrnm --mode reference`` renders it)."""
     from vrneural.formats.vrnm import read_vrnm
     from vrneural.runtime.scene import MaterialDesc
 
@@ -87,7 +88,10 @@ def use_pack(scene, path: str) -> None:
         raise VrnError(f"--pack = {path!r}: {what}")
     mat = read_vrnm(p)
     teacher = p.with_name("teacher.vrnm")
-    ref = read_vrnm(teacher) if teacher.is_file() and teacher != p else None
+    if mat.meta.get("method") == "teacher":  # a teacher is its own per-pixel reference
+        ref = mat
+    else:
+        ref = read_vrnm(teacher) if teacher.is_file() and teacher != p else None
     for o in scene.objects:
         if o.material.kind == "neural":
             o.material = MaterialDesc("neural", mat, str(p), o.material.tiling, reference=ref)
@@ -184,7 +188,9 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
     try:
         with Stop(second_raises=True) as stop:
             for f in bar:
+                stop.second_raises = True  # a slow frame: a second Ctrl-C stops it at once
                 st = r.frame(f)
+                stop.second_raises = False  # writing: finish it, so saved files stay whole
                 if f in save or video is not None:
                     hdr = r.read_eyes()
                     if f in save:
@@ -201,20 +207,21 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         bar.close()
     if interrupted and not stats:
         raise KeyboardInterrupt  # nothing rendered; the marked --out is replaced by --force
-    last = len(stats) - 1
-    if interrupted and clean and "last" in cfg.save_frames.lower() and last not in save:
-        write_frame(last, r.read_eyes())  # --save-frames last: the last frame rendered
-    if video is not None:
-        try:
-            files.append(str(video.close()))
-        except Exception:
-            if not interrupted:
-                raise
-            # a second Ctrl-C inside the encoder: then there is no video to keep
-    summary = make_summary(cfg, s, scene, adapter, stats, setup_s, files, r)
-    summary["interrupted"] = interrupted
-    write_json(out / "summary.json", summary)
-    seal_output_dir(out, "run")
+    with Stop():  # more Ctrl-C while the video and summary are written: finish writing them
+        last = len(stats) - 1
+        if interrupted and clean and "last" in cfg.save_frames.lower() and last not in save:
+            write_frame(last, r.read_eyes())  # --save-frames last: the last frame rendered
+        if video is not None:
+            try:
+                files.append(str(video.close()))
+            except Exception:
+                if not interrupted:
+                    raise
+                # a second Ctrl-C inside the encoder: then there is no video to keep
+        summary = make_summary(cfg, s, scene, adapter, stats, setup_s, files, r)
+        summary["interrupted"] = interrupted
+        write_json(out / "summary.json", summary)
+        seal_output_dir(out, "run")
     if interrupted:
         kept = ["summary.json"]
         if any(f.endswith(".png") for f in files):
