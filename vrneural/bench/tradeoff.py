@@ -145,18 +145,15 @@ def render(scene, s, frames: list[int], bar=None, keep=None):
 
 def check_budget(c: TradeoffConfig) -> None:
     """Validate the packs' training budget before any output exists (``train_packs`` would
-    check it too, but only after the output directory was made, naming its own flags)."""
-    from vrneural.btf.presets import PRESETS
-    from vrneural.errors import VrnError, check_choice, check_range, check_seed
+    check it too, but only after the output directory was made, naming its own flags): the
+    BTF as `btf synth` checks it, the epochs as `bench quality` does."""
+    from vrneural.btf.synth import BtfConfig
+    from vrneural.errors import check_range
 
-    check_choice("--preset", c.preset, sorted(PRESETS))
-    check_range("--btf-res", c.btf_res, 2, 4096)
-    if c.btf_res % 2:
-        raise VrnError(f"--btf-res = {c.btf_res} must be even (training uses 2x2 texel blocks)")
-    check_range("--btf-dirs", c.btf_dirs, 2, 100_000)
-    check_range("--teacher-epochs", c.teacher_epochs, 1, 10_000)
-    check_range("--epochs", c.epochs, 1, 10_000)
-    check_seed("--seed", c.seed)
+    btf = BtfConfig(preset=c.preset, res=c.btf_res, dirs=c.btf_dirs, seed=c.seed)
+    btf.validate(flags={"res": "--btf-res", "dirs": "--btf-dirs"})
+    for k in ("teacher_epochs", "epochs"):
+        check_range(f"--{k.replace('_', '-')}", getattr(c, k), 1, 10_000)
 
 
 def run_tradeoff(cfg: TradeoffConfig) -> dict:

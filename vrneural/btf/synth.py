@@ -37,17 +37,22 @@ class BtfConfig:
         0, "heightfield grid size N per side, 8 to 4096 (0 = 2 x res clamped to [64, 512])"
     )
 
-    def validate(self) -> None:
-        check_choice("--preset", self.preset, sorted(PRESETS))
-        check_range("--res", self.res, 2, 4096)
+    def validate(self, flags: dict[str, str] | None = None) -> None:
+        """One-line :class:`VrnError` on a bad field, named ``--FIELD`` or as ``flags`` maps it
+        (a command that synthesises under other flag names: ``{"res": "--btf-res"}``)."""
+        f = {k: f"--{k}" for k in ("preset", "res", "dirs", "spp", "seed", "grid")} | (flags or {})
+        check_choice(f["preset"], self.preset, sorted(PRESETS))
+        check_range(f["res"], self.res, 2, 4096)
         if self.res % 2:  # the networks work on 2x2 texel blocks (teach/distill need it)
-            raise VrnError(f"--res = {self.res} must be even (training uses 2x2 texel blocks)")
+            raise VrnError(f"{f['res']} = {self.res} must be even (training uses 2x2 texel blocks)")
         # at least 2 x 2 (light, view) pairs: one can be held out for the test L1
-        check_range("--dirs", self.dirs, 2, 100_000)
-        check_range("--spp", self.spp, 1, 256)
-        check_seed("--seed", self.seed)
+        check_range(f["dirs"], self.dirs, 2, 100_000)
+        check_range(f["spp"], self.spp, 1, 256)
+        check_seed(f["seed"], self.seed)
         if self.grid != 0 and not 8 <= self.grid <= 4096:
-            raise VrnError(f"--grid = {self.grid} is out of range; allowed 0 (auto) or [8, 4096]")
+            raise VrnError(
+                f"{f['grid']} = {self.grid} is out of range; allowed 0 (auto) or [8, 4096]"
+            )
 
     @property
     def grid_size(self) -> int:

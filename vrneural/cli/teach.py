@@ -37,6 +37,7 @@ def _report(fn, output: str) -> int:
     ``torchrun`` only rank 0 reports (it alone writes the files)."""
     import os
     import sys
+    from pathlib import Path
 
     from vrneural.distill.train import Interrupted
 
@@ -54,8 +55,6 @@ def _report(fn, output: str) -> int:
         return 0
     h = ck["history"][-1] if ck["history"] else {}
     test = h.get("test_l1", float("nan"))
-    from pathlib import Path
-
     pack = Path(output).with_suffix(".vrnm")
     wrote = f"  + {pack}" if ck.get("config", {}).get("export") and pack.is_file() else ""
     print(

@@ -144,24 +144,28 @@ def check_output_dir(
                 )
             if not force:
                 raise VrnError(f"{p}: output exists; {remedy}")
-            if not deletes:
-                _make_parent(p)
-                return p
-            if not isinstance(mark.get("entries"), list):
-                raise VrnError(
-                    f"{p}: an unfinished `vrneural {command}` output (killed, or still running "
-                    "elsewhere), so --force cannot tell its files from others; check it and "
-                    "delete it yourself, or choose another --out"
-                )
-            foreign = unsealed_entries(p, mark)
-            if foreign:
-                shown = ", ".join(foreign[:3]) + (", ..." if len(foreign) > 3 else "")
-                raise VrnError(
-                    f"{p}: holds {len(foreign)} file(s) vrneural did not write there ({shown}); "
-                    "--force never deletes them: move them away or choose another --out"
-                )
+            if deletes:
+                _check_replaceable(p, mark, command)
     _make_parent(p)
     return p
+
+
+def _check_replaceable(p: Path, mark: dict, command: str) -> None:
+    """``--force`` may empty ``p`` only when its command sealed it and nothing was added."""
+    if not isinstance(mark.get("entries"), list):
+        raise VrnError(
+            f"{p}: an unfinished `vrneural {command}` output (killed, or still running "
+            "elsewhere), so --force cannot tell its files from others; check it and "
+            "delete it yourself, or choose another --out"
+        )
+    ours = {*mark["entries"], OUTPUT_MARK}
+    foreign = sorted(c.name for c in p.iterdir() if c.name not in ours)
+    if foreign:
+        shown = ", ".join(foreign[:3]) + (", ..." if len(foreign) > 3 else "")
+        raise VrnError(
+            f"{p}: holds {len(foreign)} file(s) vrneural did not write there ({shown}); "
+            "--force never deletes them: move them away or choose another --out"
+        )
 
 
 def read_mark(p: Path) -> dict | None:
@@ -177,27 +181,11 @@ def read_mark(p: Path) -> dict | None:
     return doc if isinstance(doc, dict) else {}
 
 
-def unsealed_entries(p: Path, mark: dict) -> list[str]:
-    """Names in ``p`` that the command did not write: not in the entries it sealed (all of
-    them when it never sealed)."""
-    entries = mark.get("entries")
-    ours = {*(entries if isinstance(entries, list) else []), OUTPUT_MARK}
-    return sorted(c.name for c in p.iterdir() if c.name not in ours)
-
-
-def is_output_dir(p: Path, command: str) -> bool:
-    """Whether ``p`` is empty or holds ``vrneural <command>``'s output."""
-    mark = read_mark(p)
-    return (mark is not None and mark.get("command") == command) or not any(p.iterdir())
-
-
 def _write_mark(p: Path, command: str, entries: list[str] | None) -> None:
     doc = {"written_by": f"vrneural {command}", "command": command, "entries": entries}
     doc["note"] = "--force of the same command may replace the entries listed here"
-    try:
-        (p / OUTPUT_MARK).write_text(json.dumps(doc, indent=1) + "\n")
-    except OSError as e:
-        raise VrnError(f"{p}: cannot write {OUTPUT_MARK} ({e.strerror})") from None
+    with atomic_path(p / OUTPUT_MARK) as tmp:  # a killed write never leaves half a marker
+        tmp.write_text(json.dumps(doc, indent=1) + "\n")
 
 
 def mark_output_dir(path: str | os.PathLike, command: str) -> Path:
@@ -244,11 +232,7 @@ def make_output_dir(path: str | os.PathLike, command: str, keep: tuple[str, ...]
     validated, so a run that fails early leaves the old output as it was."""
     p = Path(path)
     if p.is_dir():
-        mark = read_mark(p)
-        # the folder changed since it was checked: check again, never delete on a stale check
-        if not is_output_dir(p, command) or (mark is not None and unsealed_entries(p, mark)):
-            check_output_dir(p, True, command)
-            raise VrnError(f"{p}: changed while starting; choose another --out")
+        check_output_dir(p, True, command)  # again: the folder may have changed since
         for child in p.iterdir():
             if child.name in keep or child.name == OUTPUT_MARK:
                 continue

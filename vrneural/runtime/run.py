@@ -126,8 +126,8 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     try:
         return _run(cfg, out, progress)
     except BaseException:
-        left = [c for c in out.iterdir() if c.name != OUTPUT_MARK] if out.is_dir() else [1]
-        if not left:  # failed or stopped before it wrote anything: leave nothing behind
+        # failed or stopped before it wrote anything: leave nothing behind
+        if out.is_dir() and all(c.name == OUTPUT_MARK for c in out.iterdir()):
             (out / OUTPUT_MARK).unlink(missing_ok=True)
             out.rmdir()
         raise
@@ -186,7 +186,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
     # Ctrl-C stops between frames (a second one at once): every frame counted in the summary
     # is in the video and its saved images, and the video stays playable
     try:
-        with Stop(second_raises=True) as stop:
+        with Stop() as stop:
             for f in bar:
                 stop.second_raises = True  # a slow frame: a second Ctrl-C stops it at once
                 st = r.frame(f)
@@ -224,8 +224,9 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         seal_output_dir(out, "run")
     if interrupted:
         kept = ["summary.json"]
-        if any(f.endswith(".png") for f in files):
-            kept.append(f"{sum(f.endswith('.png') for f in files)} frame PNG(s) + EXR")
+        n_png = sum(f.endswith(".png") for f in files)
+        if n_png:
+            kept.append(f"{n_png} frame PNG(s) + EXR")
         if any(f.endswith(".mp4") for f in files):
             kept.append(f"{Path(video.path).name} ({len(stats)} frames)")
         print(
