@@ -179,3 +179,33 @@ def test_only_rank_zero_reports(monkeypatch, capsys):
     monkeypatch.setenv("RANK", "0")
     assert _report(stop, "s.pt") == 130
     assert "checkpoint saved to s.pt" in capsys.readouterr().err
+
+
+def test_a_failed_command_leaves_no_empty_folders_behind(trained, tmp_path):  # noqa: F811
+    """Output folders are created when outputs are checked; a command that fails after that
+    (here: on a later option, a student given as teacher) takes back the folders it made, and
+    never a folder that was already there."""
+    mine = tmp_path / "mine"
+    mine.mkdir()  # the user's own empty folder: kept
+    for argv in (
+        ["teach", trained["btf"], "-o", tmp_path / "a" / "b" / "t.pt", "--epochs", 0],
+        ["distill", trained["student"], "-o", tmp_path / "c" / "s.pt", *FAST],
+        ["teach", trained["btf"], "-o", mine / "d" / "t.pt", "--epochs", 0],
+    ):
+        code, err = run_cli(*argv)
+        assert code == 2, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine"]
+    assert list(mine.iterdir()) == []
+    code, err = run_cli("export", trained["student"], "-o", tmp_path / "e" / "f" / "x.vrnm")
+    assert code == 0, err
+    assert (tmp_path / "e" / "f" / "x.vrnm").is_file()  # a success keeps its folders
+
+
+def test_resuming_a_finished_run_says_there_is_nothing_left_to_train(trained, tmp_path):  # noqa: F811
+    s = _copy(trained, tmp_path, "student.pt")
+    before = s.read_bytes()
+    code, err = run_cli("distill", trained["teacher"], "-o", s, "--resume", "--max-test-slices", 4)
+    assert code == 0, err
+    assert "already trained for 2 epochs, nothing left to train" in err, err
+    assert "slice/s" not in err  # no empty progress bar
+    assert s.read_bytes() == before

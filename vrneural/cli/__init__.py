@@ -96,9 +96,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{command_name(args)}: interrupted", file=sys.stderr)
         return 130
     finally:  # however the command ended, record what it wrote in its output directories
-        from vrneural.formats.atomic import seal_marked
+        from vrneural.formats.atomic import remove_empty_created_dirs, seal_marked
 
         seal_marked()
+        remove_empty_created_dirs()  # and take back folders made for outputs never written
 
 
 if __name__ == "__main__":

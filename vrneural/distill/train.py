@@ -18,6 +18,7 @@ import contextlib
 import math
 import os
 import re
+import sys
 import time
 
 import torch
@@ -216,7 +217,13 @@ def fit(
 
     n = len(data.train)
     bar = None
-    if rank == 0 and cfg.progress:
+    if rank == 0 and epoch >= cfg.epochs:  # a finished run resumed without more --epochs
+        print(
+            f"{out}: already trained for {epoch} epochs, nothing left to train "
+            f"(--epochs N with N > {epoch} continues it)",
+            file=sys.stderr,
+        )
+    elif rank == 0 and cfg.progress:
         from tqdm import tqdm
 
         bar = tqdm(

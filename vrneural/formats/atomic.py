@@ -89,11 +89,38 @@ def _size(n: int) -> str:
     return f"{n} B"
 
 
+_CREATED: list[Path] = []  # directories this process created for its outputs
+
+
+def _mkdirs(d: Path) -> None:
+    """``d.mkdir(parents=True, exist_ok=True)``, remembering each directory it creates so
+    that :func:`remove_empty_created_dirs` can take back those a failed command left empty."""
+    missing = []
+    q = d
+    while not (q.exists() or q.is_symlink()) and q != q.parent:
+        missing.append(q)
+        q = q.parent
+    d.mkdir(parents=True, exist_ok=True)
+    _CREATED.extend(missing)
+
+
+def remove_empty_created_dirs() -> None:
+    """Remove the directories :func:`_mkdirs` created that are still empty, deepest first:
+    a command that fails after checking its outputs leaves no empty folders behind. A
+    directory that holds anything (an output, a user's file) is kept."""
+    for d in sorted(set(_CREATED), key=lambda q: len(q.parts), reverse=True):
+        try:
+            d.rmdir()
+        except OSError:
+            pass
+    _CREATED.clear()
+
+
 def _make_parent(p: Path) -> None:
     """Create the directory an output goes into and check that files can be created there;
     failure is a one-line :class:`VrnError`."""
     try:
-        p.parent.mkdir(parents=True, exist_ok=True)
+        _mkdirs(p.parent)
     except OSError as e:
         raise VrnError(f"{p.parent}: cannot create output directory ({e.strerror})") from None
     try:  # a real file, not os.access: root passes access() checks on read-only mounts too
@@ -251,7 +278,7 @@ def new_output_dir(base: str) -> Path:
     while True:
         p = Path(base if k == 1 else f"{base}-{k}")
         try:
-            p.parent.mkdir(parents=True, exist_ok=True)
+            _mkdirs(p.parent)
             p.mkdir()
             return p
         except FileExistsError:
