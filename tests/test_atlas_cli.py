@@ -167,3 +167,26 @@ def test_json_stays_valid_with_warnings_on_stderr(tmp_path, capsys):
     assert main(["atlas", str(obj), "--res", "64", "-o", str(out), "--force"]) == 0
     cap = capsys.readouterr()
     assert "warning" not in cap.out and f"warning: {note}\n" in cap.err
+
+
+def test_one_mesh_of_a_file_bad_faces_and_what_is_lost_are_said(tmp_path, capsys):
+    """`FILE:NAME` picks one mesh as a scene does; a face naming a missing vertex is one line;
+    too few texels for the triangles and --padding 0 are warnings (stderr and sidecar)."""
+    glb = _two_mesh_file(tmp_path / "two.glb")
+    out = tmp_path / "one.png"
+    assert main(["atlas", f"{glb}:b", "--res", "64", "-o", str(out), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["triangles"] == 80  # icosphere(1), a dict
+    assert main(["atlas", f"{glb}:nope", "--res", "64", "-o", str(tmp_path / "n.png")]) == 2
+    assert "two.glb has no mesh 'nope'" in capsys.readouterr().err
+    bad = tmp_path / "bad.obj"
+    bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+    assert main(["atlas", str(bad), "--res", "64", "-o", str(tmp_path / "b.png")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "a face refers to a vertex the file does not have" in err
+    assert "index 8, counted from 0; it has 3 vertices" in err
+    dense = tmp_path / "dense.png"
+    assert main(["atlas", "highpoly", "--res", "64", "--padding", "0", "-o", str(dense)]) == 0
+    err = capsys.readouterr().err
+    assert "triangles own no texel at 64^2" in err and "--padding 0" in err
+    side = json.loads((tmp_path / "dense.png.config.json").read_text())
+    assert any("own no texel" in w for w in side["warnings"])

@@ -269,8 +269,13 @@ mesh = "{mesh}"
         ({"mat": 'pack = "leather.vrnm"\nprocedural = "random"'}, "procedural and pack are both"),
         ({"mat": 'pack = "leather.vrnm"\nseed = 3'}, "material.seed only applies to procedural"),
         (
-            {"mat": "seed = 3\nalbedo = [1, 1, 1]"},
+            {"mat": 'procedural = "random"\nseed = 3\nalbedo = [1, 1, 1]'},
             'material.albedo only applies to procedural = "lambertian"',
+        ),
+        ({"mat": "scale = 2.0"}, 'objects[0].material needs pack = "X.vrnm"'),
+        (
+            {"extra": "texture_res = 64\nmin_texture_res = 256"},
+            "objects[0].min_texture_res = 256 is above texture_res = 64",
         ),
         ({"mat": 'pack = "nope.vrnm"'}, "material.pack = 'nope.vrnm': file not found"),
         ({"mat": 'reference = "nope.vrnm"'}, "material.reference = 'nope.vrnm': file not found"),
@@ -345,7 +350,12 @@ def test_reference_mode_needs_a_teacher_for_a_pack(capsys, tmp_path):
 
 @pytest.mark.gpu
 def test_triangles_without_texels_are_reported_not_hidden(capsys, tmp_path):
-    text = OBJ.format(mesh="sphere", extra="texture_res = 64", mat="", light="position = [0, 1, 0]")
+    text = OBJ.format(
+        mesh="sphere",
+        extra="texture_res = 64",
+        mat='procedural = "random"',
+        light="position = [0, 1, 0]",
+    )
     out = tmp_path / "o"
     argv = ["run", _scene(tmp_path, text), "--profile", "tiny", "--frames", "1", "--no-video"]
     assert main([*argv, "--quiet", "--out", str(out)]) == 0
@@ -400,6 +410,77 @@ def test_screen_mode_summary_does_not_claim_reuse_or_a_texture(capsys, tmp_path)
     text = capsys.readouterr().out
     assert "mode=screen" in text and "(per pixel, every frame)" in text
     assert "reuse=" not in text and "texture=" not in text and "updates in" not in text
+    assert "per frame pixels shaded" in text and "blocks shaded" not in text
+    sm = json.loads((tmp_path / "s" / "summary.json").read_text())
+    assert "blocks_shaded" not in sm["per_frame"] and "blocks_shaded_per_frame" not in sm
+    assert sm["pixels_shaded_per_frame"]["median"] > 0 and "pixels_backfacing" in sm["per_frame"]
     assert main([*argv, "texture", "--out", str(tmp_path / "t")]) == 0
     text = capsys.readouterr().out
     assert "reuse=4" in text and "texture=" in text and "updates in" in text
+
+
+def test_lights_written_as_one_table_are_named_as_such(tmp_path):
+    from vrneural.errors import VrnError
+    from vrneural.runtime.scene import load_scene
+
+    text = OBJ.format(mesh="plane", extra="", mat='procedural = "random"', light="").replace(
+        "[[lights]]", "[lights]\nposition = [0, 1, 0]"
+    )
+    with pytest.raises(VrnError, match=r"lights must be an array of tables \(\[\[lights\]\]\)"):
+        load_scene(_scene(tmp_path, text))
+
+
+@pytest.mark.gpu
+def test_what_a_run_drops_or_cannot_see_is_a_warning_kept_in_the_summary(capsys, tmp_path):
+    """Lights beyond the profile's, a degenerate triangle skipped on loading and eyes inside
+    the only neural object (all black) are each a warning on stderr and in summary.json."""
+    (tmp_path / "degen.obj").write_text(
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 3 4\nf 1 2 5\n"
+    )
+    lights = "".join(f"[[lights]]\nposition = [1, 2, {k}]\n" for k in range(4))
+    text = (
+        '[[objects]]\nmesh = "sphere"\nscale = 40\n[objects.material]\npack = "leather.vrnm"\n'
+        '[[objects]]\nmesh = "degen.obj"\n[objects.material]\nkind = "plain"\n' + lights
+    )
+    out = tmp_path / "o"
+    argv = ["run", _scene(tmp_path, text), "--profile", "tiny", "--frames", "1", "--no-video"]
+    assert main([*argv, "--quiet", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    sm = json.loads((out / "summary.json").read_text())
+    assert sm["scene"]["lights"] == 2 and sm["scene"]["scene_lights"] == 4
+    warned = " | ".join(sm["warnings"])
+    assert "the scene has 4 lights and the tiny profile shades the first 2" in warned
+    assert "--lights 4 shades them all" in warned
+    assert "degen.obj: skipped 1 degenerate triangles of 3" in warned
+    assert "no texel or pixel of a neural object faced an eye in any frame" in warned
+    assert all(f"warning: {w}" in err for w in sm["warnings"])
+
+
+@pytest.mark.gpu
+def test_pack_finds_its_teacher_by_the_recorded_checkpoint_then_by_name(capsys, tmp_path):
+    from vrneural.formats.vrnm import write_vrnm
+    from vrneural.material import random_material
+
+    student = random_material(3)
+    student.meta["provenance"] = {"config": {"teacher": str(tmp_path / "far" / "big.pt")}}
+    teacher = random_material(4, arch="single", width=16)
+    teacher.meta["method"] = "teacher"
+    d = tmp_path / "p"
+    d.mkdir()
+    write_vrnm(d / "mat.vrnm", student)
+    argv = ["--profile", "tiny", "--frames", "1", "--quiet", "--no-video", "--mode", "reference"]
+    argv += ["--pack", str(d / "mat.vrnm")]
+    msg = _err(capsys, [*argv, "--out", str(tmp_path / "x")])
+    assert "pass --reference TEACHER.vrnm (looked for" in msg and "scene" not in msg.split(":")[-1]
+    assert "big.vrnm" in msg and "mat.teacher.vrnm" in msg and "teacher.vrnm" in msg
+    write_vrnm(d / "mat.teacher.vrnm", teacher)  # the bundled packs' naming
+    assert main(["run", *argv, "--out", str(tmp_path / "a")]) == 0
+    sm = json.loads((tmp_path / "a" / "summary.json").read_text())
+    refs = {o["reference"] for o in sm["scene"]["objects"] if o["material"] == "neural"}
+    assert refs == {str((d / "mat.teacher.vrnm").resolve())}
+    (tmp_path / "far").mkdir()
+    write_vrnm(tmp_path / "far" / "big.vrnm", teacher)  # the teacher the pack records wins
+    assert main(["run", *argv, "--out", str(tmp_path / "b")]) == 0
+    sm = json.loads((tmp_path / "b" / "summary.json").read_text())
+    refs = {o["reference"] for o in sm["scene"]["objects"] if o["material"] == "neural"}
+    assert refs == {str((tmp_path / "far" / "big.vrnm").resolve())}

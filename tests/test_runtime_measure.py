@@ -10,11 +10,17 @@ import pytest
 
 
 @pytest.mark.gpu
-def test_measure_quick_writes_every_target(tmp_path):
+def test_measure_quick_writes_every_target(tmp_path, capsys):
     from vrneural.runtime.measure import main
 
     out = tmp_path / "m.json"
     assert main([str(out), "--quick"]) == 0
+    text = capsys.readouterr().out  # a short report, the numbers are in the JSON
+    assert text.startswith(f"wrote {out}") and "texture_vs_screen: ratio " in text
+    assert len(text.splitlines()) < 10
+    with pytest.raises(SystemExit) as e:
+        main([str(tmp_path / "x.json"), "--only", "bogus"])
+    assert e.value.code == 2 and "unknown measurement 'bogus'" in capsys.readouterr().err
     doc = json.loads(out.read_text())
     for key in ("texture_vs_screen", "constants_vs_buffer", "vs_torch"):
         r = doc[key]

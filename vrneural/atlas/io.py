@@ -16,6 +16,7 @@ Units are taken as metres (glTF's unit; OBJ/PLY have none).
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +42,12 @@ def load_mesh(path) -> list[Mesh]:
         raise VrnError(f"{p}: unsupported mesh type {p.suffix or '(none)'!r}; allowed {allowed}")
     try:
         loaded = trimesh.load(p, process=False)
+    except IndexError as e:  # a face naming a vertex the file does not have
+        m = re.search(r"index (-?\d+) is out of bounds for axis 0 with size (\d+)", str(e))
+        what = f" (index {m[1]}, counted from 0; it has {m[2]} vertices)" if m else ""
+        raise VrnError(
+            f"{p}: cannot read mesh: a face refers to a vertex the file does not have{what}"
+        ) from None
     except Exception as e:  # trimesh raises many types for bad files
         raise VrnError(f"{p}: cannot read mesh ({type(e).__name__}: {e})") from None
     if isinstance(loaded, trimesh.Scene):

@@ -60,6 +60,11 @@ def _meshes(spec: str):
 
     if spec in BUILTIN_MESHES and not Path(spec).exists():
         return [builtin_mesh(spec)]
+    head = spec.rsplit(":", 1)[0]
+    if not Path(spec).exists() and ":" in spec and Path(head).is_file():
+        from vrneural.runtime.assets import get_mesh  # FILE:NAME, as in a scene file
+
+        return [get_mesh(spec, field="MESH")]
     if not Path(spec).exists() and not Path(spec).suffix:
         raise VrnError(
             f"{spec}: no such file, and not a built-in mesh ({', '.join(BUILTIN_MESHES)})"
@@ -77,6 +82,7 @@ def run(args) -> int:
     from vrneural.config import config_from_args
     from vrneural.errors import VrnError, check_range
     from vrneural.formats.atomic import check_output
+    from vrneural.runtime.assets import LOST_TRIANGLES
 
     cfg = config_from_args(AtlasConfig, args)
     check_texture_resolution("--res", cfg.res)
@@ -96,6 +102,15 @@ def run(args) -> int:
             _write_png(o, atlas, args.color)
             results.append({"output": str(o), **atlas.stats})
     notes = [" ".join(str(w.message).splitlines()) for w in caught]
+    if cfg.padding == 0:
+        notes.append("--padding 0: bilinear lookups at chart edges read texels with no triangle")
+    for r in results:  # the same rule as `vrneural run`'s warning
+        lost, n_tri = int(r.get("triangles_without_texels", 0)), int(r.get("triangles", 0))
+        if n_tri and lost > LOST_TRIANGLES * n_tri:
+            notes.append(
+                f"{r['mesh']}: {lost} of {n_tri} triangles own no texel at {cfg.res}^2 (too "
+                "small in the atlas; a renderer shows their neighbours' shading); raise --res"
+            )
     _write_sidecar(out, cfg, results, notes)
     for n in notes:  # stderr: stdout is the stats alone (valid JSON with --json)
         print(f"warning: {n}", file=sys.stderr)

@@ -28,6 +28,10 @@ def _atlas_api():
     return None
 
 
+#: Fraction of a mesh's triangles that may own no atlas texel before `run` and `atlas` warn
+LOST_TRIANGLES = 0.5
+
+
 def builtin_names() -> tuple[str, ...]:
     a = _atlas_api()
     return tuple(a.BUILTIN_MESHES) if a is not None else FALLBACK_MESHES
@@ -54,9 +58,9 @@ def get_mesh(spec: str, base: Path | None = None, field: str = "mesh") -> Mesh:
         if where(head).is_file():
             p, part = where(head), tail
     if not p.is_file():
+        looked = f"no such file ({p})" if base is not None and str(p) != spec else "no such file"
         raise VrnError(
-            f"{field} = {spec!r}: no such file and not a built-in mesh "
-            f"({', '.join(builtin_names())})"
+            f"{field} = {spec!r}: {looked} and not a built-in mesh ({', '.join(builtin_names())})"
         )
     if a is None:
         raise VrnError(f"{field} = {spec!r}: mesh files need vrneural.atlas (not available)")
@@ -69,6 +73,11 @@ def get_mesh(spec: str, base: Path | None = None, field: str = "mesh") -> Mesh:
             f"{field} = {spec!r} holds {len(meshes)} meshes ({', '.join(names[:6])}"
             f"{', ...' if len(names) > 6 else ''}); name one, e.g. "
             f"{spec + ':' + names[0]!r}, one object each"
+        )
+    if len(meshes) == 1 and part != "0" and part not in names:
+        raise VrnError(
+            f"{field} = {spec!r}: {p.name} holds one mesh (its objects are merged on loading); "
+            f"write {spec.rsplit(':', 1)[0]!r}"
         )
     if part in names:
         return meshes[names.index(part)]

@@ -452,15 +452,24 @@ def main(argv=None) -> int:
     p.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
     p.add_argument("--only", default="", help="comma-separated subset of measurements")
     a = p.parse_args(argv)
-    if a.only:
-        res = {k: globals()[k]() for k in a.only.split(",")}
-    else:
-        res = measure_all(a.quick)
+    known = ("texture_vs_screen", "constants_vs_buffer", "vs_torch", "mlp_only", "schedules")
+    only = [k for k in a.only.split(",") if k]
+    for k in only:
+        if k not in known:
+            p.error(f"--only: unknown measurement {k!r}; choose from {', '.join(known)}")
+    res = {k: globals()[k]() for k in only} if only else measure_all(a.quick)
     write_json(a.out, res)
-    import json
-
-    print(json.dumps(res, indent=1)[:4000])
+    print(f"wrote {a.out}: " + ", ".join(k for k in res if k in known))
+    for k in known:  # the headline ratios; everything else is in the JSON
+        if isinstance(res.get(k), dict):
+            ratios = {n: v for n, v in res[k].items() if "ratio" in n or "speedup" in n}
+            if ratios:
+                print(f"  {k}: " + ", ".join(f"{n} {_fmt(v)}" for n, v in ratios.items()))
     return 0
+
+
+def _fmt(v) -> str:
+    return f"{v:.3g}" if isinstance(v, float) else str(v)
 
 
 if __name__ == "__main__":

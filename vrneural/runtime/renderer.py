@@ -6,6 +6,7 @@ the per-pixel compute pass). Records counters, per-pass GPU ms (timestamps) and 
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -16,7 +17,7 @@ from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
 from vrneural.runtime import forward as fw
-from vrneural.runtime.assets import get_atlas, get_mesh
+from vrneural.runtime.assets import LOST_TRIANGLES, get_atlas, get_mesh
 from vrneural.runtime.camera import OrbitPath, PoseLogPath, eyes_from_pose, sphere_in_frustum
 from vrneural.runtime.codegen import reference_weights
 from vrneural.runtime.gpu_material import GpuAtlas
@@ -24,10 +25,9 @@ from vrneural.runtime.lights import light_arrays
 from vrneural.runtime.schedule import frame_slice
 from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget, screen_rect
 from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
+from vrneural.warn import VrnWarning
 
 MODES = ("texture", "screen", "reference")
-#: Fraction of an object's triangles that may own no atlas texel before `run` warns
-LOST_TRIANGLES = 0.5
 
 
 @dataclass
@@ -103,55 +103,72 @@ class Renderer:
         self.warnings: list[str] = []  # one line each; `run` prints them and keeps them
         self.draws = []
         passes: dict = {}
-        for i, o in enumerate(scene.objects):
-            if progress:
-                progress(f"object {o.name}")
-            mesh = get_mesh(o.mesh, scene.base, f"{scene.src}: objects[{i}].mesh")
-            if o.material.kind == "plain":
-                m = o.material
-                plain = (m.albedo, m.specular, m.shininess)
-                self.draws.append((fw.DrawObject(mesh, None, self.rebase(o.model), i, plain), None))
-                continue
-            res = o.texture_res or max(s.texture_res, o.min_texture_res or 0)
-            try:
-                atlas = get_atlas(mesh, res)
-            except VrnError as e:  # name the object and the knobs that set its resolution
-                raise VrnError(
-                    f"{scene.src}: objects[{i}] ({o.name}) at {res}^2 texels "
-                    f"(texture_res / min_texture_res): {e}"
-                ) from None
-            lost = int(atlas.stats.get("triangles_without_texels", 0))
-            n_tri = len(atlas.mesh.faces)
-            if lost > LOST_TRIANGLES * n_tri:
-                self.warnings.append(
-                    f"{scene.src}: objects[{i}] ({o.name}): {lost} of {n_tri} triangles own no "
-                    f"texel at {res}^2 (too small in the atlas; they show their neighbours' "
-                    "shading); raise texture_res / min_texture_res"
+        with warnings.catch_warnings(record=True) as caught:  # mesh warnings go in the summary
+            warnings.simplefilter("always", VrnWarning)
+            for i, o in enumerate(scene.objects):
+                self._add_object(i, o, passes, progress)
+        for w in caught:
+            if issubclass(w.category, VrnWarning):
+                self.warnings.append(" ".join(str(w.message).splitlines()))
+            else:  # not ours: shown as it would have been
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+    def _add_object(self, i: int, o, passes: dict, progress) -> None:
+        """Load object ``i``'s mesh; a neural one also gets its atlas, pass and targets."""
+        scene, s = self.scene, self.s
+        if progress:
+            progress(f"object {o.name}")
+        mesh = get_mesh(o.mesh, scene.base, f"{scene.src}: objects[{i}].mesh")
+        if o.material.kind == "plain":
+            m = o.material
+            plain = (m.albedo, m.specular, m.shininess)
+            self.draws.append((fw.DrawObject(mesh, None, self.rebase(o.model), i, plain), None))
+            return
+        res = o.texture_res or max(s.texture_res, o.min_texture_res or 0)
+        try:
+            atlas = get_atlas(mesh, res)
+        except VrnError as e:  # name the object and the knobs that set its resolution
+            raise VrnError(
+                f"{scene.src}: objects[{i}] ({o.name}) at {res}^2 texels "
+                f"(texture_res / min_texture_res): {e}"
+            ) from None
+        lost = int(atlas.stats.get("triangles_without_texels", 0))
+        n_tri = len(atlas.mesh.faces)
+        if lost > LOST_TRIANGLES * n_tri:
+            self.warnings.append(
+                f"{scene.src}: objects[{i}] ({o.name}): {lost} of {n_tri} triangles own no "
+                f"texel at {res}^2 (too small in the atlas; they show their neighbours' "
+                "shading); raise texture_res / min_texture_res"
+            )
+        c, r = bounding_sphere(atlas.mesh)
+        n = _Neural(i, o, atlas, GpuAtlas(atlas), c, r)
+        mat = o.material.neural
+        if s.mode == "reference":
+            ref = s.reference or o.material.reference
+            if ref is None and o.material.source.endswith(".vrnm"):
+                hint = o.material.reference_hint  # --pack: where we looked
+                how = (
+                    f"pass --reference TEACHER.vrnm ({hint})"
+                    if hint
+                    else "set material.reference in the scene or pass --reference TEACHER.vrnm"
                 )
-            c, r = bounding_sphere(atlas.mesh)
-            n = _Neural(i, o, atlas, GpuAtlas(atlas), c, r)
-            mat = o.material.neural
-            if s.mode == "reference":
-                ref = s.reference or o.material.reference
-                if ref is None and o.material.source.endswith(".vrnm"):
-                    raise VrnError(
-                        f"{scene.src}: objects[{i}] ({o.name}): --mode reference needs a teacher "
-                        f"for {Path(o.material.source).name}: set material.reference in the "
-                        "scene or pass --reference TEACHER.vrnm"
-                    )
-                mat = ref or mat  # a procedural material is its own ground truth
-            key = id(mat)
-            if key not in passes:
-                try:
-                    passes[key] = self._make_pass(mat)
-                except VrnError as e:  # name the object and its pack, not the BTF inside
-                    src = o.material.source or "procedural"
-                    raise VrnError(f"objects[{i}] ({o.name}, {src}): {e}") from None
-            for e in range(s.eyes):
-                n.targets.append(self._make_target(passes[key], n, e))
-            self.neural.append(n)
-            draw = fw.DrawObject(atlas.mesh, atlas.uv_atlas, self.rebase(o.model), i)
-            self.draws.append((draw, n))
+                raise VrnError(
+                    f"{scene.src}: objects[{i}] ({o.name}): --mode reference needs a teacher "
+                    f"for {Path(o.material.source).name}: {how}"
+                )
+            mat = ref or mat  # a procedural material is its own ground truth
+        key = id(mat)
+        if key not in passes:
+            try:
+                passes[key] = self._make_pass(mat)
+            except VrnError as e:  # name the object and its pack, not the BTF inside
+                src = o.material.source or "procedural"
+                raise VrnError(f"objects[{i}] ({o.name}, {src}): {e}") from None
+        for e in range(s.eyes):
+            n.targets.append(self._make_target(passes[key], n, e))
+        self.neural.append(n)
+        draw = fw.DrawObject(atlas.mesh, atlas.uv_atlas, self.rebase(o.model), i)
+        self.draws.append((draw, n))
 
     def rebase(self, model: np.ndarray) -> np.ndarray:
         """``model [4, 4]`` with the floating origin subtracted (float64)."""

@@ -18,6 +18,7 @@ from vrneural.formats.atomic import (
     check_output_dir,
     make_output_dir,
     new_output_dir,
+    same_file,
     seal_output_dir,
     write_json,
 )
@@ -77,8 +78,9 @@ def atlas_summary(atlas) -> dict:
 
 def use_pack(scene, path: str) -> None:
     """Give every neural object of ``scene`` the runtime pack at ``path`` (``--pack``), each
-    object keeping its tiling; a sibling ``teacher.vrnm`` becomes the ``--mode reference`` (a
-    teacher pack is its own, so ``--pack teacher.vrnm --mode reference`` renders it)."""
+    object keeping its tiling. Its teacher pack (:func:`teacher_beside`) becomes the ``--mode
+    reference``; a teacher pack is its own, so ``--pack teacher.vrnm --mode reference`` renders
+    it."""
     from vrneural.formats.vrnm import read_vrnm
     from vrneural.runtime.scene import MaterialDesc
 
@@ -87,14 +89,48 @@ def use_pack(scene, path: str) -> None:
         what = "a directory, not a pack file" if p.is_dir() else "file not found"
         raise VrnError(f"--pack = {path!r}: {what}")
     mat = read_vrnm(p)
-    teacher = p.with_name("teacher.vrnm")
     if mat.meta.get("method") == "teacher":  # a teacher is its own per-pixel reference
-        ref = mat
+        ref, source, looked = mat, str(p.resolve()), ""
     else:
-        ref = read_vrnm(teacher) if teacher.is_file() and teacher != p else None
+        found, tried = teacher_beside(p, mat)
+        ref = read_vrnm(found) if found else None
+        source = str(found.resolve()) if found else ""
+        looked = "" if found else "looked for " + ", ".join(str(t) for t in tried)
     for o in scene.objects:
         if o.material.kind == "neural":
-            o.material = MaterialDesc("neural", mat, str(p), o.material.tiling, reference=ref)
+            o.material = MaterialDesc(
+                "neural",
+                mat,
+                str(p.resolve()),
+                o.material.tiling,
+                reference=ref,
+                reference_source=source,
+                reference_hint=looked,
+            )
+
+
+def teacher_beside(pack: Path, mat) -> tuple[Path | None, list[Path]]:
+    """The teacher pack of the student ``pack``, and the paths tried: the ``.vrnm`` of the
+    teacher checkpoint recorded in the pack (beside the pack, then where it was recorded),
+    ``<stem>.teacher.vrnm`` (the bundled packs' naming) and ``teacher.vrnm`` beside the pack.
+    The first that is a teacher pack wins."""
+    from vrneural.formats.vrnm import read_vrnm
+
+    recorded = ((mat.meta.get("provenance") or {}).get("config") or {}).get("teacher")
+    tried: list[Path] = []
+    if isinstance(recorded, str) and recorded:
+        r = Path(recorded).with_suffix(".vrnm")
+        tried += [pack.with_name(r.name), r]
+    tried += [pack.with_name(f"{pack.stem}.teacher.vrnm"), pack.with_name("teacher.vrnm")]
+    tried = list(dict.fromkeys(tried))
+    for t in tried:
+        if t.is_file() and not same_file(t, pack):
+            try:
+                if read_vrnm(t).meta.get("method") == "teacher":
+                    return t, tried
+            except VrnError:
+                continue  # not a readable pack: look further
+    return None, tried
 
 
 def default_out() -> Path:
@@ -168,6 +204,12 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
     t_setup = time.perf_counter()
     r = Renderer(scene, s)  # validates the packs: a failure here leaves --out untouched
     setup_s = time.perf_counter() - t_setup
+    if cfg.scene and cfg.lights is None and len(scene.lights) > s.n_lights:
+        r.warnings.append(
+            f"{scene.src}: the scene has {len(scene.lights)} lights and the "
+            f"{cfg.profile or 'quest3'} profile shades the first {s.n_lights}; "
+            f"--lights {len(scene.lights)} shades them all"
+        )
     for w in r.warnings:
         print(f"warning: {w}", file=sys.stderr)
     make_output_dir(out, "run")
@@ -207,6 +249,12 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         bar.close()
     if interrupted and not stats:
         raise KeyboardInterrupt  # nothing rendered; the marked --out is replaced by --force
+    if r.neural and not any(st.blocks_shaded or st.pixels_shaded for st in stats):
+        r.warnings.append(  # frames all black where the neural objects should be
+            "no texel or pixel of a neural object faced an eye in any frame (an eye inside an "
+            "object, whose inside faces are culled, or every object out of view?)"
+        )
+        print(f"warning: {r.warnings[-1]}", file=sys.stderr)
     with Stop():  # more Ctrl-C while the video and summary are written: finish writing them
         last = len(stats) - 1
         if interrupted and clean and "last" in cfg.save_frames.lower() and last not in save:
@@ -244,14 +292,16 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
     warm = stats[1:] if len(stats) > 1 else stats  # frame 0 includes shader compilation
     atlases = {n.idx: n.atlas for n in r.neural}
     gpu_names = sorted({k for st in stats for k in st.gpu_ms})
+    texture = s.mode == "texture"  # 2x2 blocks of texels; the other modes shade pixels
+    unit = "blocks" if texture else "pixels"
+    shaded = [st.blocks_shaded if texture else st.pixels_shaded for st in stats]
     per_frame = {
         "wall_ms": [round(st.wall_ms, 3) for st in stats],
         "updated_objects": [st.updated_objects for st in stats],
         "culled_objects": [st.culled_objects for st in stats],
-        "blocks_shaded": [st.blocks_shaded for st in stats],
-        "blocks_backfacing": [st.blocks_backfacing for st in stats],
-        "pixels_shaded": [st.pixels_shaded for st in stats],
-        "mlp_coarse": [st.mlp_coarse for st in stats],
+        f"{unit}_shaded": shaded,
+        f"{unit}_backfacing": [st.blocks_backfacing for st in stats],  # the shader's 2nd counter
+        "mlp_coarse": [st.mlp_coarse for st in stats],  # a single-level network counts as fine
         "mlp_fine": [st.mlp_fine for st in stats],
         "gpu_ms": {k: [round(st.gpu_ms.get(k, 0.0), 4) for st in stats] for k in gpu_names},
     }
@@ -267,12 +317,18 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
                     "mesh": o.mesh,
                     "material": o.material.kind,
                     "source": o.material.source,
+                    **(
+                        {"reference": o.material.reference_source or None}
+                        if s.mode == "reference" and o.material.kind == "neural"
+                        else {}
+                    ),
                     "tiling": o.material.tiling,
                     **atlas_summary(atlases.get(i)),
                 }
                 for i, o in enumerate(scene.objects)
             ],
-            "lights": len(r.lights),
+            "lights": len(r.lights),  # shaded: the first of the scene's
+            "scene_lights": len(scene.lights),
         },
         "frames": len(stats),
         "updates": int(sum(st.updated_objects > 0 for st in stats)),
@@ -281,7 +337,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
         "gpu_ms": {
             k: percentiles(per_frame["gpu_ms"][k][1:] or per_frame["gpu_ms"][k]) for k in gpu_names
         },
-        "blocks_shaded_per_frame": percentiles(per_frame["blocks_shaded"]),
+        f"{unit}_shaded_per_frame": percentiles(shaded),
         "mlp_evaluations_per_frame": percentiles(
             [a + b for a, b in zip(per_frame["mlp_coarse"], per_frame["mlp_fine"], strict=True)]
         ),
@@ -297,6 +353,7 @@ def human_summary(sm: dict) -> str:
     r = sm["resolved"]
     fw = sm["frame_wall_ms"]
     texture = r["mode"] == "texture"  # reuse, schedule and the texture only exist there
+    unit = "blocks" if texture else "pixels"
     space = (
         f"reuse={r['reuse']} schedule={r['schedule']} " if texture else "(per pixel, every frame) "
     )
@@ -310,7 +367,7 @@ def human_summary(sm: dict) -> str:
         f"frame ms  median {fw.get('median', 0):.1f}  p95 {fw.get('p95', 0):.1f}  "
         f"p99 {fw.get('p99', 0):.1f} (wall, incl. GPU wait)",
         "gpu ms    " + "  ".join(f"{k} {v['median']:.2f}" for k, v in sm["gpu_ms"].items()),
-        f"per frame blocks shaded {sm['blocks_shaded_per_frame'].get('median', 0):.0f}, MLP evals "
+        f"per frame {unit} shaded {sm[f'{unit}_shaded_per_frame'].get('median', 0):.0f}, MLP evals "
         f"{sm['mlp_evaluations_per_frame'].get('median', 0):.0f} (median)",
     ]
     objs = [o for o in sm["scene"]["objects"] if "texture_res" in o]

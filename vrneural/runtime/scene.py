@@ -51,6 +51,8 @@ class MaterialDesc:
     specular: float = 0.04
     shininess: float = 32.0
     reference: NeuralMaterial | None = None  # teacher pack used by ``--mode reference``
+    reference_source: str = ""  # the teacher pack's path, when there is one
+    reference_hint: str = ""  # where a missing reference was looked for (``--pack``)
 
 
 @dataclass
@@ -190,15 +192,23 @@ def _material(src: str, path: str, t: dict, base: Path) -> MaterialDesc:
     tiling = f.num("scale", 1.0, 0.0, lo_open=True)
     from vrneural.formats.vrnm import read_vrnm
 
-    ref = None
+    ref, ref_src = None, ""
     if "reference" in t:
-        ref = read_vrnm(f.pack("reference", base))
+        ref_path = f.pack("reference", base)
+        ref, ref_src = read_vrnm(ref_path), str(ref_path)
+    if "pack" not in t and "procedural" not in t:  # never an untrained network by default
+        raise VrnError(
+            f'{src}: {path} needs pack = "X.vrnm" (a distilled material), procedural = '
+            '"random" | "lambertian" (test materials), or kind = "plain"'
+        )
     if "pack" in t:
         for k in ("seed", "albedo"):
             if k in t:
                 raise f.err(k, "only applies to procedural materials, not to a pack")
         p = f.pack("pack", base)
-        return MaterialDesc("neural", read_vrnm(p), str(p), tiling, reference=ref)
+        return MaterialDesc(
+            "neural", read_vrnm(p), str(p), tiling, reference=ref, reference_source=ref_src
+        )
     proc = f.str("procedural", "random", ("random", "lambertian"))
     if proc == "random":
         if "albedo" in t:
@@ -208,7 +218,7 @@ def _material(src: str, path: str, t: dict, base: Path) -> MaterialDesc:
         if "seed" in t:
             raise f.err("seed", 'only applies to procedural = "random"')
         mat = lambertian_material(f.vec("albedo", (0.8, 0.5, 0.2), lo=0.0))
-    return MaterialDesc("neural", mat, proc, tiling, reference=ref)
+    return MaterialDesc("neural", mat, proc, tiling, reference=ref, reference_source=ref_src)
 
 
 def parse_scene(data: dict, src: str, base: Path) -> Scene:
@@ -255,9 +265,17 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         )
         mat = _material(src, f"objects[{i}].material", o.get("material", {}), base)
         tres, floor = (_texture_res(f, k) for k in ("texture_res", "min_texture_res"))
+        if tres is not None and floor is not None and floor > tres:
+            raise f.err(
+                "min_texture_res",
+                f"= {floor} is above texture_res = {tres}: texture_res sets this object's "
+                "size, min_texture_res is a floor under the profile's; keep one",
+            )
         name = f.str("name", Path(mesh).stem)
         objects.append(ObjectDesc(name, mesh, model, mat, tres, floor))
     lights = []
+    if not isinstance(data.get("lights", []), list):
+        raise VrnError(f"{src}: lights must be an array of tables ([[lights]])")
     for i, lt in enumerate(data.get("lights", [])):
         f = _Fields(src, f"lights[{i}]", lt)
         f.unknown(
@@ -346,7 +364,8 @@ def builtin_material(key: str) -> MaterialDesc:
     stem = spec["pack"].removesuffix(".vrnm")
     desc = MaterialDesc("neural", read_vrnm(builtin_pack(spec["pack"])), stem, spec["scale"])
     teacher = Path(str(builtin_pack(spec["pack"]))).with_name(f"{stem}.teacher.vrnm")
-    desc.reference = read_vrnm(teacher) if teacher.is_file() else None
+    if teacher.is_file():
+        desc.reference, desc.reference_source = read_vrnm(teacher), teacher.name
     return desc
 
 
