@@ -208,7 +208,9 @@ def test_quality_targets_use_seed_means_and_flag_overlapping_ranges():
     }
     md = markdown(doc)
     assert "seeds 3-4" in md and "1.50000 (1.40000-1.60000)" in md
-    assert "**no** *(seeds overlap)*" in md  # below no-distillation: 1.5 vs 1.275, overlapping
+    # below no-distillation: 1.5 vs 1.275, overlapping; relative and absolute gap
+    assert "**no** (+17.6%, +0.22500) *(seeds overlap)*" in md
+    assert "**no** (-25.0%, -0.50000) |" in md  # 1.5x below Lafortune: 1.5 * 1.5 > 2.0
     assert "| leather | 0 of 2 | 0 of 2 |" in md  # pairs: 1.4, 1.6 vs 1.2, 1.3 and 1.05, 1.5
 
 

@@ -35,6 +35,18 @@ def targets(m: dict) -> dict[str, bool]:
     return out
 
 
+def gaps(m: dict) -> dict[str, tuple[float, float]]:
+    """Per target, the student's mean whole-BTF L1 against the baseline's: ``(relative,
+    absolute)`` difference. The absolute one is what an error floor in the data cannot hide
+    (docs/quality-research.md, "How an error floor dilutes the ratio targets")."""
+    s = m["student"]["whole_l1"]
+    out = {}
+    for name, (base, _) in TARGETS.items():
+        b = m[base]["whole_l1"]
+        out[name] = (s / b - 1 if b > 0 else float("inf"), s - b)
+    return out
+
+
 def decided(m: dict) -> dict[str, bool]:
     """Whether each target's outcome holds for every seed pair: False where the student's
     seed range (scaled by the target's factor) overlaps the baseline's."""
@@ -166,13 +178,20 @@ def markdown(doc: dict) -> str:
             if k > 1
             else []
         ),
+        "In brackets: the student's whole-BTF L1 against the baseline's, relative and "
+        "absolute. A ratio of totals shrinks when the data carry error no model removes "
+        "(measured BTFs); the absolute difference does not.",
+        "",
         "| material | " + " | ".join(targets(res[presets[0]]["methods"])) + " |",
         "|---|" + "---|" * 4,
     ]
     for p in presets:
-        t, sure = targets(res[p]["methods"]), decided(res[p]["methods"])
+        m = res[p]["methods"]
+        t, sure, gap = targets(m), decided(m), gaps(m)
         cells = [
-            ("yes" if v else "**no**") + ("" if sure[n] else " *(seeds overlap)*")
+            ("yes" if v else "**no**")
+            + f" ({gap[n][0]:+.1%}, {gap[n][1]:+.5f})"
+            + ("" if sure[n] else " *(seeds overlap)*")
             for n, v in t.items()
         ]
         lines.append(f"| {p} | " + " | ".join(cells) + " |")
