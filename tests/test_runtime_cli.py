@@ -439,11 +439,12 @@ def test_what_a_run_drops_or_cannot_see_is_a_warning_kept_in_the_summary(capsys,
     )
     lights = "".join(f"[[lights]]\nposition = [1, 2, {k}]\n" for k in range(4))
     text = (
+        'profile = "tiny"\n'  # the warning names the profile in force, here the scene's
         '[[objects]]\nmesh = "sphere"\nscale = 40\n[objects.material]\npack = "leather.vrnm"\n'
         '[[objects]]\nmesh = "degen.obj"\n[objects.material]\nkind = "plain"\n' + lights
     )
     out = tmp_path / "o"
-    argv = ["run", _scene(tmp_path, text), "--profile", "tiny", "--frames", "1", "--no-video"]
+    argv = ["run", _scene(tmp_path, text), "--frames", "1", "--no-video"]
     assert main([*argv, "--quiet", "--out", str(out)]) == 0
     err = capsys.readouterr().err
     sm = json.loads((out / "summary.json").read_text())
@@ -454,6 +455,12 @@ def test_what_a_run_drops_or_cannot_see_is_a_warning_kept_in_the_summary(capsys,
     assert "degen.obj: skipped 1 degenerate triangles of 3" in warned
     assert "no texel or pixel of a neural object faced an eye in any frame" in warned
     assert all(f"warning: {w}" in err for w in sm["warnings"])
+    dark = OBJ.format(mesh="plane", extra="", mat='procedural = "random"', light="")
+    dark = dark.replace("[[lights]]\n", "")  # a scene without lights renders black: said
+    argv = ["run", _scene(tmp_path, dark, "dark.toml"), "--profile", "tiny", "--frames", "1"]
+    assert main([*argv, "--no-video", "--quiet", "--out", str(tmp_path / "d")]) == 0
+    sm = json.loads((tmp_path / "d" / "summary.json").read_text())
+    assert "dark.toml: the scene has no [[lights]]: neural objects are black" in sm["warnings"]
 
 
 @pytest.mark.gpu
@@ -484,3 +491,8 @@ def test_pack_finds_its_teacher_by_the_recorded_checkpoint_then_by_name(capsys, 
     sm = json.loads((tmp_path / "b" / "summary.json").read_text())
     refs = {o["reference"] for o in sm["scene"]["objects"] if o["material"] == "neural"}
     assert refs == {str((tmp_path / "far" / "big.vrnm").resolve())}
+    forced = ["--reference", str(d / "mat.teacher.vrnm")]  # --reference is what shades
+    assert main(["run", *argv, *forced, "--out", str(tmp_path / "c")]) == 0
+    sm = json.loads((tmp_path / "c" / "summary.json").read_text())
+    refs = {o["reference"] for o in sm["scene"]["objects"] if o["material"] == "neural"}
+    assert refs == {str((d / "mat.teacher.vrnm").resolve())}

@@ -17,10 +17,17 @@ def test_measure_quick_writes_every_target(tmp_path, capsys):
     assert main([str(out), "--quick"]) == 0
     text = capsys.readouterr().out  # a short report, the numbers are in the JSON
     assert text.startswith(f"wrote {out}") and "texture_vs_screen: ratio " in text
-    assert len(text.splitlines()) < 10
-    with pytest.raises(SystemExit) as e:
-        main([str(tmp_path / "x.json"), "--only", "bogus"])
-    assert e.value.code == 2 and "unknown measurement 'bogus'" in capsys.readouterr().err
+    assert "mlp_only: constants_vs_buffer " in text and "staggered.p99_over_median" in text
+    assert len(text.splitlines()) == 6
+    for bad, why in (("bogus", "unknown measurement 'bogus'"), (",", "--only is empty")):
+        with pytest.raises(SystemExit) as e:
+            main([str(tmp_path / "x.json"), "--only", bad])
+        assert e.value.code == 2 and why in capsys.readouterr().err
+    one = tmp_path / "one.json"  # --only keeps --quick's sizes and the run's context
+    assert main([str(one), "--only", "mlp_only", "--quick"]) == 0
+    d = json.loads(one.read_text())
+    assert d["mlp_only"]["blocks"] == 4096 and d["quick"] and "adapter" in d and "seconds" in d
+    assert set(d) & {"texture_vs_screen", "schedules"} == set()
     doc = json.loads(out.read_text())
     for key in ("texture_vs_screen", "constants_vs_buffer", "vs_torch"):
         r = doc[key]

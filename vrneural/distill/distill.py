@@ -10,6 +10,7 @@ hidden vectors of :func:`~vrneural.distill.models.make_spec` (for the coarse-to-
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import torch
 from torch import nn
@@ -193,7 +194,12 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         "config": dataclasses.asdict(cfg),
         "btf": fp,
         "split": tck["split"],
-        "teacher": {"path": str(cfg.teacher), "sha256": tsha, "spec": tck["spec"]},
+        "teacher": {
+            "path": str(cfg.teacher),
+            "resolved": str(Path(cfg.teacher).resolve()),
+            "sha256": tsha,
+            "spec": tck["spec"],
+        },
         "versions": {"torch": str(torch.__version__)},
     }
     ck = fit(

@@ -112,7 +112,10 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None):
         "provenance": {
             "btf": ck["btf"],
             "checkpoint": str(source) if source else None,
+            # identifies this pack's checkpoint, so `run --pack` can tell a student's teacher
+            "checkpoint_sha256": _sha256_or_none(source),
             "teacher": ck.get("teacher", {}).get("sha256"),
+            "teacher_path": ck.get("teacher", {}).get("resolved"),
             "seed": cfg["seed"],
             "split_seed": cfg["split_seed"],
             "epochs": ck["epoch"],
@@ -172,3 +175,9 @@ def ranges_table(ranges: dict) -> str:
             f"{r['frac_zero']:>6.1%}"
         )
     return "\n".join(rows)
+
+
+def _sha256_or_none(path) -> str | None:
+    from vrneural.distill.checkpoint import file_sha256
+
+    return file_sha256(path) if path and Path(path).is_file() else None

@@ -423,25 +423,51 @@ def schedules(texture_res=1200, eye_res=(256, 256), reuse=4, frames=91, quality_
     return out
 
 
-def measure_all(quick: bool = False) -> dict:
+#: Each measurement with its quick (smoke-run) arguments; the full run uses the defaults.
+MEASUREMENTS = {
+    "texture_vs_screen": {"texture_res": 256, "eye_res": (400, 440), "frames": 2},
+    "constants_vs_buffer": {"res": 128, "repeats": 2},
+    "vs_torch": {"res": 128, "repeats": 2},
+    "mlp_only": {"n_blocks": 4096, "repeats": 2},
+    "schedules": {"texture_res": 64, "eye_res": (96, 96), "frames": 16, "quality_frames": 12},
+}
+
+#: The headline figures the console report prints per measurement (paths into its result).
+HEADLINES = {
+    "texture_vs_screen": ("ratio",),
+    "constants_vs_buffer": ("ratio",),
+    "vs_torch": ("ratio", "ratio_range"),
+    "mlp_only": ("constants_vs_buffer", "constants_vs_torch"),
+    "schedules": ("burst.p99_over_median", "staggered.p99_over_median"),
+}
+
+
+def measure_all(quick: bool = False, only: list[str] | None = None) -> dict:
+    """Run ``only`` (default: every measurement) at full size or, ``quick``, small sizes."""
     from vrneural.gpu.device import adapter_summary
 
     res = {"adapter": adapter_summary().to_dict(), "quick": quick}
     t0 = time.perf_counter()
-    if quick:
-        res["texture_vs_screen"] = texture_vs_screen(256, (400, 440), frames=2)
-        res["constants_vs_buffer"] = constants_vs_buffer(128, 2)
-        res["vs_torch"] = vs_torch(128, 2)
-        res["mlp_only"] = mlp_only(4096, 2)
-        res["schedules"] = schedules(64, (96, 96), frames=16, quality_frames=12)
-    else:
-        res["texture_vs_screen"] = texture_vs_screen()
-        res["constants_vs_buffer"] = constants_vs_buffer()
-        res["vs_torch"] = vs_torch()
-        res["mlp_only"] = mlp_only()
-        res["schedules"] = schedules()
+    for name in only or MEASUREMENTS:
+        res[name] = globals()[name](**(MEASUREMENTS[name] if quick else {}))
     res["seconds"] = time.perf_counter() - t0
     return res
+
+
+def _headlines(res: dict) -> list[str]:
+    lines = []
+    for name, paths in HEADLINES.items():
+        if name not in res:
+            continue
+        parts = []
+        for path in paths:
+            v = res[name]
+            for key in path.split("."):
+                v = v.get(key) if isinstance(v, dict) else None
+            if v is not None:
+                parts.append(f"{path} {_fmt(v)}")
+        lines.append(f"  {name}: " + ", ".join(parts))
+    return lines
 
 
 def main(argv=None) -> int:
@@ -450,25 +476,28 @@ def main(argv=None) -> int:
     )
     p.add_argument("out", help="output JSON")
     p.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
-    p.add_argument("--only", default="", help="comma-separated subset of measurements")
+    p.add_argument(
+        "--only", default=None, help=f"comma-separated subset of: {', '.join(MEASUREMENTS)}"
+    )
     a = p.parse_args(argv)
-    known = ("texture_vs_screen", "constants_vs_buffer", "vs_torch", "mlp_only", "schedules")
-    only = [k for k in a.only.split(",") if k]
-    for k in only:
-        if k not in known:
-            p.error(f"--only: unknown measurement {k!r}; choose from {', '.join(known)}")
-    res = {k: globals()[k]() for k in only} if only else measure_all(a.quick)
+    only = None
+    if a.only is not None:
+        only = [k.strip() for k in a.only.split(",") if k.strip()]
+        if not only:
+            p.error(f"--only is empty; choose from {', '.join(MEASUREMENTS)}")
+        for k in only:
+            if k not in MEASUREMENTS:
+                p.error(f"--only: unknown measurement {k!r}; choose from {', '.join(MEASUREMENTS)}")
+    res = measure_all(a.quick, only)
     write_json(a.out, res)
-    print(f"wrote {a.out}: " + ", ".join(k for k in res if k in known))
-    for k in known:  # the headline ratios; everything else is in the JSON
-        if isinstance(res.get(k), dict):
-            ratios = {n: v for n, v in res[k].items() if "ratio" in n or "speedup" in n}
-            if ratios:
-                print(f"  {k}: " + ", ".join(f"{n} {_fmt(v)}" for n, v in ratios.items()))
+    print(f"wrote {a.out} ({res['seconds']:.0f} s)")
+    print("\n".join(_headlines(res)))
     return 0
 
 
 def _fmt(v) -> str:
+    if isinstance(v, list):
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
     return f"{v:.3g}" if isinstance(v, float) else str(v)
 
 

@@ -95,7 +95,7 @@ def use_pack(scene, path: str) -> None:
         found, tried = teacher_beside(p, mat)
         ref = read_vrnm(found) if found else None
         source = str(found.resolve()) if found else ""
-        looked = "" if found else "looked for " + ", ".join(str(t) for t in tried)
+        looked = "" if found else "looked for " + ", ".join(tried)
     for o in scene.objects:
         if o.material.kind == "neural":
             o.material = MaterialDesc(
@@ -109,28 +109,64 @@ def use_pack(scene, path: str) -> None:
             )
 
 
-def teacher_beside(pack: Path, mat) -> tuple[Path | None, list[Path]]:
-    """The teacher pack of the student ``pack``, and the paths tried: the ``.vrnm`` of the
-    teacher checkpoint recorded in the pack (beside the pack, then where it was recorded),
-    ``<stem>.teacher.vrnm`` (the bundled packs' naming) and ``teacher.vrnm`` beside the pack.
-    The first that is a teacher pack wins."""
+def teacher_beside(pack: Path, mat) -> tuple[Path | None, list[str]]:
+    """The teacher pack of the student ``pack``, and the paths tried (each with why it was
+    passed over). Candidates, in order: the ``.vrnm`` of the teacher checkpoint the pack records
+    (beside the pack, at its absolute path, at the path as typed then), ``<stem>.teacher.vrnm``
+    (the bundled packs' naming) and ``teacher.vrnm`` beside the pack. A candidate must be a
+    teacher pack, and where the student records its teacher's checkpoint hash, the candidate
+    must not belong to another checkpoint: its own recorded hash (or that of the ``.pt`` beside
+    it) must match. The typed path is resolved against the current directory, not the one
+    `distill` ran in, so it counts only when that hash confirms it."""
+    from vrneural.distill.checkpoint import file_sha256
     from vrneural.formats.vrnm import read_vrnm
 
-    recorded = ((mat.meta.get("provenance") or {}).get("config") or {}).get("teacher")
-    tried: list[Path] = []
-    if isinstance(recorded, str) and recorded:
-        r = Path(recorded).with_suffix(".vrnm")
-        tried += [pack.with_name(r.name), r]
-    tried += [pack.with_name(f"{pack.stem}.teacher.vrnm"), pack.with_name("teacher.vrnm")]
-    tried = list(dict.fromkeys(tried))
-    for t in tried:
-        if t.is_file() and not same_file(t, pack):
-            try:
-                if read_vrnm(t).meta.get("method") == "teacher":
-                    return t, tried
-            except VrnError:
-                continue  # not a readable pack: look further
+    prov = mat.meta.get("provenance") or {}
+    want = prov.get("teacher") if isinstance(prov.get("teacher"), str) else None
+    typed = (prov.get("config") or {}).get("teacher")
+    absolute = prov.get("teacher_path")
+    cands: list[tuple[Path, bool]] = []  # (path, must the hash confirm it)
+    if isinstance(typed, str) and typed:
+        cands.append((pack.with_name(Path(typed).with_suffix(".vrnm").name), False))
+    if isinstance(absolute, str) and absolute:
+        cands.append((Path(absolute).with_suffix(".vrnm"), False))
+    if isinstance(typed, str) and typed:
+        cands.append((Path(typed).with_suffix(".vrnm"), True))
+    cands += [(pack.with_name(f"{pack.stem}.teacher.vrnm"), False)]
+    cands += [(pack.with_name("teacher.vrnm"), False)]
+    tried, seen = [], set()
+    for t, strict in cands:
+        key = str(t.resolve())
+        if key in seen:
+            continue
+        seen.add(key)
+        why = _not_the_teacher(t, pack, want, strict, read_vrnm, file_sha256)
+        if why is None:
+            return t, tried
+        tried.append(f"{t}{'' if why == 'not found' else f' ({why})'}")
     return None, tried
+
+
+def _not_the_teacher(t: Path, pack: Path, want, strict: bool, read_vrnm, file_sha256):
+    """Why ``t`` is not the teacher of ``pack`` (None: it is)."""
+    if not t.is_file():
+        return "not found"
+    if same_file(t, pack):
+        return "the pack itself"
+    try:
+        meta = read_vrnm(t).meta
+    except VrnError:
+        return "not a readable pack"
+    if meta.get("method") != "teacher":
+        return f"a {meta.get('method') or 'non-teacher'} pack, not a teacher"
+    if want is None:
+        return None
+    have = (meta.get("provenance") or {}).get("checkpoint_sha256")
+    if have is None and t.with_suffix(".pt").is_file():
+        have = file_sha256(t.with_suffix(".pt"))
+    if have is None:
+        return "cannot tell it is the recorded teacher" if strict else None
+    return None if have == want else "another teacher: its checkpoint hash differs"
 
 
 def default_out() -> Path:
@@ -207,9 +243,12 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
     if cfg.scene and cfg.lights is None and len(scene.lights) > s.n_lights:
         r.warnings.append(
             f"{scene.src}: the scene has {len(scene.lights)} lights and the "
-            f"{cfg.profile or 'quest3'} profile shades the first {s.n_lights}; "
+            f"{cfg.profile or scene.profile or 'quest3'} profile shades the first "
+            f"{s.n_lights}; "
             f"--lights {len(scene.lights)} shades them all"
         )
+    if r.neural and not scene.lights:  # (--lights 0 asks for it; an empty scene does not)
+        r.warnings.append(f"{scene.src}: the scene has no [[lights]]: neural objects are black")
     for w in r.warnings:
         print(f"warning: {w}", file=sys.stderr)
     make_output_dir(out, "run")
@@ -318,7 +357,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
                     "material": o.material.kind,
                     "source": o.material.source,
                     **(
-                        {"reference": o.material.reference_source or None}
+                        {"reference": reference_of(cfg, o.material)}
                         if s.mode == "reference" and o.material.kind == "neural"
                         else {}
                     ),
@@ -347,6 +386,14 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
         "files": files,
         "note": "frame_wall_ms and gpu_ms percentiles exclude frame 0 (shader compilation)",
     }
+
+
+def reference_of(cfg, material) -> str | None:
+    """The teacher pack an object was shaded with in reference mode: ``--reference`` for every
+    object when given, else the material's own."""
+    if cfg.reference:
+        return str(Path(cfg.reference).resolve())
+    return material.reference_source or None
 
 
 def human_summary(sm: dict) -> str:
