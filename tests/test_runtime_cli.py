@@ -469,6 +469,7 @@ def test_pack_finds_its_teacher_by_the_recorded_checkpoint_then_by_name(capsys, 
     from vrneural.material import random_material
 
     student = random_material(3)
+    student.meta["method"] = "student"
     student.meta["provenance"] = {"config": {"teacher": str(tmp_path / "far" / "big.pt")}}
     teacher = random_material(4, arch="single", width=16)
     teacher.meta["method"] = "teacher"
@@ -491,6 +492,10 @@ def test_pack_finds_its_teacher_by_the_recorded_checkpoint_then_by_name(capsys, 
     sm = json.loads((tmp_path / "b" / "summary.json").read_text())
     refs = {o["reference"] for o in sm["scene"]["objects"] if o["material"] == "neural"}
     assert refs == {str((tmp_path / "far" / "big.vrnm").resolve())}
+    assert (
+        main(["run", *argv, "--reference", str(d / "mat.vrnm"), "--out", str(tmp_path / "s")]) == 0
+    )
+    assert "the reference is a student pack, not a teacher" in capsys.readouterr().err
     forced = ["--reference", str(d / "mat.teacher.vrnm")]  # --reference is what shades
     assert main(["run", *argv, *forced, "--out", str(tmp_path / "c")]) == 0
     sm = json.loads((tmp_path / "c" / "summary.json").read_text())

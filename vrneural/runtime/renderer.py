@@ -109,7 +109,9 @@ class Renderer:
                 self._add_object(i, o, passes, progress)
         for w in caught:
             if issubclass(w.category, VrnWarning):
-                self.warnings.append(" ".join(str(w.message).splitlines()))
+                line = " ".join(str(w.message).splitlines())
+                if line not in self.warnings:  # a mesh file used by several objects: once
+                    self.warnings.append(line)
             else:  # not ours: shown as it would have been
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
@@ -155,6 +157,12 @@ class Renderer:
                 raise VrnError(
                     f"{scene.src}: objects[{i}] ({o.name}): --mode reference needs a teacher "
                     f"for {Path(o.material.source).name}: {how}"
+                )
+            method = ref.meta.get("method") if ref is not None else None
+            if method not in (None, "teacher"):  # allowed (a comparison), but not ground truth
+                self.warnings.append(
+                    f"{scene.src}: objects[{i}] ({o.name}): the reference is a {method} pack, "
+                    "not a teacher: reference mode shows that network, not the ground truth"
                 )
             mat = ref or mat  # a procedural material is its own ground truth
         key = id(mat)
