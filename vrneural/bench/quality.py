@@ -154,7 +154,7 @@ def _distill_configs(
     """``(name, stem, config)`` of every network and seed of a preset (its teacher trained;
     ``check_teacher=False`` skips comparing it with the teacher each checkpoint was made from,
     for the check before any work, when the teacher may not exist yet)."""
-    from vrneural.distill.checkpoint import file_sha256
+    from vrneural.formats.atomic import file_sha256
     from vrneural.distill.config import DistillConfig
     from vrneural.distill.distill import resolve_method
 

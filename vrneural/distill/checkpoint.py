@@ -18,7 +18,6 @@ Layout (``format`` = ``"vrneural-checkpoint"``, ``version`` = 1)::
 
 from __future__ import annotations
 
-import hashlib
 import os
 import pickle
 import re
@@ -135,11 +134,3 @@ def _first_sentence(e: Exception) -> str:
     first = text.splitlines()[0]
     cut = first.find(". ")
     return first[: cut + 1] if 0 < cut < 160 else first[:160]
-
-
-def file_sha256(path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()

@@ -17,7 +17,8 @@ from torch import nn
 
 from vrneural.btf.format import read_btf
 from vrneural.config import is_explicit, replace_config
-from vrneural.distill.checkpoint import file_sha256, load_checkpoint, recorded_btf
+from vrneural.distill.checkpoint import load_checkpoint, recorded_btf
+from vrneural.formats.atomic import file_sha256
 from vrneural.distill.config import BEFORE_FIELD, DistillConfig
 from vrneural.distill.data import SliceData, btf_fingerprint, check_btf_record
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space

@@ -178,6 +178,6 @@ def ranges_table(ranges: dict) -> str:
 
 
 def _sha256_or_none(path) -> str | None:
-    from vrneural.distill.checkpoint import file_sha256
+    from vrneural.formats.atomic import file_sha256
 
     return file_sha256(path) if path and Path(path).is_file() else None

@@ -118,9 +118,6 @@ def teacher_beside(pack: Path, mat) -> tuple[Path | None, list[str]]:
     must not belong to another checkpoint: its own recorded hash (or that of the ``.pt`` beside
     it) must match. The typed path is resolved against the current directory, not the one
     `distill` ran in, so it counts only when that hash confirms it."""
-    from vrneural.distill.checkpoint import file_sha256
-    from vrneural.formats.vrnm import read_vrnm
-
     prov = mat.meta.get("provenance") or {}
     want = prov.get("teacher") if isinstance(prov.get("teacher"), str) else None
     typed = (prov.get("config") or {}).get("teacher")
@@ -140,15 +137,18 @@ def teacher_beside(pack: Path, mat) -> tuple[Path | None, list[str]]:
         if key in seen:
             continue
         seen.add(key)
-        why = _not_the_teacher(t, pack, want, strict, read_vrnm, file_sha256)
+        why = _not_the_teacher(t, pack, want, strict)
         if why is None:
             return t, tried
         tried.append(f"{t}{'' if why == 'not found' else f' ({why})'}")
     return None, tried
 
 
-def _not_the_teacher(t: Path, pack: Path, want, strict: bool, read_vrnm, file_sha256):
+def _not_the_teacher(t: Path, pack: Path, want: str | None, strict: bool) -> str | None:
     """Why ``t`` is not the teacher of ``pack`` (None: it is)."""
+    from vrneural.formats.atomic import file_sha256
+    from vrneural.formats.vrnm import read_vrnm
+
     if not t.is_file():
         return "not found"
     if same_file(t, pack):
