@@ -89,6 +89,10 @@ def test_frames_for_covers_whole_cycles():
 
 def test_int_list_errors_are_one_line():
     assert int_list("--reuse", "0, 2,4", 0, 9) == [0, 2, 4]
+    with pytest.raises(VrnError, match="lists 2 twice; each value once"):
+        int_list("--lights", "2,2", 1, 8)  # measured twice, reported as two rows before
+    with pytest.raises(VrnError, match="has an empty item"):
+        int_list("--texture-res", "128,,256", 8, 8192)
     for bad, word in (("a,b", "integers"), ("3,99", "out of range"), ("", "empty")):
         with pytest.raises(VrnError, match=word):
             int_list("--reuse", bad, 0, 9)

@@ -133,6 +133,10 @@ def test_bench_user_errors_are_one_line(capsys, tmp_path):
         msg = _err(capsys, ["tradeoff", "--quick", flag, value, "--out", o])
         assert msg.startswith(f"vrneural bench tradeoff: error: {flag} = {value} "), msg
     assert "--preset" in _err(capsys, ["tradeoff", "--preset", "plastic", "--out", o])
+    assert "--presets = 'nope' is not allowed" in _err(capsys, ["quality", "--presets", "nope",
+                                                             "--out", o])  # fmt: skip
+    msg = _err(capsys, ["extremes", "--no-progress", "--only", "nope", "--out", o])
+    assert "unknown case or group 'nope'" in msg and "cases: " in msg and "f16_vs_f32" in msg
     assert not (tmp_path / "o").exists()
     (tmp_path / "o").mkdir()
     (tmp_path / "o" / "mine.txt").write_text("keep")

@@ -58,6 +58,7 @@ def test_bench_quality_smoke(tmp_path, capsys):
     assert code == 0, err
     log = capsys.readouterr().out
     assert "leather: teacher  reused" in log and "leather: student  reused" in log, log
+    assert "leather: lafortune  reused" in log, log
     again = json.loads((out / "results.json").read_text())["results"]["leather"]["methods"]
     for name, m in methods.items():
         for key in ("whole_l1", "train_seconds", "epochs"):

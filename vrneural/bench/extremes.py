@@ -83,6 +83,7 @@ class ExtremesConfig:
         f"{', '.join(sorted({c[1] for c in CASES}))} (default: all)",
     )
     force: bool = opt(False, "overwrite an existing --out directory")
+    progress: bool = opt(True, "show a progress bar (--no-progress: none)")
 
 
 def selected(only: str) -> list:
@@ -96,8 +97,8 @@ def selected(only: str) -> list:
     if bad:
         groups = ", ".join(sorted({c[1] for c in CASES}))
         raise VrnError(
-            f"--only = {only!r}: unknown case or group {bad[0]!r}; groups: {groups} "
-            f"({len(CASES)} cases, named in results.md of a full run)"
+            f"--only = {only!r}: unknown case or group {bad[0]!r}; groups: {groups}; "
+            f"cases: {', '.join(c[0] for c in CASES)}"
         )
     return [c for c in CASES if c[0] in keys or c[1] in keys]
 
@@ -111,7 +112,8 @@ def run_extremes(cfg: ExtremesConfig, out: str) -> dict:
     root = prepare_out(out, cfg.force, "extremes")
     t0 = time.perf_counter()
     doc = header("extremes", cfg)
-    for name, group, fn, expect, what in tqdm(cases, desc="bench extremes", unit="case"):
+    bar = tqdm(cases, desc="bench extremes", unit="case", disable=not cfg.progress)
+    for name, group, fn, expect, what in bar:
         rec = run_case(name, group, fn, expect, cfg.quick)
         rec["checks"] = what
         doc["records"].append(rec)

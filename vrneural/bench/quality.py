@@ -293,10 +293,10 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
             "macs_per_texel": mat.macs_per_texel,
         }
         out["slices"][name] = [predict_slice(models[0], data, p).numpy() for p in slices]
-    out["methods"]["lafortune"] = _lafortune(
+    out["methods"]["lafortune"], reused = _lafortune(
         data, every, slices, cfg, out, d / "lafortune.npz", tck["btf"]["sha256"]
     )
-    log(f"{preset}: lafortune  {out['methods']['lafortune']['train_seconds']:.0f} s")
+    log(f"{preset}: lafortune  {_took(out['methods']['lafortune'], reused)}")
     out["slice_pairs"] = slices
     return out
 
@@ -394,7 +394,8 @@ def _slice_pairs(data) -> list[int]:
 
 
 def _lafortune(data, every, slices, cfg: QualityConfig, out: dict, path: Path, btf_sha: str):
-    """Fit (or, with --resume, reload a matching fit from ``path``) and evaluate Lafortune."""
+    """Fit (or, with --resume, reload a matching fit from ``path``) and evaluate Lafortune;
+    returns the record and whether the fit was reloaded."""
     import numpy as np
     import torch
 
@@ -405,12 +406,13 @@ def _lafortune(data, every, slices, cfg: QualityConfig, out: dict, path: Path, b
     H, W = data.res
     flat = data.values.reshape(L * data.n_view, H * W, 3)
     key = json.dumps({"btf": btf_sha, "train": list(data.train), "iters": cfg.lafortune_iters})
-    params = None
+    params, reused = None, False
     if cfg.resume and path.exists():
         try:
             with np.load(path, allow_pickle=False) as z:
                 if str(z["key"]) == key:
                     params, seconds = torch.from_numpy(z["params"]), float(z["seconds"])
+                    reused = True
         except (OSError, ValueError, KeyError):
             params = None
     if params is None:
@@ -447,7 +449,7 @@ def _lafortune(data, every, slices, cfg: QualityConfig, out: dict, path: Path, b
         "texture_bytes": 4 * N_PARAMS * H * W,
         "storage_bytes": 4 * N_PARAMS * H * W,
         "macs_per_texel": None,
-    }
+    }, reused
 
 
 def validate(cfg: QualityConfig) -> list[str]:
@@ -472,7 +474,9 @@ def validate(cfg: QualityConfig) -> list[str]:
     check_range("--lafortune-iters", cfg.lafortune_iters, 1, 10_000)
     check_range("--jobs", cfg.jobs, 1, 256)
     for p in presets:  # --preset, --res, --dirs, --seed as `btf synth` checks them
-        BtfConfig(preset=p, res=cfg.res, dirs=cfg.dirs, seed=cfg.seed).validate()
+        BtfConfig(preset=p, res=cfg.res, dirs=cfg.dirs, seed=cfg.seed).validate(
+            {"preset": "--presets"}
+        )
     check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
     check_train_config(  # --ema and the like, as `distill` checks them
         DistillConfig(epochs=cfg.epochs, seed=cfg.seed, ema=cfg.ema, device=cfg.device)

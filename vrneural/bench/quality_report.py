@@ -143,7 +143,9 @@ def markdown(doc: dict) -> str:
         f"{cfg['epochs']} epochs"
         + (f" with weight averaging (--ema {cfg['ema']:g})" if cfg.get("ema") else "")
         + f", Lafortune {cfg['lafortune_iters']} LM iterations, "
-        f"{seeds}; {_trained_on(doc)}. Total {doc['total_seconds'] / 60:.1f} min.",
+        f"{seeds}; {_trained_on(doc)}. This invocation took {doc['total_seconds'] / 60:.1f} "
+        "min; networks it reused from earlier runs list their own train s below (per seed: "
+        "the mean over the seeds).",
         "",
         "| method | " + " | ".join(presets) + " | storage (bytes) | MLP MACs / texel |",
         "|---|" + "---|" * (len(presets) + 2),

@@ -139,12 +139,18 @@ def int_list(field: str, text: str, lo: int, hi: int, even: bool = False) -> lis
     """Parse a comma-separated list of integers in ``[lo, hi]`` (one-line VrnError if not)."""
     from vrneural.errors import VrnError
 
+    items = str(text).split(",")
+    if any(not t.strip() for t in items) and str(text).strip():
+        raise VrnError(f"{field} = {text!r} has an empty item; write e.g. 1,2,4")
     try:
-        vals = [int(t) for t in str(text).split(",") if t.strip()]
+        vals = [int(t) for t in items if t.strip()]
     except ValueError:
         raise VrnError(f"{field} = {text!r} must be comma-separated integers") from None
     if not vals:
         raise VrnError(f"{field} is empty")
+    dup = sorted({v for v in vals if vals.count(v) > 1})
+    if dup:
+        raise VrnError(f"{field} = {text!r} lists {dup[0]} twice; each value once")
     for v in vals:
         if not lo <= v <= hi:
             raise VrnError(f"{field} = {text!r}: {v} is out of range; allowed [{lo}, {hi}]")

@@ -6,6 +6,8 @@ function), so later benchmarks add one entry and one function.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from vrneural.config import add_config_args, config_from_args
 
 
@@ -46,7 +48,9 @@ def _register_extremes(sub) -> None:
         description="Run every extreme case (directions, precision, geometry, settings, "
         "training) and write results.json, results.md and f16_error.png; exit 1 on any FAIL.",
     )
-    p.add_argument("--out", default="bench-extremes", help="output directory")
+    p.add_argument(
+        "--out", default="bench-extremes", help="output directory (default: bench-extremes)"
+    )
     add_config_args(p, ExtremesConfig)
     p.set_defaults(func=_run_extremes)
 
@@ -55,8 +59,10 @@ def _run_extremes(args) -> int:
     from vrneural.bench.extremes import ExtremesConfig, run_extremes
 
     doc = run_extremes(config_from_args(ExtremesConfig, args), args.out)
+    png = ", f16_error.png" if (Path(args.out) / "f16_error.png").is_file() else ""
     print(
-        f"{args.out}: results.json, results.md ({doc['n_fail']} FAIL, {doc['total_seconds']:.0f} s)"
+        f"bench extremes: {args.out}/ results.json, results.md{png} "
+        f"({doc['n_fail']} FAIL, {doc['total_seconds']:.0f} s)"
     )
     return 1 if doc["n_fail"] else 0
 
