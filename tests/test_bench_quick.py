@@ -60,9 +60,10 @@ def test_frames_records_and_amortisation(results):
             by_n = {
                 r["reuse"]: r for r in tex if r["texture_res"] == res and r["schedule"] == sched
             }
-            # N = 0 updates every frame: never cheaper than N = 4 (work and GPU ms; 5x apart)
+            # N = 0 updates every frame: never cheaper than N = 4, as work (GPU counters). Its
+            # GPU ms are not compared: at CI sizes fixed costs dominate and a loaded 2-core
+            # lavapipe inverted them once (6.3 vs 7.3 ms); the ms ratio is the benchmark's job
             assert by_n[0]["mlp_evals_per_frame"] > by_n[4]["mlp_evals_per_frame"]
-            assert by_n[0]["shading_ms_per_frame"] >= by_n[4]["shading_ms_per_frame"]
             evals = [by_n[n]["mlp_evals_per_frame"] for n in (0, 2, 4)]
             assert evals == sorted(evals, reverse=True)
 
