@@ -486,6 +486,9 @@ def test_pack_finds_its_teacher_by_the_recorded_checkpoint_then_by_name(capsys, 
     sm = json.loads((tmp_path / "a" / "summary.json").read_text())
     refs = {o["reference"] for o in sm["scene"]["objects"] if o["material"] == "neural"}
     assert refs == {str((d / "mat.teacher.vrnm").resolve())}
+    assert sm["resolved"]["precision"] == "f32"  # the teacher always runs in f32
+    msg = _err(capsys, [*argv, "--precision", "f16", "--out", str(tmp_path / "x")])
+    assert "--precision f16 does not apply to --mode reference" in msg
     (tmp_path / "far").mkdir()
     write_vrnm(tmp_path / "far" / "big.vrnm", teacher)  # the teacher the pack records wins
     assert main(["run", *argv, "--out", str(tmp_path / "b")]) == 0

@@ -111,6 +111,13 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     precision = resolve_precision(
         cfg.precision, adapter.is_cpu, adapter.features.get("shader-f16", False)
     )
+    if cfg.mode == "reference":  # the teacher always runs in f32 (it is the ground truth)
+        if cfg.precision == "f16":
+            raise VrnError(
+                "--precision f16 does not apply to --mode reference (the teacher always runs "
+                "in f32); drop --precision or use --mode texture|screen"
+            )
+        precision = "f32"
     ref = None
     if cfg.reference and cfg.mode != "reference":
         raise VrnError(
