@@ -252,6 +252,7 @@ def curves_png(doc: dict, path: Path) -> None:
                     m["curve"],
                     label=doc["labels"][name],
                     lw=2.2 if name == "student" else 1.2,
+                    ls="--" if name == "student_nodistill" else "-",  # seen under the student
                 )
                 for c in m.get("curves", [])[1:]:  # the other seeds, thin
                     ax.plot(range(1, len(c) + 1), c, c=line.get_color(), lw=0.7, alpha=0.45)
@@ -262,7 +263,9 @@ def curves_png(doc: dict, path: Path) -> None:
         ax.set_xlabel("epoch")
         ax.set_ylabel("test L1")
         ax.grid(alpha=0.3)
-    axes[0][-1].legend(fontsize=7)
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))  # the legend below the panels, never over a curve
     _save(fig, path)
     plt.close(fig)
 

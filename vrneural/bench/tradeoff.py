@@ -363,9 +363,10 @@ def pareto_png(doc: dict, path: Path) -> None:
     for ax, key, lower in zip(axes, ("flip", "psnr", "ssim"), (True, False, False), strict=True):
         pts = [(r["frame_ms"]["mean"], r[key]) for r in recs]
         front = sorted(pareto(pts, lower), key=lambda i: pts[i][0])
-        for r, (x, y) in zip(recs, pts, strict=True):
+        for i, (r, (x, y)) in enumerate(zip(recs, pts, strict=True)):
             ax.scatter(x, y, s=18, color="C3" if r["knob"] == "base" else "C0")
-            ax.annotate(label(r), (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points")
+            if i in front or r["knob"] == "base":  # the rest are in the table: no label pile
+                ax.annotate(label(r), (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points")
         ax.plot(
             [pts[i][0] for i in front],
             [pts[i][1] for i in front],
