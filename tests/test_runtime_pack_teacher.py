@@ -37,7 +37,7 @@ def test_the_recorded_teacher_is_found_and_other_teachers_are_passed_over(
     d.mkdir()
     pack = d / "student.vrnm"
     shutil.copy(trained["student"].with_suffix(".vrnm"), pack)
-    found, _ = teacher_beside(pack, student)  # by the absolute path it records
+    found, _, _ = teacher_beside(pack, student)  # by the absolute path it records
     assert found.resolve() == teacher_pack.resolve()
 
     lost = copy.deepcopy(student)  # the teacher moved away; the typed path is relative
@@ -46,11 +46,11 @@ def test_the_recorded_teacher_is_found_and_other_teachers_are_passed_over(
     monkeypatch.chdir(tmp_path)
     _other_teacher(tmp_path / "teacher.vrnm")  # resolved against the wrong directory, no hash
     _other_teacher(d / "student.teacher.vrnm", sha="0" * 64)  # another teacher by its hash
-    found, tried = teacher_beside(pack, lost)
-    assert found is None
+    found, teacher, tried = teacher_beside(pack, lost)
+    assert found is None and teacher is None
     text = " | ".join(tried)
     assert "cannot tell it is the recorded teacher" in text
     assert "another teacher: its checkpoint hash differs" in text
     shutil.copy(teacher_pack, d / "teacher.vrnm")  # the real one, under the plain name
-    found, _ = teacher_beside(pack, lost)
-    assert found == d / "teacher.vrnm"
+    found, teacher, _ = teacher_beside(pack, lost)
+    assert found == d / "teacher.vrnm" and teacher.meta["method"] == "teacher"

@@ -9,13 +9,14 @@ import threading
 
 class Stop:
     """Within ``with Stop() as stop``, Ctrl-C sets ``stop.flag`` instead of raising; the loop
-    finishes its current unit and stops. With ``second_raises``, a second Ctrl-C raises
-    :class:`KeyboardInterrupt` at once (for units that can take long, such as a frame of the
-    per-pixel reference). Outside the main thread it does nothing (signals go to the main one)."""
+    finishes its current unit and stops. While the loop sets ``stop.second_raises``, a second
+    Ctrl-C raises :class:`KeyboardInterrupt` at once (for units that can take long, such as a
+    frame of the per-pixel reference). Outside the main thread it does nothing (signals go to
+    the main one)."""
 
-    def __init__(self, second_raises: bool = False):
+    def __init__(self):
         self.flag = False
-        self.second_raises = second_raises
+        self.second_raises = False
         self._old = None
 
     def __enter__(self):

@@ -82,7 +82,7 @@ def run(args) -> int:
     from vrneural.config import config_from_args
     from vrneural.errors import VrnError, check_range
     from vrneural.formats.atomic import check_output
-    from vrneural.runtime.assets import LOST_TRIANGLES
+    from vrneural.runtime.assets import lost_triangles
 
     cfg = config_from_args(AtlasConfig, args)
     check_texture_resolution("--res", cfg.res)
@@ -105,12 +105,9 @@ def run(args) -> int:
     if cfg.padding == 0:
         notes.append("--padding 0: bilinear lookups at chart edges read texels with no triangle")
     for r in results:  # the same rule as `vrneural run`'s warning
-        lost, n_tri = int(r.get("triangles_without_texels", 0)), int(r.get("triangles", 0))
-        if n_tri and lost > LOST_TRIANGLES * n_tri:
-            notes.append(
-                f"{r['mesh']}: {lost} of {n_tri} triangles own no texel at {cfg.res}^2 (too "
-                "small in the atlas; a renderer shows their neighbours' shading); raise --res"
-            )
+        lost = lost_triangles(r, cfg.res, "a renderer shows their neighbours' shading")
+        if lost:
+            notes.append(f"{r['mesh']}: {lost}; raise --res")
     _write_sidecar(out, cfg, results, notes)
     for n in notes:  # stderr: stdout is the stats alone (valid JSON with --json)
         print(f"warning: {n}", file=sys.stderr)

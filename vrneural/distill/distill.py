@@ -18,7 +18,6 @@ from torch import nn
 from vrneural.btf.format import read_btf
 from vrneural.config import is_explicit, replace_config
 from vrneural.distill.checkpoint import load_checkpoint, recorded_btf
-from vrneural.formats.atomic import file_sha256
 from vrneural.distill.config import BEFORE_FIELD, DistillConfig
 from vrneural.distill.data import SliceData, btf_fingerprint, check_btf_record
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
@@ -27,7 +26,7 @@ from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
 from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range
-from vrneural.formats.atomic import check_not_input
+from vrneural.formats.atomic import check_not_input, file_sha256
 
 
 def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:

@@ -32,6 +32,18 @@ def _atlas_api():
 LOST_TRIANGLES = 0.5
 
 
+def lost_triangles(stats: dict, res: int, shown_as: str) -> str | None:
+    """The warning for an atlas (its ``stats``) in which more than :data:`LOST_TRIANGLES` of
+    the triangles own no texel at ``res``^2, else None; ``shown_as`` says what those triangles
+    show instead."""
+    lost, n_tri = int(stats.get("triangles_without_texels", 0)), int(stats.get("triangles", 0))
+    if not n_tri or lost <= LOST_TRIANGLES * n_tri:
+        return None
+    return (
+        f"{lost} of {n_tri} triangles own no texel at {res}^2 (too small in the atlas; {shown_as})"
+    )
+
+
 def builtin_names() -> tuple[str, ...]:
     a = _atlas_api()
     return tuple(a.BUILTIN_MESHES) if a is not None else FALLBACK_MESHES

@@ -17,7 +17,7 @@ from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
 from vrneural.runtime import forward as fw
-from vrneural.runtime.assets import LOST_TRIANGLES, get_atlas, get_mesh
+from vrneural.runtime.assets import get_atlas, get_mesh, lost_triangles
 from vrneural.runtime.camera import OrbitPath, PoseLogPath, eyes_from_pose, sphere_in_frustum
 from vrneural.runtime.codegen import reference_weights
 from vrneural.runtime.gpu_material import GpuAtlas
@@ -134,13 +134,10 @@ class Renderer:
                 f"{scene.src}: objects[{i}] ({o.name}) at {res}^2 texels "
                 f"(texture_res / min_texture_res): {e}"
             ) from None
-        lost = int(atlas.stats.get("triangles_without_texels", 0))
-        n_tri = len(atlas.mesh.faces)
-        if lost > LOST_TRIANGLES * n_tri:
+        lost = lost_triangles(atlas.stats, res, "they show their neighbours' shading")
+        if lost:
             self.warnings.append(
-                f"{scene.src}: objects[{i}] ({o.name}): {lost} of {n_tri} triangles own no "
-                f"texel at {res}^2 (too small in the atlas; they show their neighbours' "
-                "shading); raise texture_res / min_texture_res"
+                f"{scene.src}: objects[{i}] ({o.name}): {lost}; raise texture_res / min_texture_res"
             )
         c, r = bounding_sphere(atlas.mesh)
         n = _Neural(i, o, atlas, GpuAtlas(atlas), c, r)

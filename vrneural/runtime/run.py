@@ -92,8 +92,7 @@ def use_pack(scene, path: str) -> None:
     if mat.meta.get("method") == "teacher":  # a teacher is its own per-pixel reference
         ref, source, looked = mat, str(p.resolve()), ""
     else:
-        found, tried = teacher_beside(p, mat)
-        ref = read_vrnm(found) if found else None
+        found, ref, tried = teacher_beside(p, mat)
         source = str(found.resolve()) if found else ""
         looked = "" if found else "looked for " + ", ".join(tried)
     for o in scene.objects:
@@ -109,10 +108,11 @@ def use_pack(scene, path: str) -> None:
             )
 
 
-def teacher_beside(pack: Path, mat) -> tuple[Path | None, list[str]]:
-    """The teacher pack of the student ``pack``, and the paths tried (each with why it was
-    passed over). Candidates, in order: the ``.vrnm`` of the teacher checkpoint the pack records
-    (beside the pack, at its absolute path, at the path as typed then), ``<stem>.teacher.vrnm``
+def teacher_beside(pack: Path, mat) -> tuple[Path | None, object, list[str]]:
+    """The teacher pack of the student ``pack`` (its path and material, or None, None) and the
+    paths tried before it (each with why it was passed over). Candidates, in order: the
+    ``.vrnm`` of the teacher checkpoint the pack records (beside the pack, at its absolute
+    path, at the path as typed then), ``<stem>.teacher.vrnm``
     (the bundled packs' naming) and ``teacher.vrnm`` beside the pack. A candidate must be a
     teacher pack, and where the student records its teacher's checkpoint hash, the candidate
     must not belong to another checkpoint: its own recorded hash (or that of the ``.pt`` beside
@@ -121,14 +121,15 @@ def teacher_beside(pack: Path, mat) -> tuple[Path | None, list[str]]:
     prov = mat.meta.get("provenance") or {}
     want = prov.get("teacher") if isinstance(prov.get("teacher"), str) else None
     typed = (prov.get("config") or {}).get("teacher")
+    typed = Path(typed).with_suffix(".vrnm") if isinstance(typed, str) and typed else None
     absolute = prov.get("teacher_path")
     cands: list[tuple[Path, bool]] = []  # (path, must the hash confirm it)
-    if isinstance(typed, str) and typed:
-        cands.append((pack.with_name(Path(typed).with_suffix(".vrnm").name), False))
+    if typed:
+        cands.append((pack.with_name(typed.name), False))
     if isinstance(absolute, str) and absolute:
         cands.append((Path(absolute).with_suffix(".vrnm"), False))
-    if isinstance(typed, str) and typed:
-        cands.append((Path(typed).with_suffix(".vrnm"), True))
+    if typed:
+        cands.append((typed, True))
     cands += [(pack.with_name(f"{pack.stem}.teacher.vrnm"), False)]
     cands += [(pack.with_name("teacher.vrnm"), False)]
     tried, seen = [], set()
@@ -137,36 +138,36 @@ def teacher_beside(pack: Path, mat) -> tuple[Path | None, list[str]]:
         if key in seen:
             continue
         seen.add(key)
-        why = _not_the_teacher(t, pack, want, strict)
-        if why is None:
-            return t, tried
+        teacher, why = _read_teacher(t, pack, want, strict)
+        if teacher is not None:
+            return t, teacher, tried
         tried.append(f"{t}{'' if why == 'not found' else f' ({why})'}")
-    return None, tried
+    return None, None, tried
 
 
-def _not_the_teacher(t: Path, pack: Path, want: str | None, strict: bool) -> str | None:
-    """Why ``t`` is not the teacher of ``pack`` (None: it is)."""
+def _read_teacher(t: Path, pack: Path, want: str | None, strict: bool) -> tuple[object, str]:
+    """``(material, "")`` when ``t`` is the teacher of ``pack``, else ``(None, why not)``."""
     from vrneural.formats.atomic import file_sha256
     from vrneural.formats.vrnm import read_vrnm
 
     if not t.is_file():
-        return "not found"
+        return None, "not found"
     if same_file(t, pack):
-        return "the pack itself"
+        return None, "the pack itself"
     try:
-        meta = read_vrnm(t).meta
+        mat = read_vrnm(t)
     except VrnError:
-        return "not a readable pack"
-    if meta.get("method") != "teacher":
-        return f"a {meta.get('method') or 'non-teacher'} pack, not a teacher"
+        return None, "not a readable pack"
+    if mat.meta.get("method") != "teacher":
+        return None, f"a {mat.meta.get('method') or 'non-teacher'} pack, not a teacher"
     if want is None:
-        return None
-    have = (meta.get("provenance") or {}).get("checkpoint_sha256")
+        return mat, ""
+    have = (mat.meta.get("provenance") or {}).get("checkpoint_sha256")
     if have is None and t.with_suffix(".pt").is_file():
         have = file_sha256(t.with_suffix(".pt"))
     if have is None:
-        return "cannot tell it is the recorded teacher" if strict else None
-    return None if have == want else "another teacher: its checkpoint hash differs"
+        return (None, "cannot tell it is the recorded teacher") if strict else (mat, "")
+    return (mat, "") if have == want else (None, "another teacher: its checkpoint hash differs")
 
 
 def default_out() -> Path:
