@@ -5,7 +5,8 @@
 #      a bare `torch` (which would pull several GB of CUDA packages)
 #   3. vrneural itself, editable, with the train/dev/metrics extras, and btf-extractor
 #      (UBO2014 import; built without isolation, see below)
-#   4. Mesa's lavapipe CPU Vulkan driver, only when wgpu finds no adapter
+#   4. Mesa's lavapipe CPU Vulkan driver, only when wgpu finds no Vulkan (or Metal, D3D12)
+#      adapter (an OpenGL one, e.g. llvmpipe through EGL, does not count)
 # Re-running is cheap: steps 2-3 are skipped while pyproject.toml is unchanged.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -33,7 +34,7 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
 fi
 
 if ! .venv/bin/python -c "from vrneural.gpu.device import _adapter; _adapter()" >/dev/null 2>&1; then
-    echo "[setup] wgpu finds no adapter: installing Mesa's lavapipe (mesa-vulkan-drivers)"
+    echo "[setup] wgpu finds no Vulkan adapter: installing Mesa's lavapipe (mesa-vulkan-drivers)"
     SUDO=""
     [ "$(id -u)" = 0 ] || SUDO="sudo"
     $SUDO apt-get update -qq

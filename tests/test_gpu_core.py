@@ -9,8 +9,10 @@ pytestmark = pytest.mark.gpu
 def test_adapter_summary_has_what_info_needs():
     from vrneural.gpu import adapter_summary
 
+    from vrneural.gpu.device import BACKENDS
+
     s = adapter_summary()
-    assert s.name and s.backend
+    assert s.name and s.backend in BACKENDS  # never OpenGL, where our kernels are wrong
     assert set(s.features) == {"shader-f16", "timestamp-query", "subgroup"}
     assert s.limits["max_texture_dimension_2d"] >= 2048
 

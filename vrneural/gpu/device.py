@@ -26,24 +26,57 @@ def _quiet_env() -> None:
         os.environ["XDG_RUNTIME_DIR"] = "/tmp"
 
 
+#: Backends whose WGSL compute path we test (storage textures, f16, constant weights). wgpu
+#: also offers OpenGL (e.g. Mesa's llvmpipe through EGL when no Vulkan driver is installed),
+#: but our kernels give wrong results there (its view-dimension heuristics, no shader-f16),
+#: so it is refused with the fix rather than used.
+BACKENDS = ("Vulkan", "Metal", "D3D12")
+#: Adapter types, best first (what power_preference="high-performance" means to us).
+ADAPTER_TYPES = ("DiscreteGPU", "IntegratedGPU", "VirtualGPU", "CPU")
+INSTALL_HINT = "on Debian install Mesa's CPU Vulkan driver: apt-get install -y mesa-vulkan-drivers"
+
+
+def pick_adapter(infos: list[dict]) -> int:
+    """Index of the adapter to use among ``infos`` (wgpu adapter info dicts), or -1.
+
+    Only the backends in ``BACKENDS``; among them a discrete GPU before an integrated one
+    before a CPU driver, then Vulkan before Metal before D3D12, then enumeration order.
+    """
+
+    def rank(i: int) -> tuple[int, int, int]:
+        info = infos[i]
+        kind = info.get("adapter_type", "")
+        kind_rank = ADAPTER_TYPES.index(kind) if kind in ADAPTER_TYPES else len(ADAPTER_TYPES)
+        return (kind_rank, BACKENDS.index(info["backend_type"]), i)
+
+    usable = [i for i, info in enumerate(infos) if info.get("backend_type") in BACKENDS]
+    return min(usable, key=rank) if usable else -1
+
+
+def _describe(info: dict) -> str:
+    name = info.get("device", "") or info.get("description", "") or "?"
+    return f"{name} ({info.get('backend_type', '?')})"
+
+
 @functools.cache
 def _adapter():
     _quiet_env()
     import wgpu
 
     try:
-        adapter = wgpu.gpu.request_adapter_sync(power_preference="high-performance")
+        adapters = list(wgpu.gpu.enumerate_adapters_sync())
     except Exception as e:  # wgpu raises a plain RuntimeError when no driver exists
-        adapter = None
         err = str(e).splitlines()[0] if str(e) else type(e).__name__
-    else:
-        err = ""
-    if adapter is None:
+        raise VrnError(f"no GPU adapter found (wgpu: {err}); {INSTALL_HINT}") from None
+    infos = [dict(a.info) for a in adapters]
+    i = pick_adapter(infos)
+    if i < 0:
+        found = ", ".join(_describe(info) for info in infos) or "none"
         raise VrnError(
-            "no GPU adapter found (wgpu: " + (err or "none") + "); on Debian install Mesa's "
-            "CPU Vulkan driver: apt-get install -y mesa-vulkan-drivers"
+            f"no Vulkan, Metal or D3D12 GPU adapter found (wgpu found: {found}; OpenGL is "
+            f"not supported); {INSTALL_HINT}"
         )
-    return adapter
+    return adapters[i]
 
 
 @functools.cache
