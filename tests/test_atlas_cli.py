@@ -183,7 +183,15 @@ def test_one_mesh_of_a_file_bad_faces_and_what_is_lost_are_said(tmp_path, capsys
     assert main(["atlas", str(bad), "--res", "64", "-o", str(tmp_path / "b.png")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "a face refers to a vertex the file does not have" in err
-    assert "index 8, counted from 0; it has 3 vertices" in err
+    assert "index 9; it has 3 vertices, numbered from 1" in err
+    # OBJ counts from 1: a 0 (vertex, texture or normal index) is an error with its line, not
+    # a face trimesh would silently build from the last vertex
+    for face in ("f 0 1 2", "f 1/1 2/0 3/1", "f 1//1 2//1 -0"):
+        bad.write_text(f"v 0 0 0\nv 1 0 0\nv 0 1 0\n{face}\n")
+        assert main(["atlas", str(bad), "--res", "64", "-o", str(tmp_path / "b.png")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and f"{bad}:4: face index 0; OBJ indices count from 1" in err
+    assert not (tmp_path / "b.png").exists()
     dense = tmp_path / "dense.png"
     assert main(["atlas", "highpoly", "--res", "64", "--padding", "0", "-o", str(dense)]) == 0
     err = capsys.readouterr().err

@@ -41,6 +41,14 @@ def test_every_bench_writes_json_markdown_and_small_pngs(results):
         for png in PNGS[b]:
             p = out / b / png
             assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and p.stat().st_size < 300_000
+    # bench all's own index: every bench, its time, its report and plots, linked
+    index = json.loads((out / "index.json").read_text())
+    assert list(index["benches"]) == list(BENCHES) and index["quick"] is True
+    md = (out / "index.md").read_text()
+    for b in BENCHES:
+        assert index["benches"][b]["records"] == len(docs[b]["records"])
+        assert f"[results.md]({b}/results.md)" in md
+        assert all(f"({b}/{png})" in md for png in PNGS[b])
 
 
 @pytest.mark.gpu

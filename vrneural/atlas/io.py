@@ -40,11 +40,17 @@ def load_mesh(path) -> list[Mesh]:
     if p.suffix.lower() not in MESH_SUFFIXES:
         allowed = ", ".join(MESH_SUFFIXES)
         raise VrnError(f"{p}: unsupported mesh type {p.suffix or '(none)'!r}; allowed {allowed}")
+    if p.suffix.lower() == ".obj":
+        _check_obj_indices(p)
     try:
         loaded = trimesh.load(p, process=False)
     except IndexError as e:  # a face naming a vertex the file does not have
         m = re.search(r"index (-?\d+) is out of bounds for axis 0 with size (\d+)", str(e))
-        what = f" (index {m[1]}, counted from 0; it has {m[2]} vertices)" if m else ""
+        what = ""
+        if m and p.suffix.lower() == ".obj" and int(m[1]) >= 0:  # the number the file holds
+            what = f" (index {int(m[1]) + 1}; it has {m[2]} vertices, numbered from 1)"
+        elif m:
+            what = f" (index {m[1]}, counted from 0; it has {m[2]} vertices)"
         raise VrnError(
             f"{p}: cannot read mesh: a face refers to a vertex the file does not have{what}"
         ) from None
@@ -66,6 +72,24 @@ def load_mesh(path) -> list[Mesh]:
     if not meshes:
         raise VrnError(f"{p}: no triangle faces in the file (point cloud or empty mesh?)")
     return meshes
+
+
+# An OBJ face element whose vertex, texture or normal index is 0 (OBJ counts from 1; trimesh
+# would silently turn a 0 into -1, the last vertex, and build a different triangle).
+_OBJ_ZERO_INDEX = re.compile(rb"(?m)^[ \t]*f[ \t][^\n]*?(?<=[ \t/])-?0+(?=[ \t/\r]|$)")
+
+
+def _check_obj_indices(p: Path) -> None:
+    try:
+        data = p.read_bytes()
+    except OSError as e:
+        raise VrnError(f"{p}: cannot read mesh ({e.strerror or e})") from None
+    m = _OBJ_ZERO_INDEX.search(data)
+    if m:
+        line = data.count(b"\n", 0, m.start()) + 1
+        raise VrnError(
+            f"{p}:{line}: face index 0; OBJ indices count from 1 (negative ones from the end)"
+        )
 
 
 def _to_mesh(label: str, g) -> Mesh:

@@ -107,14 +107,53 @@ def _run_all(args) -> int:
     for name in SPECS:  # every bench's folder before the first bench replaces its own
         check_output_dir(Path(args.out) / name, args.force, f"bench {name}")
     mark_output_dir(args.out, "bench all")
+    docs = {}
     for name in SPECS:
         cls, fn = _load(name)
         out = str(Path(args.out) / name)
-        doc = fn(cls(out=out, quick=args.quick, force=args.force, progress=args.progress))
-        _summary(name, doc, out)
+        docs[name] = fn(cls(out=out, quick=args.quick, force=args.force, progress=args.progress))
+        _summary(name, docs[name], out)
+    _write_index(Path(args.out), docs, args.quick, time.perf_counter() - t0)
     seal_output_dir(args.out, "bench all")
-    print(f"bench all: {time.perf_counter() - t0:.0f} s")
+    print(f"bench all: {args.out}/index.md ({time.perf_counter() - t0:.0f} s)")
     return 0
+
+
+def _write_index(out: Path, docs: dict, quick: bool, seconds: float) -> None:
+    """``OUT/index.md`` + ``index.json``: what each bench reproduces, its time and its files."""
+    from vrneural.formats.atomic import atomic_path, write_json
+
+    first = next(iter(docs.values()))
+    a = first.get("adapter", {})
+    lines = [
+        "# vrneural bench all" + (" (quick, CI sizes)" if quick else ""),
+        "",
+        f"Adapter: {a.get('name', '?')} ({a.get('backend', '?')}, {a.get('adapter_type', '?')}); "
+        f"{seconds:.0f} s in all.",
+        "",
+        "| bench | reproduces | seconds | report | plots |",
+        "|---|---|---|---|---|",
+    ]
+    benches = {}
+    for name, doc in docs.items():
+        pngs = sorted(p.name for p in (out / name).glob("*.png"))
+        plots = ", ".join(f"[{p}]({name}/{p})" for p in pngs) or "-"
+        lines.append(
+            f"| {name} | {SPECS[name][3]} | {doc['total_seconds']:.0f} | "
+            f"[results.md]({name}/results.md) | {plots} |"
+        )
+        benches[name] = {
+            "seconds": doc["total_seconds"],
+            "results": f"{name}/results.json",
+            "records": len(doc.get("records", [])),
+            "plots": [f"{name}/{p}" for p in pngs],
+        }
+    with atomic_path(out / "index.md") as tmp:
+        tmp.write_text("\n".join(lines) + "\n")
+    write_json(
+        out / "index.json",
+        {"quick": quick, "total_seconds": seconds, "adapter": a, "benches": benches},
+    )
 
 
 ENTRIES = {name: _entry(name) for name in SPECS}
