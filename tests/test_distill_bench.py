@@ -91,15 +91,19 @@ def test_bench_quality_smoke(tmp_path, capsys):
     assert two["teacher"]["whole_l1_seeds"] == [more["teacher"]["whole_l1"]]
     assert "seeds 0-1" in (out / "results.md").read_text()
     j = args.index(out)
-    code, err = run_cli(*args[:j], tmp_path / "e", *args[j + 1 :], "--ema", 0.9)
+    extra = ("--ema", 0.9, "--lr-patience", 7)
+    code, err = run_cli(*args[:j], tmp_path / "e", *args[j + 1 :], *extra)
     assert code == 0, err
     from vrneural.distill.checkpoint import load_checkpoint
 
     for name in ("neumip", "single8", "student_nodistill", "student"):
         ck = load_checkpoint(tmp_path / "e" / "leather" / f"{name}.pt")
         assert ck["config"]["ema"] == 0.9 and ck["ema"]["count"] > 0
-    assert load_checkpoint(tmp_path / "e" / "leather" / "teacher.pt")["config"]["ema"] == 0.0
-    assert "weight averaging (--ema 0.9)" in (tmp_path / "e" / "results.md").read_text()
+        assert ck["config"]["lr_patience"] == 7
+    tck = load_checkpoint(tmp_path / "e" / "leather" / "teacher.pt")
+    assert tck["config"]["ema"] == 0.0 and tck["config"]["lr_patience"] == 2
+    md = (tmp_path / "e" / "results.md").read_text()
+    assert "weight averaging (--ema 0.9)" in md and "lr patience 7 epochs" in md
 
 
 def _digests(root):
@@ -271,6 +275,7 @@ def test_bench_quality_never_writes_into_a_folder_of_the_users_files(tmp_path):
     ("argv", "needle"),
     [
         (["--ema", "1"], "--ema = 1.0 is out of range"),
+        (["--lr-patience", "-1"], "--lr-patience = -1 is out of range"),
         (["--out", ""], "--out is empty"),
         (["--dirs", "0"], "--dirs = 0 is out of range; allowed [2, 100000]"),
         (["--dirs", "1"], "--dirs = 1 is out of range; allowed [2, 100000]"),

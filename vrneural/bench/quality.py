@@ -68,6 +68,11 @@ class QualityConfig:
         choices=NEUMIP_DIRS,
     )
     ema: float = opt(0.0, "weight-average decay of every network but the teacher (distill --ema)")
+    lr_patience: int = opt(
+        2,
+        "ReduceLROnPlateau patience of every network but the teacher (distill --lr-patience; "
+        "see docs/quality-research.md on a gentler schedule)",
+    )
     device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
     compile: str = opt(
         "off", "torch.compile the networks (teach/distill --compile)", choices=COMPILE_MODES
@@ -173,6 +178,7 @@ def _distill_configs(
                     epochs=cfg.epochs,
                     seed=seed,
                     ema=cfg.ema,
+                    lr_patience=cfg.lr_patience,
                     neumip_dirs=cfg.neumip_dirs,
                     **kw,
                     **_common(cfg),
@@ -479,7 +485,13 @@ def validate(cfg: QualityConfig) -> list[str]:
         )
     check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
     check_train_config(  # --ema and the like, as `distill` checks them
-        DistillConfig(epochs=cfg.epochs, seed=cfg.seed, ema=cfg.ema, device=cfg.device)
+        DistillConfig(
+            epochs=cfg.epochs,
+            seed=cfg.seed,
+            ema=cfg.ema,
+            lr_patience=cfg.lr_patience,
+            device=cfg.device,
+        )
     )
     train_device(cfg.device)
     return presets

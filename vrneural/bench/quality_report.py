@@ -142,6 +142,12 @@ def markdown(doc: dict) -> str:
         f"directions, teacher {cfg['teacher_epochs']} epochs, every other network "
         f"{cfg['epochs']} epochs"
         + (f" with weight averaging (--ema {cfg['ema']:g})" if cfg.get("ema") else "")
+        + (
+            f" {'and' if cfg.get('ema') else 'with'} lr patience {cfg['lr_patience']} epochs "
+            "(--lr-patience)"
+            if cfg.get("lr_patience", 2) != 2
+            else ""
+        )
         + f", Lafortune {cfg['lafortune_iters']} LM iterations, "
         f"{seeds}; {_trained_on(doc)}. This invocation took {doc['total_seconds'] / 60:.1f} "
         "min; networks it reused from earlier runs list their own train s below (per seed: "
