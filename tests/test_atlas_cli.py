@@ -85,7 +85,7 @@ def test_mesh_file_with_two_meshes(tmp_path, capsys):
     ("args", "out_name", "message"),
     [
         (["{tmp}/missing.obj"], "a.png", "missing.obj: no such file"),
-        (["{tmp}/nan.obj"], "a.png", "nan.obj: 1 vertices have NaN/Inf positions"),
+        (["{tmp}/nan.obj"], "a.png", "nan.obj:3: vertex 3 has a NaN/Inf position (0 inf 0)"),
         (["sphere", "--res", "0"], "a.png", "--res = 0 is out of range; allowed [8, 8192]"),
         (["sphere", "--res", "-5"], "a.png", "--res = -5 is out of range"),
         (["sphere", "--res", "100000"], "a.png", "--res = 100000 is out of range"),
@@ -182,8 +182,32 @@ def test_one_mesh_of_a_file_bad_faces_and_what_is_lost_are_said(tmp_path, capsys
     bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
     assert main(["atlas", str(bad), "--res", "64", "-o", str(tmp_path / "b.png")]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and "a face refers to a vertex the file does not have" in err
-    assert "index 9; it has 3 vertices, numbered from 1" in err
+    assert err.count("\n") == 0 and f"{bad}:4: vertex index 9; the file has 3 vertices" in err
+    # every other malformed OBJ line is named too (trimesh would raise a bare ValueError, or
+    # silently drop the UVs a face misnames)
+    for body, needle in (
+        ("f 1 a 3", ":4: face corner 'a' is not an integer index"),
+        ("f 1/x 2 3", ":4: face corner '1/x' holds 'x', is not an integer index"),
+        ("f 1 2", ":4: a face has 2 corners; at least 3 needed"),
+        ("f 1/9 2/1 3/1", ":4: texture index 9; the file has no texture coordinates"),
+        ("vn 0 0 1\nf 1//1 2//1 3//-2", ":5: normal index -2 counts back past the first of"),
+        ("f -9 2 3", ":4: vertex index -9 counts back past the first of the 3 vertices"),
+        ("f 1/2/3/4 2 3", ":4: face corner '1/2/3/4' is not v, v/vt, v//vn or v/vt/vn"),
+    ):
+        bad.write_text(f"v 0 0 0\nv 1 0 0\nv 0 1 0\n{body}\n")
+        assert main(["atlas", str(bad), "--res", "64", "-o", str(tmp_path / "b.png")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and f"{bad}{needle}" in err, err
+    for body, needle in (
+        ("v 0 0 0\nv nan 0 0\nv 0 1 0", ":2: vertex 2 has a NaN/Inf position (nan 0 0)"),
+        ("v 0 0 0\nv 1 0\nv 0 1 0", ":2: vertex 2 needs 3 numbers x y z, got 'v 1 0'"),
+    ):
+        bad.write_text(f"{body}\nf 1 2 3\n")
+        assert main(["atlas", str(bad), "--res", "64", "-o", str(tmp_path / "b.png")]) == 2
+        assert f"{bad}{needle}" in capsys.readouterr().err
+    bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n")  # negative = from the end: fine
+    assert main(["atlas", str(bad), "--res", "64", "-o", str(tmp_path / "neg.png")]) == 0
+    capsys.readouterr()
     # OBJ counts from 1: a 0 (vertex, texture or normal index) is an error with its line, not
     # a face trimesh would silently build from the last vertex
     for face in ("f 0 1 2", "f 1/1 2/0 3/1", "f 1//1 2//1 -0"):

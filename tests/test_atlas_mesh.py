@@ -64,7 +64,10 @@ def test_validation_errors_and_degenerate_warning():
         make_mesh("m", pos, np.zeros((0, 3), int))
     bad = pos.copy()
     bad[2, 1] = np.nan
-    with pytest.raises(VrnError, match=r"1 vertices have NaN/Inf positions \(first at vertex 2\)"):
+    with pytest.raises(
+        VrnError,
+        match=r"1 vertices have NaN/Inf positions \(the first is vertex index 2, counted from 0\)",
+    ):
         make_mesh("m", bad, [[0, 1, 2]])
     bad[2, 1] = np.inf
     with pytest.raises(VrnError, match="NaN/Inf"):
@@ -177,3 +180,101 @@ def test_load_errors(tmp_path):
     (tmp_path / "junk.glb").write_bytes(b"not a glb file at all")
     with pytest.raises(VrnError, match="cannot read mesh"):
         load_mesh(tmp_path / "junk.glb")
+
+
+_CUBE = (
+    "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+    "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+    "f 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n"
+)
+
+
+def _face_normals(m):
+    p = m.positions.astype(np.float64)[m.faces.astype(np.int64)]
+    fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    return fn / np.linalg.norm(fn, axis=1, keepdims=True)
+
+
+def test_cube_without_normals_has_flat_faces(tmp_path):
+    """An 8-vertex cube with no normals in the file: its edges are creases (90 > 60 degrees),
+    so every corner gets its face's normal, not the diagonal average over the three faces."""
+    (tmp_path / "cube.obj").write_text(_CUBE)
+    (m,) = load_mesh(tmp_path / "cube.obj")
+    _check_frame(m)
+    fn = _face_normals(m)
+    for k in range(3):
+        np.testing.assert_allclose(m.normals[m.faces[:, k]], fn, atol=1e-6)
+    (smooth,) = load_mesh(tmp_path / "cube.obj", crease_deg=180)  # everything smoothed
+    assert np.abs(smooth.normals).min() > 0.3  # blended over the three faces at each corner
+    with_vn = _CUBE.split("f ")[0] + "vn 0 0 1\nf 1//1 2//1 3//1\n"
+    (tmp_path / "cube_vn.obj").write_text(with_vn)
+    with pytest.warns(MeshWarning, match="own normals; crease angle 30 not used"):
+        load_mesh(tmp_path / "cube_vn.obj", crease_deg=30)
+
+
+def test_smooth_mesh_keeps_its_vertices_and_zero_crease_is_flat():
+    ico = trimesh.creation.icosphere(subdivisions=3)
+    pos, faces = np.asarray(ico.vertices), np.asarray(ico.faces)
+    uv = pos[:, :2] * 0.5 + 0.5  # any UV: normals do not depend on it
+    m = make_mesh("ico", pos, faces, uv=uv)  # default 60: neighbours differ by ~10 degrees
+    assert len(m.positions) == len(pos)
+    np.testing.assert_array_equal(m.faces, faces)
+    np.testing.assert_allclose(m.normals, pos / np.linalg.norm(pos, axis=1)[:, None], atol=2e-2)
+    flat = make_mesh("ico", pos, faces, uv=uv, crease_deg=0)
+    assert len(flat.positions) > len(pos)
+    _check_frame(flat)
+    fn = _face_normals(flat)
+    for k in range(3):
+        np.testing.assert_allclose(flat.normals[flat.faces[:, k]], fn, atol=1e-6)
+    np.testing.assert_allclose(flat.positions[flat.faces], m.positions[m.faces])
+    np.testing.assert_allclose(flat.uv[flat.faces], m.uv[m.faces])
+    with pytest.raises(VrnError, match=r"ico: crease angle 200 is out of range \[0, 180\]"):
+        make_mesh("ico", pos, faces, uv=uv, crease_deg=200)
+
+
+def _creased_twin(pos, faces, crease_deg):
+    """Per-corner normals by brute force: the loop the vectorized code replaces."""
+    fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
+    fu = fn / np.linalg.norm(fn, axis=1, keepdims=True)
+    keyed = [tuple(p) for p in pos]
+    out = np.zeros((len(faces), 3, 3))
+    for f in range(len(faces)):
+        for k in range(3):
+            here = keyed[faces[f, k]]
+            acc = np.zeros(3)
+            for g in range(len(faces)):
+                at = any(keyed[faces[g, j]] == here for j in range(3))
+                if at and fu[f] @ fu[g] >= np.cos(np.radians(crease_deg)) - 1e-9:
+                    acc += fn[g]
+            out[f, k] = acc / np.linalg.norm(acc)
+    return out
+
+
+@pytest.mark.parametrize("crease", [0.0, 25.0, 60.0, 120.0])
+def test_creased_normals_match_a_brute_force_twin(monkeypatch, crease):
+    """A bumpy grid with a duplicated (UV-seam) column: the vectorized corners equal the loop,
+    also when the pair buffer is cut into tiny chunks; seam copies share their normal."""
+    from vrneural.atlas import geometry
+
+    rng = np.random.default_rng(3)
+    n = 6
+    s, t = np.meshgrid(np.arange(n + 1.0), np.arange(n + 1.0), indexing="xy")
+    pos = np.stack([s.ravel(), t.ravel(), rng.uniform(-0.8, 0.8, s.size)], 1)
+    faces = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            faces += [[a, a + 1, a + n + 1], [a + 1, a + n + 2, a + n + 1]]
+    faces = np.array(faces)
+    seam = np.arange(3, len(pos), n + 1)  # column 3 duplicated: faces right of it use copies
+    pos2 = np.concatenate([pos, pos[seam]])
+    right = (pos[faces].min(axis=1)[:, 0] >= 3).nonzero()[0]
+    remap = np.arange(len(pos))
+    remap[seam] = len(pos) + np.arange(len(seam))
+    faces[right] = remap[faces[right]]
+    want = _creased_twin(pos2, faces, crease)
+    for chunk in (geometry._PAIR_CHUNK, 5):
+        monkeypatch.setattr(geometry, "_PAIR_CHUNK", chunk)
+        src, f2, nrm = geometry.creased_normals(pos2, faces, crease)
+        np.testing.assert_array_equal(src[f2], faces)  # same triangles, same positions
+        np.testing.assert_allclose(nrm[f2], want, atol=1e-9)

@@ -282,6 +282,7 @@ mesh = "{mesh}"
         ({"light": "colour = [1, 1, 1]\ncolor = [1, 0, 0]"}, "lights[0].color and colour are both"),
         ({"mesh": "two.glb"}, "objects[0].mesh = 'two.glb' holds 2 meshes"),
         ({"mesh": "two.glb:teapot"}, "two.glb has no mesh 'teapot'"),
+        ({"extra": "crease_angle = 181"}, "objects[0].crease_angle = 181 is out of range"),
     ],
 )
 def test_bad_scene_fields(capsys, tmp_path, fields, needle):
@@ -328,6 +329,21 @@ def test_scene_mesh_files_by_name_or_index_and_bundled_packs(tmp_path):
     assert o.min_texture_res == 64 and o.texture_res is None and o.name == "two"
     assert o.material.source.endswith("vrneural/data/materials/leather.vrnm")
     assert o.material.reference.arch == "single" and sc.src == "s.toml"
+    assert o.crease_angle is None
+
+
+def test_scene_crease_angle_reaches_the_mesh(tmp_path):
+    """crease_angle = 0 on a built-in sphere: flat facets, so more (split) vertices."""
+    from vrneural.runtime.assets import get_mesh
+    from vrneural.runtime.scene import load_scene
+
+    text = OBJ.format(
+        mesh="sphere", extra="crease_angle = 0", mat='kind = "plain"', light="position = [0, 1, 0]"
+    )
+    o = load_scene(_scene(tmp_path, text)).objects[0]
+    assert o.crease_angle == 0.0
+    flat, smooth = get_mesh("sphere", crease_deg=o.crease_angle), get_mesh("sphere")
+    assert len(flat.positions) > len(smooth.positions) and len(flat.faces) == len(smooth.faces)
 
 
 @pytest.mark.gpu
@@ -461,6 +477,10 @@ def test_what_a_run_drops_or_cannot_see_is_a_warning_kept_in_the_summary(capsys,
     assert main([*argv, "--no-video", "--quiet", "--out", str(tmp_path / "d")]) == 0
     sm = json.loads((tmp_path / "d" / "summary.json").read_text())
     assert "dark.toml: the scene has no [[lights]]: neural objects are black" in sm["warnings"]
+    argv = ["run", "--profile", "tiny", "--lights", "0", "--frames", "1", "--no-video"]
+    assert main([*argv, "--quiet", "--out", str(tmp_path / "z")]) == 0  # asked for: said too
+    sm = json.loads((tmp_path / "z" / "summary.json").read_text())
+    assert any(w.startswith("--lights 0: none of the scene's ") for w in sm["warnings"])
 
 
 @pytest.mark.gpu

@@ -7,8 +7,12 @@ Everything here is numpy only. :func:`make_mesh` is the one way a :class:`Mesh` 
 - NaN/Inf positions, no faces, or face indices out of range -> :class:`VrnError` (one line).
 - Degenerate triangles (a repeated index or zero 3D area) are *skipped* with a counted
   :class:`MeshWarning`; ``make_mesh(..., drop_degenerate=False)`` keeps them instead.
-- Normals: kept when given and finite, else area-weighted face normals accumulated over all
-  vertices at the same position (so UV seams do not crease the shading).
+- Normals: kept when given and finite, else computed with a crease angle
+  (:data:`CREASE_DEG`, 60 degrees by default, as Unity's importer): each triangle corner gets
+  the area-weighted sum of the normals of the triangles around its position (over all vertices
+  at that position, so UV seams do not crease the shading) that are within the crease angle of
+  its own triangle's normal. Vertices whose corners disagree are split, so a cube's edges are
+  sharp and a sphere stays smooth; 180 smooths everything, 0 gives flat facets.
 - Tangents: MikkTSpace-like. Each triangle's tangent/bitangent come from its material-UV
   derivatives, normalised and weighted by the corner angle, accumulated per vertex,
   Gram-Schmidt orthogonalised against the normal; ``w = sign(dot(cross(n, t), b))``.
@@ -23,6 +27,10 @@ import numpy as np
 from vrneural.atlas.types import Mesh
 from vrneural.errors import VrnError
 from vrneural.warn import VrnWarning
+
+#: Default crease angle (degrees) for meshes without normals: adjacent triangles meeting at a
+#: sharper angle than this are shaded with separate normals (a hard edge)
+CREASE_DEG = 60.0
 
 #: Relative 3D area below which a triangle counts as degenerate (times the mean edge^2).
 DEGENERATE_REL_AREA = 1e-12
@@ -46,7 +54,7 @@ def check_geometry(name: str, pos: np.ndarray, fac: np.ndarray) -> None:
     if bad.any():
         raise VrnError(
             f"{name}: {int(bad.sum())} vertices have NaN/Inf positions "
-            f"(first at vertex {int(np.argmax(bad))})"
+            f"(the first is vertex index {int(np.argmax(bad))}, counted from 0)"
         )
     if fac.min() < 0 or fac.max() >= len(pos):
         raise VrnError(
@@ -62,12 +70,16 @@ def make_mesh(
     uv: np.ndarray | None = None,
     normals: np.ndarray | None = None,
     drop_degenerate: bool = True,
+    crease_deg: float = CREASE_DEG,
 ) -> Mesh:
     """Validate arrays and build a :class:`Mesh` with normals and tangents.
 
     positions: [V, 3] metres; faces: [F, 3] int; uv: [V, 2] material UV or None (then
-    :func:`box_uv` generates it, splitting vertices); normals: [V, 3] or None.
+    :func:`box_uv` generates it, splitting vertices); normals: [V, 3] or None (then
+    :func:`creased_normals` computes them with ``crease_deg``, splitting vertices at creases).
     """
+    if not (isinstance(crease_deg, (int, float)) and 0.0 <= crease_deg <= 180.0):
+        raise VrnError(f"{name}: crease angle {crease_deg!r} is out of range [0, 180] degrees")
     pos = np.asarray(positions, dtype=np.float64)
     fac = np.asarray(faces)
     check_geometry(name, pos, fac)
@@ -93,7 +105,8 @@ def make_mesh(
     if uv is None:
         pos, fac, uv, normals = box_uv(pos, fac, normals)
     if normals is None:
-        normals = vertex_normals(pos, fac)
+        src, fac, normals = creased_normals(pos, fac, crease_deg)
+        pos, uv = pos[src], uv[src]
     else:
         normals = _normalize(normals, fallback=vertex_normals(pos, fac))
     tangents = vertex_tangents(pos, fac, uv, normals)
@@ -136,6 +149,68 @@ def vertex_normals(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:
         np.add.at(acc, weld[faces[:, k]], fn)
     up = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (len(pos), 3))
     return _normalize(acc[weld], fallback=np.array(up))
+
+
+#: Most (corner, neighbour-corner) pairs :func:`creased_normals` holds at once (memory bound
+#: for vertices of very high valence, e.g. the centre of a fan)
+_PAIR_CHUNK = 1 << 22
+
+
+def creased_normals(
+    pos: np.ndarray, faces: np.ndarray, crease_deg: float = CREASE_DEG
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Normals with a crease angle; vertices split where their corners' normals differ.
+
+    Each triangle corner gets the area-weighted sum of the normals of all triangles around its
+    position (welded over vertices at the same position) whose unit normal is within
+    ``crease_deg`` of its own triangle's; a vertex whose corners get different sums is split.
+    Returns ``(src [V'], faces [F, 3], normals [V', 3])``: new vertex ``i`` copies old vertex
+    ``src[i]``. The first ``V`` entries are the old vertices in order, so a mesh without
+    creases keeps its indexing. ``crease_deg >= 180`` is :func:`vertex_normals` exactly.
+    """
+    nv = len(pos)
+    if crease_deg >= 180.0:
+        return np.arange(nv), faces, vertex_normals(pos, faces)
+    fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
+    fl = np.linalg.norm(fn, axis=1, keepdims=True)
+    fu = np.where(fl > 1e-300, fn / np.maximum(fl, 1e-300), 0.0)
+    _, weld = np.unique(pos, axis=0, return_inverse=True)
+    cv = faces.reshape(-1)  # corner -> vertex
+    cf = np.repeat(np.arange(len(faces)), 3)  # corner -> face
+    order = np.argsort(weld.reshape(-1)[cv], kind="stable")  # corners grouped by position
+    grp = weld.reshape(-1)[cv][order]
+    start = np.flatnonzero(np.r_[True, grp[1:] != grp[:-1]])
+    size = np.diff(np.r_[start, len(grp)])
+    g_of = np.repeat(np.arange(len(start)), size)  # sorted corner -> its group
+    n_pair = size[g_of]  # pairs each sorted corner makes
+    cos_min = np.cos(np.radians(crease_deg)) - 1e-9
+    acc = np.zeros((len(cv), 3))
+    ends = np.cumsum(n_pair)
+    lo = 0
+    while lo < len(cv):  # chunks of sorted corners holding at most _PAIR_CHUNK pairs
+        base = ends[lo - 1] if lo else 0
+        hi = max(lo + 1, int(np.searchsorted(ends, base + _PAIR_CHUNK, side="right")))
+        me = np.repeat(np.arange(lo, hi), n_pair[lo:hi])
+        first = np.repeat(start[g_of[lo:hi]] - (ends[lo:hi] - n_pair[lo:hi] - base), n_pair[lo:hi])
+        other = first + np.arange(len(me))  # partner (sorted index) of each pair
+        f_me, f_other = cf[order[me]], cf[order[other]]
+        keep = np.sum(fu[f_me] * fu[f_other], axis=1) >= cos_min
+        w = fn[f_other] * keep[:, None]
+        for k in range(3):
+            acc[lo:hi, k] = np.bincount(me - lo, weights=w[:, k], minlength=hi - lo)
+        lo = hi
+    cn = np.empty_like(acc)
+    cn[order] = acc
+    cn = _normalize(cn, fallback=np.where(fl[cf] > 1e-300, fu[cf], [[0.0, 0.0, 1.0]]))
+    key = np.column_stack([cv, np.ascontiguousarray(cn).view(np.int64)])
+    ukey, rep, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    is_first = np.r_[True, ukey[1:, 0] != ukey[:-1, 0]]  # ukey sorted by vertex first
+    new = np.where(is_first, ukey[:, 0], nv + np.cumsum(~is_first) - 1)
+    src = np.r_[np.arange(nv), ukey[~is_first, 0]]
+    normals = np.zeros((len(src), 3))
+    normals[:nv] = vertex_normals(pos, faces)  # vertices no face uses keep a sensible normal
+    normals[new] = cn[rep]
+    return src, new[inv.reshape(-1)].reshape(-1, 3), normals
 
 
 def _corner_angles(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:

@@ -49,8 +49,13 @@ def builtin_names() -> tuple[str, ...]:
     return tuple(a.BUILTIN_MESHES) if a is not None else FALLBACK_MESHES
 
 
-def get_mesh(spec: str, base: Path | None = None, field: str = "mesh") -> Mesh:
+def get_mesh(
+    spec: str, base: Path | None = None, field: str = "mesh", crease_deg: float | None = None
+) -> Mesh:
     """A built-in mesh by name, or a mesh file (relative to ``base``).
+
+    ``crease_deg``: the crease angle for computed normals (None: smooth built-ins, 60 degrees
+    for files without normals; see :mod:`vrneural.atlas.geometry`).
 
     A file holding several meshes (a glTF scene, say) needs the one to use named after a
     colon, ``"room.glb:chair"`` (the names ``vrneural atlas`` prints), or its index,
@@ -58,7 +63,7 @@ def get_mesh(spec: str, base: Path | None = None, field: str = "mesh") -> Mesh:
     """
     a = _atlas_api()
     if spec in builtin_names():
-        return a.builtin_mesh(spec) if a is not None else fallback_mesh(spec)
+        return a.builtin_mesh(spec, crease_deg) if a is not None else fallback_mesh(spec)
 
     def where(s: str) -> Path:
         p = Path(s)
@@ -76,7 +81,7 @@ def get_mesh(spec: str, base: Path | None = None, field: str = "mesh") -> Mesh:
         )
     if a is None:
         raise VrnError(f"{field} = {spec!r}: mesh files need vrneural.atlas (not available)")
-    meshes = a.load_mesh(p)
+    meshes = a.load_mesh(p, crease_deg)
     names = [m.name.split(":", 1)[1] if ":" in m.name else str(i) for i, m in enumerate(meshes)]
     if part is None:
         if len(meshes) == 1:

@@ -120,7 +120,7 @@ class Renderer:
         scene, s = self.scene, self.s
         if progress:
             progress(f"object {o.name}")
-        mesh = get_mesh(o.mesh, scene.base, f"{scene.src}: objects[{i}].mesh")
+        mesh = get_mesh(o.mesh, scene.base, f"{scene.src}: objects[{i}].mesh", o.crease_angle)
         if o.material.kind == "plain":
             m = o.material
             plain = (m.albedo, m.specular, m.shininess)

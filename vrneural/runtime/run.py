@@ -248,8 +248,13 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
             f"{s.n_lights}; "
             f"--lights {len(scene.lights)} shades them all"
         )
-    if r.neural and not scene.lights:  # (--lights 0 asks for it; an empty scene does not)
+    if r.neural and not scene.lights:
         r.warnings.append(f"{scene.src}: the scene has no [[lights]]: neural objects are black")
+    elif r.neural and s.n_lights == 0:  # asked for (a timing baseline), but say what it gives
+        r.warnings.append(
+            f"--lights 0: none of the scene's {len(scene.lights)} lights is shaded, so neural "
+            "objects are black (--lights N shades the first N)"
+        )
     for w in r.warnings:
         print(f"warning: {w}", file=sys.stderr)
     make_output_dir(out, "run")

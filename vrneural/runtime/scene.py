@@ -15,6 +15,9 @@ Format (all lengths in metres, angles in degrees)::
     scale = 1.0                   # uniform
     texture_res = 1200            # optional, overrides the profile / --texture-res
     min_texture_res = 256         # optional floor under the profile's / --texture-res
+    crease_angle = 60             # optional, degrees: computed normals (a mesh without its own)
+                                  # are smooth across gentler bends, hard at sharper ones;
+                                  # default 60 for mesh files, 180 (smooth) for built-ins
     [objects.material]            # neural: pack = "x.vrnm" | procedural = "random" | "lambertian"
     pack = "leather.vrnm"         # relative to the scene file, else a bundled pack of that name
     reference = "leather.teacher.vrnm"  # optional teacher pack for --mode reference (same rule)
@@ -63,6 +66,7 @@ class ObjectDesc:
     material: MaterialDesc
     texture_res: int | None = None
     min_texture_res: int | None = None  # floor under the profile's (dense meshes need texels)
+    crease_angle: float | None = None  # degrees, for computed normals (None: the mesh's default)
 
 
 @dataclass
@@ -255,9 +259,11 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
                 "material",
                 "texture_res",
                 "min_texture_res",
+                "crease_angle",
             )
         )
         mesh = f.str("mesh")
+        crease = f.num("crease_angle", 0.0, 0.0, 180.0) if "crease_angle" in o else None
         model = model_matrix(
             f.vec("position", (0, 0, 0), bound=MAX_COORD),
             f.vec("rotation", (0, 0, 0), bound=1e6),
@@ -272,7 +278,7 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
                 "size, min_texture_res is a floor under the profile's; keep one",
             )
         name = f.str("name", Path(mesh).stem)
-        objects.append(ObjectDesc(name, mesh, model, mat, tres, floor))
+        objects.append(ObjectDesc(name, mesh, model, mat, tres, floor, crease))
     lights = []
     if not isinstance(data.get("lights", []), list):
         raise VrnError(f"{src}: lights must be an array of tables ([[lights]])")
