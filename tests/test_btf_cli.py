@@ -52,6 +52,7 @@ def test_info_text_and_json(small_btf, capsys):
     assert main(["btf", "info", str(small_btf)]) == 0
     out = capsys.readouterr().out
     assert "6 lights x 6 views x 8x8" in out and "leather" in out
+    assert "grid 0 = auto: the heightfield was 64^2" in out  # as the sidecar says, not just 0
     assert main(["btf", "info", str(small_btf), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
     v = np.asarray(read_btf(small_btf).values, np.float32)

@@ -95,6 +95,11 @@ def test_baselines_train_and_export(trained, tmp_path):  # noqa: F811
         assert worst <= 1e-5
         assert mat.output == ("log1p" if method == "neumip" else "linear")
         assert ck["config"]["distill"] == (method != "neumip")
+        # the teacher's L1 on the same test slices is kept, and a 1-epoch network far above it
+        # is warned about as likely undertrained (the ratio is printed on stdout)
+        tl1, sl1 = ck["teacher_test_l1"], ck["history"][-1]["test_l1"]
+        assert 0 < tl1 < sl1
+        assert (f"test L1 {sl1 / tl1:.1f}x the teacher's" in err) == (sl1 / tl1 > 8), err
         w = mat.networks["mlp"][0].weight
         if method == "neumip":  # NeuMIP's inputs: wi.xy, wo.xy; trained, the rest stay exactly 0
             assert np.all(w[:, [0, 1, 3, 4]] != 0) and not np.any(w[:, [2, 5, 6, 7, 8]])

@@ -399,6 +399,8 @@ def test_pack_shows_your_own_material_on_the_builtin_scene(capsys, tmp_path):
     sm = json.loads((out / "summary.json").read_text())
     sources = [o["source"] for o in sm["scene"]["objects"] if o["material"] == "neural"]
     assert len(sources) == 3 and all(s.endswith("student.vrnm") for s in sources), sources
+    names = {o["name"] for o in sm["scene"]["objects"] if o["material"] == "neural"}
+    assert names == {"student sphere", "student cloth", "student torus"}  # not "leather sphere"
     (tmp_path / "student.pt").write_bytes(b"PK\x03\x04" + bytes(60))
     msg = _err(
         capsys, [*argv, "--pack", str(tmp_path / "student.pt"), "--out", str(tmp_path / "x")]

@@ -96,8 +96,24 @@ def figure(w: float = 6.4, h: float = 4.0, ncols: int = 1, sharey: bool = False)
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, ncols, figsize=(w, h), squeeze=False, sharey=sharey)
+    fig, axes = plt.subplots(
+        1, ncols, figsize=(w, h), squeeze=False, sharey=sharey, layout="constrained"
+    )
     return fig, list(axes[0])
+
+
+def plain_log_ticks(axis) -> None:
+    """Plain-number labels (``20``, ``30``, not ``2 x 10^1``) on a log ``axis`` (``ax.xaxis``,
+    call after plotting): every integer multiple of the decade when the data span less than a
+    factor 3, else 1, 2, 5 per decade; no minor labels."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    lo, hi = sorted(axis.get_view_interval())
+    narrow = lo > 0 and hi / lo < 3.0
+    subs = tuple(float(k) for k in range(1, 10)) if narrow else (1.0, 2.0, 5.0)
+    axis.set_major_locator(LogLocator(subs=subs))
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def finish(root: Path, doc: dict, md: list[str], t0: float) -> dict:

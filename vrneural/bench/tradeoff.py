@@ -375,6 +375,7 @@ def pareto_png(doc: dict, path: Path) -> None:
             label="Pareto front",
         )
         ax.set_xscale("log")
+        rp.plain_log_ticks(ax.xaxis)
         ax.set_xlabel("frame ms (mean, wall)")
         ax.set_ylabel(key.upper() + (" (lower is better)" if lower else " (higher is better)"))
         ax.grid(alpha=0.3)

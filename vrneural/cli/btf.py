@@ -150,7 +150,13 @@ def run_info(args) -> int:
     )
     m = s["meta"]
     print(f"meta      name={m.get('name')} convention={m.get('convention')} seed={m.get('seed')}")
-    print(f"generator {json.dumps(m.get('generator'))}")
+    gen = m.get("generator")
+    print(f"generator {json.dumps(gen)}")
+    if isinstance(gen, dict) and gen.get("grid") == 0 and isinstance(gen.get("res"), int):
+        from vrneural.btf.synth import BtfConfig
+
+        used = BtfConfig(res=gen["res"], grid=0).grid_size  # the header keeps the 0 as given
+        print(f"          grid 0 = auto: the heightfield was {used}^2 (as the .config.json says)")
     return 0
 
 

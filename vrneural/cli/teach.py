@@ -61,4 +61,20 @@ def _report(fn, output: str) -> int:
         f"{output}: {ck['method']} epochs {ck['epoch']}  test L1 {test:.5f}"
         f"  train {ck.get('train_seconds', 0):.1f} s{wrote}"
     )
+    ref = ck.get("teacher_test_l1")
+    if ref and test == test:  # a student: compare it with its teacher on the same slices
+        ratio = test / ref
+        print(f"  teacher test L1 {ref:.5f} on the same slices: {ratio:.2f}x")
+        if ratio > WORSE_THAN_TEACHER:
+            print(
+                f"warning: {output}: test L1 {ratio:.1f}x the teacher's (above "
+                f"{WORSE_THAN_TEACHER:g}x): undertrained? more --epochs usually closes much "
+                "of it (the quality report's 50-epoch students reach 1.7-6x)",
+                file=sys.stderr,
+            )
     return 0
+
+
+#: Student-to-teacher test-L1 ratio above which `distill` warns: the 50-epoch students of
+#: docs/results/quality-50-5seeds.md reach 1.7x (stone) to 6x (metal) of their teachers
+WORSE_THAN_TEACHER = 8.0

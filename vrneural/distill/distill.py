@@ -201,6 +201,8 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
             "spec": tck["spec"],
         },
         "versions": {"torch": str(torch.__version__)},
+        # the teacher on the same test slices: what `distill` compares the student with
+        "teacher_test_l1": _teacher_l1(teacher, data, pairs),
     }
     ck = fit(
         net,
@@ -216,3 +218,8 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     if rank == 0:
         finish_outputs(ck, cfg, data)
     return ck
+
+
+def _teacher_l1(teacher, data, pairs) -> float:
+    with torch.no_grad():
+        return float(mean_l1(teacher, data, pairs))

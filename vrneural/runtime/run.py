@@ -97,6 +97,8 @@ def use_pack(scene, path: str) -> None:
         looked = "" if found else "looked for " + ", ".join(tried)
     for o in scene.objects:
         if o.material.kind == "neural":
+            if scene.name == "builtin":  # "leather sphere" would name a material not shown
+                o.name = f"{p.stem} {o.mesh}"
             o.material = MaterialDesc(
                 "neural",
                 mat,
