@@ -141,9 +141,18 @@ def _normalize(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
 
 def vertex_normals(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """[V, 3] unit normals: area-weighted face normals summed over coincident positions."""
+    return _smooth_normals(pos, faces, *_welded_face_normals(pos, faces))
+
+
+def _welded_face_normals(pos: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(fn [F, 3], weld [V])``: area-weighted (unnormalised) face normals, and for every
+    vertex the index of its position among the distinct positions."""
     fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
     _, weld = np.unique(pos, axis=0, return_inverse=True)
-    weld = weld.reshape(-1)
+    return fn, weld.reshape(-1)
+
+
+def _smooth_normals(pos, faces, fn, weld) -> np.ndarray:
     acc = np.zeros((weld.max() + 1, 3))
     for k in range(3):
         np.add.at(acc, weld[faces[:, k]], fn)
@@ -171,14 +180,13 @@ def creased_normals(
     nv = len(pos)
     if crease_deg >= 180.0:
         return np.arange(nv), faces, vertex_normals(pos, faces)
-    fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
+    fn, weld = _welded_face_normals(pos, faces)
     fl = np.linalg.norm(fn, axis=1, keepdims=True)
     fu = np.where(fl > 1e-300, fn / np.maximum(fl, 1e-300), 0.0)
-    _, weld = np.unique(pos, axis=0, return_inverse=True)
     cv = faces.reshape(-1)  # corner -> vertex
     cf = np.repeat(np.arange(len(faces)), 3)  # corner -> face
-    order = np.argsort(weld.reshape(-1)[cv], kind="stable")  # corners grouped by position
-    grp = weld.reshape(-1)[cv][order]
+    order = np.argsort(weld[cv], kind="stable")  # corners grouped by position
+    grp = weld[cv][order]
     start = np.flatnonzero(np.r_[True, grp[1:] != grp[:-1]])
     size = np.diff(np.r_[start, len(grp)])
     g_of = np.repeat(np.arange(len(start)), size)  # sorted corner -> its group
@@ -208,7 +216,7 @@ def creased_normals(
     new = np.where(is_first, ukey[:, 0], nv + np.cumsum(~is_first) - 1)
     src = np.r_[np.arange(nv), ukey[~is_first, 0]]
     normals = np.zeros((len(src), 3))
-    normals[:nv] = vertex_normals(pos, faces)  # vertices no face uses keep a sensible normal
+    normals[:nv] = _smooth_normals(pos, faces, fn, weld)  # for vertices no face uses
     normals[new] = cn[rep]
     return src, new[inv.reshape(-1)].reshape(-1, 3), normals
 

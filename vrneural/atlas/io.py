@@ -85,6 +85,9 @@ _OBJ_KINDS = (
     (b"vn", "normal", "normals"),
 )
 
+# the tag of every v, vt and vn line (what face indices count)
+_OBJ_ELEMENT = re.compile(rb"(?m)^[ \t]*(vt|vn|v)(?=\s|$)")
+
 
 def _check_obj_indices(p: Path) -> None:
     """Check an OBJ's vertices and faces line by line before trimesh parses it, so each problem
@@ -97,15 +100,11 @@ def _check_obj_indices(p: Path) -> None:
         data = p.read_bytes()
     except OSError as e:
         raise VrnError(f"{p}: cannot read mesh ({e.strerror or e})") from None
-    lines = data.split(b"\n")
-    total = [0, 0, 0]  # positive indices may refer to elements defined later in the file
-    for raw in lines:
-        tok = raw.split(b"#", 1)[0].split()
-        for k, (tag, _, _) in enumerate(_OBJ_KINDS):
-            if tok and tok[0] == tag:
-                total[k] += 1
+    heads = _OBJ_ELEMENT.findall(data)
+    # positive indices may refer to elements defined later in the file
+    total = [heads.count(tag) for tag, _, _ in _OBJ_KINDS]
     seen = [0, 0, 0]
-    for n, raw in enumerate(lines, 1):
+    for n, raw in enumerate(data.split(b"\n"), 1):
         tok = raw.split(b"#", 1)[0].split()
         if not tok:
             continue
