@@ -42,6 +42,14 @@ def test_hit_miss_and_identical_result(cache_env):
     assert not list(cache_env.glob(".*tmp*")), "no temporary files left behind"
 
 
+def test_hit_under_another_name_reports_that_name(cache_env):
+    mesh = builtin_mesh("sphere")
+    build_atlas(mesh, R, 2)
+    hit = build_atlas(dataclasses.replace(mesh, name="globe.obj"), R, 2)
+    assert hit.stats["cache"] == "hit"
+    assert hit.stats["mesh"] == "globe.obj" and hit.mesh.name == "globe.obj"
+
+
 def test_key_changes_with_content_resolution_padding():
     mesh = builtin_mesh("sphere")
     k = cache_key(mesh, R, 2)
@@ -125,7 +133,7 @@ def test_build_rejects_bad_meshes_and_counts_degenerate_triangles():
     mesh = builtin_mesh("plane")
     pos = mesh.positions.copy()
     pos[3] = np.nan
-    with pytest.raises(VrnError, match="plane: 1 vertices have NaN/Inf positions"):
+    with pytest.raises(VrnError, match="plane: 1 vertex has a NaN/Inf position"):
         build_atlas(dataclasses.replace(mesh, positions=pos), 64, cache=False)
     with pytest.raises(VrnError, match="plane: mesh has no faces"):
         build_atlas(dataclasses.replace(mesh, faces=np.zeros((0, 3), np.uint32)), 64, cache=False)

@@ -52,6 +52,28 @@ def test_text_output_and_force(tmp_path, capsys):
     assert "off" in capsys.readouterr().out
 
 
+def test_crease_angle_splits_a_cube_without_normals(tmp_path, capsys):
+    """An 8-vertex cube: at 60 degrees (the default) every normal is its face's, at 180 every
+    corner's normal averages its three faces (none is axis-aligned)."""
+    cube = tmp_path / "cube.obj"
+    cube.write_text(
+        "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+        "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+        "f 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n"
+    )
+    from vrneural.cli.atlas import _meshes
+
+    (flat,) = _meshes(str(cube))
+    (smooth,) = _meshes(str(cube), 180.0)
+    np.testing.assert_allclose(np.abs(flat.normals).max(axis=1), 1.0, atol=1e-6)
+    assert np.abs(smooth.normals).max(axis=1).max() < 0.9
+    out = tmp_path / "c.png"
+    argv = ["atlas", str(cube), "--res", "64", "-o", str(out), "--crease-angle", "180"]
+    assert main(argv) == 0
+    doc = json.loads((tmp_path / "c.png.config.json").read_text())
+    assert doc["crease_angle"] == 180.0
+
+
 def _two_mesh_file(path):
     scene = trimesh.Scene()
     scene.add_geometry(trimesh.creation.box(extents=(0.2, 0.3, 0.1)), node_name="a")
@@ -98,6 +120,11 @@ def test_mesh_file_with_two_meshes(tmp_path, capsys):
         (["sphere", "--padding", "-1"], "a.png", "--padding = -1 is out of range; allowed [0, 64]"),
         (["sphere"], "a.txt", "output must be a .png file"),
         (["teapot"], "a.png", "teapot: no such file, and not a built-in mesh (sphere, torus"),
+        (
+            ["sphere", "--crease-angle", "200"],
+            "a.png",
+            "--crease-angle = 200.0 is out of range; allowed [0, 180]",
+        ),
     ],
 )
 def test_errors_are_one_line_exit_2(tmp_path, capsys, args, out_name, message):

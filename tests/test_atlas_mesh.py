@@ -66,7 +66,7 @@ def test_validation_errors_and_degenerate_warning():
     bad[2, 1] = np.nan
     with pytest.raises(
         VrnError,
-        match=r"1 vertices have NaN/Inf positions \(the first is vertex index 2, counted from 0\)",
+        match=r"1 vertex has a NaN/Inf position \(the first is vertex index 2, counted from 0\)",
     ):
         make_mesh("m", bad, [[0, 1, 2]])
     bad[2, 1] = np.inf
@@ -78,8 +78,15 @@ def test_validation_errors_and_degenerate_warning():
     with pytest.warns(MeshWarning, match="skipped 2 degenerate triangles of 3"):
         m = make_mesh("m", pos, faces, uv=pos[:, :2])
     assert len(m.faces) == 1
-    with pytest.raises(VrnError, match="all 1 triangles are degenerate"), pytest.warns(MeshWarning):
+    with (
+        pytest.raises(VrnError, match="its only triangle is degenerate"),
+        pytest.warns(MeshWarning),
+    ):
         make_mesh("m", pos, [[0, 1, 3]])
+    far = pos.copy()
+    far[3] = [1e39, 0, 0]  # finite in float64, Inf once the mesh is float32
+    with pytest.raises(VrnError, match=r"m: 1 vertex lies beyond 1e\+18 m .*vertex index 3"):
+        make_mesh("m", far, [[0, 1, 3]])
 
 
 def test_mesh_warning_prints_as_one_line(tmp_path):
@@ -100,7 +107,7 @@ def test_mesh_warning_prints_as_one_line(tmp_path):
     )
     assert r.returncode == 0, r.stderr
     lines = r.stderr.splitlines()
-    assert lines[0] == "warning: m: skipped 1 degenerate triangles of 2"
+    assert lines[0] == "warning: m: skipped 1 degenerate triangle of 2"
     assert lines[1] == "<string>:4: UserWarning: plain"
 
 
@@ -160,6 +167,70 @@ def test_file_normals_are_kept(tmp_path):
     (tmp_path / "q2.obj").write_text(plain + "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
     (m2,) = load_mesh(tmp_path / "q2.obj")
     np.testing.assert_allclose(m2.normals, np.tile([0, 0, 1.0], (len(m2.normals), 1)), atol=1e-6)
+
+
+def _tilted_quad(normal):
+    v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=np.float64)
+    f = np.array([[0, 1, 2], [0, 2, 3]])
+    uv = v[:, :2].copy()
+    return trimesh.Trimesh(
+        v,
+        f,
+        vertex_normals=np.tile(normal, (4, 1)),
+        visual=trimesh.visual.TextureVisuals(uv=uv),
+        process=False,
+    )
+
+
+def test_scene_nodes_keep_file_order_and_file_normals(tmp_path):
+    """A glTF with three nodes: they come back in the file's order (``:0`` is the first), and
+    each node's file normals are carried through its transform (a rotation, a mirror), with a
+    mirrored node's triangles turned to keep facing their normals."""
+    n = np.array([0.0, 0.6, 0.8])
+    tf = trimesh.transformations
+    rot = tf.rotation_matrix(np.pi / 2, [1, 0, 0])
+    mirror = np.diag([-1.0, 1.0, 1.0, 1.0])
+    scene = trimesh.Scene()
+    for name, m in (("first", np.eye(4)), ("second", rot), ("third", mirror)):
+        scene.add_geometry(_tilted_quad(n), node_name=name, geom_name=f"q{name}", transform=m)
+    (tmp_path / "s.glb").write_bytes(trimesh.exchange.gltf.export_glb(scene, include_normals=True))
+    meshes = load_mesh(tmp_path / "s.glb")
+    assert [m.name for m in meshes] == ["s.glb:first", "s.glb:second", "s.glb:third"]
+    for m, matrix in zip(meshes, (np.eye(4), rot, mirror), strict=True):
+        want = matrix[:3, :3] @ n  # rotation and this mirror: the inverse transpose is itself
+        np.testing.assert_allclose(m.normals, np.tile(want, (len(m.normals), 1)), atol=1e-6)
+        assert (np.sum(_face_normals(m) * want, axis=1) > 0.5).all(), m.name
+    np.testing.assert_allclose(meshes[1].positions[:, 2].max(), 1.0, atol=1e-6)  # rotated up
+
+
+def test_obj_objects_materials_and_latin1(tmp_path):
+    """One mesh per ``o`` object in file order, named after it (Latin-1 bytes decoded); the
+    materials inside an object do not split it."""
+    quad = "v {x} 0 0\nv {x1} 0 0\nv {x1} 1 0\nv {x} 1 0\n"
+    text = "# exportiert von M\xfcller\no Caf\xe9\n" + quad.format(x=0, x1=1)
+    text += "usemtl red\nf 1 2 3\nusemtl blue\nf 1 3 4\n"
+    text += "o Zebra\n" + quad.format(x=2, x1=3) + "f 5 6 7\nf 5 7 8\n"
+    (tmp_path / "two.obj").write_bytes(text.encode("latin-1"))
+    cafe, zebra = load_mesh(tmp_path / "two.obj")
+    assert (cafe.name, zebra.name) == ("two.obj:Caf\xe9", "two.obj:Zebra")
+    assert len(cafe.faces) == 2 and len(zebra.faces) == 2
+    assert cafe.positions[:, 0].max() == 1.0 and zebra.positions[:, 0].min() == 2.0
+
+
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        ("vt nan 0", "texture coordinate 1 is NaN/Inf"),
+        ("vt u v", "texture coordinate 1 needs numbers u v"),
+        ("vn 0 inf 1", "normal 1 is NaN/Inf"),
+        ("vn 0 1", "normal 1 needs 3 numbers"),
+    ],
+)
+def test_obj_bad_texture_coordinate_or_normal_names_the_line(tmp_path, line, message):
+    text = f"v 0 0 0\nv 1 0 0\nv 0 1 0\n{line}\nf 1 2 3\n"
+    (tmp_path / "b.obj").write_text(text)
+    with pytest.raises(VrnError, match=f"b.obj:4: {message}"):
+        load_mesh(tmp_path / "b.obj")
 
 
 def test_load_errors(tmp_path):

@@ -152,8 +152,11 @@ def test_bad_inputs_are_one_line_errors_and_touch_nothing(small_btf, tmp_path, v
     )
     wrong = tmp_path / "wrong.btf"
     wrong.write_bytes(b"VRNM\0\0\0\0" + small_btf.read_bytes()[8:])
-    _one_line_error(vrn("btf", "info", str(wrong)), "wrong magic")
-    _one_line_error(vrn("btf", "show", str(wrong), "-o", str(out_png), "--force"), "wrong magic")
+    _one_line_error(vrn("btf", "info", str(wrong)), "is a runtime pack, expected a BTF")
+    _one_line_error(
+        vrn("btf", "show", str(wrong), "-o", str(out_png), "--force"),
+        "is a runtime pack, expected a BTF",
+    )
     trunc = tmp_path / "trunc.btf"
     trunc.write_bytes(small_btf.read_bytes()[:-100])
     _one_line_error(vrn("btf", "info", str(trunc)), "truncated")
@@ -286,8 +289,17 @@ def test_unknown_argument_names_the_subcommand(capsys):
     with pytest.raises(SystemExit) as e:
         main(["export", "a.pt", "-o", "b.vrnm", "--no-progress"])
     err = capsys.readouterr().err
-    assert e.value.code == 2 and "usage: vrneural export" in err
-    assert "vrneural export: error: unrecognized arguments: --no-progress" in err
+    assert e.value.code == 2 and err.count("\n") == 1 and "usage" not in err
+    assert err.startswith("vrneural export: error: unrecognized arguments: --no-progress")
+    assert err.rstrip().endswith("(see 'vrneural export --help')")
+
+
+def test_bad_choice_is_one_line(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["run", "--mode", "foo"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and err.count("\n") == 1
+    assert err.startswith("vrneural run: error: argument --mode: invalid choice: 'foo'")
 
 
 def test_info_into_a_closed_pipe_is_quiet(small_btf):

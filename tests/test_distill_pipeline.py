@@ -75,7 +75,7 @@ def test_export_cli_rewrites_the_same_pack(trained, tmp_path):  # noqa: F811
             assert np.array_equal(la.weight, lb.weight) and np.array_equal(la.bias, lb.bias)
 
 
-def test_baselines_train_and_export(trained, tmp_path):  # noqa: F811
+def test_baselines_train_and_export(trained, tmp_path, capsys):  # noqa: F811
     for method, extra in (("neumip", ["--no-distill"]), ("single8", [])):
         out = tmp_path / f"{method}.pt"
         code, err = run_cli(
@@ -91,6 +91,8 @@ def test_baselines_train_and_export(trained, tmp_path):  # noqa: F811
             *FAST,
         )
         assert code == 0, err
+        label = "neumip (no distillation)" if method == "neumip" else method
+        assert f"{out}: {label} epochs 1  test L1" in capsys.readouterr().out
         worst, mat, ck = _compare(out, out.with_suffix(".vrnm"))
         assert worst <= 1e-5
         assert mat.output == ("log1p" if method == "neumip" else "linear")

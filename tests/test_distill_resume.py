@@ -197,3 +197,17 @@ def test_ema_average_and_swap():
     again = Ema(net, decay=0.5)
     again.load(ema.state())
     assert again.count == 2 and torch.equal(again.avg["weight"], ema.avg["weight"])
+
+
+def test_resume_messages_name_the_option_that_set_the_field():
+    """`bench quality` sets its teachers' epochs with --teacher-epochs: the resume errors say so."""
+    from vrneural.config import mark_explicit, name_flag, replace_config
+    from vrneural.distill.teach import resumed_config
+
+    cfg = mark_explicit(TeachConfig(output="t.pt", epochs=1), "epochs")
+    with pytest.raises(VrnError, match=r"^--epochs = 1, but t\.pt already has 2 epochs"):
+        resumed_config(cfg, {"epochs": 3}, {"epoch": 2})
+    bench = replace_config(name_flag(cfg, "epochs", "--teacher-epochs"), seed=1)
+    with pytest.raises(VrnError, match="pass --teacher-epochs 2 or more") as e:
+        resumed_config(bench, {"epochs": 3}, {"epoch": 2})
+    assert str(e.value).startswith("--teacher-epochs = 1, but t.pt")

@@ -80,3 +80,15 @@ def test_macs_and_sizes():
     # coarse: 17*8 + 8*8 + 8*8 = 264 per block -> 66 per texel; fine: 16*8 + 8*3 = 152
     assert mat.macs_per_texel == pytest.approx(264 / 4 + 152)
     assert mat.weight_bytes == 4 * (264 + 24 + 152 + 11)
+
+
+def test_vrnm_names_our_other_formats(tmp_path):
+    """A BTF given where a pack belongs (`run --pack x.btf`): say what it is and what to do."""
+    from vrneural.btf.format import BTF_MAGIC
+
+    p = tmp_path / "x.btf"
+    p.write_bytes(BTF_MAGIC.ljust(8, b"\0") + b"\0" * 100)
+    with pytest.raises(
+        VrnError, match=r"x\.btf: is a BTF file, expected a runtime pack; `vrneural teach`"
+    ):
+        read_vrnm(p)

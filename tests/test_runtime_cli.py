@@ -141,7 +141,7 @@ def test_profile_lights_are_capped_at_the_scenes(capsys, tmp_path):
     assert main(["run", *argv]) == 0
     assert json.loads((out / "summary.json").read_text())["resolved"]["n_lights"] == 1
     msg = _err(capsys, [str(scene), "--lights", "2", "--out", str(tmp_path / "o2")])
-    assert "--lights = 2 but the scene has 1 lights" in msg
+    assert "--lights = 2 but the scene has 1 light" in msg
 
 
 @pytest.mark.gpu
@@ -432,9 +432,22 @@ def test_screen_mode_summary_does_not_claim_reuse_or_a_texture(capsys, tmp_path)
     sm = json.loads((tmp_path / "s" / "summary.json").read_text())
     assert "blocks_shaded" not in sm["per_frame"] and "blocks_shaded_per_frame" not in sm
     assert sm["pixels_shaded_per_frame"]["median"] > 0 and "pixels_backfacing" in sm["per_frame"]
+    assert "--reuse" not in capsys.readouterr().err  # not given: nothing to warn about
     assert main([*argv, "texture", "--out", str(tmp_path / "t")]) == 0
     text = capsys.readouterr().out
     assert "reuse=4" in text and "texture=" in text and "updates in" in text
+    # texture space's knobs given with screen mode are said to do nothing; one frame's
+    # timings are said to include shader compilation
+    one = ["run", "--profile", "tiny", "--frames", "1", "--quiet", "--no-video", "--mode"]
+    assert (
+        main([*one, "screen", "--reuse", "2", "--schedule", "burst", "--out", str(tmp_path / "u")])
+        == 0
+    )
+    out, err = capsys.readouterr()
+    assert "warning: --reuse and --schedule only apply to --mode texture" in err
+    assert "one frame: includes shader compilation" in out
+    sm = json.loads((tmp_path / "u" / "summary.json").read_text())
+    assert sm["note"].startswith("one frame:")
 
 
 def test_lights_written_as_one_table_are_named_as_such(tmp_path):
@@ -470,7 +483,7 @@ def test_what_a_run_drops_or_cannot_see_is_a_warning_kept_in_the_summary(capsys,
     warned = " | ".join(sm["warnings"])
     assert "the scene has 4 lights and the tiny profile shades the first 2" in warned
     assert "--lights 4 shades them all" in warned
-    assert "degen.obj: skipped 1 degenerate triangles of 3" in warned
+    assert "degen.obj: skipped 1 degenerate triangle of 3" in warned
     assert "no texel or pixel of a neural object faced an eye in any frame" in warned
     assert all(f"warning: {w}" in err for w in sm["warnings"])
     dark = OBJ.format(mesh="plane", extra="", mat='procedural = "random"', light="")

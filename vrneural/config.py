@@ -90,11 +90,24 @@ def is_explicit(cfg, name: str) -> bool:
     return name in given
 
 
+def name_flag(cfg, name: str, flag: str):
+    """Record that the user sets ``cfg.<name>`` with the option ``flag`` (``bench quality``'s
+    ``--teacher-epochs`` for its teachers' epochs), for messages; returns ``cfg``."""
+    cfg.__dict__["_flags"] = dict(cfg.__dict__.get("_flags", {}), **{name: flag})
+    return cfg
+
+
+def flag(cfg, name: str) -> str:
+    """The option that sets ``cfg.<name>``: ``--<name>`` unless :func:`name_flag` said else."""
+    return cfg.__dict__.get("_flags", {}).get(name, "--" + name.replace("_", "-"))
+
+
 def replace_config(cfg, **changes):
-    """``dataclasses.replace`` that keeps the explicit-field record."""
+    """``dataclasses.replace`` that keeps the explicit-field and flag-name records."""
     new = dataclasses.replace(cfg, **changes)
-    if "_explicit" in cfg.__dict__:
-        new.__dict__["_explicit"] = cfg.__dict__["_explicit"]
+    for k in ("_explicit", "_flags"):
+        if k in cfg.__dict__:
+            new.__dict__[k] = cfg.__dict__[k]
     return new
 
 

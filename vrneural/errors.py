@@ -15,6 +15,11 @@ class VrnError(Exception):
     exit_code = 2
 
 
+def count(n: int, noun: str, plural: str | None = None) -> str:
+    """``"1 light"``, ``"3 lights"``: a number and its noun, for messages."""
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
+
+
 def check_range(name: str, value: float, lo: float | None = None, hi: float | None = None) -> None:
     """Raise :class:`VrnError` unless ``lo <= value <= hi`` (bounds optional) and finite."""
     bad = isinstance(value, float) and not math.isfinite(value)

@@ -83,7 +83,8 @@ def load_cached(mesh: Mesh, key: str, resolution: int, padding: int) -> Atlas | 
     except (VrnError, KeyError, ValueError, OSError) as e:
         warnings.warn(f"atlas cache: {e}; rebuilding", CacheWarning, stacklevel=3)
         return None
-    stats = dict(header.get("stats", {}), cache="hit", cache_file=str(path))
+    # the key is the geometry, not the name: the same mesh under another name hits
+    stats = dict(header.get("stats", {}), cache="hit", cache_file=str(path), mesh=mesh.name)
     return Atlas(
         mesh=split_mesh(mesh, vmap, faces),
         uv_atlas=uv,

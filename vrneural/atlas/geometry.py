@@ -25,7 +25,7 @@ import warnings
 import numpy as np
 
 from vrneural.atlas.types import Mesh
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, count
 from vrneural.warn import VrnWarning
 
 #: Default crease angle (degrees) for meshes without normals: adjacent triangles meeting at a
@@ -41,6 +41,11 @@ class MeshWarning(VrnWarning):
     one line, ``warning: <message>`` (:mod:`vrneural.warn`)."""
 
 
+#: The largest vertex coordinate (metres) accepted: squared distances of anything farther
+#: overflow float32 (3.4e38) in the shaders, and positions past 3.4e38 become Inf outright
+MAX_COORD = 1e18
+
+
 def check_geometry(name: str, pos: np.ndarray, fac: np.ndarray) -> None:
     """Raise :class:`VrnError` (one line, naming the mesh) unless ``pos`` is a finite ``[V, 3]``
     array and ``fac`` a non-empty ``[F, 3]`` array of vertex indices in ``[0, V)``."""
@@ -52,9 +57,21 @@ def check_geometry(name: str, pos: np.ndarray, fac: np.ndarray) -> None:
         raise VrnError(f"{name}: faces have shape {list(fac.shape)}, expected [F, 3] triangles")
     bad = ~np.isfinite(pos).all(axis=1)
     if bad.any():
+        n = int(bad.sum())
         raise VrnError(
-            f"{name}: {int(bad.sum())} vertices have NaN/Inf positions "
+            f"{name}: {count(n, 'vertex', 'vertices')} {'has a' if n == 1 else 'have'} NaN/Inf "
+            f"position{'s' if n > 1 else ''} "
             f"(the first is vertex index {int(np.argmax(bad))}, counted from 0)"
+        )
+    big = np.abs(pos).max(axis=1) > MAX_COORD
+    if big.any():
+        i = int(np.argmax(big))
+        n = int(big.sum())
+        raise VrnError(
+            f"{name}: {count(n, 'vertex', 'vertices')} {'lies' if n == 1 else 'lie'} beyond "
+            f"{MAX_COORD:.0e} m of the origin (the first is vertex index {i}, counted from 0, "
+            f"at {np.abs(pos[i]).max():.3g}); "
+            "float32 shading overflows there: scale or move the mesh"
         )
     if fac.min() < 0 or fac.max() >= len(pos):
         raise VrnError(
@@ -95,13 +112,15 @@ def make_mesh(
     degen = degenerate_faces(pos, fac)
     if degen.any() and drop_degenerate:
         warnings.warn(
-            f"{name}: skipped {int(degen.sum())} degenerate triangles of {len(fac)}",
+            f"{name}: skipped {count(int(degen.sum()), 'degenerate triangle')} of {len(fac)}",
             MeshWarning,
             stacklevel=2,
         )
         fac = fac[~degen]
         if len(fac) == 0:
-            raise VrnError(f"{name}: all {int(degen.sum())} triangles are degenerate")
+            n = int(degen.sum())
+            every = "its only triangle is" if n == 1 else f"all {n} triangles are"
+            raise VrnError(f"{name}: {every} degenerate")
     if uv is None:
         pos, fac, uv, normals = box_uv(pos, fac, normals)
     if normals is None:

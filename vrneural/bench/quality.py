@@ -30,9 +30,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from vrneural.config import config_dict, mark_explicit, opt, quick_defaults
+from vrneural.config import config_dict, mark_explicit, name_flag, opt, quick_defaults
 from vrneural.distill.config import BEFORE_FIELD, COMPILE_MODES, NEUMIP_DIRS
-from vrneural.errors import VrnError, check_range, check_seed
+from vrneural.errors import VrnError, check_range, check_seed, count
 from vrneural.formats.atomic import check_output_dir, check_resume_force, mark_output_dir
 from vrneural.versions import package_versions
 
@@ -149,6 +149,7 @@ def _teach_config(preset: str, cfg: QualityConfig, root: Path, btf_path: Path, b
         **_common(cfg),
     )
     mark_explicit(tcfg, "epochs")  # a resumed run goes to the bench's epochs, not its own
+    name_flag(tcfg, "epochs", "--teacher-epochs")
     _set_resume(tcfg, cfg.resume, btf_sha=btf_sha)
     return tcfg
 
@@ -335,7 +336,7 @@ def _reuse_problem(cfg, btf_sha: str | None = None, teacher_sha: str | None = No
     if diff:
         return f"it was trained with other settings ({'; '.join(diff)})"
     if int(ck["epoch"]) > cfg.epochs:
-        return f"it has {ck['epoch']} epochs, more than the {cfg.epochs} asked for"
+        return f"it has {count(ck['epoch'], 'epoch')}, more than the {cfg.epochs} asked for"
     if btf_sha is not None and ck["btf"].get("sha256") != btf_sha:
         return "it was trained on another BTF (the header's SHA-256 differs)"
     if teacher_sha is not None and ck.get("teacher", {}).get("sha256") != teacher_sha:

@@ -18,8 +18,16 @@ from vrneural.errors import VrnError
 COMMANDS = ["info", "btf", "teach", "distill", "export", "run", "bench", "atlas"]
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line error (the problem and where the help is) instead of the
+    command's whole usage; subcommand parsers inherit it."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="vrneural",
         description="Neural materials at VR frame rates: BTF -> distilled student -> WGSL -> "
         "texture-space shading with reuse.",

@@ -44,6 +44,15 @@ def register(sub) -> None:
         default="triangle",
         help="colour per triangle or per chart (default: triangle)",
     )
+    p.add_argument(
+        "--crease-angle",
+        type=float,
+        default=None,
+        metavar="DEG",
+        help="for meshes without normals: neighbouring triangles more than DEG degrees apart "
+        "meet at a hard edge, in [0, 180] (0 = flat facets; default: 60 for files, 180 for "
+        "the built-ins). A file's own normals are kept",
+    )
     p.add_argument("--json", action="store_true", help="print the stats as JSON")
     p.add_argument(
         "--force",
@@ -53,23 +62,23 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _meshes(spec: str):
+def _meshes(spec: str, crease: float | None = None):
     from vrneural.atlas import BUILTIN_MESHES, builtin_mesh, load_mesh
 
     from vrneural.errors import VrnError
 
     if spec in BUILTIN_MESHES and not Path(spec).exists():
-        return [builtin_mesh(spec)]
+        return [builtin_mesh(spec, crease)]
     head = spec.rsplit(":", 1)[0]
     if not Path(spec).exists() and ":" in spec and Path(head).is_file():
         from vrneural.runtime.assets import get_mesh  # FILE:NAME, as in a scene file
 
-        return [get_mesh(spec, field="MESH")]
+        return [get_mesh(spec, field="MESH", crease_deg=crease)]
     if not Path(spec).exists() and not Path(spec).suffix:
         raise VrnError(
             f"{spec}: no such file, and not a built-in mesh ({', '.join(BUILTIN_MESHES)})"
         )
-    return load_mesh(spec)
+    return load_mesh(spec, crease)
 
 
 def run(args) -> int:
@@ -87,12 +96,14 @@ def run(args) -> int:
     cfg = config_from_args(AtlasConfig, args)
     check_texture_resolution("--res", cfg.res)
     check_range("--padding", cfg.padding, 0, MAX_PADDING)
+    if args.crease_angle is not None:
+        check_range("--crease-angle", args.crease_angle, 0, 180)
     out = Path(args.output)
     if out.suffix.lower() != ".png":
         raise VrnError(f"{out}: output must be a .png file")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        meshes = _meshes(args.mesh)
+        meshes = _meshes(args.mesh, args.crease_angle)
         outs = output_paths(out, len(meshes))
         for o in [*outs, sidecar_path(out)]:  # every file written, before any is
             check_output(o, args.force)
@@ -108,7 +119,7 @@ def run(args) -> int:
         lost = lost_triangles(r, cfg.res, "a renderer shows their neighbours' shading")
         if lost:
             notes.append(f"{r['mesh']}: {lost}; raise --res")
-    _write_sidecar(out, cfg, results, notes)
+    _write_sidecar(out, cfg, results, notes, args.crease_angle)
     for n in notes:  # stderr: stdout is the stats alone (valid JSON with --json)
         print(f"warning: {n}", file=sys.stderr)
     if args.json:
@@ -152,10 +163,13 @@ def _write_png(path: Path, atlas, color: str) -> None:
         iio.imwrite(tmp, img, extension=".png")
 
 
-def _write_sidecar(out: Path, cfg, results: list[dict], notes: list[str]) -> None:
+def _write_sidecar(
+    out: Path, cfg, results: list[dict], notes: list[str], crease: float | None
+) -> None:
     from vrneural.config import config_dict
     from vrneural.formats.atomic import write_json
 
     # what write_config writes, at the path checked before anything was written (even where
     # OUT of a multi-mesh file is a directory: it is not written then)
-    write_json(sidecar_path(out), {**config_dict(cfg), "stats": results, "warnings": notes})
+    doc = {**config_dict(cfg), "crease_angle": crease, "stats": results, "warnings": notes}
+    write_json(sidecar_path(out), doc)

@@ -34,31 +34,40 @@ def run(args) -> int:
 
 def _report(fn, output: str) -> int:
     """Run a training stage; report the result or the interruption (exit 130). Under
-    ``torchrun`` only rank 0 reports (it alone writes the files)."""
+    ``torchrun`` only rank 0 reports (it alone writes the files), and every rank leaves the
+    process group before it exits."""
     import os
     import sys
     from pathlib import Path
 
-    from vrneural.distill.train import Interrupted
+    from vrneural.distill.train import Interrupted, dist_teardown
 
     rank0 = int(os.environ.get("RANK", "0")) == 0
     try:
         ck = fn()
     except Interrupted as e:
+        dist_teardown(synchronise=False)
         if rank0:
             print(
                 f"interrupted at {e}; checkpoint saved to {output}; continue with --resume",
                 file=sys.stderr,
             )
         return 130
+    except BaseException:
+        dist_teardown(synchronise=False)
+        raise
+    dist_teardown()
     if not rank0:
         return 0
     h = ck["history"][-1] if ck["history"] else {}
     test = h.get("test_l1", float("nan"))
     pack = Path(output).with_suffix(".vrnm")
     wrote = f"  + {pack}" if ck.get("config", {}).get("export") and pack.is_file() else ""
+    method = ck["method"]
+    if ck.get("config", {}).get("distill") is False:  # --no-distill: ground truth only
+        method += " (no distillation)"
     print(
-        f"{output}: {ck['method']} epochs {ck['epoch']}  test L1 {test:.5f}"
+        f"{output}: {method} epochs {ck['epoch']}  test L1 {test:.5f}"
         f"  train {ck.get('train_seconds', 0):.1f} s{wrote}"
     )
     ref = ck.get("teacher_test_l1")

@@ -8,14 +8,14 @@ import torch
 from torch import nn
 
 from vrneural.btf.format import read_btf
-from vrneural.config import is_explicit
+from vrneural.config import flag, is_explicit
 from vrneural.distill.config import TeachConfig
 from vrneural.distill.data import SliceData, btf_fingerprint, check_btf_record, split_pairs
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
 from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
-from vrneural.errors import VrnError, check_range, check_seed
+from vrneural.errors import VrnError, check_range, check_seed, count
 
 
 class GroundTruthNet(nn.Module):
@@ -71,7 +71,7 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
         now = getattr(cfg, k)
         if now != stored[k] and is_explicit(cfg, k):
             raise VrnError(
-                f"--{k.replace('_', '-')} = {now!r}, but {cfg.output} was trained with "
+                f"{flag(cfg, k)} = {now!r}, but {cfg.output} was trained with "
                 f"{stored[k]!r}; --resume continues the checkpoint's settings (drop the flag, "
                 "or start over: --force instead of --resume)"
             )
@@ -81,8 +81,8 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
     done = int(ck["epoch"])
     if merged["epochs"] < done:
         raise VrnError(
-            f"--epochs = {merged['epochs']}, but {cfg.output} already has {done} epochs; "
-            f"pass --epochs {done} or more to continue it"
+            f"{flag(cfg, 'epochs')} = {merged['epochs']}, but {cfg.output} already has "
+            f"{count(done, 'epoch')}; pass {flag(cfg, 'epochs')} {done} or more to continue it"
         )
     return merged
 

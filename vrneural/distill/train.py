@@ -25,10 +25,11 @@ import torch
 import torch.distributed as dist
 from torch import nn
 
+from vrneural.config import flag
 from vrneural.distill.checkpoint import save_checkpoint
 from vrneural.distill.data import SliceData
 from vrneural.interrupt import Stop
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, count
 
 
 def compile_networks(mode: str, *models: nn.Module, backend: str = "inductor") -> None:
@@ -63,6 +64,20 @@ def dist_setup(device: str = "cpu") -> tuple[int, int]:
     if dist.is_initialized():
         return dist.get_rank(), dist.get_world_size()
     return 0, 1
+
+
+def dist_teardown(synchronise: bool = True) -> None:
+    """End the ``torchrun`` process group (no-op without one). The ranks first meet at a
+    barrier, as rank 0 may still be writing the checkpoint and pack: a rank that exits while
+    another still holds a connection to it can abort in gloo's teardown. A rank leaving on an
+    error skips the barrier (the others may never reach it)."""
+    if not dist.is_initialized():
+        return
+    try:
+        if synchronise:
+            dist.barrier()
+    finally:
+        dist.destroy_process_group()
 
 
 def train_device(name: str) -> torch.device:
@@ -219,8 +234,8 @@ def fit(
     bar = None
     if rank == 0 and epoch >= cfg.epochs:  # a finished run resumed without more --epochs
         print(
-            f"{out}: already trained for {epoch} epochs, nothing left to train "
-            f"(--epochs N with N > {epoch} continues it)",
+            f"{out}: already trained for {count(epoch, 'epoch')}, nothing left to train "
+            f"({flag(cfg, 'epochs')} N with N > {epoch} continues it)",
             file=sys.stderr,
         )
     elif rank == 0 and cfg.progress:

@@ -31,6 +31,13 @@ import numpy as np
 
 from vrneural.errors import VrnError
 
+#: the magic of every vrneural container format -> what to call it in an error
+_KNOWN_MAGIC = {
+    b"VRNBTF": "a BTF file",
+    b"VRNM": "a runtime pack",
+    b"VRNATLAS": "an atlas cache entry",
+}
+
 _PREFIX = struct.Struct("<8sIIQ")
 _ALIGN = 64
 _DTYPES = {"float16", "float32", "float64", "uint8", "uint16", "uint32", "int32", "int64"}
@@ -200,6 +207,14 @@ def read_container(
                     f"{p}: wrong magic (a zip, probably a PyTorch checkpoint), not a {what}"
                     + (hint if what == "runtime pack" else "")
                 )
+            other = _KNOWN_MAGIC.get(got_magic.rstrip(b"\0"))
+            if other is not None:  # one of our other formats: say which
+                hint = (
+                    "; `vrneural teach` trains a teacher on it, `vrneural distill` a student"
+                    if other == "a BTF file" and what == "runtime pack"
+                    else ""
+                )
+                raise VrnError(f"{p}: is {other}, expected a {what}{hint}")
             raise VrnError(f"{p}: wrong magic {got_magic!r}, not a {what} (expected {magic!r})")
         if version not in versions:
             raise VrnError(

@@ -7,7 +7,7 @@ import math
 from dataclasses import dataclass
 
 from vrneural.config import opt
-from vrneural.errors import VrnError, check_range
+from vrneural.errors import VrnError, check_range, count
 from vrneural.runtime.profiles import get_profile
 from vrneural.runtime.renderer import MODES, Settings
 from vrneural.runtime.schedule import SCHEDULES
@@ -107,7 +107,9 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         n_lights = cfg.lights
         check_range("--lights", n_lights, 0, 64)  # 0: neural objects render black
         if n_lights > len(scene.lights):
-            raise VrnError(f"--lights = {n_lights} but the scene has {len(scene.lights)} lights")
+            raise VrnError(
+                f"--lights = {n_lights} but the scene has {count(len(scene.lights), 'light')}"
+            )
     precision = resolve_precision(
         cfg.precision, adapter.is_cpu, adapter.features.get("shader-f16", False)
     )

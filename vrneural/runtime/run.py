@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.config import config_dict, is_explicit, replace_config
-from vrneural.errors import VrnError, check_range
+from vrneural.errors import VrnError, check_range, count
 from vrneural.interrupt import Stop
 from vrneural.formats.atomic import (
     OUTPUT_MARK,
@@ -245,7 +245,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
     setup_s = time.perf_counter() - t_setup
     if cfg.scene and cfg.lights is None and len(scene.lights) > s.n_lights:
         r.warnings.append(
-            f"{scene.src}: the scene has {len(scene.lights)} lights and the "
+            f"{scene.src}: the scene has {count(len(scene.lights), 'light')} and the "
             f"{cfg.profile or scene.profile or 'quest3'} profile shades the first "
             f"{s.n_lights}; "
             f"--lights {len(scene.lights)} shades them all"
@@ -254,8 +254,14 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         r.warnings.append(f"{scene.src}: the scene has no [[lights]]: neural objects are black")
     elif r.neural and s.n_lights == 0:  # asked for (a timing baseline), but say what it gives
         r.warnings.append(
-            f"--lights 0: none of the scene's {len(scene.lights)} lights is shaded, so neural "
-            "objects are black (--lights N shades the first N)"
+            f"--lights 0: none of the scene's {count(len(scene.lights), 'light')} is shaded, so "
+            "neural objects are black (--lights N shades the first N)"
+        )
+    unused = [f"--{k}" for k in ("reuse", "schedule") if is_explicit(cfg, k)]
+    if s.mode != "texture" and unused:  # texture space's knobs: say they do nothing here
+        r.warnings.append(
+            f"{' and '.join(unused)} only apply to --mode texture; --mode {s.mode} shades "
+            "every pixel every frame"
         )
     for w in r.warnings:
         print(f"warning: {w}", file=sys.stderr)
@@ -392,7 +398,10 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
         "per_frame": per_frame,
         "out": cfg.out,
         "files": files,
-        "note": "frame_wall_ms and gpu_ms percentiles exclude frame 0 (shader compilation)",
+        "note": "frame_wall_ms and gpu_ms percentiles exclude frame 0 (shader compilation)"
+        if len(stats) > 1
+        else "one frame: frame_wall_ms and gpu_ms include shader compilation (--frames 2 or "
+        "more leaves frame 0 out)",
     }
 
 
@@ -420,7 +429,9 @@ def human_summary(sm: dict) -> str:
         f"eye={r['eye_res'][0]}x{r['eye_res'][1]} lights={r['n_lights']}",
         f"frames    {sm['frames']}{updates}, setup {sm['setup_s']:.1f} s",
         f"frame ms  median {fw.get('median', 0):.1f}  p95 {fw.get('p95', 0):.1f}  "
-        f"p99 {fw.get('p99', 0):.1f} (wall, incl. GPU wait)",
+        f"p99 {fw.get('p99', 0):.1f} (wall, incl. GPU wait"
+        + ("" if sm["frames"] > 1 else "; one frame: includes shader compilation")
+        + ")",
         "gpu ms    " + "  ".join(f"{k} {v['median']:.2f}" for k, v in sm["gpu_ms"].items()),
         f"per frame {unit} shaded {sm[f'{unit}_shaded_per_frame'].get('median', 0):.0f}, MLP evals "
         f"{sm['mlp_evaluations_per_frame'].get('median', 0):.0f} (median)",
