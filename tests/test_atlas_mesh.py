@@ -215,6 +215,12 @@ def test_obj_objects_materials_and_latin1(tmp_path):
     assert (cafe.name, zebra.name) == ("two.obj:Caf\xe9", "two.obj:Zebra")
     assert len(cafe.faces) == 2 and len(zebra.faces) == 2
     assert cafe.positions[:, 0].max() == 1.0 and zebra.positions[:, 0].min() == 2.0
+    # faces before the first ``o`` line come first, then the objects in file order
+    lead = quad.format(x=5, x1=6) + "f 1 2 3\no Zebra\n" + quad.format(x=2, x1=3) + "f 5 6 7\n"
+    (tmp_path / "lead.obj").write_text(lead + "o Ant\n" + quad.format(x=8, x1=9) + "f 9 10 11\n")
+    first, zebra, ant = load_mesh(tmp_path / "lead.obj")
+    assert (zebra.name, ant.name) == ("lead.obj:Zebra", "lead.obj:Ant")
+    assert first.positions[:, 0].min() == 5.0 and ant.positions[:, 0].min() == 8.0
 
 
 @pytest.mark.parametrize(

@@ -80,7 +80,10 @@ def load_mesh(path, crease_deg: float | None = None) -> list[Mesh]:
     except Exception as e:  # trimesh raises many types for bad files
         raise VrnError(f"{p}: cannot read mesh ({type(e).__name__}: {e})") from None
     if isinstance(loaded, trimesh.Scene):
-        parts = _scene_parts(p, loaded, _obj_object_names(text) if obj else _gltf_node_names(p))
+        if obj:
+            parts = _scene_parts(p, loaded, _obj_object_names(text), unnamed_first=True)
+        else:
+            parts = _scene_parts(p, loaded, _gltf_node_names(p))
     else:
         parts = [(p.name, loaded, None)]
     meshes = []
@@ -94,12 +97,14 @@ def load_mesh(path, crease_deg: float | None = None) -> list[Mesh]:
     return meshes
 
 
-def _scene_parts(p: Path, scene, order: list) -> list:
+def _scene_parts(p: Path, scene, order: list, unnamed_first: bool = False) -> list:
     """``(label, geometry, 4x4 transform)`` per geometry instance of a trimesh scene, in the
     file's order (``order``: node names as the file lists them; trimesh walks glTF nodes and
-    OBJ objects backwards), so ``file:0`` is the first, not the last."""
+    OBJ objects backwards), so ``file:0`` is the first, not the last. Nodes not in ``order``
+    go last, or first with ``unnamed_first`` (an OBJ's faces before its first ``o`` line)."""
     rank = {n: i for i, n in enumerate(order)}
-    nodes = sorted(scene.graph.nodes_geometry, key=lambda n: rank.get(n, len(rank)))
+    other = -1 if unnamed_first else len(rank)
+    nodes = sorted(scene.graph.nodes_geometry, key=lambda n: rank.get(n, other))
     parts = []
     for node in nodes:
         matrix, geom_name = scene.graph[node]
