@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from vrneural.btf import read_btf
+from vrneural.btf import direction_set, read_btf, write_btf
 from vrneural.cli import main
 from vrneural.distill.data import btf_fingerprint
 
@@ -326,3 +326,98 @@ def test_info_warns_about_nan_values(tmp_path, capsys):
     with pytest.warns(BtfWarning, match="1 NaN/Inf values"):
         assert main(["btf", "info", str(f)]) == 0
     assert "max 0.5" in capsys.readouterr().out
+
+
+def _interrupted_partial(out, monkeypatch, after=2):
+    """Leave ``<out>.partial`` (leather, 4^2, 5 dirs) as Ctrl-C after ``after`` views does."""
+    import vrneural.btf.render as render
+    from vrneural.btf.synth import BtfConfig, synthesize
+
+    real, calls = render.render_view, {"n": 0}
+
+    def interrupt(*a, **k):
+        calls["n"] += 1
+        if calls["n"] > after:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(render, "render_view", interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        synthesize(BtfConfig(preset="leather", res=4, dirs=5), out, progress=False)
+    monkeypatch.setattr(render, "render_view", real)
+    return out.with_name(out.name + ".partial.done")
+
+
+def test_resume_with_a_damaged_list_of_finished_views_is_one_line(
+    tmp_path, vrn_inproc, monkeypatch
+):
+    """The trial's reproduction: a stray line in `<out>.partial.done` was a traceback
+    (ValueError), and an index beyond the views was counted in "resuming, k/N"."""
+    out = tmp_path / "p.btf"
+    done = _interrupted_partial(out, monkeypatch)
+    assert done.read_text() == "0\n1\n"
+    synth = ["btf", "synth", "--preset", "leather", "--res", "4", "--dirs", "5", "--no-progress"]
+    resume = [*synth, "-o", str(out), "--resume"]
+    done.write_text("0\n1\nx\n")
+    r = vrn_inproc(*resume)
+    _one_line_error(
+        r, "vrneural btf synth: error", f"{done}, line 3: 'x' is not a view index", "--force"
+    )
+    assert "resuming" not in r.stderr and not out.exists() and done.read_text() == "0\n1\nx\n"
+    done.write_text("0\n1\n999\n")
+    r = vrn_inproc(*resume)
+    _one_line_error(r, f"{done}, line 3: view index 999 is out of range", "5 views (0..4)")
+    assert "resuming" not in r.stderr and not out.exists()
+    done.write_text("0\n1\n0\n")  # a repeat counts once
+    r = vrn_inproc(*resume)
+    assert r.returncode == 0 and "resuming, 2/5 views already done" in r.stderr, r.stderr
+    assert read_btf(out).shape == (5, 5, 4, 4) and not done.exists()
+
+
+def test_show_titles_give_the_slice_shown_not_the_angles_asked(tmp_path, vrn_inproc):
+    """With 8 directions the smallest theta is 17.5 deg: "head-on" is titled with that slice's
+    angles, and the two pairs that pick the same slice share one panel, said on stderr too."""
+    from vrneural.btf.sheet import PAIRS, dir_angles, sheet_figure, sheet_panels
+
+    d = direction_set(8)
+    vals = np.random.default_rng(0).random((8, 8, 4, 4, 3), np.float32)
+    f = write_btf(tmp_path / "s8.btf", vals, d, d, {"name": "s8"})
+    b = read_btf(f)
+    panels = sheet_panels(b)
+    titles = [p.title() for p in panels]
+    assert titles[0] == "head-on (asked wi=0 wo=0)\nnearest: wi=17.5@0 wo=17.5@0, l0 v0"
+    merged = [t for t in titles if "+ " in t]
+    assert merged == [
+        "mirror along u (asked wi=45@0 wo=45@180)\n+ grazing view (asked wi=30@0 wo=75@180)\n"
+        "nearest to both: wi=17.5@0 wo=54.3@190, l0 v4"
+    ]
+    assert len(panels) == len(PAIRS) - 1 == 7
+    assert sorted(n for p in panels for n in p.names) == sorted(n for n, *_ in PAIRS)
+    assert len({(p.light, p.view) for p in panels}) == 7  # one panel per slice
+    for p in panels:  # every title's "nearest" angles are those of the slice's directions
+        (tl, pl), (tv, pv) = dir_angles(d[p.light]), dir_angles(d[p.view])
+        assert p.title().endswith(
+            f"wi={tl:.1f}@{round(pl) % 360} wo={tv:.1f}@{round(pv) % 360}, l{p.light} v{p.view}"
+        )
+    fig = sheet_figure(b)
+    shown = [ax.get_title() for ax in fig.axes[:-1]]
+    assert [t.rsplit("  x", 1)[0] for t in shown] == titles  # the PNG's titles, plus exposure
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    png = tmp_path / "s8.png"
+    r = vrn_inproc("btf", "show", str(f), "-o", str(png))
+    assert r.returncode == 0 and png.exists()
+    assert r.stderr.strip() == (
+        f"{f}: mirror along u and grazing view resolve to the same slice "
+        "(l0 v4: wi=17.5@0 wo=54.3@190) among this BTF's 8 lights x 8 views; one panel shows "
+        "it, titled with both"
+    )
+    # UBO2014's 151 directions: eight panels, asked == shown except where the layout has no
+    # such direction (its 45 deg ring is every 20 deg in phi: no 90, no 270)
+    u = direction_set(151)
+    g = write_btf(tmp_path / "u.btf", np.ones((151, 151, 1, 1, 3)), u, u, {"name": "u"})
+    panels = sheet_panels(read_btf(g))
+    assert len(panels) == 8 and panels[0].title().endswith("nearest: wi=0 wo=0, l0 v0")
+    inexact = {p.names[0]: p.shown for p in panels if f"(asked {p.shown})" not in p.title()}
+    assert inexact == {"mirror along v": "wi=45@80 wo=45@260"}

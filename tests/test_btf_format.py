@@ -113,6 +113,45 @@ def test_writer_streams_and_resumes(tmp_path, rng):
     assert w.done == set()
 
 
+def test_resume_validates_the_list_of_finished_views(tmp_path, rng):
+    """The ``.partial.done`` sidecar: a line that is not a view index is a one-line error naming
+    the file and line (the file is kept); a repeated index counts once; an unterminated last
+    line (a write cut short) is dropped, so the next index cannot run into it."""
+    vals, ld, vd = _small(rng)  # 4 views
+    out = tmp_path / "s.btf"
+    w = BtfWriter(out, ld, vd, (5, 6), {"name": "s"})
+    for v in (0, 2):
+        w.values[:, v] = vals[:, v]
+        w.mark_done(v)
+    del w
+    done = tmp_path / "s.btf.partial.done"
+    for bad, needles in (
+        ("x\n", ["line 3:", "'x' is not a view index", "0..3"]),
+        ("\n-1\n", ["line 4:", "'-1' is not a view index"]),
+        ("1.5\n", ["line 3:", "'1.5' is not a view index"]),
+        ("4\n", ["line 3:", "view index 4 is out of range", "has 4 views (0..3)"]),
+        ("999\n1\n", ["line 3:", "view index 999 is out of range"]),
+    ):
+        done.write_text("0\n2\n" + bad)
+        with pytest.raises(VrnError) as e:
+            BtfWriter(out, ld, vd, (5, 6), {"name": "s"}, resume=True)
+        msg = str(e.value)
+        assert "\n" not in msg and msg.startswith(f"{done}, line ")
+        for n in [*needles, "remove that line", "--force instead of --resume"]:
+            assert n in msg, (bad, msg)
+        assert done.read_text() == "0\n2\n" + bad  # left as it was
+    done.write_text("0\n2\n\n2\n 0 \n3")  # duplicates, a blank line, "3" cut short
+    w = BtfWriter(out, ld, vd, (5, 6), {"name": "s"}, resume=True)
+    assert w.done == {0, 2}
+    assert done.read_text() == "0\n2\n"  # the fragment is gone
+    for v in (1, 3):
+        w.values[:, v] = vals[:, v]
+        w.mark_done(v)
+    assert sorted(int(t) for t in done.read_text().split()) == [0, 1, 2, 3]
+    w.finalize()
+    np.testing.assert_array_equal(read_btf(out).values, vals.astype(np.float16))
+
+
 def test_direction_sets():
     d = direction_set(151)
     assert d.shape == (151, 3)

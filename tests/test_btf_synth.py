@@ -94,3 +94,36 @@ def test_resume_with_other_settings_keeps_the_partial_and_names_them(tmp_path, m
     # --force starts over with the new settings
     b = read_btf(synthesize(other, out, resume=True, progress=False, force=True))
     assert b.resolution == (10, 10) and not partial.exists()
+
+
+def test_resume_counts_only_valid_finished_views(tmp_path, monkeypatch, capsys):
+    """A damaged ``.partial.done`` neither inflates the "resuming, k/N" count nor skips a view
+    that was never rendered (an out-of-range index is an error, a repeated one counts once, a
+    last line cut short is dropped), and the resumed file is byte-identical."""
+    cfg = BtfConfig(preset="carpet", res=8, dirs=7, seed=1)
+    full = synthesize(cfg, tmp_path / "full.btf", progress=False).read_bytes()
+    real = render.render_view
+    calls = {"n": 0}
+
+    def interrupt_after_three(*a, **k):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    out = tmp_path / "r.btf"
+    monkeypatch.setattr(render, "render_view", interrupt_after_three)
+    with pytest.raises(KeyboardInterrupt):
+        synthesize(cfg, out, progress=False)
+    monkeypatch.setattr(render, "render_view", real)
+    done = tmp_path / "r.btf.partial.done"
+    assert done.read_text() == "0\n1\n2\n"
+    capsys.readouterr()
+    done.write_text("0\n1\n2\n999\n")  # out of range for 7 views: was counted as "4/7"
+    with pytest.raises(VrnError, match=r"r\.btf\.partial\.done, line 4: view index 999 is out"):
+        synthesize(cfg, out, resume=True, progress=False)
+    assert "resuming" not in capsys.readouterr().err
+    done.write_text("0\n1\n2\n1\n6")  # a repeat, and view 6 (never rendered) cut short
+    synthesize(cfg, out, resume=True, progress=False)
+    assert "resuming, 3/7 views already done" in capsys.readouterr().err
+    assert out.read_bytes() == full  # view 6 was rendered, not skipped

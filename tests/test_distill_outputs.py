@@ -140,7 +140,7 @@ def test_export_warns_about_an_unfinished_run(trained, tmp_path):  # noqa: F811
     ck.update(finished=False, epoch=1, step=3)
     unf = tmp_path / "unf.pt"
     save_checkpoint(unf, {k: v for k, v in ck.items() if k not in ("format", "version")})
-    from vrneural.cli.export import UnfinishedRunWarning
+    from vrneural.distill.checkpoint import UnfinishedRunWarning
 
     with pytest.warns(UnfinishedRunWarning) as rec:
         code, err = run_cli("export", unf, "-o", tmp_path / "u.vrnm")

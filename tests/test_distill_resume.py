@@ -13,6 +13,7 @@ from vrneural.distill.config import DistillConfig, TeachConfig
 from vrneural.distill.teach import run_teach
 from vrneural.distill.train import Interrupted
 from vrneural.errors import VrnError
+from vrneural.formats.vrnm import read_vrnm
 
 
 def _same(a, b):
@@ -211,3 +212,50 @@ def test_resume_messages_name_the_option_that_set_the_field():
     with pytest.raises(VrnError, match="pass --teacher-epochs 2 or more") as e:
         resumed_config(bench, {"epochs": 3}, {"epoch": 2})
     assert str(e.value).startswith("--teacher-epochs = 1, but t.pt")
+
+
+def test_unfinished_teacher_warns_and_exported_unfinished_student_resumes(btf, tmp_path):
+    """A teacher stopped in epoch 0: distilling from it warns. A student stopped in its first
+    epoch and exported (export says to finish it with --resume): that --resume works and
+    replaces the pack, which records no test-L1 curve yet but names its checkpoint."""
+    from vrneural.distill.checkpoint import UnfinishedRunWarning
+    from vrneural.distill.distill import run_distill
+
+    t, s = tmp_path / "t.pt", tmp_path / "s.pt"
+
+    def ctrl_c(epoch, step):
+        if (epoch, step) == (0, 3):
+            signal.raise_signal(signal.SIGINT)
+
+    kw = dict(progress=False, max_test_slices=4)
+    with pytest.raises(Interrupted):
+        run_teach(TeachConfig(btf=str(btf), output=str(t), epochs=2, width=32, **kw), ctrl_c)
+    with pytest.warns(UnfinishedRunWarning, match=r"t\.pt: an unfinished run \(0 of 2 epochs"):
+        with pytest.raises(Interrupted):
+            run_distill(DistillConfig(teacher=str(t), output=str(s), epochs=1, **kw), ctrl_c)
+    assert load_checkpoint(s)["history"] == []
+    with pytest.warns(UnfinishedRunWarning, match="which replaces this pack"):
+        code, err = run_cli("export", s, "-o", s.with_suffix(".vrnm"))
+    assert code == 0, err
+    code, err = run_cli("distill", t, "-o", s, "--resume", "--no-progress")
+    assert code == 0, err
+    meta = read_vrnm(s.with_suffix(".vrnm")).meta
+    assert len(meta["metrics"]["test_l1_curve"]) == 1  # the finished run's pack replaced it
+
+
+def test_finished_run_resumed_names_the_benchs_flag(btf, tmp_path, capsys):
+    """`bench quality --resume` on a finished teacher: the "nothing left" note names
+    --teacher-epochs, the flag that sets it there (kept through the resumed config)."""
+    from vrneural.config import mark_explicit, name_flag
+
+    t = tmp_path / "t.pt"
+    kw = dict(btf=str(btf), output=str(t), epochs=1, width=32, progress=False, export=False)
+    run_teach(TeachConfig(**kw))
+    capsys.readouterr()
+    cfg = name_flag(
+        mark_explicit(TeachConfig(**kw, resume=True), "epochs"), "epochs", "--teacher-epochs"
+    )
+    run_teach(cfg)
+    err = capsys.readouterr().err
+    assert "already trained for 1 epoch, nothing left" in err
+    assert "(--teacher-epochs N with N > 1 continues it)" in err

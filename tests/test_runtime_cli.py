@@ -1,6 +1,7 @@
 """`vrneural run` user errors: one line, exit code 2; and a tiny end-to-end run."""
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -173,9 +174,13 @@ def test_ctrl_c_keeps_the_frames_rendered_so_far(capsys, tmp_path, monkeypatch):
 
 
 @pytest.mark.gpu
-def test_a_real_ctrl_c_stops_between_frames_and_keeps_them_whole(capsys, tmp_path, monkeypatch):
-    """SIGINT (what a terminal's Ctrl-C sends) during frame 3: that frame is finished, and the
-    summary, the video and the default --save-frames first,last agree on 4 frames."""
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_a_real_ctrl_c_stops_between_frames_and_keeps_them_whole(
+    capsys, tmp_path, monkeypatch, sig
+):
+    """SIGINT (what a terminal's Ctrl-C sends) or SIGTERM (kill, timeout, batch schedulers)
+    during frame 3: that frame is finished, and the summary, the video and the default
+    --save-frames first,last agree on 4 frames."""
     import os
     import signal
 
@@ -186,7 +191,7 @@ def test_a_real_ctrl_c_stops_between_frames_and_keeps_them_whole(capsys, tmp_pat
     class Interrupted(renderer.Renderer):
         def frame(self, f):
             if f == 3:
-                os.kill(os.getpid(), signal.SIGINT)
+                os.kill(os.getpid(), getattr(signal, sig))
             return super().frame(f)
 
     monkeypatch.setattr(renderer, "Renderer", Interrupted)
@@ -257,7 +262,7 @@ mesh = "{mesh}"
         ),
         ({"extra": "scale = 1e300"}, "s.toml: objects[0].scale = 1e+300 is out of range"),
         (
-            {"light": "radius = 1e9"},
+            {"light": 'motion = "circle"\nradius = 1e9'},
             "s.toml: lights[0].radius = 1000000000.0 is out of range; allowed [0, 1e+07]",
         ),
         (
@@ -283,6 +288,15 @@ mesh = "{mesh}"
         ({"mesh": "two.glb"}, "objects[0].mesh = 'two.glb' holds 2 meshes"),
         ({"mesh": "two.glb:teapot"}, "two.glb has no mesh 'teapot'"),
         ({"extra": "crease_angle = 181"}, "objects[0].crease_angle = 181 is out of range"),
+        (
+            {"light": "radius = 3\nperiod = 2"},
+            'lights[0].radius is given but the light does not move; add motion = "circle" or '
+            "drop radius, period",
+        ),
+        (
+            {"mat": 'kind = "plain"', "extra": "texture_res = 64"},
+            "objects[0].texture_res is set on a plain object; only neural ones have a radiance",
+        ),
     ],
 )
 def test_bad_scene_fields(capsys, tmp_path, fields, needle):
@@ -328,7 +342,7 @@ def test_scene_mesh_files_by_name_or_index_and_bundled_packs(tmp_path):
     o = sc.objects[0]
     assert o.min_texture_res == 64 and o.texture_res is None and o.name == "two"
     assert o.material.source.endswith("vrneural/data/materials/leather.vrnm")
-    assert o.material.reference.arch == "single" and sc.src == "s.toml"
+    assert o.material.reference.arch == "single" and sc.src.endswith("/s.toml")
     assert o.crease_angle is None
 
 
@@ -377,12 +391,32 @@ def test_triangles_without_texels_are_reported_not_hidden(capsys, tmp_path):
     assert main([*argv, "--quiet", "--out", str(out)]) == 0
     cap = capsys.readouterr()
     err = cap.err
-    assert "warning: s.toml: objects[0] (sphere): " in err and "own no texel at 64^2" in err
+    assert f"warning: {tmp_path}/s.toml: objects[0] (sphere): " in err
+    assert "own no texel at 64^2" in err
     assert "objects   sphere 64^2 " in cap.out and "tris w/o texel" in cap.out
     sm = json.loads((out / "summary.json").read_text())
     obj = sm["scene"]["objects"][0]
     assert obj["texture_res"] == 64 and obj["triangles_without_texels"] > 0.5 * obj["triangles"]
     assert len(sm["warnings"]) == 1
+    # --texture-res on the command line beats the object's texture_res, and says so; screen
+    # mode shades pixels, so no word about texels there
+    assert main([*argv, "--quiet", "--out", str(tmp_path / "c"), "--texture-res", "128"]) == 0
+    cap = capsys.readouterr()
+    assert "objects[0] (sphere): --texture-res 128 overrides its texture_res = 64" in cap.err
+    assert "objects   sphere 128^2 " in cap.out
+    assert main([*argv, "--quiet", "--out", str(tmp_path / "s"), "--mode", "screen"]) == 0
+    assert "own no texel" not in capsys.readouterr().err
+
+
+@pytest.mark.gpu
+def test_builtin_scene_says_when_lights_are_generated(capsys, tmp_path):
+    argv = ["run", "--profile", "tiny", "--frames", "1", "--no-video", "--quiet", "--out"]
+    assert main([*argv, str(tmp_path / "o"), "--lights", "5"]) == 0
+    assert "--lights 5: the built-in scene has 3 lights; 2 generated lights added" in (
+        capsys.readouterr().err
+    )
+    assert main([*argv, str(tmp_path / "p"), "--lights", "3"]) == 0
+    assert "generated" not in capsys.readouterr().err
 
 
 @pytest.mark.gpu
@@ -491,7 +525,8 @@ def test_what_a_run_drops_or_cannot_see_is_a_warning_kept_in_the_summary(capsys,
     argv = ["run", _scene(tmp_path, dark, "dark.toml"), "--profile", "tiny", "--frames", "1"]
     assert main([*argv, "--no-video", "--quiet", "--out", str(tmp_path / "d")]) == 0
     sm = json.loads((tmp_path / "d" / "summary.json").read_text())
-    assert "dark.toml: the scene has no [[lights]]: neural objects are black" in sm["warnings"]
+    dark = "dark.toml: the scene has no [[lights]]: neural objects are black"
+    assert any(w.endswith(dark) for w in sm["warnings"])
     argv = ["run", "--profile", "tiny", "--lights", "0", "--frames", "1", "--no-video"]
     assert main([*argv, "--quiet", "--out", str(tmp_path / "z")]) == 0  # asked for: said too
     sm = json.loads((tmp_path / "z" / "summary.json").read_text())
@@ -539,3 +574,49 @@ def test_pack_finds_its_teacher_by_the_recorded_checkpoint_then_by_name(capsys, 
     sm = json.loads((tmp_path / "c" / "summary.json").read_text())
     refs = {o["reference"] for o in sm["scene"]["objects"] if o["material"] == "neural"}
     assert refs == {str((d / "mat.teacher.vrnm").resolve())}
+
+
+@pytest.mark.gpu
+def test_teacher_pack_outside_reference_mode_says_what_to_do(capsys, tmp_path):
+    import vrneural
+
+    argv = ["--profile", "tiny", "--frames", "1", "--quiet", "--no-video"]
+    teacher = str(Path(vrneural.__file__).parent / "data" / "materials" / "wood.teacher.vrnm")
+    msg = _err(capsys, [*argv, "--pack", teacher, "--out", str(tmp_path / "o")])
+    assert "built-in scene: objects[0] (wood.teacher sphere" in msg
+    assert "is a teacher pack (35328 MACs/texel" in msg and "--mode reference" in msg
+    assert not (tmp_path / "o").exists()
+
+
+def test_scene_file_with_a_utf8_bom_loads(tmp_path):
+    """Windows editors save UTF-8 with a byte-order mark; TOML parsers reject it at 1:1."""
+    from vrneural.runtime.scene import load_scene
+
+    text = OBJ.format(
+        mesh="plane", extra="", mat='procedural = "random"', light="position = [0, 1, 0]"
+    )
+    p = tmp_path / "bom.toml"
+    p.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    sc = load_scene(p)
+    assert sc.name == "bom" and len(sc.objects) == 1 and len(sc.lights) == 1
+
+
+def test_pose_log_times_count_from_its_first_row_and_separators_are_named(tmp_path):
+    """A log of absolute timestamps (1000 s, 1001 s) plays from its start: half a second in,
+    the head is half way. A ';'-separated log says commas are expected."""
+    import numpy as np
+
+    from vrneural.errors import VrnError
+    from vrneural.runtime.camera import PoseLogPath
+
+    p = tmp_path / "abs.csv"
+    p.write_text("t,x,y,z,qx,qy,qz,qw\n1000,0,1,2,0,0,0,1\n1001,1.0,1,2,0,0,0,1\n")
+    pos, _ = PoseLogPath(p).pose(0.5)
+    np.testing.assert_allclose(pos, [0.5, 1, 2])
+    semi = tmp_path / "semi.csv"
+    semi.write_text("t;x;y;z;qx;qy;qz;qw\n0;0;1;2;0;0;0;1\n")
+    with pytest.raises(VrnError, match=r"semi.csv:2: .*columns are separated by commas, not ';'"):
+        PoseLogPath(semi)
+    semi.write_text("0;0;1;2;0;0;0;1\n")
+    with pytest.raises(VrnError, match=r"no rows of 8 numbers .*not ';'"):
+        PoseLogPath(semi)

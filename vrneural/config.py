@@ -102,6 +102,13 @@ def flag(cfg, name: str) -> str:
     return cfg.__dict__.get("_flags", {}).get(name, "--" + name.replace("_", "-"))
 
 
+def keep_flag_names(old, new):
+    """``new`` with the flag names :func:`name_flag` recorded on ``old``; returns ``new``."""
+    if "_flags" in old.__dict__:
+        new.__dict__["_flags"] = dict(old.__dict__["_flags"])
+    return new
+
+
 def replace_config(cfg, **changes):
     """``dataclasses.replace`` that keeps the explicit-field and flag-name records."""
     new = dataclasses.replace(cfg, **changes)

@@ -1,5 +1,6 @@
-"""Ctrl-C at a safe point: :class:`Stop` turns SIGINT into a flag that a loop checks between
-units of work (a training step, a rendered frame), so what is finished is always whole."""
+"""Ctrl-C at a safe point: :class:`Stop` turns SIGINT (and SIGTERM, what ``kill``, ``timeout``
+and batch schedulers send) into a flag that a loop checks between units of work (a training
+step, a rendered frame), so what is finished is always whole."""
 
 from __future__ import annotations
 
@@ -7,21 +8,25 @@ import signal
 import threading
 
 
+#: the signals :class:`Stop` turns into its flag
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
 class Stop:
-    """Within ``with Stop() as stop``, Ctrl-C sets ``stop.flag`` instead of raising; the loop
-    finishes its current unit and stops. While the loop sets ``stop.second_raises``, a second
-    Ctrl-C raises :class:`KeyboardInterrupt` at once (for units that can take long, such as a
-    frame of the per-pixel reference). Outside the main thread it does nothing (signals go to
-    the main one)."""
+    """Within ``with Stop() as stop``, Ctrl-C (or SIGTERM) sets ``stop.flag`` instead of
+    raising; the loop finishes its current unit and stops. While the loop sets
+    ``stop.second_raises``, a second one raises :class:`KeyboardInterrupt` at once (for units
+    that can take long, such as a frame of the per-pixel reference). Outside the main thread
+    it does nothing (signals go to the main one)."""
 
     def __init__(self):
         self.flag = False
         self.second_raises = False
-        self._old = None
+        self._old = {}
 
     def __enter__(self):
         if threading_main():
-            self._old = signal.signal(signal.SIGINT, self._handle)
+            self._old = {sig: signal.signal(sig, self._handle) for sig in SIGNALS}
         return self
 
     def _handle(self, *_):
@@ -30,8 +35,9 @@ class Stop:
         self.flag = True
 
     def __exit__(self, *exc):
-        if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+        self._old = {}
 
 
 def threading_main() -> bool:

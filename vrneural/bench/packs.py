@@ -77,7 +77,8 @@ def train_packs(d: Path, budget: dict, progress: bool, log=print) -> dict[str, P
 
 
 def load_packs(paths: dict[str, Path]) -> dict:
-    """name -> NeuralMaterial."""
+    """name -> NeuralMaterial, each checked against the role its name gives it
+    (:func:`check_packs`). Raises a one-line :class:`VrnError` naming the file."""
     from vrneural.formats.vrnm import read_vrnm
 
     out = {}
@@ -85,4 +86,108 @@ def load_packs(paths: dict[str, Path]) -> dict:
         if not Path(p).is_file():
             raise VrnError(f"--packs: {str(p)!r} not found (needs {', '.join(PACKS)} .vrnm)")
         out[k] = read_vrnm(p)
+    check_packs(out, paths)
     return out
+
+
+#: What each pack name must hold: the role's name in the reports, what it must be, and the
+#: ``meta`` it must record (``method``, ``arch``; ``distill`` from the training config).
+ROLES = {
+    "teacher": ("the reference", "a teacher", dict(method="teacher")),
+    "student": (
+        "the base network",
+        "a distilled coarse-to-fine student",
+        dict(method="student", arch="coarse_fine", distill=True),
+    ),
+    "student_nodistill": (
+        "the network 'student w/o distillation'",
+        "a coarse-to-fine student trained without distillation (distill --no-distill)",
+        dict(method="student", arch="coarse_fine", distill=False),
+    ),
+    "single8": (
+        "the network 'single-level 8-wide'",
+        "a single-level 8-wide network (distill --method single8)",
+        dict(method="single8", arch="single"),
+    ),
+    "neumip": (
+        "the network 'NeuMIP-sized 4x25'",
+        "a NeuMIP-sized network (distill --method neumip)",
+        dict(method="neumip", arch="single"),
+    ),
+}
+ARCH_WORDS = {"coarse_fine": "coarse-to-fine", "single": "single-level"}
+#: The BTF fingerprint fields compared (as :func:`vrneural.distill.data.fingerprint_mismatch`,
+#: which imports torch): the header's and a value sample's SHA-256, and the shape
+BTF_KEYS = ("sha256", "values_sha256", "shape")
+
+
+def _distilled(mat) -> bool | None:
+    cfg = (mat.meta.get("provenance") or {}).get("config") or {}
+    return cfg.get("distill", True) if mat.meta.get("method") != "teacher" else None
+
+
+def describe_pack(mat) -> str:
+    """What a pack records being, e.g. ``a coarse-to-fine student pack (8 wide, distilled)``."""
+    method = mat.meta.get("method")
+    width = next(iter(mat.networks.values()))[0].n_out
+    what = f"{width} wide"
+    if mat.output == "log1p":
+        what += ", log1p output"
+    distilled = _distilled(mat) if method else None
+    if distilled is not None:
+        what += ", distilled" if distilled else ", not distilled"
+    if not method:
+        return f"a {ARCH_WORDS[mat.arch]} pack ({what}) that records no training method"
+    if method == "teacher":
+        return f"a teacher pack ({what})"
+    return f"a {ARCH_WORDS[mat.arch]} {method} pack ({what})"
+
+
+def check_packs(mats: dict, paths: dict[str, Path]) -> None:
+    """Refuse (one line, naming the file) a pack that is not what its name says, from what it
+    records: ``meta.method`` (``"teacher"``, as `run --pack` recognises a teacher), its
+    architecture and, for the two students, whether it was distilled; then one trained on
+    another BTF than the teacher (``provenance.btf``) or from another teacher checkpoint
+    (a pack's ``provenance.teacher`` against the teacher's ``checkpoint_sha256``). A field
+    a pack does not record (an older export) is not compared."""
+    for k, mat in mats.items():
+        if k not in ROLES:
+            continue
+        role, need, want = ROLES[k]
+        have = dict(method=mat.meta.get("method"), arch=mat.arch, distill=_distilled(mat))
+        if any(have[f] != v for f, v in want.items()):
+            raise VrnError(
+                f"{paths[k]}: is {describe_pack(mat)}, but {role} ({k}.vrnm) must be {need}"
+            )
+    if "teacher" not in mats:
+        return
+    tp = paths["teacher"]
+    tprov = mats["teacher"].meta.get("provenance") or {}
+    tbtf = tprov.get("btf") or {}
+    tsha = tprov.get("checkpoint_sha256")
+    same = "all packs in --packs must come from one BTF and its teacher"
+    for k, mat in mats.items():
+        if k == "teacher":
+            continue
+        prov = mat.meta.get("provenance") or {}
+        btf = prov.get("btf") or {}
+        for f in BTF_KEYS:
+            if f in btf and f in tbtf and btf[f] != tbtf[f]:
+                raise VrnError(
+                    f"{paths[k]}: was trained on another BTF ({_btf(btf, f)}) than the "
+                    f"reference {tp} ({_btf(tbtf, f)}); {same}"
+                )
+        sha = prov.get("teacher")
+        if isinstance(sha, str) and isinstance(tsha, str) and sha != tsha:
+            raise VrnError(
+                f"{paths[k]}: was trained with another teacher (checkpoint SHA-256 "
+                f"{sha[:12]}...) than the reference {tp} (checkpoint {tsha[:12]}...); {same}"
+            )
+
+
+def _btf(fp: dict, key: str) -> str:
+    """``'leather' 40x40x48x48, sha256 22f6bad8ce61...``: a BTF record, naming ``key``."""
+    v = fp[key]
+    v = "x".join(map(str, v)) if isinstance(v, list) else f"{str(v)[:12]}..."
+    name = f"{fp['name']!r} " if fp.get("name") else ""
+    return f"{name}{key} {v}"

@@ -55,7 +55,9 @@ class TradeoffConfig:
     epochs: int = opt(4, "epochs of each small network")
     seed: int = opt(0, "training seed")
     packs: str = opt(
-        "", "directory with teacher/student/student_nodistill/single8/neumip.vrnm (skips training)"
+        "",
+        "directory with teacher/student/student_nodistill/single8/neumip.vrnm (skips training; "
+        "each must be what its name says, all from one BTF and its teacher)",
     )
     shimmer_frames: int = opt(24, "frames of the temporal-shimmer test (0 = skip it)")
     shimmer_res: str = opt("258x276", "eye resolution of the shimmer test (one eye)")
@@ -179,7 +181,7 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     check_range("--lights", c.lights, 1, 8)
     check_range("--shimmer-frames", c.shimmer_frames, 0, 100000)
     sets = settings(c, adapter_summary().features.get("shader-f16", False))
-    if c.packs:  # fail before any work or output
+    if c.packs:  # fail before any work or output, also on a pack not what its name says
         load_packs({k: Path(c.packs) / f"{k}.vrnm" for k in PACKS})
     else:  # the training budget, under this command's own flag names
         check_budget(c)

@@ -139,9 +139,58 @@ class BtfWriter:
             self._w.array("view_dirs")[:] = view_dirs
             self.progress_file.unlink(missing_ok=True)
         self.values = self._w.array("values")
-        self.done: set[int] = set()
+        self.done: set[int] = set()  #: view indices already written (from the sidecar)
         if self._w.resumed and self.progress_file.exists():
-            self.done = {int(t) for t in self.progress_file.read_text().split()}
+            self.done = self._read_progress(V)
+
+    def _read_progress(self, n_views: int) -> set[int]:
+        """The finished views listed in the sidecar (one index per line, blank lines ignored).
+
+        A line that is not an index in ``0..n_views-1`` is a one-line error naming the file and
+        the line (the file is left as it is). A repeated index is harmless (that view's data was
+        written either way) and counts once. An unterminated last line may be a write cut short
+        (``"1"`` of ``"12"``), so it is dropped and the file rewritten without it: that view is
+        only done again, and the next index appended cannot run into it.
+        """
+        f = self.progress_file
+        fix = (
+            "remove that line (a view missing from this list is only done again) or pass "
+            "--force instead of --resume to start over"
+        )
+        try:
+            text = f.read_bytes().decode("ascii", errors="replace")
+        except OSError as e:
+            raise VrnError(
+                f"{f}: cannot read the list of finished views ({e.strerror or e})"
+            ) from None
+        lines = text.split("\n")
+        cut = lines.pop()  # "" when the file ends with a newline
+        done: set[int] = set()
+        for n, line in enumerate(lines, 1):
+            t = line.strip()
+            if not t:
+                continue
+            if not (t.isascii() and t.isdigit()):
+                shown = repr(t if len(t) <= 40 else t[:40] + "...")
+                raise VrnError(
+                    f"{f}, line {n}: {shown} is not a view index (one integer 0..{n_views - 1} "
+                    f"per line expected); {fix}"
+                )
+            v = int(t)
+            if v >= n_views:
+                raise VrnError(
+                    f"{f}, line {n}: view index {v} is out of range: the BTF has {n_views} "
+                    f"views (0..{n_views - 1}); {fix}"
+                )
+            done.add(v)
+        if cut.strip():
+            try:
+                f.write_text("".join(f"{v}\n" for v in sorted(done)))
+            except OSError as e:
+                raise VrnError(
+                    f"{f}: cannot rewrite the list of finished views ({e.strerror})"
+                ) from None
+        return done
 
     def mark_done(self, view: int) -> None:
         """Flush data and record view index ``view`` as complete."""

@@ -4,10 +4,15 @@ The sheet shows BTF slices at several characteristic ``(wi, wo)`` pairs (each ti
 that seams would show), each tonemapped with its own exposure (printed in its title), plus the
 unfolded apparent BRDF of one texel: an image over light index (rows) x view index (columns),
 like the papers' figures (log-tonemapped because it spans orders of magnitude).
+
+A BTF only has its own directions, so each panel shows the slice nearest to the pair asked for
+and its title gives both: the pair's name and asked angles, and the angles and indices of the
+slice shown. Pairs that resolve to the same slice (coarse direction sets) share one panel.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -21,16 +26,16 @@ class BtfWarning(VrnWarning):
     """A BTF that reads but holds values training refuses (``vrneural btf info``)."""
 
 
-#: (label, light theta/phi, view theta/phi) in degrees.
+#: (name, light theta/phi, view theta/phi) in degrees: the pairs the sheet asks for.
 PAIRS = (
-    ("head-on  wi=0 wo=0", (0, 0), (0, 0)),
-    ("side light  wi=60@0 wo=0", (60, 0), (0, 0)),
-    ("raking light  wi=75@90 wo=0", (75, 90), (0, 0)),
-    ("mirror along u  wi=45@0 wo=45@180", (45, 0), (45, 180)),
-    ("mirror along v  wi=45@90 wo=45@270", (45, 90), (45, 270)),
-    ("back-scatter  wi=wo=60@45", (60, 45), (60, 45)),
-    ("grazing view  wi=30@0 wo=75@180", (30, 0), (75, 180)),
-    ("grazing both  wi=75@0 wo=75@180", (75, 0), (75, 180)),
+    ("head-on", (0, 0), (0, 0)),
+    ("side light", (60, 0), (0, 0)),
+    ("raking light", (75, 90), (0, 0)),
+    ("mirror along u", (45, 0), (45, 180)),
+    ("mirror along v", (45, 90), (45, 270)),
+    ("back-scatter", (60, 45), (60, 45)),
+    ("grazing view", (30, 0), (75, 180)),
+    ("grazing both", (75, 0), (75, 180)),
 )
 
 
@@ -38,6 +43,55 @@ def nearest(dirs: np.ndarray, theta_deg: float, phi_deg: float) -> int:
     """Index of the direction in ``dirs`` ``[N, 3]`` closest to (theta, phi) in degrees."""
     d = spherical(np.radians([theta_deg]), np.radians([phi_deg]))[0]
     return int(np.argmax(dirs @ d))
+
+
+def fmt_angle(theta_deg: float, phi_deg: float) -> str:
+    """``"theta@phi"`` in degrees (theta to 0.1, phi whole, in [0, 360)); ``"0"`` on the normal."""
+    t = f"{theta_deg:.1f}".removesuffix(".0")
+    if t == "0":
+        return "0"
+    return f"{t}@{round(phi_deg) % 360}"
+
+
+def dir_angles(d: np.ndarray) -> tuple[float, float]:
+    """(theta, phi) in degrees of the unit vector ``d``."""
+    theta = float(np.degrees(np.arccos(np.clip(float(d[2]), -1.0, 1.0))))
+    phi = float(np.degrees(np.arctan2(float(d[1]), float(d[0])))) % 360.0
+    return theta, phi
+
+
+@dataclass
+class Panel:
+    """One contact-sheet panel: the slice ``(light, view)`` and the pairs that resolved to it."""
+
+    light: int
+    view: int
+    shown: str  #: the slice's own angles, ``"wi=17.5@0 wo=54.3@190"``
+    names: list[str] = field(default_factory=list)  #: names of the pairs asked for
+    asked: list[str] = field(default_factory=list)  #: their angles, ``"wi=45@0 wo=45@180"``
+
+    def title(self) -> str:
+        """Multi-line title: each pair asked for, then the slice shown (angles, indices)."""
+        lines = [f"{n} (asked {a})" for n, a in zip(self.names, self.asked, strict=True)]
+        lines[1:] = [f"+ {x}" for x in lines[1:]]
+        n = len(self.names)
+        to = "nearest" if n == 1 else "nearest to both" if n == 2 else f"nearest to all {n}"
+        return "\n".join([*lines, f"{to}: {self.shown}, l{self.light} v{self.view}"])
+
+
+def sheet_panels(btf: Btf) -> list[Panel]:
+    """The panels of the contact sheet: for each of :data:`PAIRS` the nearest slice of ``btf``;
+    pairs that resolve to the same slice share one panel (in the order of their first pair)."""
+    panels: dict[tuple[int, int], Panel] = {}
+    for name, (tl, pl), (tv, pv) in PAIRS:
+        li, vi = nearest(btf.light_dirs, tl, pl), nearest(btf.view_dirs, tv, pv)
+        if (li, vi) not in panels:
+            wi = fmt_angle(*dir_angles(btf.light_dirs[li]))
+            wo = fmt_angle(*dir_angles(btf.view_dirs[vi]))
+            panels[li, vi] = Panel(li, vi, f"wi={wi} wo={wo}")
+        panels[li, vi].names.append(name)
+        panels[li, vi].asked.append(f"wi={fmt_angle(tl, pl)} wo={fmt_angle(tv, pv)}")
+    return list(panels.values())
 
 
 def tonemap(x: np.ndarray, exposure: float) -> np.ndarray:
@@ -84,21 +138,16 @@ def summary(btf: Btf, max_slices: int = 256) -> dict:
     }
 
 
-def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
-    """Write the contact sheet PNG to ``out``. ``texel = (x, y)`` picks the unfolded texel."""
+def sheet_figure(btf: Btf, texel: tuple[int, int] | None = None):
+    """The contact sheet as a matplotlib figure (panels from :func:`sheet_panels`)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from vrneural.formats.atomic import atomic_path
-
     L, V, H, W = btf.shape
-    slices, labels = [], []
-    for label, (tl, pl), (tv, pv) in PAIRS:
-        li, vi = nearest(btf.light_dirs, tl, pl), nearest(btf.view_dirs, tv, pv)
-        slices.append(np.tile(btf.slice(li, vi), (2, 2, 1)))
-        labels.append(f"{label}\n(l{li}, v{vi})")
+    panels = sheet_panels(btf)
+    slices = [np.tile(btf.slice(p.light, p.view), (2, 2, 1)) for p in panels]
     # one exposure per panel (its 99th percentile -> 0.8), printed in its title: glossy
     # materials span orders of magnitude between mirror and off-mirror pairs, so one global
     # exposure would show either the highlights or everything else
@@ -110,17 +159,18 @@ def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
 
     cols = 4
     rows = (len(slices) + cols - 1) // cols
-    fig = plt.figure(figsize=(4 * cols, 4 * rows + 6.5), dpi=100)
+    fig = plt.figure(figsize=(4 * cols, 4.3 * rows + 6.5), dpi=100)
     name = btf.meta.get("name", btf.path.name if btf.path else "?")
     fig.suptitle(
         f"{name}: {L} lights x {V} views x {H}x{W} texels (slices tiled 2x2, each panel "
-        "with its own exposure x)",
+        "with its own exposure x)\neach panel: the (wi, wo) pair asked for and the nearest slice "
+        "this BTF has (light index l, view index v); angles theta@phi in degrees",
         fontsize=13,
     )
-    for k, (img, lab, ex) in enumerate(zip(slices, labels, exposures, strict=True)):
+    for k, (img, p, ex) in enumerate(zip(slices, panels, exposures, strict=True)):
         ax = fig.add_subplot(rows + 2, cols, k + 1)
         ax.imshow(tonemap(img, ex), interpolation="nearest")
-        ax.set_title(f"{lab} x{ex:.3g}", fontsize=9)
+        ax.set_title(f"{p.title()}  x{ex:.3g}", fontsize=9)
         ax.axis("off")
     ax = fig.add_subplot(rows + 2, 1, (rows + 1, rows + 2))
     ax.imshow(np.clip(unf_img, 0, 1), interpolation="nearest", aspect="auto")
@@ -132,6 +182,16 @@ def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
     ax.set_xlabel("view index")
     ax.set_ylabel("light index")
     fig.tight_layout()
+    return fig
+
+
+def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
+    """Write the contact sheet PNG to ``out``. ``texel = (x, y)`` picks the unfolded texel."""
+    from vrneural.formats.atomic import atomic_path
+
+    fig = sheet_figure(btf, texel)  # selects the Agg backend before pyplot is imported here
+    import matplotlib.pyplot as plt
+
     out = Path(out)
     with atomic_path(out) as tmp:
         fig.savefig(tmp, format="png")

@@ -12,6 +12,7 @@ without ``--force``.
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 
@@ -52,7 +53,11 @@ def register(sub) -> None:
     i.set_defaults(func=run_info)
 
     sh = bsub.add_parser(
-        "show", help="write a contact sheet PNG", description="write a contact sheet PNG."
+        "show",
+        help="write a contact sheet PNG",
+        description="write a contact sheet PNG: slices at characteristic (wi, wo) pairs, each "
+        "panel titled with the pair asked for and the nearest slice the BTF has (angles, "
+        "indices), plus one texel's unfolded BRDF.",
     )
     sh.add_argument("file", help="a .btf file")
     sh.add_argument("-o", "--output", required=True, help="output .png")
@@ -162,7 +167,7 @@ def run_info(args) -> int:
 
 def run_show(args) -> int:
     from vrneural.btf.format import read_btf
-    from vrneural.btf.sheet import contact_sheet
+    from vrneural.btf.sheet import contact_sheet, sheet_panels
     from vrneural.errors import VrnError, check_range
     from vrneural.formats.atomic import check_output
 
@@ -175,6 +180,16 @@ def run_show(args) -> int:
         check_range("--texel Y", args.texel[1], 0, H - 1)
     out = check_output(args.output, args.force)
     print(contact_sheet(btf, out, tuple(args.texel) if args.texel else None))
+    for p in sheet_panels(btf):  # say so when this BTF's directions cannot tell pairs apart
+        if len(p.names) > 1:
+            names = f"{', '.join(p.names[:-1])} and {p.names[-1]}"
+            print(
+                f"{args.file}: {names} resolve to the same slice "
+                f"(l{p.light} v{p.view}: {p.shown}) among this BTF's {len(btf.light_dirs)} "
+                f"lights x {len(btf.view_dirs)} views; one panel shows it, titled with "
+                f"{'both' if len(p.names) == 2 else 'all'}",
+                file=sys.stderr,
+            )
     return 0
 
 

@@ -2,12 +2,6 @@
 
 from __future__ import annotations
 
-from vrneural.warn import VrnWarning
-
-
-class UnfinishedRunWarning(VrnWarning):
-    """`vrneural export` of a checkpoint whose training did not finish."""
-
 
 def register(sub) -> None:
     p = sub.add_parser(
@@ -64,7 +58,8 @@ def run(args) -> int:
         print(
             f"{out}: {meta['method']}  weights {m['weight_bytes']} B  textures "
             f"{m['texture_bytes']} B  {m['macs_per_texel']:g} MACs/texel  test L1 "
-            f"{m['test_l1']:.5f}  numpy-vs-torch {m['pack_vs_torch_max_abs']:.2e}"
+            f"{'n/a (no epoch done)' if m['test_l1'] is None else format(m['test_l1'], '.5f')}"
+            f"  numpy-vs-torch {m['pack_vs_torch_max_abs']:.2e}"
         )
     return 0
 
@@ -73,12 +68,12 @@ def _warn_unfinished(path, ck: dict) -> None:
     """One-line warning: the checkpoint is an interrupted run, and how to finish it."""
     import warnings
 
+    from vrneural.distill.checkpoint import UnfinishedRunWarning, unfinished_run
+
     cmd = "teach BTF" if ck.get("kind") == "teacher" else "distill TEACHER"
-    step = int(ck.get("step", 0))
     warnings.warn(
-        f"{path}: an unfinished run ({ck['epoch']} of {ck['config'].get('epochs', '?')} epochs "
-        f"done{f' and {step} steps of the next' if step else ''}); exporting it as it is; "
-        f"finish it with `vrneural {cmd} -o {path} --resume`",
+        f"{path}: {unfinished_run(ck)}; exporting it as it is; finish it with "
+        f"`vrneural {cmd} -o {path} --resume` (which replaces this pack)",
         UnfinishedRunWarning,
         stacklevel=1,
     )

@@ -27,11 +27,25 @@ from pathlib import Path
 import torch
 
 from vrneural.errors import VrnError
+from vrneural.warn import VrnWarning
 
 FORMAT = "vrneural-checkpoint"
 VERSION = 1
 KINDS = ("teacher", "student")
 ARCHS = ("single", "coarse_fine")  # models.NeuralModel
+
+
+class UnfinishedRunWarning(VrnWarning):
+    """A checkpoint whose training did not finish, exported or distilled from as it is."""
+
+
+def unfinished_run(ck: dict) -> str:
+    """``"an unfinished run (1 of 3 epochs done and 40 steps of the next)"``."""
+    step = int(ck.get("step", 0))
+    return (
+        f"an unfinished run ({ck['epoch']} of {ck['config'].get('epochs', '?')} epochs "
+        f"done{f' and {step} steps of the next' if step else ''})"
+    )
 
 
 def save_checkpoint(path, payload: dict) -> None:

@@ -10,14 +10,20 @@ hidden vectors of :func:`~vrneural.distill.models.make_spec` (for the coarse-to-
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from pathlib import Path
 
 import torch
 from torch import nn
 
 from vrneural.btf.format import read_btf
-from vrneural.config import is_explicit, replace_config
-from vrneural.distill.checkpoint import load_checkpoint, recorded_btf
+from vrneural.config import is_explicit, keep_flag_names, replace_config
+from vrneural.distill.checkpoint import (
+    UnfinishedRunWarning,
+    load_checkpoint,
+    recorded_btf,
+    unfinished_run,
+)
 from vrneural.distill.config import BEFORE_FIELD, DistillConfig
 from vrneural.distill.data import SliceData, btf_fingerprint, check_btf_record
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
@@ -153,8 +159,16 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         old["teacher"] = cfg.teacher
         if cfg.btf:
             old["btf"] = cfg.btf
-        cfg = DistillConfig(**old)
+        cfg = keep_flag_names(cfg, DistillConfig(**old))
     tck = load_checkpoint(cfg.teacher, kind="teacher")
+    if resume is None and not tck.get("finished", True):
+        warnings.warn(
+            f"{cfg.teacher}: {unfinished_run(tck)}; distilling from it as it is; finishing it "
+            "later (`vrneural teach BTF -o TEACHER --resume`) makes it another teacher, whose "
+            "pack this student no longer matches",
+            UnfinishedRunWarning,
+            stacklevel=2,
+        )
     tsha = file_sha256(cfg.teacher)
     if resume is not None and resume["teacher"]["sha256"] != tsha:
         raise VrnError(f"{cfg.teacher}: teacher differs from the one {cfg.output} was trained with")

@@ -50,7 +50,7 @@ def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
             )
         ck = load_checkpoint(cfg.output)
         for o in outputs[1:]:
-            if Path(o).exists() and not written_by(o, ck):
+            if Path(o).exists() and not written_by(o, ck, cfg.output):
                 raise VrnError(
                     f"{o}: exists and was not written by the run in {cfg.output}; --resume "
                     "replaces only its own files, so move it away first"
@@ -71,12 +71,35 @@ def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
     return None
 
 
-def written_by(path, ck: dict) -> bool:
-    """Whether the pack or config file ``path`` was written by the run of checkpoint ``ck``:
-    the test-L1 curve it records is a non-empty start of the checkpoint's history."""
+def written_by(path, ck: dict, output=None) -> bool:
+    """Whether the pack or config file ``path`` was written by the run of checkpoint ``ck``
+    (at ``output``): the test-L1 curve it records is a non-empty start of the checkpoint's
+    history; or, for a `vrneural export` of the run interrupted in its first epoch (no curve
+    yet), it names the checkpoint ``output`` as its source and records the run's config."""
     curve = _recorded_curve(Path(path))
     have = json_safe([h.get("test_l1") for h in ck.get("history", [])])
-    return bool(curve) and json_safe(curve) == have[: len(curve)]
+    if curve:
+        return json_safe(curve) == have[: len(curve)]
+    if curve != [] or output is None:
+        return False
+    src, config = _recorded_source(Path(path))
+    same = src is not None and Path(src).resolve() == Path(output).resolve()
+    return same and json_safe(config) == json_safe(ck.get("config"))
+
+
+def _recorded_source(p: Path) -> tuple:
+    """``(checkpoint path, training config)`` that a pack (its provenance) or the sidecar of
+    `vrneural export` records; ``(None, None)`` for anything else."""
+    try:
+        if p.suffix == ".vrnm":
+            from vrneural.formats.vrnm import read_vrnm
+
+            prov = read_vrnm(p).meta.get("provenance", {})
+            return prov.get("checkpoint"), prov.get("config")
+        doc = json.loads(p.read_text())
+        return doc.get("checkpoint"), doc.get("training_config")
+    except (VrnError, OSError, ValueError, AttributeError, TypeError):
+        return None, None
 
 
 def _recorded_curve(p: Path) -> list | None:

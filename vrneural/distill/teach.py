@@ -8,7 +8,7 @@ import torch
 from torch import nn
 
 from vrneural.btf.format import read_btf
-from vrneural.config import flag, is_explicit
+from vrneural.config import flag, is_explicit, keep_flag_names
 from vrneural.distill.config import TeachConfig
 from vrneural.distill.data import SliceData, btf_fingerprint, check_btf_record, split_pairs
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
@@ -99,7 +99,7 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
         if resume.get("kind") != "teacher":
             raise VrnError(f"{cfg.output}: is not a teacher checkpoint; cannot --resume teach")
         old = resumed_config(cfg, resume["config"], resume)
-        cfg = TeachConfig(**(old | {"btf": cfg.btf}))
+        cfg = keep_flag_names(cfg, TeachConfig(**(old | {"btf": cfg.btf})))
     btf = read_btf(cfg.btf)
     fp = btf_fingerprint(btf)
     if resume is not None:

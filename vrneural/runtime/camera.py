@@ -102,34 +102,41 @@ class OrbitPath(HeadPath):
 
 class PoseLogPath(HeadPath):
     """A recorded pose log: CSV rows ``t, x, y, z, qx, qy, qz, qw`` (header optional), times
-    increasing; positions interpolated linearly, rotations by normalised lerp."""
+    in seconds, increasing, counted from the first row (a log of absolute timestamps plays from
+    its start); positions interpolated linearly, rotations by normalised lerp."""
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
         if not self.path.is_file():
             raise VrnError(f"{self.path}: head-motion pose log not found")
-        rows = []
-        with open(self.path, newline="") as f:
+        rows, hint = [], ""
+        with open(self.path, newline="", encoding="utf-8-sig") as f:
             for i, row in enumerate(csv.reader(f)):
                 if not row or row[0].strip().startswith("#"):
                     continue
+                sep = next((c for c in ";\t|" if len(row) == 1 and c in row[0]), None)
+                hint = f" (columns are separated by commas, not {sep!r})" if sep else ""
                 try:
                     vals = [float(v) for v in row]
                 except ValueError:
                     if i == 0:
                         continue  # header
-                    raise VrnError(f"{self.path}:{i + 1}: non-numeric value in {row}") from None
+                    raise VrnError(
+                        f"{self.path}:{i + 1}: non-numeric value in {row}{hint}"
+                    ) from None
                 if len(vals) != 8:
                     raise VrnError(f"{self.path}:{i + 1}: expected 8 columns, got {len(vals)}")
                 rows.append(vals)
         a = np.asarray(rows, np.float64)
-        if len(a) < 1 or not np.isfinite(a).all():
-            raise VrnError(f"{self.path}: pose log is empty or has non-finite values")
+        if len(a) < 1:
+            raise VrnError(f"{self.path}: pose log has no rows of 8 numbers{hint}")
+        if not np.isfinite(a).all():
+            raise VrnError(f"{self.path}: pose log has non-finite values")
         if (np.diff(a[:, 0]) <= 0).any():
             raise VrnError(f"{self.path}: pose log times must increase")
         if (np.linalg.norm(a[:, 4:8], axis=1) < 1e-6).any():
             raise VrnError(f"{self.path}: pose log has a zero quaternion")
-        self.t, self.p, self.q = a[:, 0], a[:, 1:4], a[:, 4:8]
+        self.t, self.p, self.q = a[:, 0] - a[0, 0], a[:, 1:4], a[:, 4:8]
 
     def pose(self, t: float):
         t = float(np.clip(t, self.t[0], self.t[-1]))

@@ -116,6 +116,13 @@ def _check_weights(mat: NeuralMaterial, weights: str) -> None:
             f"{UNIFORM_BUFFERS_PER_STAGE - PASS_UNIFORMS - 1} layers); use streamed weights"
         )
     if weights == "constants" and mat.macs_per_texel > MAX_UNROLLED_MACS:
+        if mat.meta.get("method") == "teacher":  # the usual way here: a teacher as --pack
+            raise VrnError(
+                f"material {mat.meta.get('name', '?')!r} is a teacher pack "
+                f"({mat.macs_per_texel:.0f} MACs/texel, above the {MAX_UNROLLED_MACS} that "
+                "texture and screen modes unroll into shaders): render it with --mode "
+                "reference, or distill a student from its checkpoint (`vrneural distill`)"
+            )
         raise VrnError(
             f"material {mat.meta.get('name', '?')!r} has {mat.macs_per_texel:.0f} MACs/texel; "
             f"unrolling is limited to {MAX_UNROLLED_MACS} (use buffer weights, e.g. --mode "

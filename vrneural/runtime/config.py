@@ -73,7 +73,8 @@ def max_texture_res(adapter) -> int:
 
 
 def resolve(cfg: RunConfig, scene, adapter) -> Settings:
-    """Profile < scene < CLI; validates ranges against the adapter (``AdapterSummary``)."""
+    """Profile < scene < CLI (``--texture-res`` also beats objects' ``texture_res``);
+    validates ranges against the adapter (``AdapterSummary``)."""
     from vrneural.runtime.codegen import resolve_precision
 
     prof = get_profile(cfg.profile or scene.profile or "quest3")  # the scene's is checked
@@ -138,6 +139,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         eyes=cfg.eyes,
         reuse=int(reuse),
         texture_res=int(tex),
+        texture_res_given=cfg.texture_res is not None,
         eye_res=tuple(eye_res),
         frames=int(cfg.frames),
         fps=prof.fps,

@@ -37,6 +37,7 @@ class Settings:
     eyes: int = 2
     reuse: int = 4
     texture_res: int = 1200
+    texture_res_given: bool = False  # --texture-res on the command line: beats objects' own
     eye_res: tuple = (2064, 2208)
     frames: int = 90
     fps: float = 90.0
@@ -126,7 +127,15 @@ class Renderer:
             plain = (m.albedo, m.specular, m.shininess)
             self.draws.append((fw.DrawObject(mesh, None, self.rebase(o.model), i, plain), None))
             return
-        res = o.texture_res or max(s.texture_res, o.min_texture_res or 0)
+        res = max(s.texture_res, o.min_texture_res or 0)
+        if o.texture_res and not s.texture_res_given:
+            res = o.texture_res
+        elif o.texture_res and res != o.texture_res:
+            self.warnings.append(
+                f"{scene.src}: objects[{i}] ({o.name}): --texture-res {s.texture_res} overrides "
+                f"its texture_res = {o.texture_res}"
+                + (f" (min_texture_res {o.min_texture_res} kept)" if res != s.texture_res else "")
+            )
         try:
             atlas = get_atlas(mesh, res)
         except VrnError as e:  # name the object and the knobs that set its resolution
@@ -135,7 +144,7 @@ class Renderer:
                 f"(texture_res / min_texture_res): {e}"
             ) from None
         lost = lost_triangles(atlas.stats, res, "they show their neighbours' shading")
-        if lost:
+        if lost and s.mode == "texture":  # the other modes shade pixels, not texels
             self.warnings.append(
                 f"{scene.src}: objects[{i}] ({o.name}): {lost}; raise texture_res / min_texture_res"
             )
@@ -168,7 +177,7 @@ class Renderer:
                 passes[key] = self._make_pass(mat)
             except VrnError as e:  # name the object and its pack, not the BTF inside
                 src = o.material.source or "procedural"
-                raise VrnError(f"objects[{i}] ({o.name}, {src}): {e}") from None
+                raise VrnError(f"{scene.src}: objects[{i}] ({o.name}, {src}): {e}") from None
         for e in range(s.eyes):
             n.targets.append(self._make_target(passes[key], n, e))
         self.neural.append(n)

@@ -214,7 +214,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
     from vrneural.gpu.device import adapter_summary
     from vrneural.runtime.profiles import get_profile
     from vrneural.runtime.renderer import Renderer
-    from vrneural.runtime.scene import builtin_scene, load_scene
+    from vrneural.runtime.scene import builtin_lights, builtin_scene, load_scene
 
     cfg = replace_config(cfg, out=str(out))
     if cfg.scene and cfg.pack:
@@ -257,10 +257,17 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
             f"--lights 0: none of the scene's {count(len(scene.lights), 'light')} is shaded, so "
             "neural objects are black (--lights N shades the first N)"
         )
+    if not cfg.scene and s.n_lights > len(builtin_lights()):
+        r.warnings.append(
+            f"--lights {s.n_lights}: the built-in scene has {len(builtin_lights())} lights; "
+            f"{count(s.n_lights - len(builtin_lights()), 'generated light')} added (a SCENE "
+            "file has only the lights it defines)"
+        )
     unused = [f"--{k}" for k in ("reuse", "schedule") if is_explicit(cfg, k)]
     if s.mode != "texture" and unused:  # texture space's knobs: say they do nothing here
         r.warnings.append(
-            f"{' and '.join(unused)} only apply to --mode texture; --mode {s.mode} shades "
+            f"{' and '.join(unused)} only {'apply' if len(unused) > 1 else 'applies'} to "
+            f"--mode texture; --mode {s.mode} shades "
             "every pixel every frame"
         )
     for w in r.warnings:

@@ -271,6 +271,9 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         )
         mat = _material(src, f"objects[{i}].material", o.get("material", {}), base)
         tres, floor = (_texture_res(f, k) for k in ("texture_res", "min_texture_res"))
+        if mat.kind == "plain" and (tres or floor):
+            key = "texture_res" if tres else "min_texture_res"
+            raise f.err(key, "is set on a plain object; only neural ones have a radiance texture")
         if tres is not None and floor is not None and floor > tres:
             raise f.err(
                 "min_texture_res",
@@ -292,12 +295,20 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         intensity = f.num("intensity", 1.0, 0.0, MAX_INTENSITY)
         if max(colour) * intensity > MAX_INTENSITY:  # README: numerical behaviour at extremes
             raise f.err("intensity", f"* colour = {max(colour) * intensity:g} W/sr is above 1e6")
+        motion = f.str("motion", "none", MOTIONS)
+        idle = [k for k in ("radius", "period", "phase") if k in lt]
+        if motion == "none" and idle:
+            raise f.err(
+                idle[0],
+                f'is given but the light does not move; add motion = "circle" or drop '
+                f"{', '.join(idle)}",
+            )
         lights.append(
             PointLight(
                 f.vec("position", bound=MAX_COORD),
                 colour,
                 intensity,
-                f.str("motion", "none", MOTIONS),
+                motion,
                 f.num("radius", 0.0, 0.0, MAX_COORD),
                 f.num("period", 8.0, 0.0, lo_open=True),
                 f.num("phase", 0.0),
@@ -326,12 +337,12 @@ def load_scene(path: str | Path) -> Scene:
     if not p.is_file():
         raise VrnError(f"{p}: scene file not found")
     try:
-        data = tomllib.loads(p.read_text())
+        data = tomllib.loads(p.read_text(encoding="utf-8-sig"))  # a BOM (Windows editors) too
     except tomllib.TOMLDecodeError as e:
         raise VrnError(f"{p}: invalid TOML ({e})") from None
     except UnicodeDecodeError:
         raise VrnError(f"{p}: not a text file") from None
-    return parse_scene(data, p.name, p.parent.resolve())
+    return parse_scene(data, str(p), p.parent.resolve())  # messages name it as given
 
 
 #: Materials of the built-in scene: packs bundled in ``vrneural/data/materials`` (trained by
