@@ -124,6 +124,8 @@ def test_bench_quality_resume_never_trains_over_a_checkpoint_it_cannot_reuse(tmp
     out = tmp_path / "q"
     args = ["bench", "quality", "--presets", "leather", "--out", out, "--res", 8, "--dirs", 4]
     args += ["--teacher-epochs", 1, "--epochs", 2, "--lafortune-iters", 2, "--no-progress"]
+    expect_one_line_error([*args, "--resume"], "--resume: nothing to resume", "does not exist")
+    assert not out.exists()
     code, err = run_cli(*args)
     assert code == 0, err
     before = _digests(out)

@@ -209,3 +209,17 @@ def test_resuming_a_finished_run_says_there_is_nothing_left_to_train(trained, tm
     assert "already trained for 2 epochs, nothing left to train" in err, err
     assert "slice/s" not in err  # no empty progress bar
     assert s.read_bytes() == before
+
+
+def test_no_export_beside_an_earlier_pack_warns_that_it_goes_stale(trained, tmp_path):  # noqa: F811
+    from vrneural.distill.outputs import StalePackWarning
+
+    t = _copy(trained, tmp_path, "teacher.pt")
+    shutil.copy(trained["teacher"].with_suffix(".vrnm"), tmp_path / "teacher.vrnm")
+    before = (tmp_path / "teacher.vrnm").read_bytes()
+    with pytest.warns(StalePackWarning, match=r"teacher\.vrnm: left as it is \(--no-export\)"):
+        code, err = run_cli(
+            "teach", trained["btf"], "-o", t, "--force", "--no-export", "--epochs", 1, *FAST
+        )
+    assert code == 0, err
+    assert (tmp_path / "teacher.vrnm").read_bytes() == before  # warned about, never deleted

@@ -88,6 +88,11 @@ def test_check_output_refuses_overwrite(tmp_path):
         check_output(f, force=False)
     assert check_output(f, force=True) == f
     assert f.read_text() == "keep"
+    d = tmp_path / "somedir.pt"  # a directory where a file goes: said at once, --force or not
+    d.mkdir()
+    for force in (False, True):
+        with pytest.raises(VrnError, match=r"somedir\.pt: output path is a directory"):
+            check_output(d, force=force)
 
 
 def test_atomic_path_leaves_original_on_failure(tmp_path):

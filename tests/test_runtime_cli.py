@@ -620,3 +620,30 @@ def test_pose_log_times_count_from_its_first_row_and_separators_are_named(tmp_pa
     semi.write_text("0;0;1;2;0;0;0;1\n")
     with pytest.raises(VrnError, match=r"no rows of 8 numbers .*not ';'"):
         PoseLogPath(semi)
+
+
+def test_save_frames_parsing():
+    from vrneural.errors import VrnError
+    from vrneural.runtime.run import selected_frames
+
+    assert selected_frames("first,last", 5) == [0, 4] and selected_frames("none", 5) == []
+    assert selected_frames("all", 3) == [0, 1, 2] and selected_frames("2, 0", 5) == [0, 2]
+    with pytest.raises(VrnError, match="--save-frames is empty; pass none"):
+        selected_frames(" ", 5)
+    with pytest.raises(VrnError, match=r"frame 5 is out of range; allowed \[0, 4\]"):
+        selected_frames("5", 5)
+
+
+def test_object_names_are_unique(tmp_path):
+    """Default names (the mesh's) are numbered when a mesh repeats; a repeated given name is
+    an error (messages and summary.json name objects by it)."""
+    from vrneural.errors import VrnError
+    from vrneural.runtime.scene import load_scene
+
+    one = OBJ.format(mesh="sphere", extra="", mat='procedural = "random"', light="")
+    text = (one + one).replace("[[lights]]\n", "") + "[[lights]]\nposition = [0, 1, 0]\n"
+    sc = load_scene(_scene(tmp_path, text))
+    assert [o.name for o in sc.objects] == ["sphere", "sphere 2"]
+    named = text.replace('mesh = "sphere"', 'mesh = "sphere"\nname = "ball"')
+    with pytest.raises(VrnError, match=r"objects\[1\]\.name = 'ball' is already another object's"):
+        load_scene(_scene(tmp_path, named, "n.toml"))

@@ -148,6 +148,13 @@ def _write_index(out: Path, docs: dict, quick: bool, seconds: float) -> None:
             "records": len(doc.get("records", [])),
             "plots": [f"{name}/{p}" for p in pngs],
         }
+    if quick:
+        lines += [
+            "",
+            "With --quick every bench runs at CI sizes (smaller textures, eyes, frame counts and "
+            "trained packs than the paper's settings named under 'reproduces'); each "
+            "results.md states the settings it ran.",
+        ]
     with atomic_path(out / "index.md") as tmp:
         tmp.write_text("\n".join(lines) + "\n")
     write_json(

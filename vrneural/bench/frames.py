@@ -162,6 +162,8 @@ def markdown(doc: dict) -> list[str]:
 
 
 def plot(doc: dict, path) -> None:
+    from matplotlib.ticker import MaxNLocator
+
     recs = doc["records"]
     tex = [r for r in recs if r["mode"] == "texture"]
     scheds = list(dict.fromkeys(r["schedule"] for r in tex))
@@ -180,6 +182,7 @@ def plot(doc: dict, path) -> None:
             ax.axhline(scr[0]["frame_ms"]["median"], color="k", ls="--", label="screen space")
         ax.set_title(f"{sched} (o median, x p99)")
         ax.set_xlabel("update interval N")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # N is a whole number of frames
         ax.set_yscale("log")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("frame ms (wall)")

@@ -503,6 +503,11 @@ def run_quality(cfg: QualityConfig) -> dict:
     cfg = cfg.resolved()
     presets = validate(cfg)
     root = Path(cfg.out)
+    if cfg.resume and not root.exists():  # as teach, distill and btf synth --resume
+        raise VrnError(
+            f"--resume: nothing to resume, {root} does not exist; drop --resume to start a new "
+            "report there"
+        )
     if not (root.is_dir() and not any(root.iterdir())):  # an empty directory needs no flag
         check_output_dir(
             root,

@@ -149,8 +149,8 @@ def markdown(doc: dict) -> str:
             else ""
         )
         + f", Lafortune {cfg['lafortune_iters']} LM iterations, "
-        f"{seeds}; {_trained_on(doc)}. This invocation took {doc['total_seconds'] / 60:.1f} "
-        "min; networks it reused from earlier runs list their own train s below (per seed: "
+        f"{seeds}; {_trained_on(doc)}. This invocation took {_duration(doc['total_seconds'])}; "
+        "networks it reused from earlier runs list their own train s below (per seed: "
         "the mean over the seeds).",
         "",
         "| method | " + " | ".join(presets) + " | storage (bytes) | MLP MACs / texel |",
@@ -335,3 +335,8 @@ def _trained_on(doc: dict) -> str:
     if devs in ([], ["cpu"]):  # records from before devices were stored: CPU only
         return "CPU, 1 torch thread"
     return "networks trained on " + ", ".join(devs) + " (Lafortune on the CPU)"
+
+
+def _duration(seconds: float) -> str:
+    """``"42 s"`` below two minutes, else ``"15.4 min"``."""
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.1f} min"

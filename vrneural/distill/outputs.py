@@ -12,12 +12,14 @@ Any other file there is an error, never silently replaced.
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 from vrneural.config import config_path
 from vrneural.distill.checkpoint import load_checkpoint
 from vrneural.errors import VrnError
 from vrneural.formats.atomic import check_outputs, check_resume_force, json_safe
+from vrneural.warn import VrnWarning
 
 
 def outputs_of(output: str, export: bool) -> list[str]:
@@ -68,7 +70,20 @@ def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
                 "to start over"
             )
     check_outputs(outputs, cfg.force, inputs)
+    pack = Path(cfg.output).with_suffix(".vrnm")
+    if not cfg.export and pack.exists():  # kept, but it will not be this run's network
+        warnings.warn(
+            f"{pack}: left as it is (--no-export), so it stays the pack of an earlier run and "
+            f"will not match the new {cfg.output}; `vrneural export {cfg.output} -o {pack} "
+            "--force` replaces it afterwards",
+            StalePackWarning,
+            stacklevel=2,
+        )
     return None
+
+
+class StalePackWarning(VrnWarning):
+    """A new run with ``--no-export`` beside a pack an earlier run exported."""
 
 
 def written_by(path, ck: dict, output=None) -> bool:

@@ -22,10 +22,10 @@ def check_output(path: str | os.PathLike, force: bool) -> Path:
     directory cannot be created. Returns the path as :class:`Path`.
     """
     p = Path(path)
+    if p.is_dir() and p.suffix:  # a file goes here: even --force does not replace a directory
+        raise VrnError(f"{p}: output path is a directory (a file is written here); choose another")
     if p.exists() and not force:
         raise VrnError(f"{p}: output exists; pass --force to overwrite")
-    if p.exists() and p.is_dir() and p.suffix:
-        raise VrnError(f"{p}: output path is a directory")
     _make_parent(p)
     return p
 

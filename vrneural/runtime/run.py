@@ -38,8 +38,10 @@ def selected_frames(spec: str, frames: int) -> list[int]:
     spec = spec.strip().lower()
     if spec == "all":
         return list(range(frames))
-    if spec in ("", "none"):
+    if spec == "none":
         return []
+    if not spec:
+        raise VrnError("--save-frames is empty; pass none to save no frames")
     out = set()
     for tok in spec.split(","):
         tok = tok.strip()

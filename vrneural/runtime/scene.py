@@ -280,7 +280,14 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
                 f"= {floor} is above texture_res = {tres}: texture_res sets this object's "
                 "size, min_texture_res is a floor under the profile's; keep one",
             )
-        name = f.str("name", Path(mesh).stem)
+        taken = {x.name for x in objects}
+        if "name" in o:
+            name = f.str("name")
+            if name in taken:
+                raise f.err("name", f"= {name!r} is already another object's; names are unique")
+        else:  # the mesh's stem, numbered where several objects show one mesh: "sphere 2"
+            stem = Path(mesh).stem
+            name = next(n for k in range(1, len(objs_raw) + 2) if (n := _nth(stem, k)) not in taken)
         objects.append(ObjectDesc(name, mesh, model, mat, tres, floor, crease))
     lights = []
     if not isinstance(data.get("lights", []), list):
@@ -316,6 +323,10 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         )
     name = top.str("name", Path(src).stem)
     return Scene(name, objects, lights, profile, ipd, head, base, src)
+
+
+def _nth(stem: str, k: int) -> str:
+    return stem if k == 1 else f"{stem} {k}"
 
 
 def _texture_res(f: _Fields, key: str) -> int | None:
