@@ -355,3 +355,20 @@ def test_creased_normals_match_a_brute_force_twin(monkeypatch, crease):
         src, f2, nrm = geometry.creased_normals(pos2, faces, crease)
         np.testing.assert_array_equal(src[f2], faces)  # same triangles, same positions
         np.testing.assert_allclose(nrm[f2], want, atol=1e-9)
+
+
+def test_python_api_arguments_are_checked():
+    """What a Python user gets wrong first: a list of meshes, a precision name, UV shapes."""
+    from vrneural.atlas import build_atlas
+    from vrneural.material import material_forward, random_material
+
+    with pytest.raises(VrnError, match=r"expected a Mesh, got list .*pass one of its meshes"):
+        build_atlas([builtin_mesh("plane")], 64)
+    mat = random_material(0)
+    d = np.tile([[0.0, 0.0, 1.0]], (2, 1))
+    uv = np.zeros((2, 4, 2))
+    assert material_forward(mat, d, d, uv).shape == (2, 4, 3)
+    with pytest.raises(VrnError, match="precision = 'bf16' is not allowed; choose f32 or f16"):
+        material_forward(mat, d, d, uv, precision="bf16")
+    with pytest.raises(VrnError, match=r"uv has shape \[2, 2\], expected \[N, 4, 2\]"):
+        material_forward(mat, d, d, np.zeros((2, 2)))

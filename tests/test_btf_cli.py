@@ -421,3 +421,20 @@ def test_show_titles_give_the_slice_shown_not_the_angles_asked(tmp_path, vrn_inp
     assert len(panels) == 8 and panels[0].title().endswith("nearest: wi=0 wo=0, l0 v0")
     inexact = {p.names[0]: p.shown for p in panels if f"(asked {p.shown})" not in p.title()}
     assert inexact == {"mirror along v": "wi=45@80 wo=45@260"}
+
+
+def test_info_shows_light_and_view_theta_ranges(tmp_path, capsys):
+    """`btf info` showed only the light theta range, also in --json (`light_theta_deg`)."""
+    from vrneural.btf.dirs import spherical
+
+    ld = spherical(np.radians([0.0, 30.0, 75.0]), np.radians([0.0, 90.0, 180.0]))
+    vd = spherical(np.radians([10.0, 45.0, 60.0, 85.0]), np.radians([0.0, 45.0, 90.0, 270.0]))
+    f = write_btf(tmp_path / "lv.btf", np.ones((3, 4, 2, 2, 3)), ld, vd, {"name": "lv"})
+    assert main(["btf", "info", str(f)]) == 0
+    out = capsys.readouterr().out
+    assert "dirs      light theta 0.0..75.0 deg, view theta 10.0..85.0 deg, lights != views" in out
+    assert main(["btf", "info", str(f), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["light_theta_deg"] == pytest.approx([0.0, 75.0], abs=1e-3)
+    assert info["view_theta_deg"] == pytest.approx([10.0, 85.0], abs=1e-3)
+    assert info["same_light_and_view_dirs"] is False

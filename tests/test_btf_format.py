@@ -163,3 +163,77 @@ def test_direction_sets():
     assert q.shape == (40, 3) and q[:, 2].min() >= np.cos(np.radians(75)) - 1e-6
     with pytest.raises(VrnError):
         direction_set(0)
+
+
+@pytest.mark.parametrize(
+    "shape, shown",
+    [
+        ((0, 0, 5, 6), "0 lights x 0 views x 5x6 texels"),
+        ((3, 4, 0, 6), "3 lights x 4 views x 0x6 texels"),
+        ((3, 4, 5, 0), "3 lights x 4 views x 5x0 texels"),
+    ],
+)
+def test_empty_btf_is_refused_by_writers_and_reader(tmp_path, rng, capsys, shape, shown):
+    """An empty BTF was written and read; `btf info`/`show` then crashed on a zero-size min."""
+    from vrneural.btf.format import BTF_MAGIC, BTF_VERSION
+    from vrneural.cli import main
+    from vrneural.formats.container import write_container
+
+    L, V, H, W = shape
+    vals = np.zeros((L, V, H, W, 3), np.float32)
+    ld, vd = direction_set(max(L, 1))[:L], direction_set(max(V, 1))[:V]
+    with pytest.raises(VrnError) as e:
+        write_btf(tmp_path / "w.btf", vals, ld, vd, {})
+    assert str(e.value) == (
+        f"{tmp_path / 'w.btf'}: an empty BTF ({shown}); lights, views, height and width must "
+        "each be at least 1"
+    )
+    with pytest.raises(VrnError, match="an empty BTF"):
+        BtfWriter(tmp_path / "s.btf", ld, vd, (H, W), {})
+    assert list(tmp_path.iterdir()) == []
+    # a file written some other way (an older vrneural, a hand-made one)
+    arrays = {"values": vals.astype(np.float16), "light_dirs": ld, "view_dirs": vd}
+    f = write_container(tmp_path / "e.btf", BTF_MAGIC, BTF_VERSION, {"name": "e"}, arrays)
+    with pytest.raises(VrnError, match=f"{f}: an empty BTF \\({shown}\\)"):
+        read_btf(f)
+    for cmd in (["info", str(f)], ["show", str(f), "-o", str(tmp_path / "s.png")]):
+        capsys.readouterr()
+        assert main(["btf", *cmd]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and "an empty BTF" in err, err
+    assert not (tmp_path / "s.png").exists()
+
+
+@pytest.mark.parametrize("key", ["partial", "arrays", "file_size", "array_crc32"])
+def test_reserved_meta_keys_are_refused(tmp_path, rng, key):
+    """`meta={"partial": True}` wrote a complete file that readers refused as unfinished;
+    `arrays`/`file_size`/`array_crc32` vanished on read (or broke the container)."""
+    vals, ld, vd = _small(rng)
+    want = (
+        f"{tmp_path / 'a.btf'}: meta key {key!r} is reserved by the BTF format (reserved: "
+        "array_crc32, arrays, convention, file_size, partial); store it under another name"
+    )
+    with pytest.raises(VrnError) as e:
+        write_btf(tmp_path / "a.btf", vals, ld, vd, {"name": "t", key: True})
+    assert str(e.value) == want
+    with pytest.raises(VrnError) as e:
+        BtfWriter(tmp_path / "a.btf", ld, vd, (5, 6), {key: 1})
+    assert str(e.value) == want
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_meta_cannot_override_the_convention(tmp_path, rng):
+    vals, ld, vd = _small(rng)
+    with pytest.raises(VrnError) as e:
+        write_btf(tmp_path / "a.btf", vals, ld, vd, {"convention": "cos_outside"})
+    assert str(e.value) == (
+        f"{tmp_path / 'a.btf'}: meta key 'convention' = 'cos_outside' is not allowed: BTF values "
+        "are always 'cos_inside' (cos(theta_i) inside); drop the key"
+    )
+    with pytest.raises(VrnError, match="'convention' = 'cos_outside'"):
+        BtfWriter(tmp_path / "a.btf", ld, vd, (5, 6), {"convention": "cos_outside"})
+    assert list(tmp_path.iterdir()) == []
+    # a read BTF's meta (which holds the convention) can be written again
+    b = read_btf(write_btf(tmp_path / "b.btf", vals, ld, vd, {"name": "t"}))
+    c = read_btf(write_btf(tmp_path / "c.btf", vals, ld, vd, b.meta))
+    assert c.meta == b.meta

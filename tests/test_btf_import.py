@@ -84,3 +84,134 @@ def test_import_end_to_end_through_btf_extractor(tmp_path, rng, capsys):
     before = out.read_bytes()
     assert main(["btf", "import", str(src), "-o", str(out), "--no-progress"]) == 2
     assert "exists" in capsys.readouterr().err and out.read_bytes() == before
+
+
+def _with_angles(tmp_path, rng, name, light_deg=None, view_deg=None):
+    """The fixture's file with some light/view angles replaced ({index: (theta, phi)} degrees,
+    or radians where given as ``("rad", theta, phi)``)."""
+    L, H, W = len(THETA), 3, 4
+    vals = rng.uniform(0.05, 2.0, (L, L, H, W, 3)).astype(np.float32)
+    ang = np.radians(np.stack([THETA, PHI], 1))
+    la, va = ang.copy(), ang.copy()
+    for arr, repl in ((la, light_deg or {}), (va, view_deg or {})):
+        for i, a in repl.items():
+            arr[i] = a[1:] if a[0] == "rad" else np.radians(a)
+    src = tmp_path / name
+    write_dfmf(src, vals, la.astype(np.float32), va.astype(np.float32))
+    return src
+
+
+def _import(src, out, *extra):
+    return main(["btf", "import", str(src), "-o", str(out), "--no-progress", *extra])
+
+
+@pytest.mark.parametrize(
+    "kind, repl, shown",
+    [
+        ("view", {1: (23.5, 120.0)}, "theta 23.50 deg, phi 120.00 deg"),  # == view 2
+        ("view", {1: (23.53, 120.02)}, "theta 23.53 deg, phi 120.02 deg"),  # < 0.1 deg apart
+        ("light", {1: (23.5, 480.0)}, "theta 23.50 deg, phi 480.00 deg"),  # phi + 360
+        ("light", {0: (0.0, 90.0), 1: (0.0, 0.0)}, "light direction 0 (theta 0.00 deg"),  # pole
+    ],
+)
+def test_parse_header_rejects_directions_btf_extractor_cannot_tell_apart(
+    tmp_path, rng, capsys, kind, repl, shown
+):
+    """Two directions with the same 0.1-degree key in btf-extractor's index: `import` crashed
+    with `KeyError: 1`; now the header check names both, before any output exists."""
+    args = {"light_deg": repl} if kind == "light" else {"view_deg": repl}
+    src = _with_angles(tmp_path, rng, "dup.btf", **args)
+    with pytest.raises(VrnError) as e:
+        parse_header(src)
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith(f"{src}: ")
+    assert f"{kind} direction " in msg and " and " in msg and "0.1 deg" in msg and shown in msg
+    if repl == {1: (23.5, 120.0)}:
+        assert "view direction 1 (theta 23.50 deg, phi 120.00 deg) and view direction 2" in msg
+    out = tmp_path / "out.btf"
+    assert _import(src, out) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "same direction" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dup.btf"]
+
+
+@pytest.mark.parametrize(
+    "repl, needles",
+    [
+        ({0: ("rad", np.nan, np.nan)}, ["view direction 0 has a non-finite angle", "nan"]),
+        ({2: ("rad", 0.5, np.inf)}, ["view direction 2 has a non-finite angle", "inf"]),
+        ({3: ("rad", 3.0, 0.0)}, ["view direction 3 (theta 171.89 deg", "below the horizon"]),
+        ({4: (90.5, 10.0)}, ["view direction 4 (theta 90.50 deg", "theta <= 90 deg"]),
+    ],
+)
+def test_parse_header_rejects_bad_angles(tmp_path, rng, capsys, repl, needles):
+    """A NaN angle crashed `import` inside btf-extractor (leaving OUT.partial); a view below the
+    horizon was imported silently. Both are refused before any output file is created."""
+    src = _with_angles(tmp_path, rng, "bad.btf", view_deg=repl)
+    with pytest.raises(VrnError) as e:
+        parse_header(src)
+    assert "\n" not in str(e.value) and str(e.value).startswith(f"{src}: ")
+    for n in needles:
+        assert n in str(e.value), str(e.value)
+    assert _import(src, tmp_path / "out.btf") == 2
+    assert capsys.readouterr().err.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.btf"]
+
+
+def test_parse_header_accepts_grazing_and_distinct_close_directions(tmp_path, rng):
+    """theta = 90 deg (float32 pi/2 has z = -4e-8) is on the horizon, not below it; 0.2 deg
+    apart is two directions to btf-extractor."""
+    src = _with_angles(tmp_path, rng, "ok.btf", view_deg={5: (90.0, 270.0), 1: (23.5, 120.2)})
+    h = parse_header(src)
+    assert len(h["view_angles"]) == 6
+    if _have_extractor():  # and btf-extractor does tell them apart
+        assert _import(src, tmp_path / "out.btf") == 0
+        assert read_btf(tmp_path / "out.btf").shape == (6, 6, 3, 4)
+
+
+@needs_extractor
+def test_import_checks_btf_extractor_index_too(tmp_path, rng, monkeypatch, capsys):
+    """Should the header check and btf-extractor ever disagree on which directions coincide,
+    `import` still refuses in one line instead of a KeyError."""
+    import vrneural.btf.ubo2014 as ubo
+
+    src = _with_angles(tmp_path, rng, "dup.btf", view_deg={1: (23.5, 120.0)})
+    monkeypatch.setattr(ubo, "_check_directions", lambda *a: None)
+    with pytest.raises(VrnError, match="tells apart only 5 of the 6 view directions"):
+        ubo.import_ubo(src, tmp_path / "out.btf", progress=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dup.btf"]
+
+
+@needs_extractor
+def test_resume_from_another_source_names_it(tmp_path, rng, capsys, monkeypatch):
+    """`import --resume` with another source said only "a different header or size"; now it
+    names what differs, as `synth --resume` does, and leaves the partial file alone."""
+    from vrneural.btf import ubo2014
+
+    a, _, _ = _fixture(tmp_path, rng)
+    b = tmp_path / "other_ubo2014.btf"
+    b.write_bytes(a.read_bytes())
+    out = tmp_path / "out.btf"
+
+    class StopError(Exception):
+        pass
+
+    real = ubo2014.BtfWriter.mark_done
+
+    def stop(self, v):  # an import of `a` interrupted after its first view
+        real(self, v)
+        raise StopError
+
+    with monkeypatch.context() as m:
+        m.setattr(ubo2014.BtfWriter, "mark_done", stop)
+        with pytest.raises(StopError):
+            ubo2014.import_ubo(a, out, progress=False)
+    partial = tmp_path / "out.btf.partial"
+    before = partial.read_bytes()
+    assert _import(b, out, "--resume") == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and f"{partial}: the interrupted run used other settings" in err
+    assert f"source: '{a}' there, '{b}' here" in err and "--force" in err
+    assert partial.read_bytes() == before
+    assert _import(a, out, "--resume") == 0  # the same source continues it
+    assert read_btf(out).shape == (6, 6, 5, 7)

@@ -186,3 +186,52 @@ def test_an_unfinished_output_is_refused_and_every_ending_seals(tmp_path):
     # a caller that deletes nothing (bench quality) is not refused for either reason
     check_output_dir(out, True, "run", deletes=False)
     assert sorted(p.name for p in out.iterdir()) == [OUTPUT_MARK, "frame0000_eye0.png", "notes.md"]
+
+
+def test_an_output_directory_another_process_writes_is_refused(tmp_path):
+    """Two commands given one --out: the second is a one-line error, not a race that empties
+    the folder under the first (the lock is a flock, released however its holder ends)."""
+    import subprocess
+    import sys
+
+    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+
+    d = make_output_dir(tmp_path / "o", "run")
+    seal_output_dir(d, "run")  # a finished output: --force may replace it
+    holder = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import fcntl, os, sys, time; fd = os.open(sys.argv[1], os.O_RDONLY); "
+            "fcntl.flock(fd, fcntl.LOCK_EX); print('locked', flush=True); time.sleep(60)",
+            str(d),
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert holder.stdout.readline().strip() == "locked"
+        with pytest.raises(VrnError, match="another vrneural process is writing this output"):
+            make_output_dir(d, "run")
+    finally:
+        holder.kill()
+        holder.wait()
+    make_output_dir(d, "run")  # the holder is gone: its lock went with it
+    seal_output_dir(d, "run")
+
+
+def test_an_old_output_that_cannot_be_removed_is_one_line(tmp_path, monkeypatch):
+    import pathlib
+
+    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+
+    d = make_output_dir(tmp_path / "o", "run")
+    (d / "frame.png").write_bytes(b"x")
+    seal_output_dir(d, "run")
+
+    def read_only(self, *a, **k):
+        raise OSError(30, "Read-only file system")
+
+    monkeypatch.setattr(pathlib.Path, "unlink", read_only)
+    with pytest.raises(VrnError, match=r"frame\.png: cannot remove the old output to replace it"):
+        make_output_dir(d, "run")

@@ -647,3 +647,44 @@ def test_object_names_are_unique(tmp_path):
     named = text.replace('mesh = "sphere"', 'mesh = "sphere"\nname = "ball"')
     with pytest.raises(VrnError, match=r"objects\[1\]\.name = 'ball' is already another object's"):
         load_scene(_scene(tmp_path, named, "n.toml"))
+
+
+def test_exr_writes_under_a_path_that_is_not_utf8(tmp_path):
+    """OpenImageIO takes UTF-8 file names only; a folder named with a Latin-1 byte (a valid
+    POSIX name) still gets its EXR frames, whole."""
+    import os
+
+    import numpy as np
+
+    from vrneural.runtime.output import write_exr
+
+    d = tmp_path / os.fsdecode(b"r\xe9sultats")
+    d.mkdir()
+    out = write_exr(d / "frame0000_eye0.exr", np.full((4, 6, 3), 0.5, np.float32))
+    data = out.read_bytes()
+    assert data[:4] == b"\x76\x2f\x31\x01" and len(data) > 100  # the OpenEXR magic
+    assert [p.name for p in d.iterdir()] == ["frame0000_eye0.exr"]  # no temporary left
+
+
+@pytest.mark.gpu
+def test_a_write_error_mid_run_leaves_no_partial_video(capsys, tmp_path, monkeypatch):
+    """A frame that cannot be written (a full disk): one line, exit 2, the partial video is
+    removed and the output sealed, so a later --force can replace it."""
+    from vrneural.errors import VrnError
+    from vrneural.runtime import run as run_mod
+
+    real = run_mod.write_png
+
+    def full(path, img):
+        if "frame0002" in str(path):
+            raise VrnError(f"{path}: cannot write (No space left on device)")
+        return real(path, img)
+
+    monkeypatch.setattr(run_mod, "write_png", full)
+    out = tmp_path / "o"
+    argv = ["run", "--profile", "tiny", "--frames", "4", "--save-frames", "all", "--quiet"]
+    msg = _err(capsys, [*argv[1:], "--out", str(out)])
+    assert "frame0002_eye0.png: cannot write (No space left on device)" in msg
+    assert not list(out.glob(".*.tmp.mp4"))
+    monkeypatch.setattr(run_mod, "write_png", real)
+    assert main([*argv, "--out", str(out), "--force"]) == 0

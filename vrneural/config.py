@@ -40,7 +40,8 @@ def add_config_args(
         tp = hints[f.name]
         help_ = f.metadata.get("help", "")
         if not re.search(r"default\s*[:)]", help_):  # a help that explains its default: once
-            help_ += f" (default: {default})"
+            shown = "none" if default in ("", None) else default
+            help_ += f" (default: {shown})"
         if tp is bool:
             parser.add_argument(
                 flag,

@@ -28,7 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vrneural.mlp import Layer, mlp_forward, random_mlp
+from vrneural.errors import VrnError
+from vrneural.mlp import Layer, check_precision, mlp_forward, random_mlp
 
 ARCHS = {
     "coarse_fine": (("coarse", "fine"), ("coarse", "fine")),
@@ -136,10 +137,17 @@ def material_forward(
     material UVs of the block's 4 texels. Returns ``[N, 4, 3]`` float32. For ``"single"`` each
     texel is independent (the 4 share only the directions).
     """
+    check_precision(precision)
     wi = np.asarray(wi, np.float32)
     wo = np.asarray(wo, np.float32)
     uv = np.asarray(uv, np.float32)
-    n = wi.shape[0]
+    n = wi.shape[0] if wi.ndim else 0
+    for name, a, want in (("wi", wi, (n, 3)), ("wo", wo, (n, 3)), ("uv", uv, (n, 4, 2))):
+        if a.shape != want:
+            shape = "[N, 4, 2] (4 texels of a 2x2 block)" if name == "uv" else "[N, 3]"
+            raise VrnError(
+                f"material_forward: {name} has shape {list(a.shape)}, expected {shape} with N = {n}"
+            )
     dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)  # [N, 9]
     if mat.arch == "coarse_fine":
         uc = uv.mean(axis=1)

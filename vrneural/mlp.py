@@ -13,6 +13,8 @@ import itertools
 
 import numpy as np
 
+from vrneural.errors import VrnError
+
 ACTIVATIONS = ("relu", "leaky_relu", "none")
 LEAKY_SLOPE = 0.01
 
@@ -59,14 +61,30 @@ def activate(x: np.ndarray, act: str) -> np.ndarray:
     return x
 
 
+#: the precisions the shaders run in (and their numpy twins round to)
+PRECISIONS = ("f32", "f16")
+
+
+def check_precision(precision: str) -> None:
+    """One-line :class:`VrnError` unless ``precision`` is one of :data:`PRECISIONS`."""
+    if precision not in PRECISIONS:
+        raise VrnError(
+            f"precision = {precision!r} is not allowed; choose {' or '.join(PRECISIONS)}"
+        )
+
+
 def mlp_forward(x: np.ndarray, layers: list[Layer], precision: str = "f32") -> np.ndarray:
     """Evaluate the MLP on ``x: [N, in]``; returns ``[N, out]`` float32.
 
     ``precision="f16"`` rounds weights, inputs and each layer's result to float16 (the GPU's f16
     path also accumulates in f16, so expect differences of a few f16 ulps per layer).
     """
+    check_precision(precision)
     dt = np.float16 if precision == "f16" else np.float32
     h = np.asarray(x, dtype=np.float32).astype(dt).astype(np.float32)
+    n_in = layers[0].weight.shape[1] if layers else h.shape[-1]
+    if h.ndim != 2 or h.shape[1] != n_in:
+        raise VrnError(f"mlp_forward: x has shape {list(h.shape)}, expected [N, {n_in}]")
     for layer in layers:
         w = layer.weight.astype(dt).astype(np.float32)
         b = layer.bias.astype(dt).astype(np.float32)

@@ -86,20 +86,62 @@ def plot(result: dict, path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from vrneural.atlas import BUILTIN_MESHES
-    from vrneural.formats.atomic import check_output, write_json
+    """The command line; a user error (:class:`VrnError`, a bad option) prints one line and
+    returns (argparse: exits with) 2."""
+    import sys
 
-    p = argparse.ArgumentParser(prog="python -m vrneural.atlas.benchmark", description=__doc__)
-    p.add_argument("--mesh", default="highpoly", choices=BUILTIN_MESHES)
-    p.add_argument("--res", type=int, default=1200)
-    p.add_argument("--padding", type=int, default=2)
-    p.add_argument("--repeats", type=int, default=3)
-    p.add_argument("-o", "--output", default="atlas_bench.json")
-    p.add_argument("--force", action="store_true")
+    from vrneural.atlas import BUILTIN_MESHES
+    from vrneural.atlas.build import MAX_PADDING, MAX_RESOLUTION, MIN_RESOLUTION
+    from vrneural.cli import _Parser
+    from vrneural.errors import VrnError
+
+    prog = "python -m vrneural.atlas.benchmark"
+    p = _Parser(
+        prog=prog,
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument(
+        "--mesh",
+        default="highpoly",
+        choices=BUILTIN_MESHES,
+        help="built-in mesh to unwrap (default: %(default)s)",
+    )
+    p.add_argument(
+        "--res",
+        type=int,
+        default=1200,
+        help=f"atlas resolution R, even, in [{MIN_RESOLUTION}, {MAX_RESOLUTION}] "
+        "(default: %(default)s)",
+    )
+    p.add_argument(
+        "--padding",
+        type=int,
+        default=2,
+        help=f"gutter width in texels around charts, in [0, {MAX_PADDING}] (default: %(default)s)",
+    )
+    p.add_argument(
+        "--repeats",
+        type=int,
+        default=3,
+        help="uncached builds timed, >= 1; the JSON reports their median (default: %(default)s)",
+    )
+    p.add_argument(
+        "-o",
+        "--output",
+        default="atlas_bench.json",
+        help="JSON written here, the PNG chart beside it with suffix .png (default: %(default)s)",
+    )
+    p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     a = p.parse_args(argv)
-    out = check_output(a.output, a.force)
-    check_output(out.with_suffix(".png"), a.force)
-    result = run_benchmark(a.mesh, a.res, a.padding, max(1, a.repeats))
+    try:
+        out = _check_args(a)
+        result = run_benchmark(a.mesh, a.res, a.padding, a.repeats)
+    except VrnError as e:
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        return e.exit_code
+    from vrneural.formats.atomic import write_json
+
     write_json(out, result)
     plot(result, out.with_suffix(".png"))
     m = result["median"]
@@ -111,13 +153,27 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
+def _check_args(a: argparse.Namespace) -> Path:
+    """Validate the options before any work (one-line :class:`VrnError`); returns the JSON
+    path."""
+    from vrneural.atlas.build import MAX_PADDING, check_texture_resolution
+    from vrneural.errors import VrnError, check_range
+    from vrneural.formats.atomic import check_output
+
+    check_texture_resolution("--res", a.res)
+    check_range("--padding", a.padding, 0, MAX_PADDING)
+    check_range("--repeats", a.repeats, 1, 1000)
+    if Path(a.output).suffix.lower() == ".png":
+        raise VrnError(
+            f"--output {a.output}: the PNG chart is written beside the JSON, with suffix .png; "
+            "name a .json file"
+        )
+    out = check_output(a.output, a.force)
+    check_output(out.with_suffix(".png"), a.force)
+    return out
+
+
 if __name__ == "__main__":
     import sys
 
-    from vrneural.errors import VrnError
-
-    try:
-        sys.exit(main())
-    except VrnError as e:
-        print(f"atlas benchmark: error: {e}", file=sys.stderr)
-        sys.exit(2)
+    sys.exit(main())

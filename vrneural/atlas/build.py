@@ -48,6 +48,11 @@ def check_texture_resolution(name: str, resolution: int) -> None:
 
 def validate_mesh(mesh: Mesh) -> None:
     """Raise :class:`VrnError` for a mesh the atlas cannot handle (one line, names the mesh)."""
+    if not isinstance(mesh, Mesh):
+        hint = (
+            " (load_mesh returns a list: pass one of its meshes)" if isinstance(mesh, list) else ""
+        )
+        raise VrnError(f"build_atlas: expected a Mesh, got {type(mesh).__name__}{hint}")
     pos = np.asarray(mesh.positions)
     check_geometry(mesh.name, pos, np.asarray(mesh.faces))
     for name, width in (("normals", 3), ("tangents", 4), ("uv", 2)):

@@ -8,8 +8,9 @@ Container: :mod:`vrneural.formats.container` with magic ``b"VRNBTF"``. Arrays:
 - ``view_dirs``   ``[V, 3]`` float32 unit vectors
 
 Header: ``name``, ``convention`` ("cos_inside"), ``generator`` (config dict or import source),
-``seed``, ``texel_size_mm`` (optional), plus anything the writer adds. The texel ``(x, y)`` has its
-centre at material UV ``((x + 0.5) / W, (y + 0.5) / H)``; tiles repeat (wrap) in both axes.
+``seed``, ``texel_size_mm`` (optional), plus anything the writer adds (except the keys in
+:data:`RESERVED_KEYS`, which the format and its container set themselves). The texel ``(x, y)``
+has its centre at material UV ``((x + 0.5) / W, (y + 0.5) / H)``; tiles repeat (wrap) in both axes.
 """
 
 from __future__ import annotations
@@ -25,6 +26,9 @@ from vrneural.formats.container import ContainerWriter, read_container, write_co
 BTF_MAGIC = b"VRNBTF"
 BTF_VERSION = 1
 CONVENTION = "cos_inside"
+#: header keys a writer's ``meta`` may not set: the container's own (array table, file size,
+#: per-array CRC32s, the unfinished-write mark) and the BTF convention
+RESERVED_KEYS = ("array_crc32", "arrays", "convention", "file_size", "partial")
 
 
 @dataclass
@@ -52,9 +56,36 @@ class Btf:
         return np.asarray(self.values[light, view], dtype=np.float32)
 
 
+def _check_not_empty(path, L: int, V: int, H: int, W: int) -> None:
+    if min(L, V, H, W) < 1:
+        raise VrnError(
+            f"{path}: an empty BTF ({L} lights x {V} views x {H}x{W} texels); lights, views, "
+            "height and width must each be at least 1"
+        )
+
+
+def _header(path, meta: dict) -> dict:
+    """The header a writer stores: the convention plus ``meta``, which may not set a reserved
+    key (one would be overwritten, dropped on read, or mark a finished file as unfinished).
+    ``convention`` equal to :data:`CONVENTION` is let through (a read BTF's ``meta`` has it)."""
+    if "convention" in meta and meta["convention"] != CONVENTION:
+        raise VrnError(
+            f"{path}: meta key 'convention' = {meta['convention']!r} is not allowed: BTF values "
+            f"are always {CONVENTION!r} (cos(theta_i) inside); drop the key"
+        )
+    bad = sorted(k for k in meta if k in RESERVED_KEYS and k != "convention")
+    if bad:
+        raise VrnError(
+            f"{path}: meta key {bad[0]!r} is reserved by the BTF format (reserved: "
+            f"{', '.join(RESERVED_KEYS)}); store it under another name"
+        )
+    return {"convention": CONVENTION, **meta}
+
+
 def _validate(path, values, light_dirs, view_dirs) -> None:
     if values.ndim != 5 or values.shape[4] != 3:
         raise VrnError(f"{path}: values has shape {list(values.shape)}, expected [L, V, H, W, 3]")
+    _check_not_empty(path, *values.shape[:4])
     L, V = values.shape[:2]
     if light_dirs.shape != (L, 3):
         raise VrnError(f"{path}: light_dirs has shape {list(light_dirs.shape)}, expected [{L}, 3]")
@@ -94,8 +125,8 @@ def write_btf(
     _validate(path, values, light_dirs, view_dirs)
     if not np.isfinite(values).all():
         raise VrnError(f"{path}: BTF values contain NaN or Inf")
+    header = _header(path, meta)
     v16 = np.clip(values, 0, 65504).astype(np.float16)
-    header = {"convention": CONVENTION, **meta}
     return write_container(
         path,
         BTF_MAGIC,
@@ -103,6 +134,26 @@ def write_btf(
         header,
         {"values": v16, "light_dirs": light_dirs, "view_dirs": view_dirs},
     )
+
+
+def check_partial_settings(partial: Path, generator: dict) -> None:
+    """Refuse to continue an interrupted ``.partial`` that was made with other settings, naming
+    them (``--force`` starts over): the hours already rendered are never thrown away silently."""
+    if not partial.exists():
+        return
+    try:
+        old = read_container(partial, BTF_MAGIC, (BTF_VERSION,), "partial BTF", False, True)[0]
+    except VrnError as e:
+        raise VrnError(f"{e}; pass --force instead of --resume to start over") from None
+    have = old.get("generator", {})
+    diff = [
+        f"{k}: {have.get(k)!r} there, {v!r} here" for k, v in generator.items() if have.get(k) != v
+    ]
+    if diff:
+        raise VrnError(
+            f"{partial}: the interrupted run used other settings ({'; '.join(diff)}); rerun with "
+            "its settings to continue it, or pass --force instead of --resume to start over"
+        )
 
 
 class BtfWriter:
@@ -124,7 +175,8 @@ class BtfWriter:
     ):
         L, V = len(light_dirs), len(view_dirs)
         H, W = resolution
-        header = {"convention": CONVENTION, **meta}
+        _check_not_empty(path, L, V, H, W)
+        header = _header(path, meta)
         specs = {
             "values": ((L, V, H, W, 3), "float16"),
             "light_dirs": ((L, 3), "float32"),

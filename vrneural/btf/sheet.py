@@ -120,12 +120,14 @@ def summary(btf: Btf, max_slices: int = 256) -> dict:
         total += float(s.sum(dtype=np.float64))
         count += s.size
     theta = np.degrees(np.arccos(np.clip(btf.light_dirs[:, 2], -1, 1)))
+    theta_v = np.degrees(np.arccos(np.clip(btf.view_dirs[:, 2], -1, 1)))
     return {
         "path": str(btf.path),
         "shape": {"lights": L, "views": V, "height": H, "width": W, "channels": 3},
         "dtype": "float16",
         "size_bytes": btf.path.stat().st_size if btf.path else None,
         "light_theta_deg": [float(theta.min()), float(theta.max())],
+        "view_theta_deg": [float(theta_v.min()), float(theta_v.max())],
         "same_light_and_view_dirs": bool(
             L == V and np.allclose(btf.light_dirs, btf.view_dirs, atol=1e-6)
         ),

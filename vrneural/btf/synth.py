@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.btf.dirs import direction_set
-from vrneural.btf.format import BtfWriter
+from vrneural.btf.format import BtfWriter, check_partial_settings
 from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt
 from vrneural.errors import VrnError, check_choice, check_range, check_seed
@@ -80,29 +80,6 @@ def subsamples(cfg: BtfConfig) -> np.ndarray:
         jit = rng.random((cfg.res, cfg.res, cfg.spp, 2)) / k
         return (cells + jit - 0.5).astype(np.float64)
     return rng.random((cfg.res, cfg.res, cfg.spp, 2)) - 0.5
-
-
-def check_partial_settings(partial: Path, generator: dict) -> None:
-    """Refuse to continue an interrupted ``.partial`` that was made with other settings, naming
-    them (``--force`` starts over): the hours already rendered are never thrown away silently."""
-    from vrneural.btf.format import BTF_MAGIC, BTF_VERSION
-    from vrneural.formats.container import read_container
-
-    if not partial.exists():
-        return
-    try:
-        old = read_container(partial, BTF_MAGIC, (BTF_VERSION,), "partial BTF", False, True)[0]
-    except VrnError as e:
-        raise VrnError(f"{e}; pass --force instead of --resume to start over") from None
-    have = old.get("generator", {})
-    diff = [
-        f"{k}: {have.get(k)!r} there, {v!r} here" for k, v in generator.items() if have.get(k) != v
-    ]
-    if diff:
-        raise VrnError(
-            f"{partial}: the interrupted run used other settings ({'; '.join(diff)}); rerun with "
-            "its settings to continue it, or pass --force instead of --resume to start over"
-        )
 
 
 def synthesize(

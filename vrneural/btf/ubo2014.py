@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.btf.dirs import spherical
-from vrneural.btf.format import BtfWriter
+from vrneural.btf.format import BtfWriter, check_partial_settings
 from vrneural.errors import VrnError
 
 INSTALL_HINT = "pip install 'vrneural[ubo]' (or: pip install btf-extractor)"
@@ -123,6 +123,8 @@ def parse_header(path) -> dict:
     end = _data_end(p, fmt, r, size, len(lights), width * height)
     if end != size:
         raise VrnError(f"{p}: UBO2014 data ends at byte {end} but the file has {size} bytes")
+    _check_directions(p, "light", lights)
+    _check_directions(p, "view", views)
     return {
         "format": fmt,
         "width": width,
@@ -130,6 +132,50 @@ def parse_header(path) -> dict:
         "light_angles": np.array(lights, np.float32),
         "view_angles": np.array(views, np.float32),
     }
+
+
+def _check_directions(p: Path, kind: str, angles: list) -> None:
+    """Refuse non-finite angles, directions below the horizon (theta > 90 degrees) and pairs of
+    directions btf-extractor cannot tell apart, naming the indices and angles.
+
+    btf.hh turns the stored angles (radians) into unit vectors; btf-extractor turns those back
+    into ``(degrees(arccos z), degrees(atan2(y, x)) % 360)`` rounded to 0.1 degree and keys its
+    slices by them, so two directions whose theta and phi both differ by less than 0.1 degree
+    may share a key (one of them then cannot be read). Which way a value on a rounding boundary
+    goes depends on float32 details, so every such pair is refused; so is a pair less than 0.01
+    degree apart (the same direction, e.g. theta 0 with two phis).
+    """
+    a = np.asarray(angles, np.float64).reshape(-1, 2)
+    deg = np.degrees(a)
+
+    def shown(i: int) -> str:
+        return f"{kind} direction {i} (theta {deg[i, 0]:.2f} deg, phi {deg[i, 1]:.2f} deg)"
+
+    for i in range(len(a)):
+        if not np.isfinite(a[i]).all():
+            raise VrnError(
+                f"{p}: {kind} direction {i} has a non-finite angle (theta {a[i, 0]}, phi "
+                f"{a[i, 1]} rad); UBO2014 angles must be finite numbers"
+            )
+        if np.cos(a[i, 0]) < -1e-6:  # z < 0 (the margin lets float32 pi/2 through)
+            raise VrnError(
+                f"{p}: {shown(i)} is below the horizon; directions must have theta <= 90 deg "
+                "(pointing away from the surface)"
+            )
+    d = spherical(a[:, 0], a[:, 1])
+    theta = np.degrees(np.arccos(np.clip(d[:, 2], -1, 1)))
+    phi = np.degrees(np.arctan2(d[:, 1], d[:, 0])) % 360
+    for i in range(1, len(a)):
+        dphi = np.abs(phi[:i] - phi[i])
+        close = (np.abs(theta[:i] - theta[i]) < 0.1) & (np.minimum(dphi, 360 - dphi) < 0.1)
+        sep = np.degrees(np.arctan2(np.linalg.norm(np.cross(d[:i], d[i]), axis=1), d[:i] @ d[i]))
+        hit = np.flatnonzero(close | (sep < 0.01))
+        if hit.size:
+            raise VrnError(
+                f"{p}: {shown(int(hit[0]))} and {shown(i)} are the same direction to "
+                "btf-extractor (it rounds theta and phi to 0.1 deg); every two directions must "
+                "differ by at least 0.1 deg in theta or phi"
+            )
 
 
 def _data_end(p: Path, fmt: str, r: _Reader, size: int, n_lights: int, n_texels: int) -> int:
@@ -188,7 +234,13 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
     for (tl, pl, tv, pv), (li, vi) in btf.angles_vs_index_dict.items():
         lights[li] = (tl, pl)
         views[vi] = (tv, pv)
-    L, V = len(lights), len(views)
+    L, V = len(hdr["light_angles"]), len(hdr["view_angles"])
+    for kind, got, n in (("light", lights, L), ("view", views, V)):
+        if sorted(got) != list(range(n)):  # parse_header's check should have caught it
+            raise VrnError(
+                f"{src}: btf-extractor tells apart only {len(got)} of the {n} {kind} directions "
+                "(it rounds angles to 0.1 deg); every direction must be distinct"
+            )
     light_ang = [lights[i] for i in range(L)]
     view_ang = [views[i] for i in range(V)]
     w_img, h_img, _ = btf.img_shape  # btf-extractor reports (Width, Height, 3)
@@ -202,6 +254,8 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
         },
         "seed": None,
     }
+    if resume:  # name what differs (another source, say) before the writer refuses it
+        check_partial_settings(Path(out).with_name(Path(out).name + ".partial"), meta["generator"])
     w = BtfWriter(
         out,
         _degrees_to_dirs(light_ang),

@@ -144,9 +144,10 @@ def run_info(args) -> int:
         f"shape     {sh['lights']} lights x {sh['views']} views x {sh['height']}x{sh['width']} "
         f"texels x 3, float16"
     )
+    lt, vt = s["light_theta_deg"], s["view_theta_deg"]
     print(
-        f"dirs      theta {s['light_theta_deg'][0]:.1f}..{s['light_theta_deg'][1]:.1f} deg, "
-        f"lights {'==' if s['same_light_and_view_dirs'] else '!='} views"
+        f"dirs      light theta {lt[0]:.1f}..{lt[1]:.1f} deg, view theta {vt[0]:.1f}..{vt[1]:.1f} "
+        f"deg, lights {'==' if s['same_light_and_view_dirs'] else '!='} views"
     )
     tag = " (sampled slices)" if s["value_range_sampled"] else ""
     print(

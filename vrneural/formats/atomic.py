@@ -123,7 +123,9 @@ def _make_parent(p: Path) -> None:
     try:
         _mkdirs(p.parent)
     except OSError as e:
-        raise VrnError(f"{p.parent}: cannot create output directory ({e.strerror})") from None
+        raise VrnError(
+            f"{p.parent}: cannot create output directory ({_why(p.parent, e)})"
+        ) from None
     try:  # a real file, not os.access: root passes access() checks on read-only mounts too
         with tempfile.TemporaryFile(dir=p.parent, prefix=".vrneural-probe-"):
             pass
@@ -223,7 +225,8 @@ def mark_output_dir(path: str | os.PathLike, command: str) -> Path:
     try:
         p.mkdir(parents=True, exist_ok=True)
     except OSError as e:
-        raise VrnError(f"{p}: cannot create output directory ({e.strerror})") from None
+        raise VrnError(f"{p}: cannot create output directory ({_why(p, e)})") from None
+    lock_output_dir(p)
     _write_mark(p, command, None)
     _MARKED[p.resolve()] = command
     return p
@@ -231,6 +234,52 @@ def mark_output_dir(path: str | os.PathLike, command: str) -> Path:
 
 #: output directories this process marked and has not sealed yet (see :func:`seal_marked`)
 _MARKED: dict[Path, str] = {}
+
+#: output directories this process holds the lock of -> the open descriptor holding it
+_LOCKS: dict[Path, int] = {}
+
+
+def lock_output_dir(p: Path) -> None:
+    """Take an exclusive ``flock`` on output directory ``p`` for as long as this process writes
+    it (released by :func:`seal_output_dir`, or by the kernel however the process ends), so two
+    commands given the same ``--out`` cannot empty and fill it at the same time: the second is
+    a one-line error. A no-op where ``flock`` does not exist, or for a directory this process
+    already holds."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        return
+    key = p.resolve()
+    if key in _LOCKS:
+        return
+    try:
+        fd = os.open(p, os.O_RDONLY)
+    except OSError:
+        return  # unreadable: the write itself will say so
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        raise VrnError(
+            f"{p}: another vrneural process is writing this output right now; wait for it to "
+            "finish or choose another --out"
+        ) from None
+    _LOCKS[key] = fd
+
+
+def _unlock_output_dir(p: Path) -> None:
+    fd = _LOCKS.pop(p.resolve(), None)
+    if fd is not None:
+        os.close(fd)  # closing the descriptor releases the flock
+
+
+def _why(p: Path, e: OSError) -> str:
+    """An OSError's reason, plainer where the usual one misleads: a path component that is a
+    file gives ``File exists``/``Not a directory``."""
+    for q in (p, *p.parents):
+        if q.exists() and not q.is_dir():
+            return f"{q} is a file, not a directory"
+    return e.strerror or str(e)
 
 
 def seal_marked() -> None:
@@ -251,6 +300,7 @@ def seal_output_dir(path: str | os.PathLike, command: str) -> Path:
     p = Path(path)
     _write_mark(p, command, sorted(c.name for c in p.iterdir() if c.name != OUTPUT_MARK))
     _MARKED.pop(p.resolve(), None)
+    _unlock_output_dir(p)
     return p
 
 
@@ -260,14 +310,20 @@ def make_output_dir(path: str | os.PathLike, command: str, keep: tuple[str, ...]
     validated, so a run that fails early leaves the old output as it was."""
     p = Path(path)
     if p.is_dir():
+        lock_output_dir(p)  # before emptying it: another process may be about to do the same
         check_output_dir(p, True, command)  # again: the folder may have changed since
         for child in p.iterdir():
             if child.name in keep or child.name == OUTPUT_MARK:
                 continue
-            if child.is_dir() and not child.is_symlink():
-                shutil.rmtree(child)
-            else:
-                child.unlink()
+            try:
+                if child.is_dir() and not child.is_symlink():
+                    shutil.rmtree(child)
+                else:
+                    child.unlink()
+            except OSError as e:  # read-only, or permissions: what is left stays whole
+                raise VrnError(
+                    f"{child}: cannot remove the old output to replace it ({e.strerror or e})"
+                ) from None
     return mark_output_dir(p, command)
 
 
@@ -283,9 +339,12 @@ def new_output_dir(base: str) -> Path:
             p.mkdir()
             return p
         except FileExistsError:
-            k += 1
+            if p.parent.is_dir():
+                k += 1
+                continue
+            raise VrnError(f"{p}: cannot create output directory ({_why(p, OSError())})") from None
         except OSError as e:
-            raise VrnError(f"{p}: cannot create output directory ({e.strerror})") from None
+            raise VrnError(f"{p}: cannot create output directory ({_why(p, e)})") from None
 
 
 @contextlib.contextmanager

@@ -5,6 +5,9 @@ Tonemap: exposure, Reinhard ``x / (1 + x)`` per channel, sRGB encoding, 8 bits.
 
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -37,14 +40,22 @@ def write_exr(path: Path, hdr: np.ndarray) -> Path:
     h, w, c = a.shape
     with atomic_path(path) as tmp:
         tmp_exr = tmp.with_suffix(".exr")
-        out = ImageOutput.create(str(tmp_exr))
-        if out is None:
-            raise VrnError(f"{path}: OpenImageIO cannot write EXR ({geterror()})")
-        spec = ImageSpec(w, h, c, "half")
-        out.open(str(tmp_exr), spec)
-        out.write_image(a)
-        out.close()
-        tmp_exr.replace(tmp)
+        try:  # OpenImageIO takes UTF-8 names only: a path with other bytes goes via /tmp
+            str(tmp_exr).encode("utf-8")
+        except UnicodeEncodeError:
+            fd, name = tempfile.mkstemp(suffix=".exr", prefix=".vrneural-")
+            os.close(fd)
+            tmp_exr = Path(name)
+        try:
+            out = ImageOutput.create(str(tmp_exr))
+            if out is None:
+                raise VrnError(f"{path}: OpenImageIO cannot write EXR ({geterror()})")
+            spec = ImageSpec(w, h, c, "half")
+            if not out.open(str(tmp_exr), spec) or not out.write_image(a) or not out.close():
+                raise VrnError(f"{path}: OpenImageIO cannot write EXR ({geterror()})")
+            shutil.move(tmp_exr, tmp)
+        finally:
+            tmp_exr.unlink(missing_ok=True)
     return path
 
 
@@ -89,3 +100,11 @@ class VideoWriter:
         self.w.close()
         self.tmp.replace(self.path)
         return self.path
+
+    def abort(self) -> None:
+        """Stop encoding and remove the partial video (the run failed; nothing to keep)."""
+        try:
+            self.w.close()
+        except Exception:  # ffmpeg on a full disk: any error; there is nothing to save
+            pass
+        self.tmp.unlink(missing_ok=True)

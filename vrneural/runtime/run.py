@@ -307,6 +307,10 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         interrupted = clean = stop.flag
     except KeyboardInterrupt:  # the second Ctrl-C, mid-frame: keep what was finished
         interrupted, clean = True, False
+    except BaseException:  # an error (a full disk, say): no half-written video left behind
+        if video is not None:
+            video.abort()
+        raise
     finally:
         bar.close()
     if interrupted and not stats:
