@@ -10,6 +10,28 @@ from vrneural.btf.synth import BtfConfig, synthesize
 from vrneural.errors import VrnError
 
 
+def _interrupted_after_three_views(tmp_path, monkeypatch):
+    """A carpet 8^2 x 7 directions synth interrupted (KeyboardInterrupt, what SIGINT does in
+    the view loop) after 3 of its 7 views: ``(config, bytes of an uninterrupted run, output)``."""
+    cfg = BtfConfig(preset="carpet", res=8, dirs=7, seed=1)
+    full = synthesize(cfg, tmp_path / "full.btf", progress=False).read_bytes()
+    real = render.render_view
+    calls = {"n": 0}
+
+    def interrupt_after_three(*a, **k):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    out = tmp_path / "r.btf"
+    monkeypatch.setattr(render, "render_view", interrupt_after_three)
+    with pytest.raises(KeyboardInterrupt):
+        synthesize(cfg, out, progress=False)
+    monkeypatch.setattr(render, "render_view", real)
+    return cfg, full, out
+
+
 def test_same_seed_same_bytes_other_seed_differs(tmp_path):
     cfg = BtfConfig(preset="fabric", res=8, dirs=6, seed=3)
     a = synthesize(cfg, tmp_path / "a.btf", progress=False).read_bytes()
@@ -38,22 +60,7 @@ def test_values_finite_nonnegative_and_varied(tmp_path, preset):
 def test_ctrl_c_leaves_a_resumable_partial_and_resume_gives_same_bytes(
     tmp_path, monkeypatch, capsys
 ):
-    cfg = BtfConfig(preset="carpet", res=8, dirs=7, seed=1)
-    full = synthesize(cfg, tmp_path / "full.btf", progress=False).read_bytes()
-    real = render.render_view
-    calls = {"n": 0}
-
-    def interrupt_after_three(*a, **k):  # what SIGINT does in the view loop: KeyboardInterrupt
-        calls["n"] += 1
-        if calls["n"] == 4:
-            raise KeyboardInterrupt
-        return real(*a, **k)
-
-    out = tmp_path / "r.btf"
-    monkeypatch.setattr(render, "render_view", interrupt_after_three)
-    with pytest.raises(KeyboardInterrupt):
-        synthesize(cfg, out, progress=False)
-    monkeypatch.setattr(render, "render_view", real)
+    cfg, full, out = _interrupted_after_three_views(tmp_path, monkeypatch)
     assert not out.exists()
     assert "3/7 views" in capsys.readouterr().err
     partial = tmp_path / "r.btf.partial"
@@ -100,22 +107,7 @@ def test_resume_counts_only_valid_finished_views(tmp_path, monkeypatch, capsys):
     """A damaged ``.partial.done`` neither inflates the "resuming, k/N" count nor skips a view
     that was never rendered (an out-of-range index is an error, a repeated one counts once, a
     last line cut short is dropped), and the resumed file is byte-identical."""
-    cfg = BtfConfig(preset="carpet", res=8, dirs=7, seed=1)
-    full = synthesize(cfg, tmp_path / "full.btf", progress=False).read_bytes()
-    real = render.render_view
-    calls = {"n": 0}
-
-    def interrupt_after_three(*a, **k):
-        calls["n"] += 1
-        if calls["n"] == 4:
-            raise KeyboardInterrupt
-        return real(*a, **k)
-
-    out = tmp_path / "r.btf"
-    monkeypatch.setattr(render, "render_view", interrupt_after_three)
-    with pytest.raises(KeyboardInterrupt):
-        synthesize(cfg, out, progress=False)
-    monkeypatch.setattr(render, "render_view", real)
+    cfg, full, out = _interrupted_after_three_views(tmp_path, monkeypatch)
     done = tmp_path / "r.btf.partial.done"
     assert done.read_text() == "0\n1\n2\n"
     capsys.readouterr()
