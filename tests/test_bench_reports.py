@@ -144,3 +144,12 @@ def test_lights_and_materials_say_fps_is_from_the_mean_frame_time(tmp_path, benc
     doc = json.loads((out / "results.json").read_text())
     for r in doc["records"]:
         assert r["fps"] == pytest.approx(1e3 / r["frame_ms"]["mean"])
+
+
+def test_list_options_refuse_a_value_named_twice():
+    from vrneural.bench.report import choice_list
+    from vrneural.errors import VrnError
+
+    assert choice_list("--precisions", "f16, f32", ("f32", "f16")) == ["f16", "f32"]
+    with pytest.raises(VrnError, match="--precisions names f16 more than once"):
+        choice_list("--precisions", "f16,f16", ("f32", "f16"))

@@ -176,9 +176,14 @@ def int_list(field: str, text: str, lo: int, hi: int, even: bool = False) -> lis
 
 
 def choice_list(field: str, text: str, allowed) -> list[str]:
-    from vrneural.errors import check_choice
+    """The comma-separated values of option ``field``, each one of ``allowed``, none twice (a
+    value named twice would be measured and reported twice)."""
+    from vrneural.errors import VrnError, check_choice
 
     vals = [t.strip() for t in str(text).split(",") if t.strip()]
     for v in vals:
         check_choice(field, v, allowed)
+    twice = sorted({v for v in vals if vals.count(v) > 1})
+    if twice:
+        raise VrnError(f"{field} names {', '.join(twice)} more than once")
     return vals
