@@ -417,6 +417,18 @@ def test_builtin_scene_says_when_lights_are_generated(capsys, tmp_path):
     )
     assert main([*argv, str(tmp_path / "p"), "--lights", "3"]) == 0
     assert "generated" not in capsys.readouterr().err
+    # the built-in scene defines its 3 lights whatever is shaded (tiny: the first 2; --lights
+    # 0: none), and the work percentiles leave frame 0's full update out as the times do
+    for k, lights in (("q", []), ("r", ["--lights", "0"])):
+        frames = ["--frames", "6", "--reuse", "4", "--schedule", "burst"]
+        assert main([*argv, str(tmp_path / k), *lights, *frames]) == 0
+        sm = json.loads((tmp_path / k / "summary.json").read_text())
+        assert sm["scene"]["scene_lights"] == 3
+        assert sm["scene"]["lights"] == (2 if not lights else 0)
+    sm = json.loads((tmp_path / "q" / "summary.json").read_text())
+    blocks = sm["per_frame"]["blocks_shaded"]  # burst, N = 4: frames 0 and 5 update
+    assert blocks[0] > 0 and blocks[5] > 0 and not any(blocks[1:5])
+    assert sm["blocks_shaded_per_frame"]["mean"] == pytest.approx(blocks[5] / 5)  # frames 1-5
 
 
 @pytest.mark.gpu
