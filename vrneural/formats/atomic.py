@@ -258,12 +258,15 @@ def lock_output_dir(p: Path) -> None:
         return  # unreadable: the write itself will say so
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
+    except BlockingIOError:  # EWOULDBLOCK: another process holds it
         os.close(fd)
         raise VrnError(
             f"{p}: another vrneural process is writing this output right now; wait for it to "
             "finish or choose another --out"
         ) from None
+    except OSError:  # no locks on this file system (some network mounts): go on without
+        os.close(fd)
+        return
     _LOCKS[key] = fd
 
 
