@@ -10,25 +10,31 @@ from vrneural.btf.synth import BtfConfig, synthesize
 from vrneural.errors import VrnError
 
 
-def _interrupted_after_three_views(tmp_path, monkeypatch):
-    """A carpet 8^2 x 7 directions synth interrupted (KeyboardInterrupt, what SIGINT does in
-    the view loop) after 3 of its 7 views: ``(config, bytes of an uninterrupted run, output)``."""
-    cfg = BtfConfig(preset="carpet", res=8, dirs=7, seed=1)
-    full = synthesize(cfg, tmp_path / "full.btf", progress=False).read_bytes()
+def _interrupt_after(monkeypatch, cfg, out, views: int) -> None:
+    """Synthesise ``cfg`` into ``out``, interrupted (KeyboardInterrupt, what SIGINT does in the
+    view loop) after ``views`` views."""
     real = render.render_view
     calls = {"n": 0}
 
-    def interrupt_after_three(*a, **k):
+    def interrupt(*a, **k):
         calls["n"] += 1
-        if calls["n"] == 4:
+        if calls["n"] == views + 1:
             raise KeyboardInterrupt
         return real(*a, **k)
 
-    out = tmp_path / "r.btf"
-    monkeypatch.setattr(render, "render_view", interrupt_after_three)
+    monkeypatch.setattr(render, "render_view", interrupt)
     with pytest.raises(KeyboardInterrupt):
         synthesize(cfg, out, progress=False)
     monkeypatch.setattr(render, "render_view", real)
+
+
+def _interrupted_after_three_views(tmp_path, monkeypatch):
+    """A carpet 8^2 x 7 directions synth interrupted after 3 of its 7 views: ``(config, bytes
+    of an uninterrupted run, output)``."""
+    cfg = BtfConfig(preset="carpet", res=8, dirs=7, seed=1)
+    full = synthesize(cfg, tmp_path / "full.btf", progress=False).read_bytes()
+    out = tmp_path / "r.btf"
+    _interrupt_after(monkeypatch, cfg, out, 3)
     return cfg, full, out
 
 
@@ -79,19 +85,7 @@ def test_ctrl_c_leaves_a_resumable_partial_and_resume_gives_same_bytes(
 def test_resume_with_other_settings_keeps_the_partial_and_names_them(tmp_path, monkeypatch):
     cfg = BtfConfig(preset="carpet", res=8, dirs=7, seed=1)
     out = tmp_path / "r.btf"
-    real = render.render_view
-    calls = {"n": 0}
-
-    def interrupt_after_two(*a, **k):
-        calls["n"] += 1
-        if calls["n"] == 3:
-            raise KeyboardInterrupt
-        return real(*a, **k)
-
-    monkeypatch.setattr(render, "render_view", interrupt_after_two)
-    with pytest.raises(KeyboardInterrupt):
-        synthesize(cfg, out, progress=False)
-    monkeypatch.setattr(render, "render_view", real)
+    _interrupt_after(monkeypatch, cfg, out, 2)
     partial = tmp_path / "r.btf.partial"
     before = partial.read_bytes()
     other = BtfConfig(preset="carpet", res=10, dirs=7, seed=1)

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vrneural.errors import VrnError
-from vrneural.mlp import Layer, check_precision, mlp_forward, random_mlp
+from vrneural.mlp import Layer, mlp_forward, random_mlp
 
 ARCHS = {
     "coarse_fine": (("coarse", "fine"), ("coarse", "fine")),
@@ -137,7 +137,6 @@ def material_forward(
     material UVs of the block's 4 texels. Returns ``[N, 4, 3]`` float32. For ``"single"`` each
     texel is independent (the 4 share only the directions).
     """
-    check_precision(precision)
     wi = np.asarray(wi, np.float32)
     wo = np.asarray(wo, np.float32)
     uv = np.asarray(uv, np.float32)

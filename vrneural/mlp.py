@@ -73,6 +73,12 @@ def check_precision(precision: str) -> None:
         )
 
 
+def wgsl_type(precision: str) -> str:
+    """The WGSL scalar type ``T`` a shader generated for ``precision`` computes in (checked)."""
+    check_precision(precision)
+    return precision
+
+
 def mlp_forward(x: np.ndarray, layers: list[Layer], precision: str = "f32") -> np.ndarray:
     """Evaluate the MLP on ``x: [N, in]``; returns ``[N, out]`` float32.
 
@@ -82,7 +88,7 @@ def mlp_forward(x: np.ndarray, layers: list[Layer], precision: str = "f32") -> n
     check_precision(precision)
     dt = np.float16 if precision == "f16" else np.float32
     h = np.asarray(x, dtype=np.float32).astype(dt).astype(np.float32)
-    n_in = layers[0].weight.shape[1] if layers else h.shape[-1]
+    n_in = layers[0].n_in if layers else h.shape[-1]
     if h.ndim != 2 or h.shape[1] != n_in:
         raise VrnError(f"mlp_forward: x has shape {list(h.shape)}, expected [N, {n_in}]")
     for layer in layers:

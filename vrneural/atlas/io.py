@@ -162,27 +162,15 @@ def _check_obj_indices(p: Path) -> str:
         raise VrnError(f"{p}: cannot read mesh ({e.strerror or e})") from None
     heads = _OBJ_ELEMENT.findall(data)
     # positive indices may refer to elements defined later in the file
-    total = [heads.count(tag) for tag, _, _ in _OBJ_KINDS]
+    total = [heads.count(tag) for tag in _OBJ_TAGS]
     seen = [0, 0, 0]
     for n, raw in enumerate(data.split(b"\n"), 1):
         tok = raw.split(b"#", 1)[0].split()
         if not tok:
             continue
         here = f"{p}:{n}"
-        if tok[0] == b"v":
-            seen[0] += 1
-            try:
-                xyz = [float(t) for t in tok[1:4]]
-            except ValueError:
-                xyz = []
-            if len(xyz) < 3:
-                text = raw.decode(errors="replace").strip()
-                raise VrnError(f"{here}: vertex {seen[0]} needs 3 numbers x y z, got {text!r}")
-            if not all(math.isfinite(c) for c in xyz):
-                coords = b" ".join(tok[1:4]).decode(errors="replace")
-                raise VrnError(f"{here}: vertex {seen[0]} has a NaN/Inf position ({coords})")
-        elif tok[0] in (b"vt", b"vn"):
-            k = 1 if tok[0] == b"vt" else 2
+        if tok[0] in _OBJ_NUMBERS:
+            k = _OBJ_TAGS.index(tok[0])
             seen[k] += 1
             _check_obj_numbers(here, tok, seen[k], raw)
         elif tok[0] == b"f":
@@ -195,21 +183,29 @@ def _check_obj_indices(p: Path) -> str:
         return data.decode("latin-1")
 
 
+#: per element tag: its name, the numbers it needs, how many at least, what a NaN/Inf one is
+_OBJ_NUMBERS = {
+    b"v": ("vertex", "3 numbers x y z", 3, "has a NaN/Inf position"),
+    b"vt": ("texture coordinate", "numbers u v", 1, "is NaN/Inf"),
+    b"vn": ("normal", "3 numbers x y z", 3, "is NaN/Inf"),
+}
+_OBJ_TAGS = tuple(tag for tag, _, _ in _OBJ_KINDS)
+
+
 def _check_obj_numbers(here: str, tok: list, k: int, raw: bytes) -> None:
-    """A ``vt`` line needs 1-3 finite numbers (u [v [w]]), a ``vn`` line 3."""
-    texture = tok[0] == b"vt"
-    what = f"texture coordinate {k}" if texture else f"normal {k}"
-    need = "numbers u v" if texture else "3 numbers x y z"
+    """A ``v`` line (the ``k``-th) needs 3 finite numbers, a ``vt`` line 1-3 (u [v [w]]), a
+    ``vn`` line 3."""
+    name, need, least, nan = _OBJ_NUMBERS[tok[0]]
     try:
         vals = [float(t) for t in tok[1:4]]
     except ValueError:
         vals = []
-    if len(vals) < (1 if texture else 3):
+    if len(vals) < least:
         text = raw.decode(errors="replace").strip()
-        raise VrnError(f"{here}: {what} needs {need}, got {text!r}")
+        raise VrnError(f"{here}: {name} {k} needs {need}, got {text!r}")
     if not all(math.isfinite(c) for c in vals):
-        vals_text = b" ".join(tok[1:4]).decode(errors="replace")
-        raise VrnError(f"{here}: {what} is NaN/Inf ({vals_text})")
+        shown = b" ".join(tok[1:4]).decode(errors="replace")
+        raise VrnError(f"{here}: {name} {k} {nan} ({shown})")
 
 
 def _obj_face_indices(here: str, tok: list) -> list:

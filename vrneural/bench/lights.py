@@ -118,8 +118,7 @@ def run_lights(cfg: LightsConfig) -> dict:
     )
     md += [
         "",
-        "FPS: 1000 / the mean frame ms (wall clock incl. GPU wait), so one slow frame lowers "
-        "it; the median and p99 frame ms are beside it.",
+        rp.FPS_NOTE,
         "",
         f"shading / linear: shading ms over (shading ms per light at {first['lights']} "
         "light(s) x lights); 1 = linear.",

@@ -132,8 +132,7 @@ def run_materials(cfg: MaterialsConfig) -> dict:
     )
     md += [
         "",
-        "FPS: 1000 / the mean frame ms (wall clock incl. GPU wait), so one slow frame lowers "
-        "it; the median and p99 frame ms are beside it.",
+        rp.FPS_NOTE,
         "",
         "![materials](materials.png)",
     ]

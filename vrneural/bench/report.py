@@ -175,6 +175,13 @@ def int_list(field: str, text: str, lo: int, hi: int, even: bool = False) -> lis
     return vals
 
 
+#: under the tables of the frame benches whose FPS column is ``1000 / mean frame ms``
+FPS_NOTE = (
+    "FPS: 1000 / the mean frame ms (wall clock incl. GPU wait), so one slow frame lowers it; "
+    "the median and p99 frame ms are beside it."
+)
+
+
 def choice_list(field: str, text: str, allowed) -> list[str]:
     """The comma-separated values of option ``field``, each one of ``allowed``, none twice (a
     value named twice would be measured and reported twice)."""

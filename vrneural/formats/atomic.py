@@ -341,11 +341,11 @@ def new_output_dir(base: str) -> Path:
             _mkdirs(p.parent)
             p.mkdir()
             return p
-        except FileExistsError:
-            if p.parent.is_dir():
+        except FileExistsError as e:
+            if p.parent.is_dir():  # the name is taken: the next one
                 k += 1
                 continue
-            raise VrnError(f"{p}: cannot create output directory ({_why(p, OSError())})") from None
+            raise VrnError(f"{p}: cannot create output directory ({_why(p, e)})") from None
         except OSError as e:
             raise VrnError(f"{p}: cannot create output directory ({_why(p, e)})") from None
 

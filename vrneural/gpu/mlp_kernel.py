@@ -12,7 +12,7 @@ from vrneural.gpu.pipelines import compute_pipeline
 from vrneural.gpu.readback import read_texture, upload_buffer
 from vrneural.gpu.shaders import render_wgsl
 from vrneural.gpu.timing import GpuTimer
-from vrneural.mlp import Layer, pack_weights
+from vrneural.mlp import Layer, pack_weights, wgsl_type
 
 _ACT_CODE = {"relu": 0, "leaky_relu": 1, "none": 2}
 MAX_GROUPS_X = 32768
@@ -26,7 +26,7 @@ def mlp_wgsl(layers: list[Layer], precision: str = "f32", buffer_weights: bool =
         layers=layers,
         n_in=dims[0],
         n_out=dims[-1],
-        T="f16" if precision == "f16" else "f32",
+        T=wgsl_type(precision),
         buffer_weights=buffer_weights,
         dims=dims,
         acts=[_ACT_CODE[lay.act] for lay in layers],

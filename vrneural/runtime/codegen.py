@@ -26,7 +26,7 @@ import numpy as np
 from vrneural.errors import VrnError
 from vrneural.gpu.shaders import render_wgsl
 from vrneural.material import ARCHS, NeuralMaterial
-from vrneural.mlp import pack_weights
+from vrneural.mlp import pack_weights, wgsl_type
 
 _ACT_CODE = {"relu": 0, "leaky_relu": 1, "none": 2}
 PRECISIONS = ("auto", "f16", "f32")
@@ -232,7 +232,7 @@ def texture_space_wgsl(
         raise VrnError(f"radiance format {radiance_format!r} not in {RADIANCE_FORMATS}")
     return render_wgsl(
         "texture_space",
-        T="f16" if precision == "f16" else "f32",
+        T=wgsl_type(precision),
         mat=material_spec(mat, weights),
         n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
@@ -252,7 +252,7 @@ def screen_space_wgsl(
     _check_weights(mat, weights)
     return render_wgsl(
         "screen_space",
-        T="f16" if precision == "f16" else "f32",
+        T=wgsl_type(precision),
         mat=material_spec(mat, weights),
         n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work

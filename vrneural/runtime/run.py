@@ -218,6 +218,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
     from vrneural.runtime.scene import builtin_lights, builtin_scene, load_scene
 
     cfg = replace_config(cfg, out=str(out))
+    n_builtin = len(builtin_lights())
     if cfg.scene and cfg.pack:
         raise VrnError(
             f"--pack = {cfg.pack!r} replaces the built-in scene's materials; with a SCENE file, "
@@ -227,7 +228,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         scene = load_scene(cfg.scene)
     else:
         # its three lights (more generated for --lights N > 3); the profile shades the first
-        scene = builtin_scene(max(len(builtin_lights()), cfg.lights or 0))
+        scene = builtin_scene(max(n_builtin, cfg.lights or 0))
         if cfg.pack:
             use_pack(scene, cfg.pack)
     adapter = adapter_summary()
@@ -258,10 +259,10 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
             f"--lights 0: none of the scene's {count(len(scene.lights), 'light')} is shaded, so "
             "neural objects are black (--lights N shades the first N)"
         )
-    if not cfg.scene and s.n_lights > len(builtin_lights()):
+    if not cfg.scene and s.n_lights > n_builtin:
         r.warnings.append(
-            f"--lights {s.n_lights}: the built-in scene has {len(builtin_lights())} lights; "
-            f"{count(s.n_lights - len(builtin_lights()), 'generated light')} added (a SCENE "
+            f"--lights {s.n_lights}: the built-in scene has {n_builtin} lights; "
+            f"{count(s.n_lights - n_builtin, 'generated light')} added (a SCENE "
             "file has only the lights it defines)"
         )
     unused = [f"--{k}" for k in ("reuse", "schedule") if is_explicit(cfg, k)]
@@ -370,6 +371,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
         "mlp_fine": [st.mlp_fine for st in stats],
         "gpu_ms": {k: [round(st.gpu_ms.get(k, 0.0), 4) for st in stats] for k in gpu_names},
     }
+    evals = [a + b for a, b in zip(per_frame["mlp_coarse"], per_frame["mlp_fine"], strict=True)]
     return {
         "adapter": adapter.to_dict(),
         "config": config_dict(cfg),
@@ -404,10 +406,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
         },
         # the work of frame 0 is a full first update whatever the schedule: left out as well
         f"{unit}_shaded_per_frame": percentiles(shaded[1:] or shaded),
-        "mlp_evaluations_per_frame": percentiles(
-            [a + b for a, b in zip(per_frame["mlp_coarse"], per_frame["mlp_fine"], strict=True)][1:]
-            or [per_frame["mlp_coarse"][0] + per_frame["mlp_fine"][0]]
-        ),
+        "mlp_evaluations_per_frame": percentiles(evals[1:] or evals),
         "warnings": list(r.warnings),
         "per_frame": per_frame,
         "out": cfg.out,

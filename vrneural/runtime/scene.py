@@ -246,7 +246,7 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
     objs_raw = data.get("objects", [])
     if not isinstance(objs_raw, list) or not objs_raw:
         raise VrnError(f"{src}: objects must be a non-empty array of tables ([[objects]])")
-    objects = []
+    objects, taken = [], set()  # taken: the object names given so far
     for i, o in enumerate(objs_raw):
         f = _Fields(src, f"objects[{i}]", o)
         f.unknown(
@@ -280,14 +280,17 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
                 f"= {floor} is above texture_res = {tres}: texture_res sets this object's "
                 "size, min_texture_res is a floor under the profile's; keep one",
             )
-        taken = {x.name for x in objects}
         if "name" in o:
             name = f.str("name")
             if name in taken:
                 raise f.err("name", f"= {name!r} is already another object's; names are unique")
         else:  # the mesh's stem, numbered where several objects show one mesh: "sphere 2"
-            stem = Path(mesh).stem
-            name = next(n for k in range(1, len(objs_raw) + 2) if (n := _nth(stem, k)) not in taken)
+            name = stem = Path(mesh).stem
+            k = 1
+            while name in taken:
+                k += 1
+                name = f"{stem} {k}"
+        taken.add(name)
         objects.append(ObjectDesc(name, mesh, model, mat, tres, floor, crease))
     lights = []
     if not isinstance(data.get("lights", []), list):
@@ -323,10 +326,6 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         )
     name = top.str("name", Path(src).stem)
     return Scene(name, objects, lights, profile, ipd, head, base, src)
-
-
-def _nth(stem: str, k: int) -> str:
-    return stem if k == 1 else f"{stem} {k}"
 
 
 def _texture_res(f: _Fields, key: str) -> int | None:

@@ -15,7 +15,6 @@ import numpy as np
 from vrneural.gpu.device import get_device, has_feature
 from vrneural.gpu.pipelines import compute_pipeline
 from vrneural.gpu.readback import read_buffer, read_texture, upload_buffer
-from vrneural.mlp import check_precision
 from vrneural.material import NeuralMaterial
 from vrneural.runtime.codegen import texture_space_wgsl
 from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial, new_radiance_texture
@@ -79,7 +78,6 @@ class TextureSpacePass:
         radiance_format: str = "rgba16float",
         subgroups: bool | None = None,
     ):
-        check_precision(precision)
         self.mat = mat
         self.radiance_format = radiance_format  # rgba32float: no f16 clamp, 2x memory
         self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
