@@ -219,6 +219,12 @@ def test_obj_objects_materials_and_latin1(tmp_path):
     lead = quad.format(x=5, x1=6) + "f 1 2 3\no Zebra\n" + quad.format(x=2, x1=3) + "f 5 6 7\n"
     (tmp_path / "lead.obj").write_text(lead + "o Ant\n" + quad.format(x=8, x1=9) + "f 9 10 11\n")
     first, zebra, ant = load_mesh(tmp_path / "lead.obj")
+    # a UTF-8 byte-order mark before a first v line: that vertex still counts
+    (tmp_path / "bom.obj").write_bytes(
+        b"\xef\xbb\xbf" + (quad.format(x=0, x1=1) + "f 1 2 4\n").encode()
+    )
+    (bom,) = load_mesh(tmp_path / "bom.obj")
+    assert len(bom.faces) == 1 and bom.positions[:, 0].max() == 1.0
     assert (zebra.name, ant.name) == ("lead.obj:Zebra", "lead.obj:Ant")
     assert first.positions[:, 0].min() == 5.0 and ant.positions[:, 0].min() == 8.0
 

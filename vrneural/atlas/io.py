@@ -156,8 +156,8 @@ def _check_obj_indices(p: Path) -> str:
     back from those defined so far); also texture coordinates and normals that are not finite
     numbers (trimesh would drop them all without a word). Returns the file's text (UTF-8, or
     Latin-1 where that fails: every byte sequence is valid Latin-1)."""
-    try:
-        data = p.read_bytes()
+    try:  # without a UTF-8 byte-order mark, which would hide a first v line from the counts
+        data = p.read_bytes().removeprefix(b"\xef\xbb\xbf")
     except OSError as e:
         raise VrnError(f"{p}: cannot read mesh ({e.strerror or e})") from None
     heads = _OBJ_ELEMENT.findall(data)
@@ -178,7 +178,7 @@ def _check_obj_indices(p: Path) -> str:
                 raise VrnError(f"{here}: a face has {len(tok) - 1} corners; at least 3 needed")
             _check_obj_ranges(here, _obj_face_indices(here, tok), total, seen)
     try:
-        return data.decode("utf-8-sig")
+        return data.decode("utf-8")
     except UnicodeDecodeError:
         return data.decode("latin-1")
 
