@@ -9,7 +9,7 @@ import pytest
 
 from vrneural.btf import direction_set, read_btf, write_btf
 from vrneural.cli import main
-from vrneural.distill.data import btf_fingerprint
+from vrneural.btf.identity import btf_fingerprint
 
 
 def _vrn(*args, timeout=300):

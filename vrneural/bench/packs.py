@@ -116,8 +116,8 @@ ROLES = {
     ),
 }
 ARCH_WORDS = {"coarse_fine": "coarse-to-fine", "single": "single-level"}
-#: The BTF fingerprint fields compared (as :func:`vrneural.distill.data.fingerprint_mismatch`,
-#: which imports torch): the header's and a value sample's SHA-256, and the shape
+#: The BTF fingerprint fields compared (:data:`vrneural.btf.identity.FINGERPRINT_KEYS` but the
+#: name, which a renamed copy changes): the header's and a value sample's SHA-256, and the shape
 BTF_KEYS = ("sha256", "values_sha256", "shape")
 
 

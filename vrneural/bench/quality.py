@@ -213,7 +213,7 @@ def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> 
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
     from vrneural.btf.format import read_btf
-    from vrneural.distill.data import btf_fingerprint
+    from vrneural.btf.identity import btf_fingerprint
 
     quiet = dataclasses.replace(cfg, progress=False)
     btfs = {p: root / "btf" / f"{p}.btf" for p in presets}
@@ -248,7 +248,8 @@ def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> 
 def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     """Train and evaluate every method on one preset; returns its records."""
     from vrneural.btf.format import read_btf
-    from vrneural.distill.data import SliceData, btf_fingerprint
+    from vrneural.btf.identity import btf_fingerprint
+    from vrneural.distill.data import SliceData
     from vrneural.distill.distill import model_from_checkpoint, run_distill
     from vrneural.distill.evaluate import mean_l1, predict_slice
     from vrneural.distill.teach import run_teach

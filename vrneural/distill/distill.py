@@ -25,7 +25,8 @@ from vrneural.distill.checkpoint import (
     unfinished_run,
 )
 from vrneural.distill.config import BEFORE_FIELD, DistillConfig
-from vrneural.distill.data import SliceData, btf_fingerprint, check_btf_record
+from vrneural.btf.identity import btf_fingerprint, check_btf_record
+from vrneural.distill.data import SliceData
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
 from vrneural.distill.models import NeuralModel, apply_output, make_spec
 from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs

@@ -148,7 +148,7 @@ def export_checkpoint(
     """Write the ``.vrnm`` of a loaded checkpoint. Returns ``(path, meta)``."""
     from vrneural.btf.format import read_btf
     from vrneural.distill.checkpoint import recorded_btf
-    from vrneural.distill.data import btf_fingerprint, check_btf_record
+    from vrneural.btf.identity import btf_fingerprint, check_btf_record
     from vrneural.formats.atomic import check_not_input, check_output
     from vrneural.formats.vrnm import write_vrnm
 

@@ -1,0 +1,9 @@
+"""Scoring runtime packs against a BTF (`vrneural eval`), with numpy alone.
+
+Dependencies point one way: ``cli`` -> ``scoring`` -> ``material``, ``formats``, ``btf`` and
+``bench.metrics``.
+
+- :mod:`.score`   the pack's slices as the shader computes them, and the metrics
+- :mod:`.run`     which packs and BTF, the checks, the printed table and the written outputs
+- :mod:`.figure`  slices.png: the BTF, each pack and its error at characteristic slices
+"""
