@@ -14,7 +14,7 @@ from vrneural.btf.identity import btf_fingerprint, split_pairs
 from vrneural.errors import VrnError
 from vrneural.formats.vrnm import read_vrnm, write_vrnm
 from vrneural.material import material_forward, random_material
-from vrneural.scoring.run import evaluate
+from vrneural.scoring.run import evaluate, labels, trainer_test
 from vrneural.scoring.score import (
     EvalConfig,
     from_blocks,
@@ -150,11 +150,16 @@ def test_cli_errors(tmp_path):
     expect_one_line_error(["eval", path, "--btf", btf, "--slices", "0"], "--slices", "range")
     expect_one_line_error(["eval", path, "--btf", tmp_path / "no.btf"], "no.btf")
     gone = {"btf": {"path": str(tmp_path / "gone.btf"), "sha256": "x"}}
-    build = {"steps": [{"step": "btf synth", "command": "vrneural btf synth --preset wood -o /x"}]}
+    cmd = "vrneural btf synth --preset wood -o /x --no-progress --force"
+    build = {"steps": [{"step": "btf synth", "command": cmd}]}
     p2, _ = _pack(tmp_path, name="g.vrnm", meta={"provenance": gone, "build": build})
     expect_one_line_error(
-        ["eval", p2], "gone.btf", "does not exist", "--btf", "btf synth --preset wood -o BTF"
-    )
+        ["eval", p2], "gone.btf", "does not exist", "--btf", "btf synth --preset wood -o BTF`"
+    )  # the recipe without --force (a pasted command never overwrites) or --no-progress
+    cfg = tmp_path / "m.vrnm.config.json"
+    cfg.write_text('{"config": "export"}')
+    expect_one_line_error(["eval", cfg, "--btf", btf], "JSON file", "not a runtime pack")
+    expect_one_line_error(["eval", tmp_path, "--btf", btf], "is a directory", "runtime pack")
     other = {"btf": {"path": str(btf), "sha256": "y"}}
     p3, _ = _pack(tmp_path, name="h.vrnm", meta={"provenance": other})
     expect_one_line_error(["eval", p2, p3], "record different BTFs", "--btf")
@@ -178,6 +183,9 @@ def test_trained_pack_scores_as_its_checkpoint(trained, tmp_path):  # noqa: F811
     assert doc["warnings"] == []
     assert s["held_out_slices"] >= 1
     assert s["l1_held_out"] == pytest.approx(mat.meta["metrics"]["test_l1"], rel=0.01)
+    # the trainer's own subset of the held-out slices gives its number (float16 textures are
+    # rounded in training too, so the pack is the trained model)
+    assert s["l1_trainer_test"] == pytest.approx(mat.meta["metrics"]["test_l1"], rel=1e-4)
     assert doc["packs"][0]["method"] == "student"
 
 
@@ -195,3 +203,59 @@ def test_eval_needs_no_torch(tmp_path):
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
+
+
+def test_trainer_subset_is_the_trainers():
+    """The held-out slices the trainer measures (``--max-test-slices``) are picked as
+    :func:`vrneural.distill.evaluate.test_pairs` picks them."""
+    ev = pytest.importorskip("vrneural.distill.evaluate")
+    for n, m in ((160, 64), (1000, 64), (7, 64), (50, 3), (2265, 64)):
+        test = sorted(np.random.default_rng(n).choice(10 * n, n, replace=False).tolist())
+
+        class Mat:
+            meta = {"provenance": {"config": {"max_test_slices": m}}}  # noqa: RUF012
+
+        class Data:
+            pass
+
+        Data.test = test
+        assert trainer_test(Mat, test) == ev.test_pairs(Data, m), (n, m)
+    assert trainer_test(Mat, None) is None
+
+
+def test_labels_tell_packs_apart():
+    assert labels(["a/p.vrnm", "b/p.vrnm", "c/q.vrnm"]) == ["a/p.vrnm", "b/p.vrnm", "q.vrnm"]
+    assert labels(["x/run/s.vrnm", "y/run/s.vrnm"]) == ["x/run/s.vrnm", "y/run/s.vrnm"]
+
+
+def test_another_shape_is_named_in_the_warning(tmp_path):
+    _, mat0 = _pack(tmp_path, name="tmp.vrnm")
+    small = _own_btf(tmp_path / "small.btf", mat0, res=4)
+    fp = btf_fingerprint(read_btf(small))
+    path, _ = _pack(tmp_path, meta={"provenance": {"btf": fp}})
+    big = _own_btf(tmp_path / "big.btf", mat0, res=8)
+    doc = evaluate(EvalConfig(packs=(str(path),), btf=str(big)), progress=False)
+    assert "shape 4x4x4x4, not 4x4x8x8" in doc["warnings"][0]
+
+
+def test_ctrl_c_while_writing_keeps_the_old_output(tmp_path, monkeypatch):
+    """Everything is computed before the old output is replaced: Ctrl-C in the figure (the
+    slow part) leaves the old output whole."""
+    import vrneural.scoring.figure as figure
+
+    path, mat = _pack(tmp_path)
+    btf = _own_btf(tmp_path / "own.btf", mat)
+    out = tmp_path / "res"
+    assert evaluate(EvalConfig(packs=(str(path),), btf=str(btf), out=str(out)), progress=False)
+    before = {f.name: f.read_bytes() for f in out.iterdir()}
+
+    def stop(*_):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(figure, "slices_png", stop)
+    with pytest.raises(KeyboardInterrupt):
+        evaluate(
+            EvalConfig(packs=(str(path),), btf=str(btf), out=str(out), force=True, slices="2"),
+            progress=False,
+        )
+    assert {f.name: f.read_bytes() for f in out.iterdir()} == before

@@ -14,8 +14,8 @@ def register(sub) -> None:
         "the shader computes it (float16 textures; --precision f16 emulates the runtime's "
         "half-precision path): L1 over all slices, the held-out ones and the training ones, "
         "RMSE, PSNR and SSIM of each slice as displayed, the worst slices. Prints a table; "
-        "--out DIR also writes results.json, results.md and slices.png (the BTF, each pack "
-        "and its error at characteristic slices). Needs no torch.",
+        "--out DIR also writes results.json, results.md, slices.png (the BTF, each pack "
+        "and its error at characteristic slices) and config.json. Needs no torch.",
     )
     p.add_argument("packs", nargs="+", metavar="PACK", help="runtime pack (.vrnm)")
     add_config_args(p, EvalConfig, skip=("packs", "out"))
@@ -23,7 +23,8 @@ def register(sub) -> None:
         "-o",
         "--out",
         default="",
-        help="directory for results.json, results.md and slices.png (default: print only)",
+        help="directory for results.json, results.md, slices.png and config.json "
+        "(default: print only)",
     )
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.add_argument(
@@ -36,7 +37,7 @@ def main(args) -> int:
     import json
 
     from vrneural.config import config_from_args
-    from vrneural.scoring.run import evaluate, text_table
+    from vrneural.scoring.run import OUT_FILES, evaluate, text_table
     from vrneural.scoring.score import EvalConfig
 
     cfg = config_from_args(EvalConfig, args, packs=tuple(args.packs))
@@ -46,5 +47,5 @@ def main(args) -> int:
         return 0
     print(text_table(doc))
     if cfg.out:
-        print(f"wrote {cfg.out}/: results.json, results.md, slices.png")
+        print(f"wrote {cfg.out}/: {', '.join(OUT_FILES)}")
     return 0

@@ -197,6 +197,8 @@ def read_container(
     magic = magic.ljust(8, b"\0")
     with open(p, "rb") as f:
         pre = f.read(_PREFIX.size)
+        if pre.lstrip()[:1] in (b"{", b"["):  # the .config.json beside an output, say
+            raise VrnError(f"{p}: is a JSON file (text), not a {what}")
         if len(pre) < _PREFIX.size:
             raise VrnError(f"{p}: truncated ({size} bytes), not a {what}")
         got_magic, version, crc, hlen = _PREFIX.unpack(pre)

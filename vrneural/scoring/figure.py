@@ -6,6 +6,7 @@ compare at a glance (Fig. 8/12 of the paper, from packs rather than checkpoints)
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
@@ -13,16 +14,14 @@ import numpy as np
 from vrneural.scoring.score import display_slice, predict_slice, slice_exposure, texel_blocks
 
 
-def slices_figure(mats: list, names: list[str], btf, out: Path, precision: str) -> Path:
-    """Write the figure to ``out`` (atomically). ``precision``: ``f32``, ``f16`` or ``both``
-    (shown in f32)."""
+def slices_png(mats: list, names: list[str], btf, precision: str) -> bytes:
+    """The figure as PNG bytes. ``precision``: ``f32``, ``f16`` or ``both`` (shown in f32)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from vrneural.btf.sheet import sheet_panels
-    from vrneural.formats.atomic import atomic_path
 
     prec = "f16" if precision == "f16" else "f32"
     L, V, H, W = btf.shape
@@ -59,7 +58,7 @@ def slices_figure(mats: list, names: list[str], btf, out: Path, precision: str) 
         fontsize=9,
     )
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / fig.get_figheight()))  # room for the title
-    with atomic_path(Path(out)) as tmp:
-        fig.savefig(tmp, format="png")
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
     plt.close(fig)
-    return Path(out)
+    return buf.getvalue()

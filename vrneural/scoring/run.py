@@ -10,14 +10,17 @@ from what the pack records (``split_seed``, ``test_fraction``) with the trainer'
 from __future__ import annotations
 
 import sys
+import textwrap
 import time
 from pathlib import Path
+
+import numpy as np
 
 from vrneural.errors import VrnError, count
 from vrneural.scoring.score import EvalConfig, pick_slices, precisions, score
 
 #: the fields of a BTF record compared (not the name, which a renamed copy changes)
-COMPARED = ("sha256", "values_sha256", "shape")
+COMPARED = ("shape", "sha256", "values_sha256")  # the shape first: the plainest to name
 
 
 def load_packs(paths: list[str]) -> list:
@@ -33,9 +36,23 @@ def load_packs(paths: list[str]) -> list:
         if key in seen:
             raise VrnError(f"{p}: named twice (as {seen[key]!r}); name each pack once")
         seen[key] = p
-        if not Path(p).is_file():
-            raise VrnError(f"{p}: no such pack" if not Path(p).exists() else f"{p}: not a file")
-    return [read_vrnm(p) for p in paths]
+        if not Path(p).exists():
+            raise VrnError(f"{p}: no such pack")
+    return [read_vrnm(p) for p in paths]  # a directory or another format: one line each
+
+
+def labels(paths: list[str]) -> list[str]:
+    """Names that tell the packs apart: each path's shortest tail of components that no other
+    pack shares (``student.vrnm``, or ``run1/student.vrnm`` beside ``run2/student.vrnm``)."""
+    parts = [Path(p).resolve().parts for p in paths]
+    out = []
+    for i, pa in enumerate(parts):
+        for k in range(1, len(pa) + 1):
+            tail = pa[-k:]
+            if all(q[-k:] != tail for j, q in enumerate(parts) if j != i):
+                break
+        out.append(str(Path(*tail)))
+    return out
 
 
 def _record(mat) -> dict:
@@ -74,7 +91,7 @@ def _recipe(mat) -> str:
     cmd = next((s.get("command") for s in steps if s.get("step") == "btf synth"), None)
     if not isinstance(cmd, str):
         return ""
-    words = cmd.split()
+    words = [w for w in cmd.split() if w not in ("--force", "--no-progress")]
     if "-o" in words:  # the recorded output path is the missing one: let the user choose
         k = words.index("-o")
         words[k : k + 2] = ["-o", "BTF"]
@@ -89,9 +106,15 @@ def held_out(pack: str, mat, fp: dict, btf, warnings: list[str]) -> list[int] | 
     rec = _record(mat)
     differs = next((k for k in COMPARED if k in rec and rec[k] != fp[k]), None)
     if differs:
+        what = (
+            f"shape {_shape(rec['shape'])}, not {_shape(fp['shape'])} (lights x views x "
+            "height x width)"
+            if differs == "shape"
+            else f"{differs} differs from {btf.path}'s"
+        )
         warnings.append(
-            f"{pack}: was trained on another BTF ({differs} differs from {btf.path}'s): its "
-            "scores are on a BTF it never saw, and it has no held-out split there"
+            f"{pack}: was trained on another BTF ({what}): its scores are on a BTF it never "
+            "saw, and it has no held-out split there"
         )
         return None
     prov = mat.meta.get("provenance") or {}
@@ -102,6 +125,24 @@ def held_out(pack: str, mat, fp: dict, btf, warnings: list[str]) -> list[int] | 
     return split_pairs(L, V, float(frac), seed)[1]
 
 
+def _shape(s) -> str:
+    return "x".join(map(str, s)) if isinstance(s, (list, tuple)) else str(s)
+
+
+def trainer_test(mat, test: list[int] | None) -> list[int] | None:
+    """The held-out pairs the trainer measured its test L1 on (``--max-test-slices``, 64 by
+    default: that many evenly spaced ones), as :func:`vrneural.distill.evaluate.test_pairs`
+    picks them; None without a split."""
+    if test is None:
+        return None
+    cfg = (mat.meta.get("provenance") or {}).get("config") or {}
+    m = cfg.get("max_test_slices")
+    if not isinstance(m, int) or m <= 0 or len(test) <= m:
+        return list(test)
+    idx = np.round(np.linspace(0, len(test) - 1, m)).astype(int)
+    return [test[i] for i in idx]
+
+
 def label(mat, path: str) -> dict:
     """What the table says of a pack: name, method, MACs per texel, bytes."""
     method = mat.meta.get("method") or "?"
@@ -110,7 +151,6 @@ def label(mat, path: str) -> dict:
         method = "student w/o distillation"
     return {
         "pack": str(path),
-        "name": Path(path).name,
         "method": method,
         "arch": mat.arch,
         "macs_per_texel": float(mat.macs_per_texel),
@@ -140,15 +180,17 @@ def evaluate(cfg: EvalConfig, progress: bool = True) -> dict:
     for w in warnings:
         print(f"warning: {w}", file=sys.stderr)
     precs = precisions(cfg.precision)
-    res = score(mats, btf, pairs, precs, tests, progress)
+    subs = [trainer_test(m, t) for m, t in zip(mats, tests, strict=True)]
+    res = score(mats, btf, pairs, precs, tests, progress, subs)
+    names = labels(list(cfg.packs))
     doc = {
         "command": "eval",
         "btf": {"path": str(btf.path), "shape": [L, V, H, W], "name": fp["name"]},
         "slices": res["slices"],
         "precisions": precs,
         "packs": [
-            {**label(m, p), "scores": s}
-            for p, m, s in zip(cfg.packs, mats, res["scores"], strict=True)
+            {**label(m, p), "name": n, "scores": s}
+            for p, n, m, s in zip(cfg.packs, names, mats, res["scores"], strict=True)
         ],
         "warnings": warnings,
     }
@@ -158,24 +200,59 @@ def evaluate(cfg: EvalConfig, progress: bool = True) -> dict:
     return doc
 
 
-def write_outputs(cfg: EvalConfig, out: Path, doc: dict, mats: list, btf) -> None:
-    from vrneural.config import write_config
-    from vrneural.formats.atomic import atomic_path, make_output_dir, seal_output_dir, write_json
-    from vrneural.scoring.figure import slices_figure
+#: what ``--out`` holds (besides the output marker)
+OUT_FILES = ("results.json", "results.md", "slices.png", "config.json")
 
-    make_output_dir(out, "eval")
-    files = [out / "results.json", out / "results.md", out / "slices.png"]
-    doc["files"] = [str(f) for f in files]
-    write_json(files[0], doc)
-    with atomic_path(files[1]) as tmp:
-        tmp.write_text(markdown(doc) + "\n")
-    slices_figure(mats, [Path(p).name for p in cfg.packs], btf, files[2], cfg.precision)
-    write_config(out, cfg)
-    seal_output_dir(out, "eval")
+
+def write_outputs(cfg: EvalConfig, out: Path, doc: dict, mats: list, btf) -> None:
+    """Write :data:`OUT_FILES`. Everything is computed first (the figure too); then the old
+    output is replaced and the files written with Ctrl-C held off, so an interrupted eval
+    leaves the old output or the whole new one, never a mix."""
+    from vrneural.config import config_dict
+    from vrneural.formats.atomic import atomic_path, make_output_dir, seal_output_dir, write_json
+    from vrneural.interrupt import Stop
+    from vrneural.scoring.figure import slices_png
+
+    png = slices_png(mats, [p["name"] for p in doc["packs"]], btf, cfg.precision)
+    doc["files"] = [str(out / f) for f in OUT_FILES]
+    md = markdown(doc) + "\n"
+    config = {**config_dict(cfg), "btf_scored": doc["btf"]["path"]}
+    with Stop() as stop:
+        make_output_dir(out, "eval")
+        write_json(out / "results.json", doc)
+        for name, data in (("results.md", md.encode()), ("slices.png", png)):
+            with atomic_path(out / name) as tmp:
+                tmp.write_bytes(data)
+        write_json(out / "config.json", config)
+        seal_output_dir(out, "eval")
+    if stop.flag:  # Ctrl-C came while writing: all was written, then stop as asked
+        raise KeyboardInterrupt
 
 
 def _f(v, fmt: str) -> str:
     return "-" if v is None else format(v, fmt)
+
+
+def _held_out_note(doc: dict) -> str:
+    """``", 160 held out"``: how many scored slices the held-out L1 rests on."""
+    counts = {s["held_out_slices"] for p in doc["packs"] for s in p["scores"]}
+    counts.discard(None)
+    if not counts:
+        return ", no held-out split known"
+    if len(counts) == 1:
+        return f", {counts.pop()} of them held out in training"
+    return ", held-out counts differ by pack (results.json: held_out_slices)"
+
+
+#: the table's legend (printed under it and in results.md)
+LEGEND = (
+    "L1, RMSE: linear BTF units, over texels and RGB; held-out / train: the slices the pack's "
+    "training held out / trained on. rel. L1: L1 / the mean of the BTF slices scored. PSNR, "
+    "SSIM: each slice displayed at its own exposure (its 99th percentile at 1, then "
+    "x / (1 + x) and sRGB), averaged over slices. bytes: the pack's weights + textures (its "
+    "file also holds meta). f16 rows: the runtime's half-precision path emulated, and its L1 "
+    "change against f32."
+)
 
 
 def table_rows(doc: dict) -> list[list[str]]:
@@ -197,11 +274,11 @@ def table_rows(doc: dict) -> list[list[str]]:
                     prec,
                     f"{p['macs_per_texel']:g}",
                     str(p["weight_bytes"] + p["texture_bytes"]),
-                    _f(s["l1"], ".4g"),
-                    _f(s["l1_held_out"], ".4g"),
-                    _f(s["l1_train"], ".4g"),
+                    _f(s["l1"], ".6f"),
+                    _f(s["l1_held_out"], ".6f"),
+                    _f(s["l1_train"], ".6f"),
                     _f(s["l1_relative"], ".1%"),
-                    _f(s["rmse"], ".4g"),
+                    _f(s["rmse"], ".6f"),
                     _f(s["psnr_db"], ".2f"),
                     _f(s["ssim"], ".4f"),
                 ]
@@ -219,7 +296,7 @@ def headline(doc: dict) -> str:
     )
     return (
         f"{count(len(doc['packs']), 'pack')} on {b['path']} ({L} lights x {V} views x "
-        f"{H}x{W} texels), {which}"
+        f"{H}x{W} texels), {which}{_held_out_note(doc)}"
     )
 
 
@@ -234,6 +311,13 @@ def text_table(doc: dict) -> str:
         worst = "; ".join(f"l{w['light']} v{w['view']} {w['angles']} {w['l1']:.4g}"
                           for w in s["worst"][:3])  # fmt: skip
         lines.append(f"worst slices of {p['name']} ({s['precision']}, L1): {worst}")
+        sub = s.get("l1_trainer_test")
+        if sub is not None and sub != s["l1_held_out"]:
+            lines.append(
+                f"  the test L1 distill/export printed for {p['name']} is over at most 64 "
+                f"held-out slices (--max-test-slices); on those: {sub:.6f}"
+            )
+    lines += textwrap.wrap(LEGEND, 100)
     return "\n".join(lines)
 
 
@@ -243,14 +327,21 @@ def markdown(doc: dict) -> str:
     md += ["| " + " | ".join(r) + " |" for r in rows[:1]]
     md += ["|" + "---|" * len(rows[0])]
     md += ["| " + " | ".join(r) + " |" for r in rows[1:]]
+    md += ["", LEGEND, ""]
+    trainer = [
+        f"{p['name']} {p['scores'][0]['l1_trainer_test']:.6f}"
+        for p in doc["packs"]
+        if p["scores"][0].get("l1_trainer_test") is not None
+        and p["scores"][0]["l1_trainer_test"] != p["scores"][0]["l1_held_out"]
+    ]
+    if trainer:  # why the held-out L1 differs from the test L1 that distill/export printed
+        md += [
+            "The test L1 that `distill` and `export` print is measured on at most "
+            "--max-test-slices (64) evenly spaced held-out slices, not all of them; on those "
+            f"slices ({doc['precisions'][0]}): {', '.join(trainer)}.",
+            "",
+        ]
     md += [
-        "",
-        "L1, RMSE: linear BTF units, over texels and RGB (held-out / train: the split the pack "
-        "records). rel. L1: L1 / the BTF's mean. PSNR, SSIM: each slice displayed at its own "
-        "exposure (its 99th percentile at 1, then x / (1 + x) and sRGB), averaged over slices. "
-        "bytes: weights + textures of the pack. f16 rows: the runtime's half-precision path "
-        "emulated, and its L1 change against f32.",
-        "",
         "## Worst slices (L1)",
         "",
     ]

@@ -57,7 +57,7 @@ class EvalConfig:
     precision: str = opt(
         "f32", "arithmetic of the runtime emulated: f32, f16 or both", choices=PRECISION_CHOICES
     )
-    out: str = opt("", "directory for results.json, results.md and slices.png (default: none)")
+    out: str = opt("", "directory for results.json, results.md, slices.png, config.json")
     force: bool = opt(False, "overwrite an existing --out")
 
 
@@ -152,10 +152,13 @@ def score(
     precs: list[str],
     tests: list[list[int] | None] | None = None,
     progress: bool = False,
+    trainer_tests: list[list[int] | None] | None = None,
 ) -> dict:
     """Score ``mats`` on the ``pairs`` of ``btf``. ``tests``: per pack, the held-out pair
-    indices of its training (None: no split known). Returns ``{"slices": {...}, "scores":
-    [[{...} per precision] per pack]}`` (see the module docstring for the metrics)."""
+    indices of its training (None: no split known); ``trainer_tests``: per pack, the subset
+    of them its trainer's test L1 was measured on (``l1_trainer_test``). Returns
+    ``{"slices": {...}, "scores": [[{...} per precision] per pack]}`` (see the module
+    docstring for the metrics)."""
     from tqdm import tqdm
 
     from vrneural.bench.metrics import psnr, ssim
@@ -195,7 +198,10 @@ def score(
     scores = []
     for m in range(len(mats)):
         test = (tests or [None] * len(mats))[m]
+        sub = (trainer_tests or [None] * len(mats))[m]
         held = [pos[p] for p in (test or []) if p in pos]
+        # the trainer's subset counts only when all of it was scored (else it is another mean)
+        sub_idx = [pos[p] for p in sub] if sub and all(p in pos for p in sub) else []
         trained = sorted(set(range(len(pairs))) - set(held)) if test is not None else []
         rows = []
         for k, prec in enumerate(precs):
@@ -209,6 +215,7 @@ def score(
                     "l1": l1,
                     "l1_held_out": _l1(a, held, per_slice),
                     "l1_train": _l1(a, trained, per_slice),
+                    "l1_trainer_test": _l1(a, sub_idx, per_slice),
                     "l1_relative": l1 / mean_gt if mean_gt > 0 else None,
                     "rmse": math.sqrt(sum(a.sq_sum) / (len(pairs) * per_slice)),
                     "psnr_db": float(np.mean(a.psnr)),
