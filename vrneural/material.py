@@ -140,7 +140,12 @@ def material_forward(
     wi = np.asarray(wi, np.float32)
     wo = np.asarray(wo, np.float32)
     uv = np.asarray(uv, np.float32)
-    n = wi.shape[0] if wi.ndim else 0
+    if wi.ndim != 2:
+        raise VrnError(
+            f"material_forward: wi has shape {list(wi.shape)}, expected [N, 3] (one direction "
+            "per 2x2 block; a single one as wi[None])"
+        )
+    n = wi.shape[0]
     for name, a, want in (("wi", wi, (n, 3)), ("wo", wo, (n, 3)), ("uv", uv, (n, 4, 2))):
         if a.shape != want:
             shape = "[N, 4, 2] (4 texels of a 2x2 block)" if name == "uv" else "[N, 3]"

@@ -4,6 +4,7 @@ resolution against a device profile, the scene and the adapter."""
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 from vrneural.config import opt
@@ -49,9 +50,12 @@ class RunConfig:
     force: bool = opt(False, "overwrite an existing output directory")
 
 
-def parse_res(s: str, field: str = "--eye-res") -> tuple[int, int]:
+def parse_res(s, field: str = "--eye-res") -> tuple[int, int]:
+    """``"2064x2208"`` (or, from Python, ``(2064, 2208)``) -> ``(width, height)``, checked."""
+    if isinstance(s, (tuple, list)) and len(s) == 2:
+        s = f"{s[0]}x{s[1]}"
     try:
-        w, h = (int(v) for v in s.lower().split("x"))
+        w, h = (int(v) for v in str(s).lower().split("x"))
     except ValueError:
         raise VrnError(f"{field} = {s!r} must be WIDTHxHEIGHT, e.g. 2064x2208") from None
     if not (16 <= w <= 16384 and 16 <= h <= 16384):
@@ -76,7 +80,26 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     """Profile < scene < CLI (``--texture-res`` also beats objects' ``texture_res``);
     validates ranges against the adapter (``AdapterSummary``)."""
     from vrneural.runtime.codegen import resolve_precision
+    from vrneural.runtime.scene import Scene
 
+    if not isinstance(cfg, RunConfig):
+        raise VrnError(f"resolve: cfg is a {type(cfg).__name__}, expected a RunConfig")
+    if not isinstance(scene, Scene):
+        raise VrnError(
+            f"resolve: scene is a {type(scene).__name__}, expected a Scene (load_scene(path) "
+            "or builtin_scene())"
+        )
+    if not hasattr(adapter, "limits"):
+        raise VrnError("resolve: adapter must be adapter_summary() (vrneural.gpu.device)")
+    for name, allowed in (("mode", MODES), ("schedule", SCHEDULES)):
+        if getattr(cfg, name) not in allowed:
+            raise VrnError(
+                f"--{name} = {getattr(cfg, name)!r} is not allowed; choose {', '.join(allowed)}"
+            )
+    for name in ("frames", "eyes"):
+        v = getattr(cfg, name)
+        if not isinstance(v, numbers.Integral) or isinstance(v, bool):
+            raise VrnError(f"--{name} = {v!r} must be a whole number")
     prof = get_profile(cfg.profile or scene.profile or "quest3")  # the scene's is checked
     if cfg.eyes not in (1, 2):
         raise VrnError(f"--eyes = {cfg.eyes} is not allowed; choose 1 or 2")

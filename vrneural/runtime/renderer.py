@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, count
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
@@ -52,16 +52,20 @@ class Settings:
 
 @dataclass
 class FrameStats:
-    frame: int
-    wall_ms: float
+    """What one :meth:`Renderer.frame` did. Frame 0 includes shader compilation: leave it out
+    of timings."""
+
+    frame: int  #: the frame index
+    wall_ms: float  #: host wall time of the frame, GPU wait included
+    #: GPU ms per pass name (texture, forward; screen in the screen modes), both eyes summed
     gpu_ms: dict
-    updated_objects: int
-    culled_objects: int
-    blocks_shaded: int
-    blocks_backfacing: int
-    mlp_coarse: int
-    mlp_fine: int
-    pixels_shaded: int = 0
+    updated_objects: int  #: neural objects whose radiance textures were updated (texture mode)
+    culled_objects: int  #: neural objects outside every eye's view, not updated
+    blocks_shaded: int  #: 2x2 texel blocks shaded (texture mode)
+    blocks_backfacing: int  #: blocks skipped as facing away from the eye (texture mode)
+    mlp_coarse: int  #: coarse-network evaluations (per block; per pixel in screen modes)
+    mlp_fine: int  #: fine-network evaluations (per texel; per pixel in screen modes)
+    pixels_shaded: int = 0  #: pixels shaded per pixel (screen and reference modes)
 
 
 @dataclass
@@ -86,6 +90,11 @@ class Renderer:
     """Everything on the device for one scene and settings; :meth:`frame` renders one frame."""
 
     def __init__(self, scene, s: Settings, progress=None):
+        if not isinstance(s, Settings):
+            raise VrnError(
+                f"Renderer: settings are a {type(s).__name__}, expected Settings: pass "
+                "resolve(run_config, scene, adapter_summary())"
+            )
         self.scene, self.s = scene, s
         self.dev = get_device()
         w, h = s.eye_res
@@ -196,7 +205,9 @@ class Renderer:
             return TextureSpacePass(mat, s.precision, len(self.lights))
         if s.mode == "screen":
             return ScreenSpacePass(mat, s.precision, len(self.lights))
-        return ScreenSpacePass(mat, "f32", len(self.lights), weights=reference_weights(mat))
+        if s.mode == "reference":
+            return ScreenSpacePass(mat, "f32", len(self.lights), weights=reference_weights(mat))
+        raise VrnError(f"mode = {s.mode!r} is not allowed; choose texture, screen or reference")
 
     def _make_target(self, p, n: _Neural, eye: int):
         if self.s.mode == "texture":
@@ -313,5 +324,20 @@ class Renderer:
         return [read_texture(et.colour).astype(np.float32) for et in self.eye_t]
 
     def radiance(self, obj: int = 0, eye: int = 0) -> np.ndarray:
-        """Radiance texture ``[R, R, 4]`` of neural object ``obj`` for ``eye`` (texture mode)."""
+        """Radiance texture ``[R, R, 4]`` float32 of neural object ``obj`` (counting neural
+        objects only, in scene order) for ``eye``; texture mode only. RGB is linear radiance
+        where the last update shaded a front-facing block, alpha 0 outside the atlas charts."""
+        if self.s.mode != "texture":
+            raise VrnError(
+                f"radiance: there are radiance textures only in mode 'texture' (this renderer "
+                f"is in mode {self.s.mode!r})"
+            )
+        n = len(self.neural)
+        if not (isinstance(obj, int) and 0 <= obj < n):
+            raise VrnError(
+                f"radiance: obj = {obj!r} is out of range; the scene has "
+                f"{count(n, 'neural object')} (0..{n - 1}; plain objects are not counted)"
+            )
+        if not (isinstance(eye, int) and 0 <= eye < self.s.eyes):
+            raise VrnError(f"radiance: eye = {eye!r} is out of range; eyes 0..{self.s.eyes - 1}")
         return read_texture(self.neural[obj].targets[eye].texture).astype(np.float32)

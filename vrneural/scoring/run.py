@@ -17,7 +17,13 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.errors import VrnError, count
-from vrneural.scoring.score import EvalConfig, pick_slices, precisions, score
+from vrneural.scoring.score import (
+    PRECISION_CHOICES,
+    EvalConfig,
+    pick_slices,
+    precisions,
+    score,
+)
 
 #: the fields of a BTF record compared (not the name, which a renamed copy changes)
 COMPARED = ("shape", "sha256", "values_sha256")  # the shape first: the plainest to name
@@ -165,8 +171,17 @@ def evaluate(cfg: EvalConfig, progress: bool = True) -> dict:
     from vrneural.btf.identity import btf_fingerprint
     from vrneural.formats.atomic import check_output_dir
 
+    import dataclasses
+    import os
+
     t0 = time.perf_counter()
-    mats = load_packs(cfg.packs)
+    if isinstance(cfg.packs, (str, os.PathLike)):  # one pack given bare, from Python
+        cfg = dataclasses.replace(cfg, packs=(str(cfg.packs),))
+    if cfg.precision not in PRECISION_CHOICES:
+        raise VrnError(
+            f"--precision = {cfg.precision!r} is not allowed; choose {', '.join(PRECISION_CHOICES)}"
+        )
+    mats = load_packs([str(p) for p in cfg.packs])
     path = btf_path(cfg, mats)
     btf = read_btf(path)
     L, V, H, W = btf.shape

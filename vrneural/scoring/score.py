@@ -68,7 +68,7 @@ def precisions(choice: str) -> list[str]:
 def pick_slices(spec: str, n_pairs: int, texels_per_slice: int) -> list[int]:
     """The pair indices ``l * V + v`` scored: ``'all'``, ``'auto'`` or a count N (N distinct
     pairs drawn at random with the fixed :data:`SAMPLE_SEED`, so reruns score the same ones)."""
-    s = spec.strip().lower()
+    s = str(spec).strip().lower()
     if s == "all":
         return list(range(n_pairs))
     if s == "auto":
@@ -91,6 +91,8 @@ def pick_slices(spec: str, n_pairs: int, texels_per_slice: int) -> list[int]:
 def texel_blocks(H: int, W: int) -> np.ndarray:
     """Texel-centre UVs of an ``H x W`` slice in 2x2 blocks, ``[H W / 4, 4, 2]``, in the order
     of :func:`vrneural.distill.data.to_blocks` (row-major blocks, texels row-major inside)."""
+    if H % 2 or W % 2 or H < 2 or W < 2:
+        raise VrnError(f"texel_blocks: {H}x{W} texels; both sides must be even (2x2 blocks)")
     ys, xs = np.meshgrid(np.arange(H), np.arange(W), indexing="ij")
     uv = np.stack([(xs + 0.5) / W, (ys + 0.5) / H], -1).astype(np.float32)  # [H, W, 2]
     return to_blocks(uv)
@@ -114,6 +116,12 @@ def predict_slice(
     """The pack's slice ``[H, W, 3]`` float32 (linear) at one light ``wi`` and view ``wo``
     (unit ``[3]`` vectors, the BTF's local frame); ``uv`` from :func:`texel_blocks`."""
     n = uv.shape[0]
+    for name, d in (("wi", wi), ("wo", wo)):
+        if np.shape(d) != (3,):
+            raise VrnError(
+                f"predict_slice: {name} has shape {list(np.shape(d))}, expected [3] (one "
+                "direction for the whole slice)"
+            )
     d_i = np.broadcast_to(np.asarray(wi, np.float32), (n, 3))
     d_o = np.broadcast_to(np.asarray(wo, np.float32), (n, 3))
     return from_blocks(material_forward(mat, d_i, d_o, uv, prec), H, W)
