@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from distill_helpers import expect_one_line_error, run_cli
@@ -49,6 +50,20 @@ def test_bench_quality_smoke(tmp_path, capsys):
     assert doc["versions"]["torch"] and doc["config"]["res"] == 8
     md = (out / "results.md").read_text()
     assert "| leather |" in md and "1.5x below Lafortune" in md
+    # PSNR / SSIM as `vrneural eval` defines them: the same numbers from the exported pack
+    for k, m in methods.items():
+        if k != "lafortune":
+            assert 0 < m["ssim"] <= 1 and np.isfinite(m["psnr_db"]), k
+    assert "PSNR and SSIM of the BTF slices" in md
+    from vrneural.scoring.run import evaluate
+    from vrneural.scoring.score import EvalConfig
+
+    pack = out / "leather" / "student.vrnm"
+    ev = evaluate(EvalConfig(packs=(str(pack),), btf=str(out / "btf" / "leather.btf")), False)
+    row = ev["packs"][0]["scores"][0]
+    assert row["psnr_db"] == pytest.approx(methods["student"]["psnr_db"], abs=1e-3)
+    assert row["ssim"] == pytest.approx(methods["student"]["ssim"], abs=1e-4)
+    assert row["l1"] == pytest.approx(methods["student"]["whole_l1"], rel=1e-4)
     for png in ("curves.png", "slices.png"):
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     code, err = run_cli(*args)  # results exist: refuse without --force

@@ -276,16 +276,26 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     out: dict = {"btf": tck["btf"], "synth_seconds": synth_s, "methods": {}, "slices": {}}
     gt = [data.target(p, shard=False) for p in slices]
     out["slices"]["ground truth"] = [_img(g, data.res) for g in gt]
+    from vrneural.scoring.score import score
+
     for name, cks in records.items():
         models = [model_from_checkpoint(ck) for ck in cks]
         mat = models[0].to_material()
         whole = [mean_l1(m, data, every) for m in models]
         test = [mean_l1(m, data, data.test) for m in models]
+        # PSNR and SSIM of every slice as displayed (`vrneural eval`'s definitions), per seed
+        shown = score([m.to_material() for m in models], btf, every, ["f32"])["scores"]
+        psnr = [s[0]["psnr_db"] for s in shown]
+        ssim = [s[0]["ssim"] for s in shown]
         out["methods"][name] = {
             "whole_l1": statistics.fmean(whole),
             "test_l1": statistics.fmean(test),
             "whole_l1_seeds": whole,
             "test_l1_seeds": test,
+            "psnr_db": statistics.fmean(psnr),
+            "ssim": statistics.fmean(ssim),
+            "psnr_db_seeds": psnr,
+            "ssim_seeds": ssim,
             "seeds": [int(ck["config"]["seed"]) for ck in cks],
             "train_seconds": statistics.fmean(ck["train_seconds"] for ck in cks),
             "epoch_seconds_median": statistics.median(

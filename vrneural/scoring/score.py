@@ -33,8 +33,8 @@ from vrneural.config import opt
 from vrneural.errors import VrnError
 from vrneural.material import NeuralMaterial, material_forward
 
-#: ``--slices auto`` scores every slice up to this many texels in all, else evenly spread
-#: slices adding up to about as many (a few minutes on two CPU cores for an 8-wide student)
+#: ``--slices auto`` scores every slice up to this many texels in all, else slices drawn at
+#: random adding up to about as many (a few minutes on two CPU cores for an 8-wide student)
 AUTO_TEXELS = 64 * 1024 * 1024
 #: seed of the slices drawn when not all are scored
 SAMPLE_SEED = 0
