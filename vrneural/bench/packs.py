@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from vrneural.btf.identity import fingerprint_mismatch
 from vrneural.errors import VrnError
 
 RUNS = {
@@ -121,7 +122,9 @@ ARCH_WORDS = {"coarse_fine": "coarse-to-fine", "single": "single-level"}
 BTF_KEYS = ("sha256", "values_sha256", "shape")
 
 
-def _distilled(mat) -> bool | None:
+def distilled(mat) -> bool | None:
+    """Whether a pack's network was distilled (its recorded config; True for an older record
+    without the field), None for a teacher."""
     cfg = (mat.meta.get("provenance") or {}).get("config") or {}
     return cfg.get("distill", True) if mat.meta.get("method") != "teacher" else None
 
@@ -133,9 +136,9 @@ def describe_pack(mat) -> str:
     what = f"{width} wide"
     if mat.output == "log1p":
         what += ", log1p output"
-    distilled = _distilled(mat) if method else None
-    if distilled is not None:
-        what += ", distilled" if distilled else ", not distilled"
+    was = distilled(mat) if method else None
+    if was is not None:
+        what += ", distilled" if was else ", not distilled"
     if not method:
         return f"a {ARCH_WORDS[mat.arch]} pack ({what}) that records no training method"
     if method == "teacher":
@@ -154,7 +157,7 @@ def check_packs(mats: dict, paths: dict[str, Path]) -> None:
         if k not in ROLES:
             continue
         role, need, want = ROLES[k]
-        have = dict(method=mat.meta.get("method"), arch=mat.arch, distill=_distilled(mat))
+        have = dict(method=mat.meta.get("method"), arch=mat.arch, distill=distilled(mat))
         if any(have[f] != v for f, v in want.items()):
             raise VrnError(
                 f"{paths[k]}: is {describe_pack(mat)}, but {role} ({k}.vrnm) must be {need}"
@@ -171,12 +174,12 @@ def check_packs(mats: dict, paths: dict[str, Path]) -> None:
             continue
         prov = mat.meta.get("provenance") or {}
         btf = prov.get("btf") or {}
-        for f in BTF_KEYS:
-            if f in btf and f in tbtf and btf[f] != tbtf[f]:
-                raise VrnError(
-                    f"{paths[k]}: was trained on another BTF ({_btf(btf, f)}) than the "
-                    f"reference {tp} ({_btf(tbtf, f)}); {same}"
-                )
+        f = fingerprint_mismatch(btf, tbtf, BTF_KEYS)
+        if f:
+            raise VrnError(
+                f"{paths[k]}: was trained on another BTF ({_btf(btf, f)}) than the "
+                f"reference {tp} ({_btf(tbtf, f)}); {same}"
+            )
         sha = prov.get("teacher")
         if isinstance(sha, str) and isinstance(tsha, str) and sha != tsha:
             raise VrnError(

@@ -280,11 +280,12 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
 
     for name, cks in records.items():
         models = [model_from_checkpoint(ck) for ck in cks]
-        mat = models[0].to_material()
+        mats = [m.to_material() for m in models]  # the packs' materials, one per seed
+        mat = mats[0]
         whole = [mean_l1(m, data, every) for m in models]
         test = [mean_l1(m, data, data.test) for m in models]
         # PSNR and SSIM of every slice as displayed (`vrneural eval`'s definitions), per seed
-        shown = score([m.to_material() for m in models], btf, every, ["f32"])["scores"]
+        shown = score(mats, btf, every, ["f32"])["scores"]
         psnr = [s[0]["psnr_db"] for s in shown]
         ssim = [s[0]["ssim"] for s in shown]
         out["methods"][name] = {

@@ -63,10 +63,11 @@ def _values_sha256(values: np.ndarray) -> str:
 FINGERPRINT_KEYS = ("name", "shape", "sha256", "values_sha256")
 
 
-def fingerprint_mismatch(have: dict, want: dict) -> str | None:
-    """The first of :data:`FINGERPRINT_KEYS` on which two fingerprints differ (keys one of
-    them lacks, from an older release, are skipped), or None when they match."""
-    for k in FINGERPRINT_KEYS:
+def fingerprint_mismatch(have: dict, want: dict, keys=FINGERPRINT_KEYS) -> str | None:
+    """The first of ``keys`` (default :data:`FINGERPRINT_KEYS`) on which two fingerprints
+    differ (keys one of them lacks, from an older release, are skipped), or None when they
+    match."""
+    for k in keys:
         if k in have and k in want and have[k] != want[k]:
             return k
     return None

@@ -9,6 +9,8 @@ from what the pack records (``split_seed``, ``test_fraction``) with the trainer'
 
 from __future__ import annotations
 
+import dataclasses
+import os
 import sys
 import textwrap
 import time
@@ -107,10 +109,10 @@ def _recipe(mat) -> str:
 def held_out(pack: str, mat, fp: dict, btf, warnings: list[str]) -> list[int] | None:
     """The pack's held-out pair indices on ``btf`` (fingerprint ``fp``), None when the pack
     was trained on another BTF (a warning says so) or records no split."""
-    from vrneural.btf.identity import split_pairs
+    from vrneural.btf.identity import fingerprint_mismatch, split_pairs
 
     rec = _record(mat)
-    differs = next((k for k in COMPARED if k in rec and rec[k] != fp[k]), None)
+    differs = fingerprint_mismatch(fp, rec, COMPARED)
     if differs:
         what = (
             f"shape {_shape(rec['shape'])}, not {_shape(fp['shape'])} (lights x views x "
@@ -151,9 +153,10 @@ def trainer_test(mat, test: list[int] | None) -> list[int] | None:
 
 def label(mat, path: str) -> dict:
     """What the table says of a pack: name, method, MACs per texel, bytes."""
+    from vrneural.bench.packs import distilled
+
     method = mat.meta.get("method") or "?"
-    cfg = (mat.meta.get("provenance") or {}).get("config") or {}
-    if method == "student" and cfg.get("distill") is False:
+    if method == "student" and distilled(mat) is False:
         method = "student w/o distillation"
     return {
         "pack": str(path),
@@ -170,9 +173,6 @@ def evaluate(cfg: EvalConfig, progress: bool = True) -> dict:
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
     from vrneural.formats.atomic import check_output_dir
-
-    import dataclasses
-    import os
 
     t0 = time.perf_counter()
     if isinstance(cfg.packs, (str, os.PathLike)):  # one pack given bare, from Python
@@ -246,6 +246,14 @@ def write_outputs(cfg: EvalConfig, out: Path, doc: dict, mats: list, btf) -> Non
 
 def _f(v, fmt: str) -> str:
     return "-" if v is None else format(v, fmt)
+
+
+def _trainer_l1(pack: dict) -> float | None:
+    """The first precision's L1 on the trainer's ``--max-test-slices`` subset, where it
+    differs from the L1 on all held-out slices (else None: nothing to explain)."""
+    s = pack["scores"][0]
+    sub = s.get("l1_trainer_test")
+    return sub if sub is not None and sub != s["l1_held_out"] else None
 
 
 def _held_out_note(doc: dict) -> str:
@@ -326,11 +334,11 @@ def text_table(doc: dict) -> str:
         worst = "; ".join(f"l{w['light']} v{w['view']} {w['angles']} {w['l1']:.4g}"
                           for w in s["worst"][:3])  # fmt: skip
         lines.append(f"worst slices of {p['name']} ({s['precision']}, L1): {worst}")
-        sub = s.get("l1_trainer_test")
-        if sub is not None and sub != s["l1_held_out"]:
+        sub = _trainer_l1(p)
+        if sub is not None:
             lines.append(
-                f"  the test L1 distill/export printed for {p['name']} is over at most 64 "
-                f"held-out slices (--max-test-slices); on those: {sub:.6f}"
+                f"  the test L1 distill/export printed for {p['name']} is over the held-out "
+                f"slices of --max-test-slices (64 by default); on those: {sub:.6f}"
             )
     lines += textwrap.wrap(LEGEND, 100)
     return "\n".join(lines)
@@ -344,10 +352,7 @@ def markdown(doc: dict) -> str:
     md += ["| " + " | ".join(r) + " |" for r in rows[1:]]
     md += ["", LEGEND, ""]
     trainer = [
-        f"{p['name']} {p['scores'][0]['l1_trainer_test']:.6f}"
-        for p in doc["packs"]
-        if p["scores"][0].get("l1_trainer_test") is not None
-        and p["scores"][0]["l1_trainer_test"] != p["scores"][0]["l1_held_out"]
+        f"{p['name']} {_trainer_l1(p):.6f}" for p in doc["packs"] if _trainer_l1(p) is not None
     ]
     if trainer:  # why the held-out L1 differs from the test L1 that distill/export printed
         md += [

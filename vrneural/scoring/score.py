@@ -9,7 +9,8 @@ what the runtime's half-precision path costs. Per pack and precision:
 
 - **L1**: mean ``|pack - BTF|`` over texels and RGB, linear BTF units (the whole-BTF L1 that
   ``bench quality`` reports for checkpoints), over the slices scored, over the held-out ones
-  and over the training ones (the split the pack records), and relative to the BTF's mean;
+  and over the training ones (the split the pack records), and relative to the mean value
+  of the BTF slices scored;
 - **RMSE**, linear;
 - **PSNR** (dB) and **SSIM** of each slice *as displayed*, averaged over slices: each slice at
   its own exposure (the BTF slice's 99th percentile of the max channel maps to 1), then the
