@@ -700,3 +700,17 @@ def test_a_write_error_mid_run_leaves_no_partial_video(capsys, tmp_path, monkeyp
     assert not list(out.glob(".*.tmp.mp4"))
     monkeypatch.setattr(run_mod, "write_png", real)
     assert main([*argv, "--out", str(out), "--force"]) == 0
+
+
+def test_run_line_names_the_objects_texture_sides():
+    """The summary's run line gives the textures the objects used, not only the profile's."""
+    from vrneural.runtime.run import _texture_text
+
+    def sm(*sides):
+        objs = [{"name": f"o{i}", "texture_res": t} for i, t in enumerate(sides)]
+        return {"scene": {"objects": [*objs, {"name": "floor"}]}}
+
+    assert _texture_text(128, sm(128, 128)) == "128^2"
+    assert _texture_text(128, sm()) == "128^2"
+    assert _texture_text(128, sm(1024)) == "1024^2 (per object; profile 128^2)"
+    assert _texture_text(128, sm(256, 128, 1024)) == "128^2-1024^2 (per object; profile 128^2)"

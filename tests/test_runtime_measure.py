@@ -28,6 +28,7 @@ def test_measure_quick_writes_every_target(tmp_path, capsys):
     d = json.loads(one.read_text())
     assert d["mlp_only"]["blocks"] == 4096 and d["quick"] and "adapter" in d and "seconds" in d
     assert set(d) & {"texture_vs_screen", "schedules"} == set()
+    assert main([str(one), "--only", "mlp_only", "--quick", "--force"]) == 0  # replaced
     doc = json.loads(out.read_text())
     for key in ("texture_vs_screen", "constants_vs_buffer", "vs_torch"):
         r = doc[key]
@@ -51,3 +52,29 @@ def test_measure_quick_writes_every_target(tmp_path, capsys):
         > 3 * sch["staggered"]["mlp_evals_per_frame"]["p99"]
     )
     assert sch["control_every_frame"]["p99_over_median"] >= 1
+
+
+def test_measure_checks_its_output_before_measuring(tmp_path, capsys, monkeypatch):
+    """A bad or existing output is a one-line error (exit 2) before any work; --force replaces."""
+    import vrneural.runtime.measure as m
+
+    def never(*a, **k):
+        raise AssertionError("measured before the output was checked")
+
+    monkeypatch.setattr(m, "measure_all", never)
+    old = tmp_path / "m.json"
+    old.write_text("{}")
+    cases = [
+        ([str(old)], "output exists; pass --force to overwrite"),
+        ([str(tmp_path)], "is a directory; name the JSON file to write"),
+        ([str(tmp_path / "new") + "/"], "is a directory; name the JSON file to write"),
+    ]
+    for argv, why in cases:
+        assert m.main([*argv, "--quick"]) == 2, argv
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and why in err and "Traceback" not in err, err
+    assert old.read_text() == "{}" and not (tmp_path / "new").exists()
+    monkeypatch.setattr(m, "measure_all", lambda quick, only: {"seconds": 1.0, "quick": quick})
+    nested = tmp_path / "a" / "b" / "m.json"  # missing folders are created
+    assert m.main([str(nested), "--quick"]) == 0 and json.loads(nested.read_text())["quick"]
+    assert m.main([str(old), "--force"]) == 0 and json.loads(old.read_text())["seconds"] == 1.0

@@ -84,7 +84,11 @@ class QualityConfig:
     )
     quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps")
     progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
+    force: bool = opt(
+        False,
+        "use an existing --out: retrain every network and rewrite the reports (other files "
+        "in it are kept)",
+    )
     resume: bool = opt(
         False,
         "reuse the checkpoints in OUT that match this run (same config, BTF and teacher): "

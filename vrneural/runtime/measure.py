@@ -19,9 +19,9 @@ GPU times are medians over repeats, from timestamps (one compute pass per measur
 
 from __future__ import annotations
 
-import argparse
 import math
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -471,14 +471,22 @@ def _headlines(res: dict) -> list[str]:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(
-        prog="python -m vrneural.runtime.measure", description=__doc__.splitlines()[0]
-    )
-    p.add_argument("out", help="output JSON")
+    """The command line. Options and the output path are checked before any measurement (one
+    line and exit 2); an existing output needs ``--force``."""
+    import sys
+
+    from vrneural.cli import _Parser
+    from vrneural.errors import VrnError
+    from vrneural.formats.atomic import check_output
+
+    prog = "python -m vrneural.runtime.measure"
+    p = _Parser(prog=prog, description=__doc__.splitlines()[0])
+    p.add_argument("out", help="output JSON file (its folder is created)")
     p.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
     p.add_argument(
         "--only", default=None, help=f"comma-separated subset of: {', '.join(MEASUREMENTS)}"
     )
+    p.add_argument("--force", action="store_true", help="overwrite an existing output")
     a = p.parse_args(argv)
     only = None
     if a.only is not None:
@@ -488,9 +496,16 @@ def main(argv=None) -> int:
         for k in only:
             if k not in MEASUREMENTS:
                 p.error(f"--only: unknown measurement {k!r}; choose from {', '.join(MEASUREMENTS)}")
-    res = measure_all(a.quick, only)
-    write_json(a.out, res)
-    print(f"wrote {a.out} ({res['seconds']:.0f} s)")
+    try:
+        if a.out.endswith(("/", "\\")) or Path(a.out).is_dir():
+            raise VrnError(f"{a.out}: is a directory; name the JSON file to write")
+        out = check_output(a.out, a.force)
+        res = measure_all(a.quick, only)
+        write_json(out, res)
+    except VrnError as e:
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        return e.exit_code
+    print(f"wrote {out} ({res['seconds']:.0f} s)")
     print("\n".join(_headlines(res)))
     return 0
 

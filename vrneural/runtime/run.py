@@ -428,6 +428,16 @@ def reference_of(cfg, material) -> str | None:
     return material.reference_source or None
 
 
+def _texture_text(profile_res: int, sm: dict) -> str:
+    """The run line's texture side: the profile's, or the objects' own where a scene's
+    ``texture_res`` / ``min_texture_res`` changed it (listed per object on the next lines)."""
+    sides = sorted({o["texture_res"] for o in sm["scene"]["objects"] if "texture_res" in o})
+    if not sides or sides == [profile_res]:
+        return f"{profile_res}^2"
+    shown = f"{sides[0]}^2" if len(sides) == 1 else f"{sides[0]}^2-{sides[-1]}^2"
+    return f"{shown} (per object; profile {profile_res}^2)"
+
+
 def human_summary(sm: dict) -> str:
     r = sm["resolved"]
     fw = sm["frame_wall_ms"]
@@ -436,7 +446,7 @@ def human_summary(sm: dict) -> str:
     space = (
         f"reuse={r['reuse']} schedule={r['schedule']} " if texture else "(per pixel, every frame) "
     )
-    tex = f" texture={r['texture_res']}^2" if texture else ""
+    tex = f" texture={_texture_text(r['texture_res'], sm)}" if texture else ""
     updates = f" (updates in {sm['updates']})" if texture else ""
     lines = [
         f"adapter   {sm['adapter']['name']} ({sm['adapter']['backend']})",
