@@ -9,6 +9,8 @@ import pytest
 
 from distill_helpers import expect_one_line_error, run_cli
 
+from vrneural.distill.checkpoint import load_checkpoint
+
 
 def test_bench_quality_smoke(tmp_path, capsys):
     out = tmp_path / "q"
@@ -307,3 +309,43 @@ def test_bench_quality_checks_every_option_before_any_work(tmp_path, monkeypatch
     code, err = run_cli("bench", "quality", "--res", 8, "--dirs", 4, *out, *argv, "--no-progress")
     assert code == 2 and err.count("\n") == 1 and needle in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_bench_quality_wide_start(tmp_path):
+    """--wide-start 16: each 8-wide network (single8, both students) is pruned from its own
+    16-wide run of the first half of the epochs and reported as one run of all the epochs;
+    NeuMIP trains as before; --resume reuses all of it and refuses a plain run's checkpoint."""
+    out = tmp_path / "q"
+    base = ["bench", "quality", "--presets", "leather", "--out", out, "--res", 8, "--dirs", 4]
+    base += ["--teacher-epochs", 1, "--epochs", 3, "--lafortune-iters", 1, "--no-progress"]
+    code, err = run_cli(*base, "--wide-start", 16)
+    assert code == 0, err
+    d = out / "leather"
+    methods = json.loads((out / "results.json").read_text())["results"]["leather"]["methods"]
+    assert "neumip" in methods and not any("wide" in k for k in methods)
+    for name in ("single8", "student_nodistill", "student"):
+        wide, ck = load_checkpoint(d / f"{name}.wide.pt"), load_checkpoint(d / f"{name}.pt")
+        assert (
+            wide["epoch"] == 1
+            and max(wide["spec"].get("hidden") or wide["spec"]["fine_hidden"]) == 16
+        )
+        assert ck["epoch"] == 2 and ck["init_from"]["path"] == str(d / f"{name}.wide.pt")
+        assert methods[name]["epochs"] == 3 and len(methods[name]["curve"]) == 3
+        assert ck["config"]["distill"] == wide["config"]["distill"]
+    assert load_checkpoint(d / "neumip.pt")["init_from"] is None
+    assert methods["student"]["weight_bytes"] == 1516  # the runtime network is 8 wide
+    assert "pruned to 8 wide (--wide-start)" in (out / "results.md").read_text()
+    stamp = (d / "student.pt").stat().st_mtime_ns
+    code, err = run_cli(*base, "--wide-start", 16, "--resume")
+    assert code == 0, err
+    assert (d / "student.pt").stat().st_mtime_ns == stamp  # reused, not retrained
+    code, err = run_cli(*base, "--resume")  # plain networks asked: the pruned ones do not do
+    assert code == 2 and "pruned from a wide start there, from random weights here" in err, err
+    code, err = run_cli(*base, "--wide-start", 16, "--epochs", 1, "--force")
+    assert code == 2 and "--wide-start" in err and "at least 2" in err, err
+    # --jobs: the wide starts train first, in worker processes; the same table
+    code, err = run_cli(*base, "--wide-start", 16, "--out", tmp_path / "j", "--jobs", 2)
+    assert code == 0, err
+    par = json.loads((tmp_path / "j" / "results.json").read_text())["results"]["leather"]
+    for name, m in methods.items():
+        assert par["methods"][name]["whole_l1"] == m["whole_l1"], name

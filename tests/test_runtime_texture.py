@@ -69,6 +69,23 @@ def test_gpu_matches_twin(arch, precision, weights):
 
 
 @pytest.mark.gpu
+@pytest.mark.parametrize("precision", ["f32", "f16"])
+def test_gpu_matches_twin_for_a_16_wide_student(precision):
+    """`distill --width 16` packs: the generated kernel handles any M_c/M_f/z width."""
+    from vrneural.runtime import texture_pass
+
+    at = quad_atlas(32)
+    mat = random_material(4, "coarse_fine", width=16)
+    assert mat.networks["fine"][0].weight.shape[0] == 16
+    args = (at, mat, np.eye(4, dtype=np.float32), EYE, LP, LC, TILING, precision)
+    got, _ = texture_pass.shade_texture_space(*args)
+    want, _ = reference.shade_texture_space(*args)
+    np.testing.assert_array_equal(got[..., 3], want[..., 3])
+    err = np.abs(got[..., :3] - _f16(want[..., :3])) / (np.abs(want[..., :3]) + 1e-2)
+    assert err.max() <= (2 * 2.0**-10 if precision == "f32" else 0.25)
+
+
+@pytest.mark.gpu
 @pytest.mark.parametrize(
     "tiling",
     [(3.7, 5.3, -2.31, -7.9), (37.3, 41.9, 1000.37, -513.1)],  # negative uvs; large uvs

@@ -33,7 +33,12 @@ from pathlib import Path
 from vrneural.config import config_dict, mark_explicit, name_flag, opt, quick_defaults
 from vrneural.distill.config import BEFORE_FIELD, COMPILE_MODES, NEUMIP_DIRS
 from vrneural.errors import VrnError, check_range, check_seed, count
-from vrneural.formats.atomic import check_output_dir, check_resume_force, mark_output_dir
+from vrneural.formats.atomic import (
+    check_output_dir,
+    check_resume_force,
+    file_sha256,
+    mark_output_dir,
+)
 from vrneural.versions import package_versions
 
 METHODS = ("lafortune", "neumip", "single8", "student_nodistill", "student")
@@ -72,6 +77,12 @@ class QualityConfig:
         2,
         "ReduceLROnPlateau patience of every network but the teacher (distill --lr-patience; "
         "see docs/quality-research.md on a gentler schedule)",
+    )
+    wide_start: int = opt(
+        0,
+        "train the 8-wide networks (single8, both students) this wide for the first half of "
+        "--epochs, then prune them to 8 wide for the rest (distill --width/--init-from; "
+        "0 = off, from random weights)",
     )
     device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
     compile: str = opt(
@@ -164,10 +175,6 @@ def _distill_configs(
     """``(name, stem, config)`` of every network and seed of a preset (its teacher trained;
     ``check_teacher=False`` skips comparing it with the teacher each checkpoint was made from,
     for the check before any work, when the teacher may not exist yet)."""
-    from vrneural.formats.atomic import file_sha256
-    from vrneural.distill.config import DistillConfig
-    from vrneural.distill.distill import resolve_method
-
     d = root / preset
     tsha = file_sha256(d / "teacher.pt") if check_teacher else None
     out = []
@@ -175,24 +182,61 @@ def _distill_configs(
         for seed in range(cfg.seed, cfg.seed + cfg.repeats):
             # the first seed keeps the plain name, so a one-seed run's checkpoints are reused
             stem = name if seed == cfg.seed else f"{name}.seed{seed}"
-            dcfg = resolve_method(
-                DistillConfig(
-                    teacher=str(d / "teacher.pt"),
-                    output=str(d / f"{stem}.pt"),
-                    btf=str(btf_path),  # not the teacher's record: OUT may have moved
-                    epochs=cfg.epochs,
+
+            if cfg.wide_start and name != "neumip":
+                # --wide-start: W wide for the first half, then this network pruned from it
+                wide_epochs = cfg.epochs // 2
+                wide = _network_config(
+                    cfg,
+                    d,
+                    btf_path,
+                    d / f"{stem}.wide.pt",
                     seed=seed,
-                    ema=cfg.ema,
-                    lr_patience=cfg.lr_patience,
-                    neumip_dirs=cfg.neumip_dirs,
                     **kw,
-                    **_common(cfg),
+                    epochs=wide_epochs,
+                    width=cfg.wide_start,
+                    export=False,
                 )
-            )
-            mark_explicit(dcfg, "epochs")
+                _set_resume(wide, cfg.resume, teacher_sha=tsha)
+                out.append((None, f"{stem}.wide", wide))
+                dcfg = _network_config(
+                    cfg,
+                    d,
+                    btf_path,
+                    d / f"{stem}.pt",
+                    seed=seed,
+                    **kw,
+                    epochs=cfg.epochs - wide_epochs,
+                    init_from=str(d / f"{stem}.wide.pt"),
+                )
+            else:
+                dcfg = _network_config(
+                    cfg, d, btf_path, d / f"{stem}.pt", seed=seed, **kw, epochs=cfg.epochs
+                )
             _set_resume(dcfg, cfg.resume, teacher_sha=tsha)
             out.append((name, stem, dcfg))
     return out
+
+
+def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
+    """The `distill` config of one network of the bench (``kw``: method, seed, epochs, ...)."""
+    from vrneural.distill.config import DistillConfig
+    from vrneural.distill.distill import resolve_method
+
+    dcfg = resolve_method(
+        DistillConfig(
+            teacher=str(d / "teacher.pt"),
+            output=str(output),
+            btf=str(btf_path),  # not the teacher's record: OUT may have moved
+            ema=cfg.ema,
+            lr_patience=cfg.lr_patience,
+            neumip_dirs=cfg.neumip_dirs,
+            **kw,
+            **_common(cfg),
+        )
+    )
+    mark_explicit(dcfg, "epochs")
+    return dcfg
 
 
 def _job(kind: str, job_cfg) -> float:
@@ -240,13 +284,30 @@ def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> 
             sha = btf_fingerprint(read_btf(btfs[p]))["sha256"]
             teach.append((f"{p}: teacher", "teach", _teach_config(p, quiet, root, btfs[p], sha)))
         run(teach)
-        run(
-            [
-                (f"{p}: {stem}", "distill", c)
-                for p in presets
-                for _, stem, c in _distill_configs(p, quiet, root, btfs[p])
-            ]
-        )
+        runs = [
+            (p, n, stem, c)
+            for p in presets
+            for n, stem, c in _distill_configs(p, quiet, root, btfs[p])
+        ]
+        # the wide starts (name None) first: the networks pruned from them read them
+        for wide in (True, False):
+            run([(f"{p}: {stem}", "distill", c) for p, n, stem, c in runs if (n is None) == wide])
+
+
+def _with_wide_start(ck: dict) -> dict:
+    """A network pruned from a wide start (``--wide-start``) as one run: its history after the
+    wide run's, its epochs and training seconds the two together."""
+    init = ck.get("init_from")
+    if not init:
+        return ck
+    from vrneural.distill.checkpoint import load_checkpoint
+
+    wide = load_checkpoint(init["path"])
+    return ck | {
+        "history": list(wide["history"]) + list(ck["history"]),
+        "epoch": int(wide["epoch"]) + int(ck["epoch"]),
+        "train_seconds": float(wide["train_seconds"]) + float(ck["train_seconds"]),
+    }
 
 
 def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
@@ -272,8 +333,10 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     for name, stem, dcfg in _distill_configs(preset, cfg, root, btf_path):
         reused = _finished(dcfg)
         ck = run_distill(dcfg)
-        records.setdefault(name, []).append(ck)
         log(f"{preset}: {stem}  {_took(ck, reused)}")
+        if name is None:  # a wide start: the network pruned from it is the record
+            continue
+        records.setdefault(name, []).append(_with_wide_start(ck))
     data = SliceData(btf, tck["split"]["test"])
     every = list(range(len(data.train) + len(data.test)))
     slices = _slice_pairs(data)
@@ -327,7 +390,18 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
 # Fields that may differ between a reusable checkpoint and this run: paths and workflow flags
 # (the BTF and the teacher are compared by content), the epochs (a shorter run continues), and
 # where and how fast it trains (device, compile), which do not change what is trained.
-_FREE = {"btf", "output", "teacher", "epochs", "progress", "force", "resume", "device", "compile"}
+_FREE = {
+    "btf",
+    "output",
+    "teacher",
+    "init_from",
+    "epochs",
+    "progress",
+    "force",
+    "resume",
+    "device",
+    "compile",
+}
 
 
 def _reuse_problem(cfg, btf_sha: str | None = None, teacher_sha: str | None = None):
@@ -349,12 +423,19 @@ def _reuse_problem(cfg, btf_sha: str | None = None, teacher_sha: str | None = No
         for k, v in want.items()
         if k not in free and have.get(k, default[k]) != v
     ]
+    pruned = bool(have.get("init_from")), bool(want.get("init_from"))
+    if pruned[0] != pruned[1]:
+        how = {True: "pruned from a wide start", False: "from random weights"}
+        diff.append(f"{how[pruned[0]]} there, {how[pruned[1]]} here")
     if diff:
         return f"it was trained with other settings ({'; '.join(diff)})"
     if int(ck["epoch"]) > cfg.epochs:
         return f"it has {count(ck['epoch'], 'epoch')}, more than the {cfg.epochs} asked for"
     if btf_sha is not None and ck["btf"].get("sha256") != btf_sha:
         return "it was trained on another BTF (the header's SHA-256 differs)"
+    init, wide = ck.get("init_from"), getattr(cfg, "init_from", "")
+    if wide and init and Path(wide).is_file() and file_sha256(wide) != init["sha256"]:
+        return f"it was pruned from another {Path(wide).name} (its SHA-256 differs)"
     if teacher_sha is not None and ck.get("teacher", {}).get("sha256") != teacher_sha:
         return (
             "it was distilled from another teacher (teacher.pt's SHA-256 differs; a teacher "
@@ -496,6 +577,13 @@ def validate(cfg: QualityConfig) -> list[str]:
         check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 1, 10_000)
     check_range("--lafortune-iters", cfg.lafortune_iters, 1, 10_000)
     check_range("--jobs", cfg.jobs, 1, 256)
+    if cfg.wide_start:
+        check_range("--wide-start", cfg.wide_start, 8, 64)
+        if cfg.epochs < 2:
+            raise VrnError(
+                f"--epochs {cfg.epochs} with --wide-start: half the epochs go to the wide start, "
+                "so at least 2 are needed"
+            )
     for p in presets:  # --preset, --res, --dirs, --seed as `btf synth` checks them
         BtfConfig(preset=p, res=cfg.res, dirs=cfg.dirs, seed=cfg.seed).validate(
             {"preset": "--presets"}

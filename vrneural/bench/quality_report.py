@@ -174,6 +174,12 @@ def markdown(doc: dict) -> str:
             if cfg.get("lr_patience", 2) != 2
             else ""
         )
+        + (
+            f"; the 8-wide networks (single-level, both students) {cfg['wide_start']} wide for "
+            f"the first {cfg['epochs'] // 2} epochs, then pruned to 8 wide (--wide-start)"
+            if cfg.get("wide_start")
+            else ""
+        )
         + f", Lafortune {cfg['lafortune_iters']} LM iterations, "
         f"{seeds}; {_trained_on(doc)}. This invocation took {_duration(doc['total_seconds'])}; "
         "networks it reused from earlier runs list their own train s below (per seed: "

@@ -32,6 +32,12 @@ def run(args) -> int:
     return _report(lambda: run_teach(cfg), cfg.output)
 
 
+def _width(spec: dict) -> int | None:
+    """The hidden width of a student or single8 spec (None for other specs)."""
+    hidden = spec.get("coarse_hidden") or spec.get("hidden")
+    return max(hidden) if hidden else None
+
+
 def _report(fn, output: str) -> int:
     """Run a training stage; report the result or the interruption (exit 130). Under
     ``torchrun`` only rank 0 reports (it alone writes the files), and every rank leaves the
@@ -66,6 +72,12 @@ def _report(fn, output: str) -> int:
     method = ck["method"]
     if ck.get("config", {}).get("distill") is False:  # --no-distill: ground truth only
         method += " (no distillation)"
+    width = _width(ck.get("spec", {}))
+    if width and width != 8 and ck.get("method") in ("student", "single8"):
+        method += f" {width} wide"
+    init = ck.get("init_from")
+    if init:  # --init-from: where its weights started
+        method += f", from {init['path']} ({_width(init['spec'])} wide, pruned to {width})"
     print(
         f"{output}: {method} epochs {ck['epoch']}  test L1 {test:.5f}"
         f"  train {ck.get('train_seconds', 0):.1f} s{wrote}"

@@ -97,6 +97,14 @@ class DistillConfig(TrainConfig):
         "like the student; a stronger baseline than the paper's, see README: Training)",
         choices=NEUMIP_DIRS,
     )
+    width: int = opt(
+        8, "hidden width of the student's M_c and M_f, and of single8 (NeuMIP is always 25)"
+    )
+    init_from: str = opt(
+        "",
+        "start from this run of the same method and teacher (trained at this --width or wider), "
+        "its hidden units pruned to --width; see README: Training",
+    )
     coarse_channels: int = opt(8, "student U_c channels (one texel per 2x2 block)")
     fine_channels: int = opt(8, "student U_f channels (full BTF resolution)")
     export: bool = opt(True, "also write the runtime pack beside the checkpoint (s.pt -> s.vrnm)")

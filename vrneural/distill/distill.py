@@ -30,6 +30,7 @@ from vrneural.distill.data import SliceData
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
 from vrneural.distill.models import NeuralModel, apply_output, make_spec
 from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
+from vrneural.distill.prune import prune_to
 from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range
@@ -92,6 +93,43 @@ class DistillNet(nn.Module):
         return loss, {"gt": gt.detach(), "teacher": out.detach()}
 
 
+WIDTH_KEYS = ("hidden", "coarse_hidden", "fine_hidden")
+
+
+def check_init(path: str, ick: dict, cfg: DistillConfig, spec: dict, teacher_sha: str) -> None:
+    """``--init-from``: a run of this method, from this teacher (so the same BTF and split:
+    its weights never saw this run's held-out slices), of this architecture at this width or
+    wider. One-line error otherwise."""
+    where = f"--init-from {path}"
+    if cfg.method == "neumip":
+        raise VrnError(f"{where}: --init-from prunes the 8-wide networks (student, single8)")
+    if ick.get("method") != cfg.method:
+        raise VrnError(
+            f"{where}: is a {ick.get('method')} run; this run trains {cfg.method} "
+            f"(train the wide run with --method {cfg.method} --width 16)"
+        )
+    if ick.get("teacher", {}).get("sha256") != teacher_sha:
+        raise VrnError(
+            f"{where}: was distilled from another teacher than {cfg.teacher}; its "
+            "training slices may be this run's held-out ones (use a run of this teacher)"
+        )
+    theirs = ick["spec"]
+    for k in sorted(set(spec) | set(theirs)):
+        if k in WIDTH_KEYS:
+            mine, wide = spec.get(k), theirs.get(k)
+            if not isinstance(wide, list) or len(wide) != len(mine):
+                raise VrnError(f"{where}: its {k} {wide} has another depth than {mine}")
+            if any(w < m for w, m in zip(wide, mine, strict=True)):
+                raise VrnError(
+                    f"{where}: is {max(wide)} wide, narrower than --width {cfg.width}; prune "
+                    "from a wider run (e.g. --width 16)"
+                )
+        elif k not in ("tex_init",) and spec.get(k) != theirs.get(k):
+            raise VrnError(f"{where}: its {k} is {theirs.get(k)!r}, this run's {spec.get(k)!r}")
+    if not ick.get("finished", True):
+        warnings.warn(f"{path}: {unfinished_run(ick)}; starting from it as it is", stacklevel=2)
+
+
 def _state_mismatch(want: dict, have: dict) -> str | None:
     """The first difference between a model's state dict and a checkpoint's, in words."""
     for k, v in have.items():
@@ -149,9 +187,12 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         check_range(f"--{k}", getattr(cfg, k), 0.0, 100.0)
     check_range("--coarse-channels", cfg.coarse_channels, 1, 64)
     check_range("--fine-channels", cfg.fine_channels, 1, 64)
+    check_range("--width", cfg.width, 1, 64)
+    if cfg.method == "neumip" and is_explicit(cfg, "width"):
+        raise VrnError("--width: NeuMIP is always 4 x 25 (the paper's baseline); drop --width")
     cfg = resolve_method(cfg)
     outs = outputs_of(cfg.output, cfg.export)
-    resume = prepare_outputs(cfg, outs, inputs=[cfg.teacher, cfg.btf])
+    resume = prepare_outputs(cfg, outs, inputs=[cfg.teacher, cfg.btf, cfg.init_from])
     if resume is not None:
         if resume.get("kind") != "student":
             raise VrnError(f"{cfg.output}: is not a student checkpoint; cannot --resume distill")
@@ -197,8 +238,23 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         coarse_channels=cfg.coarse_channels,
         fine_channels=cfg.fine_channels,
         neumip_dirs=cfg.neumip_dirs,
+        width=cfg.width,
     )
     model = NeuralModel(spec, cfg.seed)
+    init = None
+    if cfg.init_from and resume is None:  # a resumed run has its weights already
+        try:
+            ick = load_checkpoint(cfg.init_from, kind="student")
+        except VrnError as e:
+            raise VrnError(f"--init-from: {e}") from None
+        check_init(cfg.init_from, ick, cfg, spec, tsha)
+        model = prune_to(model_from_checkpoint(ick, cfg.init_from), spec, data.on("cpu"), cfg.seed)
+        init = {
+            "path": str(cfg.init_from),
+            "sha256": file_sha256(cfg.init_from),
+            "spec": ick["spec"],
+            "epochs": int(ick["epoch"]),
+        }
     net = DistillNet(model, teacher.to(dev), data, cfg).to(dev)
     compile_networks(cfg.compile, model, teacher)
     pairs = test_pairs(data, cfg.max_test_slices)
@@ -216,6 +272,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
             "spec": tck["spec"],
         },
         "versions": {"torch": str(torch.__version__)},
+        "init_from": init if resume is None else resume.get("init_from"),
         # the teacher on the same test slices: what `distill` compares the student with
         "teacher_test_l1": float(mean_l1(teacher, data, pairs)),  # frozen: no autograd graph
     }

@@ -135,20 +135,30 @@ class NeuralModel(nn.Module):
         self.register_buffer("dir_mask", dir_mask(spec), persistent=False)
 
     def forward(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor):
+        raw, acts = self.activations(wi, wo, uv)
+        if self.arch == "single":
+            hs = acts["mlp"]
+        else:
+            n = uv.shape[0]
+            hs = [h[:, None].expand(n, 4, h.shape[-1]) for h in acts["coarse"]] + acts["fine"]
+        return raw, [hs[i] for i in self.latent_layers]
+
+    def activations(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor):
+        """``raw [N, 4, 3]`` and every layer's output per network: ``{"mlp": [...]}``
+        (``[N, 4, D]`` each) or ``{"coarse": [...] ([N, D], once per block), "fine": [...]}``."""
         n = uv.shape[0]
         dirs = torch.cat([wi, wo, half_vector(wi, wo)]) * self.dir_mask  # [9]
         if self.arch == "single":
             f = sample_bilinear_wrap(f16_round(self.tex["features"]), uv)  # [N, 4, C]
             x = torch.cat([dirs.expand(n, 4, DIR_INPUTS), f], -1)
             raw, hs = self.mlp(x)
-        else:
-            fc = sample_bilinear_wrap(f16_round(self.tex["coarse"]), uv.mean(1))  # [N, Cc]
-            z, hc = self.coarse(torch.cat([dirs.expand(n, DIR_INPUTS), fc], -1))  # [N, Z]
-            ff = sample_bilinear_wrap(f16_round(self.tex["fine"]), uv)  # [N, 4, Cf]
-            zk = z[:, None].expand(n, 4, z.shape[-1])
-            raw, hf = self.fine(torch.cat([zk, ff], -1))
-            hs = [h[:, None].expand(n, 4, h.shape[-1]) for h in hc] + hf
-        return raw, [hs[i] for i in self.latent_layers]
+            return raw, {"mlp": hs}
+        fc = sample_bilinear_wrap(f16_round(self.tex["coarse"]), uv.mean(1))  # [N, Cc]
+        z, hc = self.coarse(torch.cat([dirs.expand(n, DIR_INPUTS), fc], -1))  # [N, Z]
+        ff = sample_bilinear_wrap(f16_round(self.tex["fine"]), uv)  # [N, 4, Cf]
+        zk = z[:, None].expand(n, 4, z.shape[-1])
+        raw, hf = self.fine(torch.cat([zk, ff], -1))
+        return raw, {"coarse": hc, "fine": hf}
 
     def predict(self, wi, wo, uv) -> torch.Tensor:
         """BTF values ``[N, 4, 3]`` (output transform applied)."""
@@ -196,6 +206,7 @@ def make_spec(method: str, res: tuple[int, int], space: str = "linear", **kw) ->
     (``single``); single8: 4 x 8, 8 channels;
     student: M_c 2 x 8 (the second layer's output is z_c), M_f 8 -> 3, U_c 8 ch at half
     resolution (one texel per 2x2 block), U_f 8 ch at full resolution (``coarse_fine``).
+    ``kw["width"]`` (default 8) sets the hidden width of single8 and the student.
     """
     out = "log1p" if space == "log" else "linear"
     H, W = res
@@ -212,7 +223,7 @@ def make_spec(method: str, res: tuple[int, int], space: str = "linear", **kw) ->
             tex_init=0.1,
         )
     if method in ("neumip", "single8"):
-        width, c = (25, 7) if method == "neumip" else (8, 8)
+        width, c = (25, 7) if method == "neumip" else (kw.get("width", 8), 8)
         if method == "neumip":
             out = "log1p"
         return dict(
@@ -233,8 +244,8 @@ def make_spec(method: str, res: tuple[int, int], space: str = "linear", **kw) ->
             coarse_res=[H // 2, W // 2],
             fine_channels=kw.get("fine_channels", 8),
             fine_res=[H, W],
-            coarse_hidden=[8, 8],
-            fine_hidden=[8],
+            coarse_hidden=[kw.get("width", 8)] * 2,
+            fine_hidden=[kw.get("width", 8)],
             latent_layers=[1, 2],
             tex_init=0.1,
         )

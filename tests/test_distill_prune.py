@@ -1,0 +1,191 @@
+"""``distill --width`` and ``--init-from``: pruning a wide network to a narrow one.
+
+Parity: units that are constant over the data (their mean folded into the next bias) or that
+nothing reads are dropped first, and then the pruned network is the wide one exactly. The CLI
+trains a wide run, prunes it, exports the pruned pack (numpy forward == torch) and refuses
+every init it cannot use with one line.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+from distill_helpers import FAST, analytic_btf, expect_one_line_error, run_cli
+
+from vrneural.btf.format import read_btf
+from vrneural.distill.checkpoint import load_checkpoint
+from vrneural.distill.data import SliceData
+from vrneural.distill.distill import model_from_checkpoint
+from vrneural.distill.models import NeuralModel, make_spec
+from vrneural.distill.prune import prune_to
+from vrneural.formats.vrnm import read_vrnm
+from vrneural.material import material_forward
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory):
+    d = tmp_path_factory.mktemp("prune")
+    return SliceData(read_btf(analytic_btf(d / "m.btf", res=16, n_dirs=4)), [0, 5])
+
+
+def _hidden_chains(spec):
+    if spec["arch"] == "single":
+        return [("mlp", len(spec["hidden"]))]
+    return [("coarse", len(spec["coarse_hidden"])), ("fine", len(spec["fine_hidden"]))]
+
+
+@torch.no_grad()
+def _predict(net, data, pairs=(1, 2, 7, 11)):
+    g = torch.Generator().manual_seed(3)
+    uv = data.uv(g, shard=False)  # jittered: not only the texel centres pruning looked at
+    return torch.stack([net.predict(*data.dirs(p), uv) for p in pairs])
+
+
+@pytest.mark.parametrize("method", ["student", "single8"])
+@pytest.mark.parametrize("kind", ["constant", "unread"])
+def test_dropped_units_that_carry_nothing_leave_the_function_exact(data, method, kind):
+    """A 12-wide network whose units 8-11 are constant (kind ``constant``: zero incoming
+    weights, positive bias; pruning folds their value into the next bias) or read by nothing
+    (``unread``) prunes to an 8-wide network with the same output."""
+    wide_spec = make_spec(method, data.res, width=12)
+    wide = NeuralModel(wide_spec, seed=1)
+    with torch.no_grad():
+        for name, n in _hidden_chains(wide_spec):
+            for i in range(n):
+                lin = getattr(wide, name).layers[i]
+                lin.bias[:8] += 0.5  # keep the real units alive
+                if kind == "constant":
+                    lin.weight[8:] = 0.0
+                    lin.bias[8:] = torch.linspace(0.1, 0.4, 4)
+                else:
+                    lin.weight[8:] *= 3.0  # large variance, but nothing reads them
+                    reader = _reader(wide, name, i, n)
+                    reader.weight[:, 8:12] = 0.0
+    narrow = prune_to(wide, make_spec(method, data.res, width=8), data)
+    for name, n in _hidden_chains(narrow.spec):
+        for i in range(n):
+            got = getattr(narrow, name).layers[i].weight
+            full = getattr(wide, name).layers[i].weight
+            # kept: units 0-7; inputs: all, or units 0-7 of the layer before + the rest
+            cols = list(range(full.shape[1]))
+            if full.shape[1] != got.shape[1]:
+                cols = cols[:8] + cols[12:]
+            assert got.shape[0] == 8 and torch.equal(got, full[:8][:, cols])
+    np.testing.assert_allclose(
+        _predict(narrow, data).numpy(), _predict(wide, data).numpy(), rtol=1e-5, atol=1e-6
+    )
+    for k in narrow.tex:
+        assert torch.equal(narrow.tex[k], wide.tex[k])
+
+
+def _reader(net, name, i, n):
+    if name == "coarse" and i + 1 == n:
+        return net.fine.layers[0]  # the coarse MLP's last layer, z_c, is read by M_f
+    return getattr(net, name).layers[i + 1]
+
+
+@pytest.mark.parametrize("method", ["student", "single8"])
+def test_pruning_to_the_same_width_changes_nothing(data, method):
+    spec = make_spec(method, data.res, width=8)
+    net = NeuralModel(spec, seed=4)
+    same = prune_to(net, spec, data)
+    for k, v in net.state_dict().items():
+        assert torch.equal(same.state_dict()[k], v), k
+
+
+def test_importance_is_spread_times_the_weights_that_read_it(data):
+    """A unit with a large spread that nothing reads goes before a weakly varying one that is
+    read; a read, varying unit stays."""
+    spec = make_spec("single8", data.res, width=3)
+    net = NeuralModel(spec, seed=2)
+    with torch.no_grad():
+        first, second = net.mlp.layers[0], net.mlp.layers[1]
+        first.weight[0] *= 10.0  # varies a lot, read by nothing
+        second.weight[:, 0] = 0.0
+        first.bias += 1.0  # all alive
+        first.weight[2] *= 0.1  # varies a little, read
+    narrow = prune_to(net, make_spec("single8", data.res, width=2), data)
+    assert torch.equal(narrow.mlp.layers[0].weight, net.mlp.layers[0].weight[[1, 2]])
+
+
+def test_width_and_init_from_end_to_end(tmp_path):
+    """A 16-wide student (its pack runs in numpy), pruned into an 8-wide one by --init-from;
+    the pack of the pruned run equals its torch network and records where it started."""
+    btf = analytic_btf(tmp_path / "m.btf", res=16, n_dirs=4)
+    t, w, s = tmp_path / "t.pt", tmp_path / "wide.pt", tmp_path / "s.pt"
+    assert run_cli("teach", btf, "-o", t, "--epochs", 1, *FAST)[0] == 0
+    code, err = run_cli("distill", t, "-o", w, "--width", 16, "--epochs", 1, *FAST)
+    assert code == 0, err
+    wide_ck = load_checkpoint(w)
+    assert wide_ck["spec"]["coarse_hidden"] == [16, 16] and wide_ck["spec"]["fine_hidden"] == [16]
+    code, err = run_cli("distill", t, "-o", s, "--init-from", w, "--epochs", 1, *FAST)
+    assert code == 0, err
+    ck = load_checkpoint(s)
+    assert ck["spec"]["coarse_hidden"] == [8, 8] and ck["config"]["init_from"] == str(w)
+    assert ck["init_from"]["epochs"] == 1 and ck["init_from"]["spec"] == wide_ck["spec"]
+    assert json.loads((tmp_path / "s.pt.config.json").read_text())["init_from"] == str(w)
+    data = SliceData(read_btf(btf), ck["split"]["test"])
+    for path, ckpt in ((tmp_path / "wide.vrnm", wide_ck), (tmp_path / "s.vrnm", ck)):
+        net = model_from_checkpoint(ckpt)
+        mat = read_vrnm(path)
+        wi, wo = data.dirs(3)
+        uv = data.uv(None, shard=False)
+        n = uv.shape[0]
+        with torch.no_grad():
+            want = net.predict(wi, wo, uv).numpy()
+        tile = (n, 1)
+        got = material_forward(
+            mat, np.tile(wi.numpy(), tile), np.tile(wo.numpy(), tile), uv.numpy()
+        )
+        np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-5)
+    # a resumed pruned run keeps its weights (no second pruning) and its record
+    code, err = run_cli("distill", t, "-o", s, "--resume", "--epochs", 2, *FAST)
+    assert code == 0, err
+    assert load_checkpoint(s)["init_from"] == ck["init_from"]
+
+
+def test_init_from_errors(tmp_path):
+    btf = analytic_btf(tmp_path / "m.btf", res=16, n_dirs=4)
+    t, t2 = tmp_path / "t.pt", tmp_path / "t2.pt"
+    assert run_cli("teach", btf, "-o", t, "--epochs", 1, *FAST)[0] == 0
+    assert run_cli("teach", btf, "-o", t2, "--epochs", 1, "--seed", 1, *FAST)[0] == 0
+    runs = {
+        "s8": ("--width", 8),
+        "s4": ("--width", 4),
+        "w16s8": ("--method", "single8", "--width", 16),
+        "nm": ("--method", "neumip", "--no-distill"),
+    }
+    for name, flags in runs.items():
+        code, err = run_cli(
+            "distill", t, "-o", tmp_path / f"{name}.pt", "--epochs", 1, *flags, *FAST
+        )
+        assert code == 0, err
+    code, err = run_cli(
+        "distill", t2, "-o", tmp_path / "other.pt", "--epochs", 1, "--width", 16, *FAST
+    )
+    assert code == 0, err
+    out = tmp_path / "new.pt"
+    cases = [
+        (["--init-from", tmp_path / "s4.pt"], "is 4 wide, narrower than --width 8"),
+        (["--init-from", tmp_path / "w16s8.pt"], "is a single8 run; this run trains student"),
+        (["--init-from", tmp_path / "other.pt"], "was distilled from another teacher"),
+        (["--init-from", t], "--init-from"),
+        (["--init-from", tmp_path / "missing.pt"], "missing.pt"),
+        (["--init-from", tmp_path / "nm.pt", "--method", "neumip"], "--init-from prunes"),
+        (["--method", "neumip", "--width", 16], "NeuMIP is always 4 x 25"),
+        (["--width", 0], "--width"),
+        (["--init-from", tmp_path / "s8.pt", "--coarse-channels", 4], "its coarse_channels is 8"),
+    ]
+    for flags, needle in cases:
+        expect_one_line_error(["distill", t, "-o", out, "--epochs", 1, *flags, *FAST], needle)
+        assert not out.exists()
+    # the init is an input: never the output, even with --force
+    s8 = tmp_path / "s8.pt"
+    before = s8.read_bytes()
+    expect_one_line_error(
+        ["distill", t, "-o", s8, "--init-from", s8, "--force", *FAST], "would overwrite the input"
+    )
+    assert s8.read_bytes() == before

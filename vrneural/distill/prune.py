@@ -1,0 +1,118 @@
+"""``distill --init-from``: start a narrow network from a wider trained one, pruned.
+
+An 8-wide network trained from random weights ends in a worse and more seed-dependent minimum
+than the same 8-wide network cut out of a 16-wide one after part of the budget (README:
+Training; research log). Pruning keeps, in every hidden layer, the ``width`` units with the
+largest importance
+
+    importance_j = std(a_j) * ||W_next[:, j]||
+
+(``a_j`` the unit's activation over a fixed set of training slices at texel centres, ``W_next``
+the weights that read it), and folds each dropped unit's mean activation into the next layer's
+bias, so a dropped unit that barely varies costs nothing. Layers are pruned from the input
+side, each on the activations of the already-pruned network before it. Textures are kept. For
+the coarse-to-fine student the coarse MLP's last layer is z_c, read by the first ``Z`` inputs
+of M_f.
+
+Deterministic: the slices are every k-th training pair (at most :data:`SLICES`), no jitter.
+"""
+
+from __future__ import annotations
+
+import torch
+
+from vrneural.distill.data import SliceData
+from vrneural.distill.models import NeuralModel
+
+SLICES = 64
+
+
+@torch.no_grad()
+def prune_to(wide: NeuralModel, spec: dict, data: SliceData, seed: int = 0) -> NeuralModel:
+    """A :class:`NeuralModel` of ``spec`` (hidden widths <= ``wide``'s, everything else
+    equal) holding ``wide``'s pruned weights and its textures."""
+    net = NeuralModel(spec, seed)
+    state = {k: v.clone() for k, v in wide.state_dict().items()}
+    # the layer chains whose hidden units are pruned: (state prefix, layer count, widths)
+    if spec["arch"] == "single":
+        chains = [("mlp", len(spec["hidden"]) + 1, spec["hidden"])]
+    else:
+        chains = [
+            ("coarse", len(spec["coarse_hidden"]), spec["coarse_hidden"]),
+            ("fine", len(spec["fine_hidden"]) + 1, spec["fine_hidden"]),
+        ]
+    for name, n_layers, widths in chains:
+        for i, keep in enumerate(widths):
+            mean, std = _activations(wide, state, data, name, i)  # of the pruned-so-far net
+            w_next, b_next, cols = _reader(state, name, i, n_layers)
+            imp = std * w_next[:, cols].norm(dim=0)
+            order = torch.argsort(imp, descending=True, stable=True)
+            kept = order[:keep].sort().values
+            dropped = order[keep:]
+            # the dropped units' mean output goes into the bias that read it
+            state[b_next] = state[b_next] + w_next[:, cols[dropped]] @ mean[dropped]
+            w = f"{name}.layers.{i}"
+            state[f"{w}.weight"] = state[f"{w}.weight"][kept]
+            state[f"{w}.bias"] = state[f"{w}.bias"][kept]
+            keep_cols = torch.cat([cols[kept], _other_cols(w_next.shape[1], cols)])
+            state[_weight_of(b_next)] = w_next[:, keep_cols.sort().values]
+    net.load_state_dict(state)
+    return net
+
+
+def _reader(state: dict, name: str, i: int, n_layers: int):
+    """The layer that reads hidden layer ``i`` of chain ``name``: its weight, its bias key and
+    the columns of its input that are that layer's units."""
+    if i + 1 < n_layers:  # the next layer of the same chain reads all of it
+        w = state[f"{name}.layers.{i + 1}.weight"]
+        return w, f"{name}.layers.{i + 1}.bias", torch.arange(w.shape[1])
+    # the coarse MLP's last layer (z_c) is read by M_f's first layer, as its first Z inputs
+    z = state[f"{name}.layers.{i}.weight"].shape[0]
+    w = state["fine.layers.0.weight"]
+    return w, "fine.layers.0.bias", torch.arange(z)
+
+
+def _other_cols(n: int, cols: torch.Tensor) -> torch.Tensor:
+    mask = torch.ones(n, dtype=torch.bool)
+    mask[cols] = False
+    return torch.arange(n)[mask]
+
+
+def _weight_of(bias_key: str) -> str:
+    return bias_key[: -len("bias")] + "weight"
+
+
+def _activations(wide: NeuralModel, state: dict, data: SliceData, name: str, i: int):
+    """Mean and standard deviation per unit of layer ``i`` of chain ``name`` of the network in
+    ``state`` (pruned up to there), over the fixed slices (float64 sums: no activations kept)."""
+    probe = NeuralModel(_spec_of(wide.spec, state), 0).to(data.device)
+    probe.load_state_dict(state)
+    uv = data.uv(None, shard=False)
+    step = max(1, len(data.train) // SLICES)
+    total = total_sq = 0.0
+    count = 0
+    for pair in data.train[::step][:SLICES]:
+        wi, wo = data.dirs(pair)
+        a = probe.activations(wi, wo, uv)[1][name][i]
+        a = a.reshape(-1, a.shape[-1]).double()
+        total = total + a.sum(0)
+        total_sq = total_sq + (a * a).sum(0)
+        count += a.shape[0]
+    mean = total / count
+    var = (total_sq / count - mean * mean).clamp_min(0.0)
+    return mean.float(), var.sqrt().float()
+
+
+def _spec_of(spec: dict, state: dict) -> dict:
+    """``spec`` with the hidden widths the (partly pruned) weights in ``state`` have."""
+    s = dict(spec)
+
+    def widths(name, n):
+        return [int(state[f"{name}.layers.{j}.weight"].shape[0]) for j in range(n)]
+
+    if s["arch"] == "single":
+        s["hidden"] = widths("mlp", len(s["hidden"]))
+    else:
+        s["coarse_hidden"] = widths("coarse", len(s["coarse_hidden"]))
+        s["fine_hidden"] = widths("fine", len(s["fine_hidden"]))
+    return s
