@@ -343,9 +343,24 @@ def test_bench_quality_wide_start(tmp_path):
     assert code == 2 and "pruned from a wide start there, from random weights here" in err, err
     code, err = run_cli(*base, "--wide-start", 16, "--epochs", 1, "--force")
     assert code == 2 and "--wide-start" in err and "at least 2" in err, err
+    # more epochs cannot extend a wide start (the pruned networks would start again): one
+    # line before any work
+    code, err = run_cli(*base, "--wide-start", 16, "--epochs", 4, "--resume")
+    assert code == 2 and "a wide start cannot be extended" in err, err
+    assert (d / "student.pt").stat().st_mtime_ns == stamp
+    # a moved OUT resumes in place, reading the wide runs where they are now
+    moved = tmp_path / "moved"
+    out.rename(moved)
+    code, err = run_cli(*[moved if a == out else a for a in base], "--wide-start", 16, "--resume")
+    # no "--epochs N with N > 1 continues it" for the halves (no option sets their epochs)
+    assert code == 0 and "wide.pt: already" not in err and "student.pt: already" not in err, err
+    assert "neumip.pt: already trained for 3 epochs" in err
+    again = json.loads((moved / "results.json").read_text())["results"]["leather"]["methods"]
+    assert again["student"]["curve"] == methods["student"]["curve"]
+    out = moved
     # --jobs: the wide starts train first, in worker processes; the same table
     code, err = run_cli(*base, "--wide-start", 16, "--out", tmp_path / "j", "--jobs", 2)
-    assert code == 0, err
+    assert code == 0 and "wide.pt: already" not in err, err
     par = json.loads((tmp_path / "j" / "results.json").read_text())["results"]["leather"]
     for name, m in methods.items():
         assert par["methods"][name]["whole_l1"] == m["whole_l1"], name

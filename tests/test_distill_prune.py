@@ -16,7 +16,7 @@ import torch
 from distill_helpers import FAST, analytic_btf, expect_one_line_error, run_cli
 
 from vrneural.btf.format import read_btf
-from vrneural.distill.checkpoint import load_checkpoint
+from vrneural.distill.checkpoint import UnfinishedRunWarning, load_checkpoint, save_checkpoint
 from vrneural.distill.data import SliceData
 from vrneural.distill.distill import model_from_checkpoint
 from vrneural.distill.models import NeuralModel, make_spec
@@ -141,10 +141,29 @@ def test_width_and_init_from_end_to_end(tmp_path):
             mat, np.tile(wi.numpy(), tile), np.tile(wo.numpy(), tile), uv.numpy()
         )
         np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-5)
-    # a resumed pruned run keeps its weights (no second pruning) and its record
-    code, err = run_cli("distill", t, "-o", s, "--resume", "--epochs", 2, *FAST)
+    # a resumed pruned run keeps its weights (no second pruning) and its record, and the
+    # same init spelled another way is no contradiction
+    again = [
+        "distill",
+        t,
+        "-o",
+        s,
+        "--resume",
+        "--epochs",
+        2,
+        "--init-from",
+        f"{tmp_path}/./wide.pt",
+    ]
+    code, err = run_cli(*again, *FAST)
     assert code == 0, err
     assert load_checkpoint(s)["init_from"] == ck["init_from"]
+    # an unfinished wide run: a one-line warning, then it is used as it is
+    unfinished = dict(wide_ck, finished=False)
+    save_checkpoint(tmp_path / "unfinished.pt", unfinished)
+    argv = ["distill", t, "-o", tmp_path / "u.pt", "--init-from", tmp_path / "unfinished.pt"]
+    with pytest.warns(UnfinishedRunWarning, match="starting from it as it is"):
+        code, err = run_cli(*argv, "--epochs", 1, *FAST)
+    assert code == 0, err
 
 
 def test_init_from_errors(tmp_path):
@@ -157,6 +176,7 @@ def test_init_from_errors(tmp_path):
         "s4": ("--width", 4),
         "w16s8": ("--method", "single8", "--width", 16),
         "nm": ("--method", "neumip", "--no-distill"),
+        "log": ("--space", "log"),
     }
     for name, flags in runs.items():
         code, err = run_cli(
@@ -177,7 +197,15 @@ def test_init_from_errors(tmp_path):
         (["--init-from", tmp_path / "nm.pt", "--method", "neumip"], "--init-from prunes"),
         (["--method", "neumip", "--width", 16], "NeuMIP is always 4 x 25"),
         (["--width", 0], "--width"),
-        (["--init-from", tmp_path / "s8.pt", "--coarse-channels", 4], "its coarse_channels is 8"),
+        (
+            ["--init-from", tmp_path / "s8.pt", "--coarse-channels", 4],
+            "was trained with --coarse-channels 8, this run with 4",
+        ),
+        (
+            ["--init-from", tmp_path / "log.pt"],
+            "was trained with --space log, this run with linear",
+        ),
+        (["--init-from", tmp_path / "s8.pt", "--width", 9], "at least as wide (e.g. --width 18)"),
     ]
     for flags, needle in cases:
         expect_one_line_error(["distill", t, "-o", out, "--epochs", 1, *flags, *FAST], needle)

@@ -197,8 +197,11 @@ def _distill_configs(
                     width=cfg.wide_start,
                     export=False,
                 )
+                name_flag(wide, "epochs", "")  # no option sets its epochs directly
                 _set_resume(wide, cfg.resume, teacher_sha=tsha)
                 out.append((None, f"{stem}.wide", wide))
+                if cfg.resume:
+                    _check_wide_start(d / f"{stem}.pt", wide_epochs, cfg.epochs)
                 dcfg = _network_config(
                     cfg,
                     d,
@@ -209,6 +212,7 @@ def _distill_configs(
                     epochs=cfg.epochs - wide_epochs,
                     init_from=str(d / f"{stem}.wide.pt"),
                 )
+                name_flag(dcfg, "epochs", "")
             else:
                 dcfg = _network_config(
                     cfg, d, btf_path, d / f"{stem}.pt", seed=seed, **kw, epochs=cfg.epochs
@@ -216,6 +220,26 @@ def _distill_configs(
             _set_resume(dcfg, cfg.resume, teacher_sha=tsha)
             out.append((name, stem, dcfg))
     return out
+
+
+def _check_wide_start(path: Path, wide_epochs: int, epochs: int) -> None:
+    """``--resume --wide-start``: a network pruned from a wide start of another length cannot
+    be continued (it would have to start again from the longer wide run): one line."""
+    from vrneural.distill.checkpoint import load_checkpoint
+
+    if not path.is_file():
+        return
+    try:
+        init = load_checkpoint(path).get("init_from")
+    except VrnError:
+        return  # unreadable: _set_resume names the problem
+    if init and int(init["epochs"]) != wide_epochs:
+        raise VrnError(
+            f"{path}: --resume cannot reuse this checkpoint: it was pruned from a wide start "
+            f"of {count(int(init['epochs']), 'epoch')}, and --epochs {epochs} with --wide-start "
+            f"asks for {wide_epochs}; a wide start cannot be extended (--force retrains, or "
+            "use another --out)"
+        )
 
 
 def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
@@ -294,15 +318,15 @@ def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> 
             run([(f"{p}: {stem}", "distill", c) for p, n, stem, c in runs if (n is None) == wide])
 
 
-def _with_wide_start(ck: dict) -> dict:
+def _with_wide_start(ck: dict, wide_path: str) -> dict:
     """A network pruned from a wide start (``--wide-start``) as one run: its history after the
-    wide run's, its epochs and training seconds the two together."""
-    init = ck.get("init_from")
-    if not init:
+    wide run's (read where it is now, ``wide_path``: OUT may have moved), its epochs and
+    training seconds the two together."""
+    if not ck.get("init_from") or not wide_path:
         return ck
     from vrneural.distill.checkpoint import load_checkpoint
 
-    wide = load_checkpoint(init["path"])
+    wide = load_checkpoint(wide_path)
     return ck | {
         "history": list(wide["history"]) + list(ck["history"]),
         "epoch": int(wide["epoch"]) + int(ck["epoch"]),
@@ -336,7 +360,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
         log(f"{preset}: {stem}  {_took(ck, reused)}")
         if name is None:  # a wide start: the network pruned from it is the record
             continue
-        records.setdefault(name, []).append(_with_wide_start(ck))
+        records.setdefault(name, []).append(_with_wide_start(ck, dcfg.init_from))
     data = SliceData(btf, tck["split"]["test"])
     every = list(range(len(data.train) + len(data.test)))
     slices = _slice_pairs(data)
@@ -578,7 +602,8 @@ def validate(cfg: QualityConfig) -> list[str]:
     check_range("--lafortune-iters", cfg.lafortune_iters, 1, 10_000)
     check_range("--jobs", cfg.jobs, 1, 256)
     if cfg.wide_start:
-        check_range("--wide-start", cfg.wide_start, 8, 64)
+        if not 8 <= cfg.wide_start <= 64:
+            raise VrnError(f"--wide-start {cfg.wide_start}: 0 (off) or a width in [8, 64]")
         if cfg.epochs < 2:
             raise VrnError(
                 f"--epochs {cfg.epochs} with --wide-start: half the epochs go to the wide start, "

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.formats.atomic import atomic_path
+from vrneural.errors import count
 
 ORDER = ("lafortune", "neumip", "single8", "student_nodistill", "student", "teacher")
 
@@ -176,7 +177,8 @@ def markdown(doc: dict) -> str:
         )
         + (
             f"; the 8-wide networks (single-level, both students) {cfg['wide_start']} wide for "
-            f"the first {cfg['epochs'] // 2} epochs, then pruned to 8 wide (--wide-start)"
+            f"the first {count(cfg['epochs'] // 2, 'epoch')}, then pruned to 8 wide "
+            "(--wide-start)"
             if cfg.get("wide_start")
             else ""
         )

@@ -77,7 +77,9 @@ def _report(fn, output: str) -> int:
         method += f" {width} wide"
     init = ck.get("init_from")
     if init:  # --init-from: where its weights started
-        method += f", from {init['path']} ({_width(init['spec'])} wide, pruned to {width})"
+        was = _width(init["spec"])
+        cut = f"pruned to {width}" if was != width else "not pruned"
+        method += f", from {init['path']} ({was} wide, {cut})"
     print(
         f"{output}: {method} epochs {ck['epoch']}  test L1 {test:.5f}"
         f"  train {ck.get('train_seconds', 0):.1f} s{wrote}"

@@ -34,7 +34,7 @@ from vrneural.distill.prune import prune_to
 from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range
-from vrneural.formats.atomic import check_not_input, file_sha256
+from vrneural.formats.atomic import check_not_input, file_sha256, same_file
 
 
 def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
@@ -122,12 +122,33 @@ def check_init(path: str, ick: dict, cfg: DistillConfig, spec: dict, teacher_sha
             if any(w < m for w, m in zip(wide, mine, strict=True)):
                 raise VrnError(
                     f"{where}: is {max(wide)} wide, narrower than --width {cfg.width}; prune "
-                    "from a wider run (e.g. --width 16)"
+                    f"from a run at least as wide (e.g. --width {max(16, 2 * cfg.width)})"
                 )
         elif k not in ("tex_init",) and spec.get(k) != theirs.get(k):
-            raise VrnError(f"{where}: its {k} is {theirs.get(k)!r}, this run's {spec.get(k)!r}")
+            name, show = SPEC_FLAGS.get(k, (k, lambda v: v))
+            raise VrnError(
+                f"{where}: was trained with {name} {show(theirs.get(k))}, this run with "
+                f"{show(spec.get(k))}"
+            )
     if not ick.get("finished", True):
-        warnings.warn(f"{path}: {unfinished_run(ick)}; starting from it as it is", stacklevel=2)
+        warnings.warn(
+            f"{path}: {unfinished_run(ick)}; starting from it as it is",
+            UnfinishedRunWarning,
+            stacklevel=2,
+        )
+
+
+#: spec fields -> the option that sets them and its value, for --init-from's messages
+SPEC_FLAGS = {
+    "output": ("--space", lambda v: "log" if v == "log1p" else "linear"),
+    "coarse_channels": ("--coarse-channels", lambda v: v),
+    "fine_channels": ("--fine-channels", lambda v: v),
+    "channels": ("texture channels", lambda v: v),
+    "dir_inputs": ("--neumip-dirs", lambda v: v),
+    "tex_res": ("the BTF resolution", lambda v: "x".join(map(str, v))),
+    "coarse_res": ("the BTF resolution / 2", lambda v: "x".join(map(str, v))),
+    "fine_res": ("the BTF resolution", lambda v: "x".join(map(str, v))),
+}
 
 
 def _state_mismatch(want: dict, have: dict) -> str | None:
@@ -196,6 +217,9 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     if resume is not None:
         if resume.get("kind") != "student":
             raise VrnError(f"{cfg.output}: is not a student checkpoint; cannot --resume distill")
+        was = resume["config"].get("init_from") or ""
+        if cfg.init_from and was and same_file(cfg.init_from, was):  # ./wide.pt == wide.pt
+            cfg = replace_config(cfg, init_from=was)
         # output and teacher: where they are now (the directory may have moved)
         old = resumed_config(cfg, BEFORE_FIELD | resume["config"], resume)
         old["teacher"] = cfg.teacher
@@ -251,6 +275,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         model = prune_to(model_from_checkpoint(ick, cfg.init_from), spec, data.on("cpu"), cfg.seed)
         init = {
             "path": str(cfg.init_from),
+            "resolved": str(Path(cfg.init_from).resolve()),
             "sha256": file_sha256(cfg.init_from),
             "spec": ick["spec"],
             "epochs": int(ick["epoch"]),

@@ -232,7 +232,9 @@ def fit(
 
     n = len(data.train)
     bar = None
-    if rank == 0 and epoch >= cfg.epochs:  # a finished run resumed without more --epochs
+    if rank == 0 and epoch >= cfg.epochs and flag(cfg, "epochs"):
+        # a finished run resumed without more --epochs (no hint where no option sets its
+        # epochs directly: bench quality's --wide-start halves)
         print(
             f"{out}: already trained for {count(epoch, 'epoch')}, nothing left to train "
             f"({flag(cfg, 'epochs')} N with N > {epoch} continues it)",
