@@ -299,6 +299,18 @@ def curves_png(doc: dict, path: Path) -> None:
                     ax.plot(range(1, len(c) + 1), c, c=line.get_color(), lw=0.7, alpha=0.45)
             else:
                 ax.axhline(m["test_l1"], ls="--", c="gray", label=doc["labels"][name])
+        wide = doc["config"].get("wide_start")
+        if wide:  # the 8-wide networks were cut from their wide starts here
+            cut = doc["config"]["epochs"] // 2 + 0.5
+            ax.axvline(cut, c="k", ls=":", lw=0.8)
+            ax.annotate(
+                f"{wide} -> 8 wide",
+                (cut, 1),
+                xycoords=("data", "axes fraction"),
+                xytext=(3, -10),
+                textcoords="offset points",
+                fontsize=7,
+            )
         ax.set_yscale("log")
         ax.set_title(p)
         ax.set_xlabel("epoch")
