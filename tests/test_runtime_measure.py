@@ -66,8 +66,8 @@ def test_measure_checks_its_output_before_measuring(tmp_path, capsys, monkeypatc
     old.write_text("{}")
     cases = [
         ([str(old)], "output exists; pass --force to overwrite"),
-        ([str(tmp_path)], "is a directory; name the JSON file to write"),
-        ([str(tmp_path / "new") + "/"], "is a directory; name the JSON file to write"),
+        ([str(tmp_path)], "output path is a directory (a file is written here)"),
+        ([str(tmp_path / "new") + "/"], "output path is a directory (a file is written here)"),
     ]
     for argv, why in cases:
         assert m.main([*argv, "--quick"]) == 2, argv

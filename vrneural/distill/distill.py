@@ -272,7 +272,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         except VrnError as e:
             raise VrnError(f"--init-from: {e}") from None
         check_init(cfg.init_from, ick, cfg, spec, tsha)
-        model = prune_to(model_from_checkpoint(ick, cfg.init_from), spec, data.on("cpu"), cfg.seed)
+        model = prune_to(model_from_checkpoint(ick, cfg.init_from), spec, data.on("cpu"))
         init = {
             "path": str(cfg.init_from),
             "resolved": str(Path(cfg.init_from).resolve()),

@@ -210,6 +210,7 @@ def make_spec(method: str, res: tuple[int, int], space: str = "linear", **kw) ->
     """
     out = "log1p" if space == "log" else "linear"
     H, W = res
+    narrow = kw.get("width", 8)  # single8 and the student
     if method == "teacher":
         width, layers = kw.get("width", 128), kw.get("layers", 4)
         hidden = [width] * (layers - 1)
@@ -223,7 +224,7 @@ def make_spec(method: str, res: tuple[int, int], space: str = "linear", **kw) ->
             tex_init=0.1,
         )
     if method in ("neumip", "single8"):
-        width, c = (25, 7) if method == "neumip" else (kw.get("width", 8), 8)
+        width, c = (25, 7) if method == "neumip" else (narrow, 8)
         if method == "neumip":
             out = "log1p"
         return dict(
@@ -244,8 +245,8 @@ def make_spec(method: str, res: tuple[int, int], space: str = "linear", **kw) ->
             coarse_res=[H // 2, W // 2],
             fine_channels=kw.get("fine_channels", 8),
             fine_res=[H, W],
-            coarse_hidden=[kw.get("width", 8)] * 2,
-            fine_hidden=[kw.get("width", 8)],
+            coarse_hidden=[narrow] * 2,
+            fine_hidden=[narrow],
             latent_layers=[1, 2],
             tex_init=0.1,
         )

@@ -28,10 +28,11 @@ SLICES = 64
 
 
 @torch.no_grad()
-def prune_to(wide: NeuralModel, spec: dict, data: SliceData, seed: int = 0) -> NeuralModel:
+def prune_to(wide: NeuralModel, spec: dict, data: SliceData) -> NeuralModel:
     """A :class:`NeuralModel` of ``spec`` (hidden widths <= ``wide``'s, everything else
-    equal) holding ``wide``'s pruned weights and its textures."""
-    net = NeuralModel(spec, seed)
+    equal) holding ``wide``'s pruned weights and its textures (every tensor is the wide
+    network's, so nothing depends on a seed)."""
+    net = NeuralModel(spec)
     state = {k: v.clone() for k, v in wide.state_dict().items()}
     # the layer chains whose hidden units are pruned: (state prefix, layer count, widths)
     if spec["arch"] == "single":
@@ -85,7 +86,7 @@ def _weight_of(bias_key: str) -> str:
 def _activations(wide: NeuralModel, state: dict, data: SliceData, name: str, i: int):
     """Mean and standard deviation per unit of layer ``i`` of chain ``name`` of the network in
     ``state`` (pruned up to there), over the fixed slices (float64 sums: no activations kept)."""
-    probe = NeuralModel(_spec_of(wide.spec, state), 0).to(data.device)
+    probe = NeuralModel(_spec_of(wide.spec, state)).to(data.device)
     probe.load_state_dict(state)
     uv = data.uv(None, shard=False)
     step = max(1, len(data.train) // SLICES)

@@ -22,8 +22,12 @@ def check_output(path: str | os.PathLike, force: bool) -> Path:
     directory cannot be created. Returns the path as :class:`Path`.
     """
     p = Path(path)
-    if p.is_dir() and p.suffix:  # a file goes here: even --force does not replace a directory
-        raise VrnError(f"{p}: output path is a directory (a file is written here); choose another")
+    # a file goes here: even --force does not replace a directory, and a name given with a
+    # trailing slash ("out/new/") means a directory, which Path would silently make a file
+    if p.is_dir() or str(path).endswith(("/", os.sep)):
+        raise VrnError(
+            f"{path}: output path is a directory (a file is written here); choose another"
+        )
     if p.exists() and not force:
         raise VrnError(f"{p}: output exists; pass --force to overwrite")
     _make_parent(p)

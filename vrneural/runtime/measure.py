@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import math
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -497,8 +496,6 @@ def main(argv=None) -> int:
             if k not in MEASUREMENTS:
                 p.error(f"--only: unknown measurement {k!r}; choose from {', '.join(MEASUREMENTS)}")
     try:
-        if a.out.endswith(("/", "\\")) or Path(a.out).is_dir():
-            raise VrnError(f"{a.out}: is a directory; name the JSON file to write")
         out = check_output(a.out, a.force)
         res = measure_all(a.quick, only)
         write_json(out, res)
