@@ -331,8 +331,10 @@ def test_bench_quality_wide_start(tmp_path):
         )
         assert ck["epoch"] == 2 and ck["init_from"]["path"] == str(d / f"{name}.wide.pt")
         assert methods[name]["epochs"] == 3 and len(methods[name]["curve"]) == 3
+        assert methods[name]["wide_start"] == {"width": 16, "epochs": 1}
         assert ck["config"]["distill"] == wide["config"]["distill"]
     assert load_checkpoint(d / "neumip.pt")["init_from"] is None
+    assert methods["neumip"]["wide_start"] is None
     assert methods["student"]["weight_bytes"] == 1516  # the runtime network is 8 wide
     assert "pruned to 8 wide (--wide-start)" in (out / "results.md").read_text()
     stamp = (d / "student.pt").stat().st_mtime_ns

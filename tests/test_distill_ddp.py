@@ -18,7 +18,8 @@ from vrneural.distill.checkpoint import load_checkpoint
 def test_ddp_equals_single_process(trained, tmp_path):  # noqa: F811
     single, multi = tmp_path / "single.pt", tmp_path / "multi.pt"
     args = ["distill", str(trained["teacher"]), "--epochs", "1", *FAST, "--no-export"]
-    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    # TMPDIR: torchrun's per-run torchelastic_* directories stay in the test's folder
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "TMPDIR": str(tmp_path)}
     code, err = run_cli(*args, "-o", single)  # in-process: saves one torch start-up
     assert code == 0, err
     torchrun = [

@@ -127,6 +127,15 @@ def test_width_and_init_from_end_to_end(tmp_path):
     assert ck["spec"]["coarse_hidden"] == [8, 8] and ck["config"]["init_from"] == str(w)
     assert ck["init_from"]["epochs"] == 1 and ck["init_from"]["spec"] == wide_ck["spec"]
     assert json.loads((tmp_path / "s.pt.config.json").read_text())["init_from"] == str(w)
+    # the packs say what they are: eval's method column, and where the pruned one started
+    from vrneural.scoring.run import label
+
+    pruned = read_vrnm(tmp_path / "s.vrnm")
+    assert label(read_vrnm(tmp_path / "wide.vrnm"), "w")["method"] == "student 16 wide"
+    assert label(pruned, "s")["method"] == "student (16 -> 8 wide)"
+    init = pruned.meta["provenance"]["init_from"]
+    assert (init["width"], init["epochs"]) == (16, 1)
+    assert init["sha256"] == ck["init_from"]["sha256"]
     data = SliceData(read_btf(btf), ck["split"]["test"])
     for path, ckpt in ((tmp_path / "wide.vrnm", wide_ck), (tmp_path / "s.vrnm", ck)):
         net = model_from_checkpoint(ckpt)
@@ -217,3 +226,80 @@ def test_init_from_errors(tmp_path):
         ["distill", t, "-o", s8, "--init-from", s8, "--force", *FAST], "would overwrite the input"
     )
     assert s8.read_bytes() == before
+
+
+def test_wide_start_is_width_then_init_from_in_one_resumable_run(tmp_path, capsys):
+    """``distill --wide-start 16 --epochs 3`` trains exactly what ``--width 16 --epochs 1``
+    and then ``--init-from`` with ``--epochs 2`` train; Ctrl-C in either half resumes to the
+    same weights; every refusal is one line before any work."""
+    import signal
+
+    from vrneural.distill.config import DistillConfig
+    from vrneural.distill.distill import run_distill
+    from vrneural.distill.train import Interrupted
+
+    btf = analytic_btf(tmp_path / "m.btf", res=16, n_dirs=4)
+    t, w, p, s = (tmp_path / f"{n}.pt" for n in ("t", "w", "p", "s"))
+    assert run_cli("teach", btf, "-o", t, "--epochs", 1, *FAST)[0] == 0
+    assert run_cli("distill", t, "-o", w, "--width", 16, "--epochs", 1, *FAST)[0] == 0
+    assert run_cli("distill", t, "-o", p, "--init-from", w, "--epochs", 2, *FAST)[0] == 0
+    capsys.readouterr()
+    code, err = run_cli("distill", t, "-o", s, "--wide-start", 16, "--epochs", 3, *FAST)
+    assert code == 0, err
+    wide = tmp_path / "s.wide.pt"
+    assert f"from {wide} (16 wide, 1 epoch, pruned to 8)" in capsys.readouterr().out
+    assert (tmp_path / "s.wide.pt.config.json").is_file() and (tmp_path / "s.vrnm").is_file()
+    assert not (tmp_path / "s.wide.vrnm").exists()
+    ck, ref = load_checkpoint(s), load_checkpoint(p)
+    assert load_checkpoint(wide)["spec"]["fine_hidden"] == [16] and ck["epoch"] == 2
+    assert ck["init_from"]["path"] == str(wide) and ck["init_from"]["epochs"] == 1
+    for k, v in ref["net"].items():
+        assert torch.equal(v, ck["net"][k]), k
+    assert [h["test_l1"] for h in ck["history"]] == [h["test_l1"] for h in ref["history"]]
+
+    # Ctrl-C in the wide half, then in the pruned half; each resumed without --epochs (the
+    # run's own target, recorded in both halves): the same network
+    kw = dict(teacher=str(t), progress=False, max_test_slices=4, wide_start=16)
+    r = tmp_path / "r.pt"
+    calls = []
+
+    def ctrl_c_at(n):
+        def hook(epoch, step):
+            calls.append(1)
+            if len(calls) == n:
+                signal.raise_signal(signal.SIGINT)
+
+        return hook
+
+    with pytest.raises(Interrupted) as stop:
+        run_distill(DistillConfig(output=str(r), epochs=3, **kw), on_step=ctrl_c_at(3))
+    assert stop.value.path == str(tmp_path / "r.wide.pt") and not r.exists()
+    calls.clear()
+    steps = len(ck["split"]["train"])  # one epoch of the wide half
+    with pytest.raises(Interrupted) as stop:
+        run_distill(DistillConfig(output=str(r), resume=True, **kw), on_step=ctrl_c_at(steps + 2))
+    assert stop.value.path == str(r) and load_checkpoint(r)["finished"] is False
+    code, err = run_cli("distill", t, "-o", r, "--wide-start", 16, "--resume", *FAST)
+    assert code == 0, err
+    got = load_checkpoint(r)
+    assert got["config"]["wide_start_epochs"] == 3 and got["epoch"] == 2
+    for k, v in ck["net"].items():
+        assert torch.equal(v, got["net"][k]), k
+
+    # refusals: one line, exit 2, nothing written or changed
+    before = {f: f.read_bytes() for f in tmp_path.iterdir() if f.is_file()}
+    new = tmp_path / "new.pt"
+    cases = [
+        ([s, "--wide-start", 16, "--epochs", 3], "s.pt"),
+        ([new, "--wide-start", 8], "wider than --width 8"),
+        ([new, "--wide-start", 65], "[9, 64]"),
+        ([new, "--wide-start", 16, "--method", "neumip", "--no-distill"], "NeuMIP is always"),
+        ([new, "--wide-start", 16, "--init-from", w], "pass one of the two"),
+        ([new, "--wide-start", 16, "--epochs", 1], "at least 2"),
+        ([new, "--wide-start", 16, "--resume"], "nothing to resume"),
+        ([s, "--wide-start", 16, "--epochs", 5, "--resume"], "cannot be extended"),
+        ([w, "--wide-start", 32, "--epochs", 2, "--resume"], "was not trained with --wide-start"),
+    ]
+    for flags, needle in cases:
+        expect_one_line_error(["distill", t, "-o", *flags, *FAST], needle)
+    assert {f: f.read_bytes() for f in tmp_path.iterdir() if f.is_file()} == before

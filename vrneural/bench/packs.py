@@ -129,11 +129,28 @@ def distilled(mat) -> bool | None:
     return cfg.get("distill", True) if mat.meta.get("method") != "teacher" else None
 
 
+def pack_width(mat) -> int:
+    """The hidden width of a pack's network (its first layer's outputs)."""
+    return next(iter(mat.networks.values()))[0].n_out
+
+
+def width_words(mat) -> str:
+    """How a student or single8 pack's width differs from the paper's 8: ``" 16 wide"``, or
+    ``" (16 -> 8 wide)"`` for one pruned from a wide run (--wide-start / --init-from); ``""``
+    for an 8-wide one from random weights and for other packs."""
+    if mat.meta.get("method") not in ("student", "single8"):
+        return ""
+    width = pack_width(mat)
+    init = (mat.meta.get("provenance") or {}).get("init_from")
+    if init:
+        return f" ({init['width']} -> {width} wide)"
+    return f" {width} wide" if width != 8 else ""
+
+
 def describe_pack(mat) -> str:
     """What a pack records being, e.g. ``a coarse-to-fine student pack (8 wide, distilled)``."""
     method = mat.meta.get("method")
-    width = next(iter(mat.networks.values()))[0].n_out
-    what = f"{width} wide"
+    what = f"{pack_width(mat)} wide"
     if mat.output == "log1p":
         what += ", log1p output"
     was = distilled(mat) if method else None

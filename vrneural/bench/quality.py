@@ -334,6 +334,19 @@ def _with_wide_start(ck: dict, wide_path: str) -> dict:
     }
 
 
+def _wide_start_record(ck: dict) -> dict | None:
+    """``{"width", "epochs"}`` of the wide run a network was pruned from (``--wide-start``),
+    or None for one trained from random weights."""
+    init = ck.get("init_from")
+    if not init:
+        return None
+    spec = init["spec"]
+    return {
+        "width": max(spec.get("coarse_hidden") or spec["hidden"]),
+        "epochs": int(init["epochs"]),
+    }
+
+
 def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     """Train and evaluate every method on one preset; returns its records."""
     from vrneural.btf.format import read_btf
@@ -401,6 +414,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
             "texture_bytes": mat.texture_bytes,
             "storage_bytes": mat.weight_bytes + mat.texture_bytes,
             "macs_per_texel": mat.macs_per_texel,
+            "wide_start": _wide_start_record(cks[0]),
         }
         out["slices"][name] = [predict_slice(models[0], data, p).numpy() for p in slices]
     out["methods"]["lafortune"], reused = _lafortune(

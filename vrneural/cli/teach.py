@@ -47,6 +47,7 @@ def _report(fn, output: str) -> int:
     from pathlib import Path
 
     from vrneural.distill.train import Interrupted, dist_teardown
+    from vrneural.errors import count
 
     rank0 = int(os.environ.get("RANK", "0")) == 0
     try:
@@ -55,7 +56,8 @@ def _report(fn, output: str) -> int:
         dist_teardown(synchronise=False)
         if rank0:
             print(
-                f"interrupted at {e}; checkpoint saved to {output}; continue with --resume",
+                f"interrupted at {e}; checkpoint saved to {getattr(e, 'path', output)}; "
+                "continue with --resume",
                 file=sys.stderr,
             )
         return 130
@@ -79,7 +81,7 @@ def _report(fn, output: str) -> int:
     if init:  # --init-from: where its weights started
         was = _width(init["spec"])
         cut = f"pruned to {width}" if was != width else "not pruned"
-        method += f", from {init['path']} ({was} wide, {cut})"
+        method += f", from {init['path']} ({was} wide, {count(init['epochs'], 'epoch')}, {cut})"
     print(
         f"{output}: {method} epochs {ck['epoch']}  test L1 {test:.5f}"
         f"  train {ck.get('train_seconds', 0):.1f} s{wrote}"

@@ -105,6 +105,15 @@ class DistillConfig(TrainConfig):
         "start from this run of the same method and teacher (trained at this --width or wider), "
         "its hidden units pruned to --width; see README: Training",
     )
+    wide_start: int = opt(
+        0,
+        "train this wide for the first half of --epochs (into <output>.wide.pt), then prune to "
+        "--width and train on for the rest: --width and --init-from in one run (0 = off, from "
+        "random weights as the paper; see README: Training)",
+    )
+    wide_start_epochs: int = opt(
+        0, "with --wide-start: the epochs of both halves, recorded in each (0: not one)", cli=False
+    )
     coarse_channels: int = opt(8, "student U_c channels (one texel per 2x2 block)")
     fine_channels: int = opt(8, "student U_f channels (full BTF resolution)")
     export: bool = opt(True, "also write the runtime pack beside the checkpoint (s.pt -> s.vrnm)")

@@ -14,10 +14,17 @@ import warnings
 from pathlib import Path
 
 import torch
+import torch.distributed as dist
 from torch import nn
 
 from vrneural.btf.format import read_btf
-from vrneural.config import is_explicit, keep_flag_names, replace_config
+from vrneural.config import (
+    is_explicit,
+    keep_flag_names,
+    mark_explicit,
+    name_flag,
+    replace_config,
+)
 from vrneural.distill.checkpoint import (
     UnfinishedRunWarning,
     load_checkpoint,
@@ -33,7 +40,7 @@ from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
 from vrneural.distill.prune import prune_to
 from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
-from vrneural.errors import VrnError, check_range
+from vrneural.errors import VrnError, check_range, count
 from vrneural.formats.atomic import check_not_input, file_sha256, same_file
 
 
@@ -201,8 +208,99 @@ def teacher_split(cfg: DistillConfig, tck: dict, resume: bool) -> DistillConfig:
     return cfg
 
 
+def wide_output(output) -> str:
+    """Where ``--wide-start`` keeps its wide run: ``student.pt`` -> ``student.wide.pt``."""
+    outputs_of(output, False)  # the .pt check, with its message
+    return str(Path(output).with_suffix(".wide.pt"))
+
+
+def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
+    """``--wide-start W``: train W wide for ``epochs // 2`` epochs into ``<output>.wide.pt``,
+    prune that run to ``--width`` and train on for the other epochs into ``--output`` (what
+    ``--width W`` and then ``--init-from`` do, as one resumable run). Every output of both
+    halves is checked before any work. Returns the pruned run's final checkpoint."""
+    w = cfg.wide_start
+    if cfg.method == "neumip":
+        raise VrnError(
+            "--wide-start: prunes the 8-wide networks (student, single8); NeuMIP is "
+            "always 4 x 25 (drop --wide-start)"
+        )
+    if cfg.init_from:
+        raise VrnError(
+            "--wide-start trains its own wide run; --init-from starts from another "
+            "one (pass one of the two)"
+        )
+    check_range("--width", cfg.width, 1, 64)
+    if not cfg.width < w <= 64:
+        raise VrnError(
+            f"--wide-start {w}: 0 (off) or a width in [{cfg.width + 1}, 64], wider than "
+            f"--width {cfg.width}"
+        )
+    if cfg.epochs < 2:
+        raise VrnError(
+            f"--epochs {cfg.epochs} with --wide-start: half the epochs go to the wide run and "
+            "half to the pruned one, so at least 2"
+        )
+    wide_path = wide_output(cfg.output)
+    if cfg.resume and not is_explicit(cfg, "epochs"):  # no --epochs: the run's own target
+        cfg = replace_config(cfg, epochs=_planned_epochs(cfg.output, wide_path) or cfg.epochs)
+    wide_epochs = cfg.epochs // 2
+    both = dict(wide_start=0, wide_start_epochs=cfg.epochs)
+    wide = replace_config(cfg, output=wide_path, width=w, epochs=wide_epochs, export=False, **both)
+    narrow = replace_config(cfg, epochs=cfg.epochs - wide_epochs, init_from=wide_path, **both)
+    for c in (wide, narrow):
+        mark_explicit(c, "epochs")  # a resumed half goes to its share, not its stored target
+        name_flag(c, "epochs", "")  # no option sets one half's epochs directly
+    if cfg.resume and Path(cfg.output).exists():  # the pruned half began: continue it
+        _check_wide_start(cfg, wide_epochs)
+        return run_distill(narrow, on_step)
+    if cfg.resume and not Path(wide_path).exists():
+        raise VrnError(
+            f"--resume: nothing to resume, neither {cfg.output} nor its wide start {wide_path} "
+            "exists; drop --resume to start a new run"
+        )
+    if not cfg.resume:  # the pruned half's outputs, before the wide half's work
+        outs = outputs_of(cfg.output, cfg.export)
+        prepare_outputs(narrow, outs, inputs=[cfg.teacher, cfg.btf, wide_path])
+    run_distill(wide, on_step)
+    if dist.is_initialized():
+        dist.barrier()  # rank 0 wrote the wide run; every rank prunes it
+    return run_distill(replace_config(narrow, resume=False), on_step)
+
+
+def _planned_epochs(output: str, wide_path: str) -> int | None:
+    """The epochs of both halves that a ``--wide-start`` run at ``output`` was started with
+    (its checkpoints record them), None where neither half records them."""
+    for f in (output, wide_path):
+        if Path(f).is_file():
+            planned = load_checkpoint(f)["config"].get("wide_start_epochs")
+            if planned:
+                return int(planned)
+    return None
+
+
+def _check_wide_start(cfg: DistillConfig, wide_epochs: int) -> None:
+    """``--resume --wide-start``: the pruned run at ``--output`` must come from a wide start of
+    this length (a wide start cannot be extended: its pruned half would start again)."""
+    ck = load_checkpoint(cfg.output, kind="student")
+    init = ck.get("init_from")
+    if not init:
+        raise VrnError(
+            f"{cfg.output}: was not trained with --wide-start (it started from random weights); "
+            "resume it without --wide-start, or start over with --force"
+        )
+    if int(init["epochs"]) != wide_epochs:
+        raise VrnError(
+            f"{cfg.output}: was pruned from a wide start of {count(int(init['epochs']), 'epoch')}"
+            f", and --epochs {cfg.epochs} with --wide-start asks for {wide_epochs}; a wide start "
+            "cannot be extended (--force retrains both halves)"
+        )
+
+
 def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     """Train (or resume) a student/baseline; returns the final checkpoint dict."""
+    if cfg.wide_start:
+        return run_wide_start(cfg, on_step)
     check_train_config(cfg)
     for k in ("sigma", "lambda1", "lambda2"):
         check_range(f"--{k}", getattr(cfg, k), 0.0, 100.0)

@@ -119,6 +119,8 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None):
             "seed": cfg["seed"],
             "split_seed": cfg["split_seed"],
             "epochs": ck["epoch"],
+            # --init-from / --wide-start: the wide run it was pruned from (None: random init)
+            "init_from": _init_record(ck.get("init_from")),
             "config": cfg,
             "vrneural": __version__,
             "torch": str(torch.__version__),
@@ -181,3 +183,16 @@ def _sha256_or_none(path) -> str | None:
     from vrneural.formats.atomic import file_sha256
 
     return file_sha256(path) if path and Path(path).is_file() else None
+
+
+def _init_record(init: dict | None) -> dict | None:
+    """A checkpoint's ``init_from`` for the pack: the wide run's file, hash, width, epochs."""
+    if not init:
+        return None
+    spec = init["spec"]
+    return {
+        "path": init["path"],
+        "sha256": init["sha256"],
+        "width": max(spec.get("coarse_hidden") or spec["hidden"]),
+        "epochs": int(init["epochs"]),
+    }

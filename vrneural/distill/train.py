@@ -285,7 +285,9 @@ def fit(
                 if _stopping(stop.flag, world, dev):
                     seconds += time.perf_counter() - t0
                     save(False)
-                    raise Interrupted(f"epoch {epoch + 1} step {step}/{n}")
+                    stopped = Interrupted(f"epoch {epoch + 1} step {step}/{n}")
+                    stopped.path = out  # the checkpoint it saved (a --wide-start half)
+                    raise stopped
             net.eval()
             with torch.no_grad(), ema.applied() if ema else contextlib.nullcontext():
                 last_test = float(test_l1())

@@ -153,11 +153,11 @@ def trainer_test(mat, test: list[int] | None) -> list[int] | None:
 
 def label(mat, path: str) -> dict:
     """What the table says of a pack: name, method, MACs per texel, bytes."""
-    from vrneural.bench.packs import distilled
+    from vrneural.bench.packs import distilled, width_words
 
-    method = mat.meta.get("method") or "?"
-    if method == "student" and distilled(mat) is False:
-        method = "student w/o distillation"
+    method = (mat.meta.get("method") or "?") + width_words(mat)
+    if mat.meta.get("method") == "student" and distilled(mat) is False:
+        method += " w/o distillation"
     return {
         "pack": str(path),
         "method": method,
