@@ -223,3 +223,33 @@ def test_no_export_beside_an_earlier_pack_warns_that_it_goes_stale(trained, tmp_
         )
     assert code == 0, err
     assert (tmp_path / "teacher.vrnm").read_bytes() == before  # warned about, never deleted
+
+
+def test_force_then_ctrl_c_resumes_the_new_run(trained, tmp_path):  # noqa: F811
+    """A finished run at -o, retrained with --force and interrupted before it finishes: the
+    old run's config and pack are gone (not taken for the new run's), so --resume works."""
+    import signal
+
+    from vrneural.distill.config import DistillConfig
+    from vrneural.distill.distill import run_distill
+    from vrneural.distill.train import Interrupted
+
+    s = tmp_path / "s.pt"
+    args = ["distill", trained["teacher"], "-o", s, "--epochs", 1, *FAST]
+    assert run_cli(*args)[0] == 0
+    olds = outputs_of(str(s), True)[1:]
+    assert all(Path(o).is_file() for o in olds)
+
+    def ctrl_c(epoch, step):
+        if step == 2:
+            signal.raise_signal(signal.SIGINT)
+
+    kw = dict(teacher=str(trained["teacher"]), progress=False, max_test_slices=4, epochs=2)
+    with pytest.raises(Interrupted):
+        run_distill(DistillConfig(output=str(s), force=True, seed=3, **kw), on_step=ctrl_c)
+    assert not any(Path(o).exists() for o in olds)
+    code, err = run_cli("distill", trained["teacher"], "-o", s, "--resume", *FAST)
+    assert code == 0, err
+    ck = load_checkpoint(s)
+    assert ck["epoch"] == 2 and ck["config"]["seed"] == 3
+    assert all(Path(o).is_file() for o in olds)

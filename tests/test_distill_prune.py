@@ -279,12 +279,51 @@ def test_wide_start_is_width_then_init_from_in_one_resumable_run(tmp_path, capsy
     with pytest.raises(Interrupted) as stop:
         run_distill(DistillConfig(output=str(r), resume=True, **kw), on_step=ctrl_c_at(steps + 2))
     assert stop.value.path == str(r) and load_checkpoint(r)["finished"] is False
-    code, err = run_cli("distill", t, "-o", r, "--wide-start", 16, "--resume", *FAST)
+    assert "pruned half, 8 wide" in str(stop.value) and stop.value.resume == f"-o {r} --resume"
+    code, err = run_cli("distill", t, "-o", r, "--resume", *FAST)  # --wide-start is recorded
     assert code == 0, err
     got = load_checkpoint(r)
-    assert got["config"]["wide_start_epochs"] == 3 and got["epoch"] == 2
+    assert (got["config"]["wide_start"], got["config"]["wide_start_epochs"]) == (16, 3)
+    assert got["epoch"] == 2 and got["config"]["wide_start_width"] == 8
     for k, v in ck["net"].items():
         assert torch.equal(v, got["net"][k]), k
+    code, err = run_cli("distill", t, "-o", r, "--resume", *FAST)  # finished: says so
+    assert code == 0 and "nothing left to train; a wide start cannot be extended" in err, err
+
+    # --force starts both halves afresh: interrupted in its wide half, the old pruned half
+    # is gone, so --resume continues the new run (not the old one's result)
+    calls.clear()
+    with pytest.raises(Interrupted) as stop:
+        run_distill(DistillConfig(output=str(r), epochs=3, force=True, **kw), ctrl_c_at(2))
+    assert "wide half, 16 wide" in str(stop.value) and not r.exists()
+    assert not (tmp_path / "r.vrnm").exists()
+    # a stray file where the pruned half will write: refused before the wide half trains on
+    stray = tmp_path / "r.vrnm"
+    stray.write_bytes(b"x")
+    wide_before = (tmp_path / "r.wide.pt").read_bytes()
+    expect_one_line_error(["distill", t, "-o", r, "--resume", *FAST], "r.vrnm: exists")
+    assert (tmp_path / "r.wide.pt").read_bytes() == wide_before
+    stray.unlink()
+    # the wide half is resumed through its run, and flags must match what the run recorded
+    expect_one_line_error(
+        ["distill", t, "-o", tmp_path / "r.wide.pt", "--resume", *FAST],
+        "is the wide half of a --wide-start run",
+        f"-o {r} --resume",
+    )
+    for flags, needle in (
+        (["--width", 4], "--width = 4, but"),
+        (["--wide-start", 32], "--wide-start = 32, but"),
+        (["--epochs", 5], "--epochs = 5, but"),
+    ):
+        expect_one_line_error(["distill", t, "-o", r, "--resume", *flags, *FAST], needle)
+    assert (tmp_path / "r.wide.pt").read_bytes() == wide_before
+    with pytest.warns(UnfinishedRunWarning, match=f"its --wide-start run, .* -o {r} --resume"):
+        code, err = run_cli("export", tmp_path / "r.wide.pt", "-o", tmp_path / "rw.vrnm")
+    assert code == 0, err
+    code, err = run_cli("distill", t, "-o", r, "--resume", *FAST)
+    assert code == 0, err
+    for k, v in ck["net"].items():
+        assert torch.equal(v, load_checkpoint(r)["net"][k]), k
 
     # refusals: one line, exit 2, nothing written or changed
     before = {f: f.read_bytes() for f in tmp_path.iterdir() if f.is_file()}
@@ -297,9 +336,13 @@ def test_wide_start_is_width_then_init_from_in_one_resumable_run(tmp_path, capsy
         ([new, "--wide-start", 16, "--init-from", w], "pass one of the two"),
         ([new, "--wide-start", 16, "--epochs", 1], "at least 2"),
         ([new, "--wide-start", 16, "--resume"], "nothing to resume"),
-        ([s, "--wide-start", 16, "--epochs", 5, "--resume"], "cannot be extended"),
+        ([s, "--wide-start", 16, "--epochs", 5, "--resume"], "its epochs were split"),
+        ([s, "--resume", "--epochs", 5], "--epochs = 5, but", "--wide-start"),
+        ([s, "--resume", "--width", 4], "--width = 4, but"),
         ([w, "--wide-start", 32, "--epochs", 2, "--resume"], "was not trained with --wide-start"),
+        ([p, "--wide-start", 16, "--epochs", 3, "--resume"], "was not trained with --wide-start"),
+        ([new, "--width", 64, "--wide-start", 65], "64 is the widest"),
     ]
-    for flags, needle in cases:
-        expect_one_line_error(["distill", t, "-o", *flags, *FAST], needle)
+    for flags, *needles in cases:
+        expect_one_line_error(["distill", t, "-o", *flags, *FAST], *needles)
     assert {f: f.read_bytes() for f in tmp_path.iterdir() if f.is_file()} == before

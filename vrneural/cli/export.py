@@ -24,11 +24,13 @@ def run(args) -> int:
     import json
     from pathlib import Path
 
+    from vrneural.bench.packs import width_words
     from vrneural.config import config_path
     from vrneural.distill.checkpoint import load_checkpoint
     from vrneural.distill.export import export_checkpoint, ranges_table
     from vrneural.errors import VrnError
     from vrneural.formats.atomic import check_outputs, write_json
+    from vrneural.formats.vrnm import read_vrnm
 
     if Path(args.output).suffix != ".vrnm":
         raise VrnError(f"{args.output}: output pack must end in .vrnm")
@@ -56,7 +58,8 @@ def run(args) -> int:
         print(ranges_table(meta["ranges"]))
         m = meta["metrics"]
         print(
-            f"{out}: {meta['method']}  weights {m['weight_bytes']} B  textures "
+            f"{out}: {meta['method']}{width_words(read_vrnm(out))}  weights "
+            f"{m['weight_bytes']} B  textures "
             f"{m['texture_bytes']} B  {m['macs_per_texel']:g} MACs/texel  test L1 "
             f"{'n/a (no epoch done)' if m['test_l1'] is None else format(m['test_l1'], '.5f')}"
             f"  numpy-vs-torch {m['pack_vs_torch_max_abs']:.2e}"
@@ -70,10 +73,15 @@ def _warn_unfinished(path, ck: dict) -> None:
 
     from vrneural.distill.checkpoint import UnfinishedRunWarning, unfinished_run
 
+    from vrneural.distill.distill import is_wide_half, run_of_wide_half
+
     cmd = "teach BTF" if ck.get("kind") == "teacher" else "distill TEACHER"
+    how = f"`vrneural {cmd} -o {path} --resume` (which replaces this pack)"
+    if is_wide_half(ck.get("config", {})):  # the wide half of --wide-start: resume the run
+        run = run_of_wide_half(path)
+        how = f"its --wide-start run, `vrneural {cmd} -o {run} --resume`"
     warnings.warn(
-        f"{path}: {unfinished_run(ck)}; exporting it as it is; finish it with "
-        f"`vrneural {cmd} -o {path} --resume` (which replaces this pack)",
+        f"{path}: {unfinished_run(ck)}; exporting it as it is; finish it with {how}",
         UnfinishedRunWarning,
         stacklevel=1,
     )

@@ -57,7 +57,7 @@ def _report(fn, output: str) -> int:
         if rank0:
             print(
                 f"interrupted at {e}; checkpoint saved to {getattr(e, 'path', output)}; "
-                "continue with --resume",
+                f"continue with {getattr(e, 'resume', '--resume')}",
                 file=sys.stderr,
             )
         return 130

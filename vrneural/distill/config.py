@@ -111,9 +111,10 @@ class DistillConfig(TrainConfig):
         "--width and train on for the rest: --width and --init-from in one run (0 = off, from "
         "random weights as the paper; see README: Training)",
     )
-    wide_start_epochs: int = opt(
-        0, "with --wide-start: the epochs of both halves, recorded in each (0: not one)", cli=False
-    )
+    # recorded in both halves of a --wide-start run (the wide one has no init_from): what the
+    # whole run was started with, so that --resume of either half continues that run
+    wide_start_epochs: int = opt(0, "with --wide-start: the epochs of both halves", cli=False)
+    wide_start_width: int = opt(0, "with --wide-start: the width it is pruned to", cli=False)
     coarse_channels: int = opt(8, "student U_c channels (one texel per 2x2 block)")
     fine_channels: int = opt(8, "student U_f channels (full BTF resolution)")
     export: bool = opt(True, "also write the runtime pack beside the checkpoint (s.pt -> s.vrnm)")

@@ -10,6 +10,7 @@ hidden vectors of :func:`~vrneural.distill.models.make_spec` (for the coarse-to-
 from __future__ import annotations
 
 import dataclasses
+import sys
 import warnings
 from pathlib import Path
 
@@ -39,7 +40,7 @@ from vrneural.distill.models import NeuralModel, apply_output, make_spec
 from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
 from vrneural.distill.prune import prune_to
 from vrneural.distill.teach import check_train_config, resumed_config
-from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
+from vrneural.distill.train import Interrupted, compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, count
 from vrneural.formats.atomic import check_not_input, file_sha256, same_file
 
@@ -209,16 +210,86 @@ def teacher_split(cfg: DistillConfig, tck: dict, resume: bool) -> DistillConfig:
 
 
 def wide_output(output) -> str:
-    """Where ``--wide-start`` keeps its wide run: ``student.pt`` -> ``student.wide.pt``."""
+    """Where ``--wide-start`` keeps its wide half: ``student.pt`` -> ``student.wide.pt``."""
     outputs_of(output, False)  # the .pt check, with its message
     return str(Path(output).with_suffix(".wide.pt"))
 
 
+def run_of_wide_half(wide_path) -> str:
+    """The output of the ``--wide-start`` run a wide half belongs to (``s.wide.pt`` -> ``s.pt``)."""
+    return str(Path(wide_path).with_suffix("")).removesuffix(".wide") + ".pt"
+
+
+def is_wide_half(config: dict) -> bool:
+    """Whether a checkpoint's config is the wide half of a ``--wide-start`` run."""
+    return bool(config.get("wide_start")) and not config.get("init_from")
+
+
+def stored_wide_start(output: str) -> dict | None:
+    """The config of the ``--wide-start`` run at ``output`` (its pruned half, or where that has
+    not begun its wide half ``<output>.wide.pt``), None where there is none. ``output`` itself
+    being a wide half is an error: the run is resumed by its own output."""
+    if Path(output).is_file():
+        c = load_checkpoint(output)["config"]
+        if is_wide_half(c):
+            raise VrnError(
+                f"{output}: is the wide half of a --wide-start run; resume the run: "
+                f"vrneural distill TEACHER -o {run_of_wide_half(output)} --resume"
+            )
+        return c if c.get("wide_start") else None
+    wide = wide_output(output)
+    if Path(wide).is_file():
+        c = load_checkpoint(wide)["config"]
+        return c if is_wide_half(c) else None
+    return None
+
+
+#: (option, field of the checkpoint's config recording it) that a --resume must not contradict
+WIDE_START_RECORD = (
+    ("wide_start", "wide_start"),
+    ("width", "wide_start_width"),
+    ("epochs", "wide_start_epochs"),
+)
+
+
 def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
     """``--wide-start W``: train W wide for ``epochs // 2`` epochs into ``<output>.wide.pt``,
-    prune that run to ``--width`` and train on for the other epochs into ``--output`` (what
-    ``--width W`` and then ``--init-from`` do, as one resumable run). Every output of both
-    halves is checked before any work. Returns the pruned run's final checkpoint."""
+    prune that half to ``--width`` and train on for the other epochs into ``--output`` (what
+    ``--width W`` and then ``--init-from`` do, as one run). Every output of both halves is
+    checked before any work; ``--force`` removes the old pruned half's files as the new run
+    starts; ``--resume`` (of the output, with or without ``--wide-start``) continues whichever
+    half was interrupted, with the settings the run was started with. Returns the pruned
+    half's final checkpoint."""
+    stored = stored_wide_start(cfg.output) if cfg.resume else None
+    if cfg.resume and stored is None:
+        if Path(cfg.output).exists():
+            raise VrnError(
+                f"{cfg.output}: was not trained with --wide-start (it started from random "
+                "weights or from --init-from); resume it without --wide-start, or start over "
+                "with --force"
+            )
+        raise VrnError(
+            f"--resume: nothing to resume, neither {cfg.output} nor its wide half "
+            f"{wide_output(cfg.output)} exists; drop --resume to start a new run"
+        )
+    if stored is not None:  # the run's own settings; a flag that contradicts one is an error
+        for name, key in WIDE_START_RECORD:
+            now, was = getattr(cfg, name), int(stored[key])
+            if is_explicit(cfg, name) and now != was:
+                why = (
+                    "its epochs were split between the halves when it began"
+                    if name == "epochs"
+                    else "--resume continues the run's settings"
+                )
+                raise VrnError(
+                    f"--{name.replace('_', '-')} = {now}, but {cfg.output} is a --wide-start "
+                    f"run with --{name.replace('_', '-')} {was}; {why} (drop the flag, or start "
+                    "over: --force instead of --resume)"
+                )
+        cfg = replace_config(
+            cfg,
+            **{name: int(stored[key]) for name, key in WIDE_START_RECORD},
+        )
     w = cfg.wide_start
     if cfg.method == "neumip":
         raise VrnError(
@@ -231,6 +302,8 @@ def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
             "one (pass one of the two)"
         )
     check_range("--width", cfg.width, 1, 64)
+    if cfg.width == 64:
+        raise VrnError("--wide-start: --width 64 leaves no wider start (64 is the widest)")
     if not cfg.width < w <= 64:
         raise VrnError(
             f"--wide-start {w}: 0 (off) or a width in [{cfg.width + 1}, 64], wider than "
@@ -238,69 +311,84 @@ def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
         )
     if cfg.epochs < 2:
         raise VrnError(
-            f"--epochs {cfg.epochs} with --wide-start: half the epochs go to the wide run and "
-            "half to the pruned one, so at least 2"
+            f"--epochs {cfg.epochs} with --wide-start: the wide half gets epochs // 2 and the "
+            "pruned half the rest, so at least 2"
         )
-    wide_path = wide_output(cfg.output)
-    if cfg.resume and not is_explicit(cfg, "epochs"):  # no --epochs: the run's own target
-        cfg = replace_config(cfg, epochs=_planned_epochs(cfg.output, wide_path) or cfg.epochs)
-    wide_epochs = cfg.epochs // 2
-    both = dict(wide_start=0, wide_start_epochs=cfg.epochs)
-    wide = replace_config(cfg, output=wide_path, width=w, epochs=wide_epochs, export=False, **both)
-    narrow = replace_config(cfg, epochs=cfg.epochs - wide_epochs, init_from=wide_path, **both)
+    wide_path, wide_epochs = wide_output(cfg.output), cfg.epochs // 2
+    record = dict(wide_start_epochs=cfg.epochs, wide_start_width=cfg.width)
+    wide = replace_config(
+        cfg, output=wide_path, width=w, epochs=wide_epochs, export=False, **record
+    )
+    narrow = replace_config(cfg, epochs=cfg.epochs - wide_epochs, init_from=wide_path, **record)
     for c in (wide, narrow):
-        mark_explicit(c, "epochs")  # a resumed half goes to its share, not its stored target
+        mark_explicit(c, "epochs")  # a half goes to its share, not its stored target
         name_flag(c, "epochs", "")  # no option sets one half's epochs directly
-    if cfg.resume and Path(cfg.output).exists():  # the pruned half began: continue it
-        _check_wide_start(cfg, wide_epochs)
-        return run_distill(narrow, on_step)
-    if cfg.resume and not Path(wide_path).exists():
-        raise VrnError(
-            f"--resume: nothing to resume, neither {cfg.output} nor its wide start {wide_path} "
-            "exists; drop --resume to start a new run"
-        )
-    if not cfg.resume:  # the pruned half's outputs, before the wide half's work
-        outs = outputs_of(cfg.output, cfg.export)
-        prepare_outputs(narrow, outs, inputs=[cfg.teacher, cfg.btf, wide_path])
-    run_distill(wide, on_step)
-    if dist.is_initialized():
-        dist.barrier()  # rank 0 wrote the wide run; every rank prunes it
-    return run_distill(replace_config(narrow, resume=False), on_step)
+    outs = outputs_of(cfg.output, cfg.export)
+    try:
+        if cfg.resume and Path(cfg.output).exists():  # the pruned half began: continue it
+            return _resume_pruned_half(cfg, narrow, wide_path, on_step)
+        if cfg.resume:  # the wide half only: its pruned half will write every output
+            for o in outs:
+                if Path(o).exists():
+                    raise VrnError(
+                        f"{o}: exists, and the pruned half of {cfg.output} (not begun yet) "
+                        "would write it; --resume replaces only its own files, so move it away "
+                        "first"
+                    )
+        else:  # the pruned half's outputs, before the wide half's work
+            prepare_outputs(narrow, outs, inputs=[cfg.teacher, cfg.btf, wide_path])
+            if cfg.force:  # an old pruned half must not pass for this run's
+                for o in outs:
+                    Path(o).unlink(missing_ok=True)
+        wck = _train(wide, on_step)
+        if cfg.progress and _rank() == 0:
+            test = wck["history"][-1]["test_l1"] if wck["history"] else float("nan")
+            print(
+                f"{wide_path}: wide half done ({w} wide, {count(wide_epochs, 'epoch')}, test "
+                f"L1 {test:.5f}); pruning to {cfg.width} wide",
+                file=sys.stderr,
+            )
+        if dist.is_initialized():
+            dist.barrier()  # rank 0 wrote the wide half; every rank prunes it
+        return _train(replace_config(narrow, resume=False, force=False), on_step)
+    except Interrupted as e:
+        e.resume = f"-o {cfg.output} --resume"  # the whole run, not the half's file
+        raise
 
 
-def _planned_epochs(output: str, wide_path: str) -> int | None:
-    """The epochs of both halves that a ``--wide-start`` run at ``output`` was started with
-    (its checkpoints record them), None where neither half records them."""
-    for f in (output, wide_path):
-        if Path(f).is_file():
-            planned = load_checkpoint(f)["config"].get("wide_start_epochs")
-            if planned:
-                return int(planned)
-    return None
+def _rank() -> int:
+    return dist.get_rank() if dist.is_initialized() else 0
 
 
-def _check_wide_start(cfg: DistillConfig, wide_epochs: int) -> None:
-    """``--resume --wide-start``: the pruned run at ``--output`` must come from a wide start of
-    this length (a wide start cannot be extended: its pruned half would start again)."""
+def _resume_pruned_half(cfg, narrow, wide_path: str, on_step) -> dict:
+    """``--resume`` of a wide-start run whose pruned half began: continue it, after checking
+    that it was pruned from the wide half that is there now."""
     ck = load_checkpoint(cfg.output, kind="student")
-    init = ck.get("init_from")
-    if not init:
+    init = ck.get("init_from") or {}
+    if Path(wide_path).is_file() and file_sha256(wide_path) != init.get("sha256"):
         raise VrnError(
-            f"{cfg.output}: was not trained with --wide-start (it started from random weights); "
-            "resume it without --wide-start, or start over with --force"
+            f"{cfg.output}: was pruned from another {Path(wide_path).name} than the one there "
+            "now (its SHA-256 differs); start over with --force"
         )
-    if int(init["epochs"]) != wide_epochs:
-        raise VrnError(
-            f"{cfg.output}: was pruned from a wide start of {count(int(init['epochs']), 'epoch')}"
-            f", and --epochs {cfg.epochs} with --wide-start asks for {wide_epochs}; a wide start "
-            "cannot be extended (--force retrains both halves)"
+    if ck.get("finished", True) and int(ck["epoch"]) >= narrow.epochs and _rank() == 0:
+        print(
+            f"{cfg.output}: already trained ({count(cfg.epochs, 'epoch')}: {cfg.wide_start} wide "
+            f"for {init.get('epochs', '?')}, then {cfg.width} wide), nothing left to train; a "
+            "wide start cannot be extended (--force retrains both halves)",
+            file=sys.stderr,
         )
+    return _train(narrow, on_step)
 
 
 def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     """Train (or resume) a student/baseline; returns the final checkpoint dict."""
-    if cfg.wide_start:
+    if cfg.wide_start or (cfg.resume and stored_wide_start(cfg.output)):
         return run_wide_start(cfg, on_step)
+    return _train(cfg, on_step)
+
+
+def _train(cfg: DistillConfig, on_step=None) -> dict:
+    """One training run (a whole ``distill`` run, or one half of a ``--wide-start`` run)."""
     check_train_config(cfg)
     for k in ("sigma", "lambda1", "lambda2"):
         check_range(f"--{k}", getattr(cfg, k), 0.0, 100.0)

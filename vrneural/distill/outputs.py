@@ -2,7 +2,9 @@
 
 ``teach`` and ``distill`` write the checkpoint ``x.pt``, its ``x.pt.config.json`` and (unless
 ``--no-export``) the pack ``x.vrnm`` with ``x.vrnm.config.json``. A fresh run refuses every
-one that exists without ``--force``; no run writes over one of its inputs, even with
+one that exists without ``--force``; with ``--force`` the old config and pack files are
+removed as the run starts (the checkpoint is replaced by the first save), so that an interrupted
+new run resumes without taking them for its own; no run writes over one of its inputs, even with
 ``--force``. ``--resume`` continues the checkpoint and, when it finishes, replaces the pack and
 config files beside it only where this run wrote them earlier: their recorded test-L1 curve is
 the start of the checkpoint's (for a given config and BTF that curve identifies the run).
@@ -70,6 +72,9 @@ def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
                 "to start over"
             )
     check_outputs(outputs, cfg.force, inputs)
+    if cfg.force:  # an old run's config and pack must not pass for this run's on --resume
+        for o in outputs[1:]:
+            Path(o).unlink(missing_ok=True)
     pack = Path(cfg.output).with_suffix(".vrnm")
     if not cfg.export and pack.exists():  # kept, but it will not be this run's network
         warnings.warn(

@@ -65,6 +65,10 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
     the checkpoint's nor the default) is an error, not silently ignored; so is an ``--epochs``
     below the epochs already trained.
     """
+
+    def shown(k: str) -> str:  # name_flag(cfg, k, "") (no option sets it): the field's own
+        return flag(cfg, k) or "--" + k.replace("_", "-")
+
     for f in dataclasses.fields(cfg):
         k = f.name
         if k in free or k in ("force", "btf", "teacher") or k not in stored:
@@ -72,7 +76,7 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
         now = getattr(cfg, k)
         if now != stored[k] and is_explicit(cfg, k):
             raise VrnError(
-                f"{flag(cfg, k)} = {now!r}, but {cfg.output} was trained with "
+                f"{shown(k)} = {now!r}, but {cfg.output} was trained with "
                 f"{stored[k]!r}; --resume continues the checkpoint's settings (drop the flag, "
                 "or start over: --force instead of --resume)"
             )
@@ -82,8 +86,8 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
     done = int(ck["epoch"])
     if merged["epochs"] < done:
         raise VrnError(
-            f"{flag(cfg, 'epochs')} = {merged['epochs']}, but {cfg.output} already has "
-            f"{count(done, 'epoch')}; pass {flag(cfg, 'epochs')} {done} or more to continue it"
+            f"{shown('epochs')} = {merged['epochs']}, but {cfg.output} already has "
+            f"{count(done, 'epoch')}; pass {shown('epochs')} {done} or more to continue it"
         )
     return merged
 

@@ -149,6 +149,14 @@ class Ema:
         self.count = int(state["count"])
 
 
+def half_words(cfg) -> str:
+    """Which half of a ``distill --wide-start`` run ``cfg`` trains, in words ("" otherwise)."""
+    w = getattr(cfg, "wide_start", 0)
+    if not w:
+        return ""
+    return f" (wide half, {w} wide)" if not cfg.init_from else f" (pruned half, {cfg.width} wide)"
+
+
 class Interrupted(KeyboardInterrupt):
     """Raised after the checkpoint of an interrupted run is saved (a KeyboardInterrupt, so
     callers that do not know it still exit with code 130)."""
@@ -245,7 +253,7 @@ def fit(
 
         bar = tqdm(
             total=(cfg.epochs - epoch) * n - step,
-            desc=str(payload.get("method") or payload.get("kind") or "train"),
+            desc=str(payload.get("method") or payload.get("kind") or "train") + half_words(cfg),
             unit="slice",
             dynamic_ncols=True,
         )
@@ -285,7 +293,7 @@ def fit(
                 if _stopping(stop.flag, world, dev):
                     seconds += time.perf_counter() - t0
                     save(False)
-                    stopped = Interrupted(f"epoch {epoch + 1} step {step}/{n}")
+                    stopped = Interrupted(f"epoch {epoch + 1} step {step}/{n}{half_words(cfg)}")
                     stopped.path = out  # the checkpoint it saved (a --wide-start half)
                     raise stopped
             net.eval()

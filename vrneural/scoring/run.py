@@ -156,7 +156,7 @@ def label(mat, path: str) -> dict:
     from vrneural.bench.packs import distilled, width_words
 
     method = (mat.meta.get("method") or "?") + width_words(mat)
-    if mat.meta.get("method") == "student" and distilled(mat) is False:
+    if mat.meta.get("method") in ("student", "single8") and distilled(mat) is False:
         method += " w/o distillation"
     return {
         "pack": str(path),
