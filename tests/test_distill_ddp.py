@@ -15,9 +15,13 @@ from distill_helpers import FAST, run_cli, trained  # noqa: F401 (fixture)
 from vrneural.distill.checkpoint import load_checkpoint
 
 
-def test_ddp_equals_single_process(trained, tmp_path):  # noqa: F811
+@pytest.mark.parametrize("wide", [False, True], ids=["plain", "wide-start"])
+def test_ddp_equals_single_process(trained, tmp_path, wide):  # noqa: F811
+    """Plain, and --wide-start (both halves under DDP, every rank pruning the wide half that
+    rank 0 wrote)."""
     single, multi = tmp_path / "single.pt", tmp_path / "multi.pt"
-    args = ["distill", str(trained["teacher"]), "--epochs", "1", *FAST, "--no-export"]
+    epochs = ["--epochs", "2", "--wide-start", "16"] if wide else ["--epochs", "1"]
+    args = ["distill", str(trained["teacher"]), *epochs, *FAST, "--no-export"]
     # TMPDIR: torchrun's per-run torchelastic_* directories stay in the test's folder
     env = {**os.environ, "OMP_NUM_THREADS": "1", "TMPDIR": str(tmp_path)}
     code, err = run_cli(*args, "-o", single)  # in-process: saves one torch start-up
@@ -54,6 +58,9 @@ def test_ddp_equals_single_process(trained, tmp_path):  # noqa: F811
         warnings.warn(f"torchrun failed once, then passed:\n{failures[0]}", stacklevel=1)
     a, b = load_checkpoint(single), load_checkpoint(multi)
     assert b["epoch"] == 1 and b["finished"]
+    if wide:  # the pruned half started from the same wide half
+        assert b["init_from"]["spec"] == a["init_from"]["spec"]
+        assert b["init_from"]["path"] == str(tmp_path / "multi.wide.pt")
     # gradients are averaged over two equal halves of each slice: equal to the full-slice
     # gradient up to float32 summation order; after one epoch of Adam the weights agree to
     # about 1e-6 (measured 2e-7); a wrong split (e.g. unequal shares) is off by > 1e-3
