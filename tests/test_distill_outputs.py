@@ -227,7 +227,8 @@ def test_no_export_beside_an_earlier_pack_warns_that_it_goes_stale(trained, tmp_
 
 def test_force_then_ctrl_c_resumes_the_new_run(trained, tmp_path):  # noqa: F811
     """A finished run at -o, retrained with --force and interrupted before it finishes: the
-    old run's config and pack are gone (not taken for the new run's), so --resume works."""
+    old run's checkpoint, config and pack are gone as training starts (not taken for the new
+    run's), so --resume continues the new run."""
     import signal
 
     from vrneural.distill.config import DistillConfig
@@ -240,13 +241,18 @@ def test_force_then_ctrl_c_resumes_the_new_run(trained, tmp_path):  # noqa: F811
     olds = outputs_of(str(s), True)[1:]
     assert all(Path(o).is_file() for o in olds)
 
+    seen = []
+
     def ctrl_c(epoch, step):
+        seen.append(s.exists())
         if step == 2:
             signal.raise_signal(signal.SIGINT)
 
     kw = dict(teacher=str(trained["teacher"]), progress=False, max_test_slices=4, epochs=2)
     with pytest.raises(Interrupted):
         run_distill(DistillConfig(output=str(s), force=True, seed=3, **kw), on_step=ctrl_c)
+    assert seen[0] is False  # the old checkpoint went before the first step: an interrupt
+    # before the new run's first save cannot leave it to be resumed as if it were the new one
     assert not any(Path(o).exists() for o in olds)
     code, err = run_cli("distill", trained["teacher"], "-o", s, "--resume", *FAST)
     assert code == 0, err

@@ -293,8 +293,15 @@ def test_wide_start_is_width_then_init_from_in_one_resumable_run(tmp_path, capsy
     # --force starts both halves afresh: interrupted in its wide half, the old pruned half
     # is gone, so --resume continues the new run (not the old one's result)
     calls.clear()
+    seen = []
+
+    def look_then_ctrl_c(epoch, step):  # at the first step, before the new run's first save
+        seen.append([f.name for f in tmp_path.glob("r.*")])
+        ctrl_c_at(2)(epoch, step)
+
     with pytest.raises(Interrupted) as stop:
-        run_distill(DistillConfig(output=str(r), epochs=3, force=True, **kw), ctrl_c_at(2))
+        run_distill(DistillConfig(output=str(r), epochs=3, force=True, **kw), look_then_ctrl_c)
+    assert seen[0] == []  # the old run's files (both halves) are gone as training starts
     assert "wide half, 16 wide" in str(stop.value) and not r.exists()
     assert not (tmp_path / "r.vrnm").exists()
     # a stray file where the pruned half will write: refused before the wide half trains on
@@ -325,6 +332,21 @@ def test_wide_start_is_width_then_init_from_in_one_resumable_run(tmp_path, capsy
     for k, v in ck["net"].items():
         assert torch.equal(v, load_checkpoint(r)["net"][k]), k
 
+    # --no-export is the run's setting, kept when its wide half is resumed; a plain run at the
+    # output of an unfinished wide half warns that it leaves that half as it is
+    n = tmp_path / "n.pt"
+    calls.clear()
+    with pytest.raises(Interrupted):
+        run_distill(DistillConfig(output=str(n), epochs=2, export=False, **kw), ctrl_c_at(2))
+    (tmp_path / "o.wide.pt").write_bytes((tmp_path / "n.wide.pt").read_bytes())
+    with pytest.warns(UnfinishedRunWarning, match="unfinished wide half of a --wide-start run"):
+        code, err = run_cli("distill", t, "-o", tmp_path / "o.pt", "--epochs", 1, *FAST)
+    assert code == 0, err
+    expect_one_line_error(["distill", t, "-o", n, "--resume", "--export", *FAST], "--export")
+    assert run_cli("distill", t, "-o", n, "--resume", *FAST)[0] == 0
+    assert not (tmp_path / "n.vrnm").exists() and not (tmp_path / "n.wide.vrnm").exists()
+    assert load_checkpoint(n)["config"]["export"] is False
+
     # refusals: one line, exit 2, nothing written or changed
     before = {f: f.read_bytes() for f in tmp_path.iterdir() if f.is_file()}
     new = tmp_path / "new.pt"
@@ -341,6 +363,8 @@ def test_wide_start_is_width_then_init_from_in_one_resumable_run(tmp_path, capsy
         ([s, "--resume", "--width", 4], "--width = 4, but"),
         ([w, "--wide-start", 32, "--epochs", 2, "--resume"], "was not trained with --wide-start"),
         ([p, "--wide-start", 16, "--epochs", 3, "--resume"], "was not trained with --wide-start"),
+        ([s, "--resume", "--force"], "contradict"),
+        ([s, "--resume", "--init-from", w], "which started from its own wide half"),
         ([new, "--width", 64, "--wide-start", 65], "64 is the widest"),
     ]
     for flags, *needles in cases:

@@ -85,7 +85,8 @@ def test_ctrl_c_saves_and_resume_continues_mid_epoch(btf, tmp_path):
         run_teach(TeachConfig(output=str(b), **kw), on_step=ctrl_c)
     ck = load_checkpoint(b)
     assert (ck["epoch"], ck["step"], ck["finished"]) == (1, 5, False)
-    with pytest.raises(VrnError, match=r"interrupted run \(epoch 1 of 2\); pass --resume"):
+    done = r"holds an unfinished run \(1 of 2 epochs done and 5 steps of the next\); pass --resume"
+    with pytest.raises(VrnError, match=done):
         run_teach(TeachConfig(output=str(b), **kw))  # the hint points at --resume, not --force
     run_teach(TeachConfig(output=str(b), resume=True, **kw))
     _same(a, b)

@@ -38,7 +38,7 @@ def run(args) -> int:
     check_outputs([args.output, sidecar], args.force, inputs=[args.checkpoint, args.btf])
     ck = load_checkpoint(args.checkpoint)
     if not ck.get("finished", True):
-        _warn_unfinished(args.checkpoint, ck)
+        _warn_unfinished(args.checkpoint, ck, args.output)
     out, meta = export_checkpoint(
         ck, args.output, force=args.force, source=args.checkpoint, btf=args.btf or None
     )
@@ -67,16 +67,19 @@ def run(args) -> int:
     return 0
 
 
-def _warn_unfinished(path, ck: dict) -> None:
+def _warn_unfinished(path, ck: dict, output) -> None:
     """One-line warning: the checkpoint is an interrupted run, and how to finish it."""
     import warnings
+    from pathlib import Path
 
     from vrneural.distill.checkpoint import UnfinishedRunWarning, unfinished_run
 
     from vrneural.distill.distill import is_wide_half, run_of_wide_half
 
     cmd = "teach BTF" if ck.get("kind") == "teacher" else "distill TEACHER"
-    how = f"`vrneural {cmd} -o {path} --resume` (which replaces this pack)"
+    how = f"`vrneural {cmd} -o {path} --resume`"
+    if Path(output).resolve() == Path(path).with_suffix(".vrnm").resolve():
+        how += " (which replaces this pack)"  # the pack a finished run writes beside it
     if is_wide_half(ck.get("config", {})):  # the wide half of --wide-start: resume the run
         run = run_of_wide_half(path)
         how = f"its --wide-start run, `vrneural {cmd} -o {run} --resume`"

@@ -10,6 +10,7 @@ hidden vectors of :func:`~vrneural.distill.models.make_spec` (for the coarse-to-
 from __future__ import annotations
 
 import dataclasses
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -37,12 +38,17 @@ from vrneural.btf.identity import btf_fingerprint, check_btf_record
 from vrneural.distill.data import SliceData
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
 from vrneural.distill.models import NeuralModel, apply_output, make_spec
-from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
+from vrneural.distill.outputs import (
+    clear_outputs,
+    finish_outputs,
+    outputs_of,
+    prepare_outputs,
+)
 from vrneural.distill.prune import prune_to
 from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import Interrupted, compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, count
-from vrneural.formats.atomic import check_not_input, file_sha256, same_file
+from vrneural.formats.atomic import check_not_input, check_resume_force, file_sha256, same_file
 
 
 def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
@@ -249,6 +255,7 @@ WIDE_START_RECORD = (
     ("wide_start", "wide_start"),
     ("width", "wide_start_width"),
     ("epochs", "wide_start_epochs"),
+    ("export", "export"),  # the run's: the wide half records it and never writes a pack
 )
 
 
@@ -274,7 +281,7 @@ def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
         )
     if stored is not None:  # the run's own settings; a flag that contradicts one is an error
         for name, key in WIDE_START_RECORD:
-            now, was = getattr(cfg, name), int(stored[key])
+            now, was = getattr(cfg, name), type(getattr(cfg, name))(stored[key])
             if is_explicit(cfg, name) and now != was:
                 why = (
                     "its epochs were split between the halves when it began"
@@ -287,8 +294,7 @@ def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
                     "over: --force instead of --resume)"
                 )
         cfg = replace_config(
-            cfg,
-            **{name: int(stored[key]) for name, key in WIDE_START_RECORD},
+            cfg, **{name: type(getattr(cfg, name))(stored[key]) for name, key in WIDE_START_RECORD}
         )
     w = cfg.wide_start
     if cfg.method == "neumip":
@@ -300,6 +306,9 @@ def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
         raise VrnError(
             "--wide-start trains its own wide run; --init-from starts from another "
             "one (pass one of the two)"
+            if not stored
+            else f"--init-from: {cfg.output} is a --wide-start run, which started from its own "
+            "wide half (drop --init-from)"
         )
     check_range("--width", cfg.width, 1, 64)
     if cfg.width == 64:
@@ -316,9 +325,7 @@ def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
         )
     wide_path, wide_epochs = wide_output(cfg.output), cfg.epochs // 2
     record = dict(wide_start_epochs=cfg.epochs, wide_start_width=cfg.width)
-    wide = replace_config(
-        cfg, output=wide_path, width=w, epochs=wide_epochs, export=False, **record
-    )
+    wide = replace_config(cfg, output=wide_path, width=w, epochs=wide_epochs, **record)
     narrow = replace_config(cfg, epochs=cfg.epochs - wide_epochs, init_from=wide_path, **record)
     for c in (wide, narrow):
         mark_explicit(c, "epochs")  # a half goes to its share, not its stored target
@@ -335,11 +342,12 @@ def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
                         "would write it; --resume replaces only its own files, so move it away "
                         "first"
                     )
-        else:  # the pruned half's outputs, before the wide half's work
+        else:  # both halves' outputs, before any work
+            wide_outs = outputs_of(wide_path, False)
             prepare_outputs(narrow, outs, inputs=[cfg.teacher, cfg.btf, wide_path])
-            if cfg.force:  # an old pruned half must not pass for this run's
-                for o in outs:
-                    Path(o).unlink(missing_ok=True)
+            prepare_outputs(wide, wide_outs, inputs=[cfg.teacher, cfg.btf])
+            if cfg.force and _rank() == 0:  # the old run's halves go (see clear_outputs)
+                clear_outputs(outs + wide_outs)
         wck = _train(wide, on_step)
         if cfg.progress and _rank() == 0:
             test = wck["history"][-1]["test_l1"] if wck["history"] else float("nan")
@@ -357,7 +365,8 @@ def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
 
 
 def _rank() -> int:
-    return dist.get_rank() if dist.is_initialized() else 0
+    """This process's rank (under ``torchrun`` also before the process group is set up)."""
+    return dist.get_rank() if dist.is_initialized() else int(os.environ.get("RANK", "0"))
 
 
 def _resume_pruned_half(cfg, narrow, wide_path: str, on_step) -> dict:
@@ -382,8 +391,22 @@ def _resume_pruned_half(cfg, narrow, wide_path: str, on_step) -> dict:
 
 def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     """Train (or resume) a student/baseline; returns the final checkpoint dict."""
+    check_resume_force(cfg.resume, cfg.force)
     if cfg.wide_start or (cfg.resume and stored_wide_start(cfg.output)):
         return run_wide_start(cfg, on_step)
+    wide = Path(cfg.output).with_suffix(".wide.pt")
+    if not cfg.resume and cfg.output.endswith(".pt") and wide.is_file():
+        try:
+            c = load_checkpoint(wide)
+        except VrnError:
+            c = {}
+        if is_wide_half(c.get("config", {})) and not c.get("finished", True):
+            warnings.warn(
+                f"{wide}: holds the unfinished wide half of a --wide-start run at "
+                f"{cfg.output}; this run (without --wide-start) leaves it as it is",
+                UnfinishedRunWarning,
+                stacklevel=2,
+            )
     return _train(cfg, on_step)
 
 
@@ -398,7 +421,8 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
     if cfg.method == "neumip" and is_explicit(cfg, "width"):
         raise VrnError("--width: NeuMIP is always 4 x 25 (the paper's baseline); drop --width")
     cfg = resolve_method(cfg)
-    outs = outputs_of(cfg.output, cfg.export)
+    export = cfg.export and not is_wide_half(dataclasses.asdict(cfg))  # a wide half: no pack
+    outs = outputs_of(cfg.output, export)
     resume = prepare_outputs(cfg, outs, inputs=[cfg.teacher, cfg.btf, cfg.init_from])
     if resume is not None:
         if resume.get("kind") != "student":
@@ -487,6 +511,8 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
         # the teacher on the same test slices: what `distill` compares the student with
         "teacher_test_l1": float(mean_l1(teacher, data, pairs)),  # frozen: no autograd graph
     }
+    if cfg.force and resume is None and rank == 0:
+        clear_outputs(outs)
     ck = fit(
         net,
         lambda: mean_l1(model, data, pairs),
@@ -499,5 +525,5 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
         on_step=on_step,
     )
     if rank == 0:
-        finish_outputs(ck, cfg, data)
+        finish_outputs(ck, cfg, data, export)
     return ck

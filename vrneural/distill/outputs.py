@@ -2,13 +2,12 @@
 
 ``teach`` and ``distill`` write the checkpoint ``x.pt``, its ``x.pt.config.json`` and (unless
 ``--no-export``) the pack ``x.vrnm`` with ``x.vrnm.config.json``. A fresh run refuses every
-one that exists without ``--force``; with ``--force`` the old config and pack files are
-removed as the run starts (the checkpoint is replaced by the first save), so that an interrupted
-new run resumes without taking them for its own; no run writes over one of its inputs, even with
-``--force``. ``--resume`` continues the checkpoint and, when it finishes, replaces the pack and
-config files beside it only where this run wrote them earlier: their recorded test-L1 curve is
-the start of the checkpoint's (for a given config and BTF that curve identifies the run).
-Any other file there is an error, never silently replaced.
+one that exists without ``--force``; with ``--force`` the old files are removed once every
+check has passed, just before training (:func:`clear_outputs`); no run writes over one of its
+inputs, even with ``--force``. ``--resume`` continues the checkpoint and, when it finishes,
+replaces the pack and config files beside it only where this run wrote them earlier: their
+recorded test-L1 curve is the start of the checkpoint's (for a given config and BTF that curve
+identifies the run). Any other file there is an error, never silently replaced.
 """
 
 from __future__ import annotations
@@ -18,7 +17,7 @@ import warnings
 from pathlib import Path
 
 from vrneural.config import config_path
-from vrneural.distill.checkpoint import load_checkpoint
+from vrneural.distill.checkpoint import load_checkpoint, unfinished_run
 from vrneural.errors import VrnError
 from vrneural.formats.atomic import check_outputs, check_resume_force, json_safe
 from vrneural.warn import VrnWarning
@@ -67,14 +66,10 @@ def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
             ck = None  # not a checkpoint: the plain "output exists" below
         if ck is not None and not ck.get("finished", True):
             raise VrnError(
-                f"{cfg.output}: holds an interrupted run (epoch {ck['epoch']} of "
-                f"{ck['config'].get('epochs', '?')}); pass --resume to continue it or --force "
-                "to start over"
+                f"{cfg.output}: holds {unfinished_run(ck)}; pass --resume to continue it or "
+                "--force to start over"
             )
     check_outputs(outputs, cfg.force, inputs)
-    if cfg.force:  # an old run's config and pack must not pass for this run's on --resume
-        for o in outputs[1:]:
-            Path(o).unlink(missing_ok=True)
     pack = Path(cfg.output).with_suffix(".vrnm")
     if not cfg.export and pack.exists():  # kept, but it will not be this run's network
         warnings.warn(
@@ -85,6 +80,14 @@ def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
             stacklevel=2,
         )
     return None
+
+
+def clear_outputs(outputs: list[str]) -> None:
+    """``--force``, once every check has passed and just before training: remove the old
+    run's files (checkpoint, config, pack), so that a new run interrupted before its first
+    save cannot be taken for the old one by ``--resume``, nor the old files for its own."""
+    for o in outputs:
+        Path(o).unlink(missing_ok=True)
 
 
 class StalePackWarning(VrnWarning):
@@ -139,15 +142,16 @@ def _recorded_curve(p: Path) -> list | None:
         return None
 
 
-def finish_outputs(ck: dict, cfg, data) -> None:
-    """Write ``<output>.config.json`` and (with export) the ``.vrnm`` pack + its config.
+def finish_outputs(ck: dict, cfg, data, export: bool | None = None) -> None:
+    """Write ``<output>.config.json`` and (with export; default ``cfg.export``) the ``.vrnm``
+    pack + its config.
 
     Called when a run finishes: an interrupted run has only its checkpoint until then."""
     from vrneural.config import write_config
 
     extra = {"epochs_done": ck["epoch"], "history": ck["history"], "btf": ck["btf"]}
     write_config(cfg.output, cfg, extra)
-    if cfg.export:
+    if cfg.export if export is None else export:
         from vrneural.distill.export import export_checkpoint
 
         pack = outputs_of(cfg.output, True)[2]

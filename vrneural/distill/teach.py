@@ -14,7 +14,12 @@ from vrneural.btf.identity import btf_fingerprint, check_btf_record, split_pairs
 from vrneural.distill.data import SliceData
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
-from vrneural.distill.outputs import finish_outputs, outputs_of, prepare_outputs
+from vrneural.distill.outputs import (
+    clear_outputs,
+    finish_outputs,
+    outputs_of,
+    prepare_outputs,
+)
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, check_seed, count
 
@@ -131,6 +136,8 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
         "split": {"train": train, "test": test},
         "versions": {"torch": str(torch.__version__)},
     }
+    if cfg.force and resume is None and rank == 0:
+        clear_outputs(outs)
     ck = fit(
         net,
         lambda: mean_l1(model, data, pairs),
