@@ -263,10 +263,10 @@ def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
     """``--wide-start W``: train W wide for ``epochs // 2`` epochs into ``<output>.wide.pt``,
     prune that half to ``--width`` and train on for the other epochs into ``--output`` (what
     ``--width W`` and then ``--init-from`` do, as one run). Every output of both halves is
-    checked before any work; ``--force`` removes the old pruned half's files as the new run
-    starts; ``--resume`` (of the output, with or without ``--wide-start``) continues whichever
-    half was interrupted, with the settings the run was started with. Returns the pruned
-    half's final checkpoint."""
+    checked before any work; ``--force`` then removes both halves of the old run (see
+    :func:`~vrneural.distill.outputs.clear_outputs`); ``--resume`` (of the output, with or
+    without ``--wide-start``) continues whichever half was interrupted, with the settings the
+    run was started with. Returns the pruned half's final checkpoint."""
     stored = stored_wide_start(cfg.output) if cfg.resume else None
     if cfg.resume and stored is None:
         if Path(cfg.output).exists():
@@ -394,7 +394,7 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     check_resume_force(cfg.resume, cfg.force)
     if cfg.wide_start or (cfg.resume and stored_wide_start(cfg.output)):
         return run_wide_start(cfg, on_step)
-    wide = Path(cfg.output).with_suffix(".wide.pt")
+    wide = Path(cfg.output).with_suffix(".wide.pt")  # an unfinished wide half left behind?
     if not cfg.resume and cfg.output.endswith(".pt") and wide.is_file():
         try:
             c = load_checkpoint(wide)
