@@ -107,9 +107,10 @@ class DistillConfig(TrainConfig):
     )
     wide_start: int = opt(
         0,
-        "train this wide for the first half of --epochs (into <output>.wide.pt), then prune to "
-        "--width and train on for the rest: --width and --init-from in one run (0 = off, from "
-        "random weights as the paper; see README: Training)",
+        "train this wide for --epochs // 2 epochs (into <output>.wide.pt), then prune to "
+        "--width and train on for the rest: --width and --init-from in one run; --resume of "
+        "the output continues either half (0 = off, from random weights as the paper; see "
+        "README: Training)",
     )
     # recorded in both halves of a --wide-start run (the wide one has no init_from): what the
     # whole run was started with, so that --resume of either half continues that run
