@@ -186,6 +186,7 @@ def test_init_from_errors(tmp_path):
         "w16s8": ("--method", "single8", "--width", 16),
         "nm": ("--method", "neumip", "--no-distill"),
         "log": ("--space", "log"),
+        "s8nd": ("--method", "single8", "--no-distill"),
     }
     for name, flags in runs.items():
         code, err = run_cli(
@@ -196,6 +197,10 @@ def test_init_from_errors(tmp_path):
         "distill", t2, "-o", tmp_path / "other.pt", "--epochs", 1, "--width", 16, *FAST
     )
     assert code == 0, err
+    from vrneural.scoring.run import label
+
+    for name, want in (("s8nd", "single8 w/o distillation"), ("s4", "student 4 wide")):
+        assert label(read_vrnm(tmp_path / f"{name}.vrnm"), name)["method"] == want
     out = tmp_path / "new.pt"
     cases = [
         (["--init-from", tmp_path / "s4.pt"], "is 4 wide, narrower than --width 8"),
