@@ -337,14 +337,10 @@ def _with_wide_start(ck: dict, wide_path: str) -> dict:
 def _wide_start_record(ck: dict) -> dict | None:
     """``{"width", "epochs"}`` of the wide run a network was pruned from (``--wide-start``),
     or None for one trained from random weights."""
-    init = ck.get("init_from")
-    if not init:
-        return None
-    spec = init["spec"]
-    return {
-        "width": max(spec.get("coarse_hidden") or spec["hidden"]),
-        "epochs": int(init["epochs"]),
-    }
+    from vrneural.distill.export import init_record
+
+    init = init_record(ck.get("init_from"))
+    return init and {k: init[k] for k in ("width", "epochs")}
 
 
 def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:

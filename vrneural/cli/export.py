@@ -73,16 +73,15 @@ def _warn_unfinished(path, ck: dict, output) -> None:
     from pathlib import Path
 
     from vrneural.distill.checkpoint import UnfinishedRunWarning, unfinished_run
-
     from vrneural.distill.distill import is_wide_half, run_of_wide_half
 
     cmd = "teach BTF" if ck.get("kind") == "teacher" else "distill TEACHER"
-    how = f"`vrneural {cmd} -o {path} --resume`"
-    if Path(output).resolve() == Path(path).with_suffix(".vrnm").resolve():
-        how += " (which replaces this pack)"  # the pack a finished run writes beside it
     if is_wide_half(ck.get("config", {})):  # the wide half of --wide-start: resume the run
-        run = run_of_wide_half(path)
-        how = f"its --wide-start run, `vrneural {cmd} -o {run} --resume`"
+        how = f"its --wide-start run, `vrneural {cmd} -o {run_of_wide_half(path)} --resume`"
+    else:
+        how = f"`vrneural {cmd} -o {path} --resume`"
+        if Path(output).resolve() == Path(path).with_suffix(".vrnm").resolve():
+            how += " (which replaces this pack)"  # the pack a finished run writes beside it
     warnings.warn(
         f"{path}: {unfinished_run(ck)}; exporting it as it is; finish it with {how}",
         UnfinishedRunWarning,

@@ -32,12 +32,6 @@ def run(args) -> int:
     return _report(lambda: run_teach(cfg), cfg.output)
 
 
-def _width(spec: dict) -> int | None:
-    """The hidden width of a student or single8 spec (None for other specs)."""
-    hidden = spec.get("coarse_hidden") or spec.get("hidden")
-    return max(hidden) if hidden else None
-
-
 def _report(fn, output: str) -> int:
     """Run a training stage; report the result or the interruption (exit 130). Under
     ``torchrun`` only rank 0 reports (it alone writes the files), and every rank leaves the
@@ -46,6 +40,7 @@ def _report(fn, output: str) -> int:
     import sys
     from pathlib import Path
 
+    from vrneural.distill.models import spec_width
     from vrneural.distill.train import Interrupted, dist_teardown
     from vrneural.errors import count
 
@@ -74,12 +69,12 @@ def _report(fn, output: str) -> int:
     method = ck["method"]
     if ck.get("config", {}).get("distill") is False:  # --no-distill: ground truth only
         method += " (no distillation)"
-    width = _width(ck.get("spec", {}))
+    width = spec_width(ck["spec"]) if ck.get("spec") else None
     if width and width != 8 and ck.get("method") in ("student", "single8"):
         method += f" {width} wide"
     init = ck.get("init_from")
     if init:  # --init-from: where its weights started
-        was = _width(init["spec"])
+        was = spec_width(init["spec"])
         cut = f"pruned to {width}" if was != width else "not pruned"
         method += f", from {init['path']} ({was} wide, {count(init['epochs'], 'epoch')}, {cut})"
     print(

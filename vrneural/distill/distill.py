@@ -259,15 +259,17 @@ WIDE_START_RECORD = (
 )
 
 
-def run_wide_start(cfg: DistillConfig, on_step=None) -> dict:
+def run_wide_start(cfg: DistillConfig, on_step=None, stored: dict | None = None) -> dict:
     """``--wide-start W``: train W wide for ``epochs // 2`` epochs into ``<output>.wide.pt``,
     prune that half to ``--width`` and train on for the other epochs into ``--output`` (what
     ``--width W`` and then ``--init-from`` do, as one run). Every output of both halves is
     checked before any work; ``--force`` then removes both halves of the old run (see
     :func:`~vrneural.distill.outputs.clear_outputs`); ``--resume`` (of the output, with or
     without ``--wide-start``) continues whichever half was interrupted, with the settings the
-    run was started with. Returns the pruned half's final checkpoint."""
-    stored = stored_wide_start(cfg.output) if cfg.resume else None
+    run was started with (``stored``: :func:`stored_wide_start` of the output, where the
+    caller read it). Returns the pruned half's final checkpoint."""
+    if cfg.resume and stored is None:
+        stored = stored_wide_start(cfg.output)
     if cfg.resume and stored is None:
         if Path(cfg.output).exists():
             raise VrnError(
@@ -392,10 +394,11 @@ def _resume_pruned_half(cfg, narrow, wide_path: str, on_step) -> dict:
 def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     """Train (or resume) a student/baseline; returns the final checkpoint dict."""
     check_resume_force(cfg.resume, cfg.force)
-    if cfg.wide_start or (cfg.resume and stored_wide_start(cfg.output)):
-        return run_wide_start(cfg, on_step)
-    wide = Path(cfg.output).with_suffix(".wide.pt")  # an unfinished wide half left behind?
-    if not cfg.resume and cfg.output.endswith(".pt") and wide.is_file():
+    stored = stored_wide_start(cfg.output) if cfg.resume else None
+    if cfg.wide_start or stored:
+        return run_wide_start(cfg, on_step, stored)
+    wide = cfg.output.endswith(".pt") and Path(wide_output(cfg.output))
+    if not cfg.resume and wide and wide.is_file():  # an unfinished wide half left behind?
         try:
             c = load_checkpoint(wide)
         except VrnError:

@@ -120,7 +120,7 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None):
             "split_seed": cfg["split_seed"],
             "epochs": ck["epoch"],
             # --init-from / --wide-start: the wide run it was pruned from (None: random init)
-            "init_from": _init_record(ck.get("init_from")),
+            "init_from": init_record(ck.get("init_from")),
             "config": cfg,
             "vrneural": __version__,
             "torch": str(torch.__version__),
@@ -185,14 +185,16 @@ def _sha256_or_none(path) -> str | None:
     return file_sha256(path) if path and Path(path).is_file() else None
 
 
-def _init_record(init: dict | None) -> dict | None:
-    """A checkpoint's ``init_from`` for the pack: the wide run's file, hash, width, epochs."""
+def init_record(init: dict | None) -> dict | None:
+    """A checkpoint's ``init_from`` (``--init-from``/``--wide-start``) in short: the wide run's
+    file, hash, width and epochs; None for a run from random weights."""
     if not init:
         return None
-    spec = init["spec"]
+    from vrneural.distill.models import spec_width
+
     return {
         "path": init["path"],
         "sha256": init["sha256"],
-        "width": max(spec.get("coarse_hidden") or spec["hidden"]),
+        "width": spec_width(init["spec"]),
         "epochs": int(init["epochs"]),
     }

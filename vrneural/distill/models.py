@@ -197,6 +197,12 @@ def dir_mask(spec: dict) -> torch.Tensor:
     return torch.tensor(DIR_MODES[mode], dtype=torch.float32)
 
 
+def spec_width(spec: dict) -> int:
+    """The hidden width of a spec's network (its widest hidden layer; for the coarse-to-fine
+    student, M_c's, which ``make_spec`` sets to M_f's)."""
+    return max(spec.get("coarse_hidden") or spec["hidden"])
+
+
 def make_spec(method: str, res: tuple[int, int], space: str = "linear", **kw) -> dict:
     """Architecture of each method, as a plain dict. ``res = (H, W)`` of the BTF.
 
