@@ -211,6 +211,27 @@ def test_resuming_a_finished_run_says_there_is_nothing_left_to_train(trained, tm
     assert s.read_bytes() == before
 
 
+@pytest.mark.parametrize("name", ["teacher", "student"])
+def test_a_finished_run_resumed_writes_only_missing_files(trained, tmp_path, name):  # noqa: F811
+    """Nothing trained, so nothing there is rewritten (a pack exported since stays); a
+    deleted pack or config comes back."""
+    s = _copy(trained, tmp_path, f"{name}.pt")
+    files = [tmp_path / f"{name}{x}" for x in (".pt.config.json", ".vrnm", ".vrnm.config.json")]
+    argv = ("distill", trained["teacher"]) if name == "student" else ("teach", trained["btf"])
+    argv += ("-o", s, "--resume", "--max-test-slices", 4)
+    code, err = run_cli(*argv)
+    assert code == 0 and all(f.is_file() for f in files), err  # missing: written
+    files[2].write_text(files[2].read_text() + "\n")  # edited since: stays
+    stamp = {f: (f.read_bytes(), f.stat().st_mtime_ns) for f in files}
+    code, err = run_cli(*argv)
+    assert code == 0, err
+    assert {f: (f.read_bytes(), f.stat().st_mtime_ns) for f in files} == stamp
+    files[1].unlink()
+    code, err = run_cli(*argv)
+    assert code == 0 and files[1].read_bytes() == stamp[files[1]][0], err  # the same pack again
+    assert files[0].stat().st_mtime_ns == stamp[files[0]][1]
+
+
 def test_no_export_beside_an_earlier_pack_warns_that_it_goes_stale(trained, tmp_path):  # noqa: F811
     from vrneural.distill.outputs import StalePackWarning
 

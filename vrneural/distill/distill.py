@@ -528,5 +528,5 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
         on_step=on_step,
     )
     if rank == 0:
-        finish_outputs(ck, cfg, data, export)
+        finish_outputs(ck, cfg, data, export, missing_only=ck is resume)
     return ck

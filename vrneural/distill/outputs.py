@@ -7,7 +7,8 @@ check has passed, just before training (:func:`clear_outputs`); no run writes ov
 inputs, even with ``--force``. ``--resume`` continues the checkpoint and, when it finishes,
 replaces the pack and config files beside it only where this run wrote them earlier: their
 recorded test-L1 curve is the start of the checkpoint's (for a given config and BTF that curve
-identifies the run). Any other file there is an error, never silently replaced.
+identifies the run). Any other file there is an error, never silently replaced. A finished
+run resumed trains nothing and writes only the files that are missing.
 """
 
 from __future__ import annotations
@@ -142,18 +143,24 @@ def _recorded_curve(p: Path) -> list | None:
         return None
 
 
-def finish_outputs(ck: dict, cfg, data, export: bool | None = None) -> None:
+def finish_outputs(ck: dict, cfg, data, export: bool | None = None, missing_only=False) -> None:
     """Write ``<output>.config.json`` and (with export; default ``cfg.export``) the ``.vrnm``
     pack + its config.
 
-    Called when a run finishes: an interrupted run has only its checkpoint until then."""
+    Called when a run finishes: an interrupted run has only its checkpoint until then. With
+    ``missing_only`` (a finished run resumed, nothing trained) only files that are not there
+    are written: the ones there describe this very checkpoint already, and a pack exported
+    from it since (``vrneural export``) stays as it is."""
     from vrneural.config import write_config
 
     extra = {"epochs_done": ck["epoch"], "history": ck["history"], "btf": ck["btf"]}
-    write_config(cfg.output, cfg, extra)
+    if not (missing_only and config_path(cfg.output).exists()):
+        write_config(cfg.output, cfg, extra)
     if cfg.export if export is None else export:
         from vrneural.distill.export import export_checkpoint
 
         pack = outputs_of(cfg.output, True)[2]
+        if missing_only and Path(pack).exists() and config_path(pack).exists():
+            return
         _, meta = export_checkpoint(ck, pack, data=data.on("cpu"), force=True, source=cfg.output)
         write_config(pack, cfg, {**extra, "metrics": meta["metrics"]})

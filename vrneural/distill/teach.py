@@ -150,5 +150,5 @@ def run_teach(cfg: TeachConfig, on_step=None) -> dict:
         on_step=on_step,
     )
     if rank == 0:
-        finish_outputs(ck, cfg, data)
+        finish_outputs(ck, cfg, data, missing_only=ck is resume)
     return ck
