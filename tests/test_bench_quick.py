@@ -101,7 +101,7 @@ def test_kernels_rates_are_finite(results):
     for r in recs:
         assert _finite(r["gflops"], r["texels_per_s"], r["fraction_of_sgemm"]) and r["gflops"] > 0
     neumip = [r for r in recs if r["network"] == "neumip"]
-    assert neumip and all(r["macs_per_texel"] == 1725 for r in neumip)
+    assert neumip and all(r["macs_per_texel"] == 1600 for r in neumip)  # wi.xy, wo.xy read
 
 
 @pytest.mark.gpu

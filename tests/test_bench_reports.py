@@ -3,6 +3,7 @@ with any subset of precisions, the roofline flag, plot layout (from made-up reco
 and tiny end-to-end runs (a few seconds each on lavapipe)."""
 
 import json
+import re
 
 import pytest
 
@@ -153,3 +154,40 @@ def test_list_options_refuse_a_value_named_twice():
     assert choice_list("--precisions", "f16, f32", ("f32", "f16")) == ["f16", "f32"]
     with pytest.raises(VrnError, match="--precisions names f16 more than once"):
         choice_list("--precisions", "f16,f16", ("f32", "f16"))
+
+
+def test_kernels_time_the_networks_distill_trains():
+    """MACs per texel of the README's Models table (the trained shapes: M_c 2 layers, NeuMIP
+    reading wi.xy and wo.xy), and student:W as distill --width W."""
+    from vrneural.errors import VrnError
+
+    macs = {n: kernels.network(n)[1] for n in ("student", "single8", "neumip", "student:16")}
+    assert macs == {"student": 202, "single8": 288, "neumip": 1600, "student:16": 564}
+    coarse, fine = (layers for layers, _ in kernels.network("student:4")[0])
+    assert [(x.n_in, x.n_out) for x in coarse + fine] == [(17, 4), (4, 4), (12, 4), (4, 3)]
+    assert kernels.network_names("student, student:12,neumip") == [
+        "student",
+        "student:12",
+        "neumip",
+    ]
+    for bad, msg in (
+        ("student:0", "student:W needs a width W in [1, 64]"),
+        ("student:x", "student:W needs a width W in [1, 64]"),
+        ("student:8,student:8", "--networks names student:8 more than once"),
+        ("resnet", "choose one of: neumip, single8, student, student:W"),
+        (" , ", "--networks is empty"),
+    ):
+        with pytest.raises(VrnError, match=re.escape(msg)):
+            kernels.network_names(bad)
+
+
+@pytest.mark.gpu
+def test_bench_kernels_times_a_student_of_another_width(tmp_path):
+    out = tmp_path / "k"
+    argv = ["bench", "kernels", "--networks", "student:4,student", "--precisions", "f32"]
+    argv += ["--texels", "1024", "--sgemm-n", "64", "--repeats", "1", "--no-progress"]
+    assert main([*argv, "--out", str(out)]) == 0
+    doc = json.loads((out / "results.json").read_text())
+    got = {(r["network"], r["variant"]): r["macs_per_texel"] for r in doc["records"]}
+    assert got[("student:4", "constants")] == 81 and got[("student", "torch")] == 202
+    assert "| student:4 | constants | f32 | 81 |" in (out / "results.md").read_text()

@@ -1,15 +1,16 @@
 """`vrneural bench kernels`: the MLP evaluators of the runtime, in one run on one adapter.
 
-For the student (coarse 2 x 8 per 2x2 block + fine 8 -> 3 per texel), the single-level 8-wide
-network and the NeuMIP-sized network (arch single, 7-channel texture, 4 x 25, log1p), all with
-seeded random weights (speed does not depend on the values): the generated kernel with constant
-(unrolled) weights, the same kernel reading weights from a storage buffer, each in f32 and f16,
-and PyTorch CPU (f32). Reports texel evaluations/s, achieved GFLOP/s (2 FLOP per multiply-add)
-and their ratio to this machine's numpy sgemm GFLOP/s, the roofline of a CPU adapter (measured
-before and after the kernels, the better kept; a kernel above it is flagged in results.md).
-Speed-ups are against the same network's constants kernel in f32, or in f16 when only f16 was
-measured (the column header names the reference). GPU times come from timestamps around the
-dispatches (inputs uploaded beforehand, excluded).
+For the networks `distill` trains, in their shapes and with their initial weights (speed does
+not depend on the values): the student (M_c 17 -> 8 -> 8 once per 2x2 block, M_f 16 -> 8 -> 3
+per texel; ``student:W`` the student ``distill --width W`` trains), the single-level 8-wide
+network and NeuMIP (4 x 25, 7-channel texture, reading wi.xy and wo.xy; log1p). Each as the
+generated kernel with constant (unrolled) weights, the same kernel reading weights from a
+storage buffer, each in f32 and f16, and PyTorch CPU (f32). Reports texel evaluations/s,
+achieved GFLOP/s (2 FLOP per multiply-add) and their ratio to this machine's numpy sgemm
+GFLOP/s, the roofline of a CPU adapter (measured before and after the kernels, the better kept;
+a kernel above it is flagged in results.md). Speed-ups are against the same network's constants
+kernel in f32, or in f16 when only f16 was measured (the column header names the reference). GPU
+times come from timestamps around the dispatches (inputs uploaded beforehand, excluded).
 """
 
 from __future__ import annotations
@@ -33,7 +34,11 @@ class KernelsConfig:
     out: str = opt("bench-kernels", "output directory", cli=False)
     texels: int = opt(1 << 18, "texels per evaluation (the student's coarse net runs on 1/4)")
     repeats: int = opt(3, "timed repeats (median)")
-    networks: str = opt("student,single8,neumip", "networks (comma-separated)")
+    networks: str = opt(
+        "student,single8,neumip",
+        "networks (comma-separated): student, single8, neumip, or student:W (the student W "
+        "wide, as distill --width W)",
+    )
     precisions: str = opt("f32,f16", "GPU precisions (f16 needs shader-f16)")
     sgemm_n: int = opt(1024, "matrix side of the numpy sgemm roofline")
     quick: bool = opt(False, "CI-sized: student and NeuMIP, 16384 texels, 2 repeats, sgemm 256")
@@ -46,19 +51,55 @@ class KernelsConfig:
         return quick_defaults(self, texels=16384, repeats=2, sgemm_n=256, networks="student,neumip")
 
 
-def network(name: str):
-    """``[(layers, rows per texel)]`` of a network family, and its MACs per texel."""
-    from vrneural.material import random_material
+def student_width(name: str) -> int | None:
+    """The width of a ``student`` (8, the paper's) or ``student:W`` network name (``--networks``;
+    W in [1, 64], as `distill --width`); None for another name. Raises a one-line error for a
+    ``student:`` name whose width is not such an integer."""
+    from vrneural.errors import VrnError
 
     if name == "student":
-        m = random_material(5)
-        parts = [(m.networks["coarse"], 0.25), (m.networks["fine"], 1.0)]
-    elif name == "single8":
-        parts = [(random_material(6, "single", 8, 8).networks["mlp"], 1.0)]
+        return 8
+    if not name.startswith("student:"):
+        return None
+    w = name.split(":", 1)[1]
+    if not (w.isdigit() and 1 <= int(w) <= 64):
+        raise VrnError(
+            f"--networks: {name!r}: student:W needs a width W in [1, 64] (distill --width)"
+        )
+    return int(w)
+
+
+def network_names(text: str) -> list[str]:
+    """``--networks``: each one of :data:`NETWORKS` or ``student:W``, none twice."""
+    from vrneural.errors import VrnError, check_choice
+
+    vals = [t.strip() for t in str(text).split(",") if t.strip()]
+    for v in vals:
+        if student_width(v) is None:
+            check_choice("--networks", v, (*NETWORKS, "student:W"))
+    twice = sorted({v for v in vals if vals.count(v) > 1})
+    if twice:
+        raise VrnError(f"--networks names {', '.join(twice)} more than once")
+    if not vals:
+        raise VrnError(f"--networks is empty; choose from {', '.join(NETWORKS)} or student:W")
+    return vals
+
+
+def network(name: str):
+    """``[(layers, rows per texel)]`` of a network, and its MACs per texel: the network
+    `distill` trains under that name (:func:`~vrneural.distill.models.make_spec`; ``student:W``
+    as ``--width W``), with its initial weights (speed does not depend on their values; the
+    inputs NeuMIP does not read are zero, so the constants kernel skips them as in a pack)."""
+    from vrneural.distill.models import NeuralModel, make_spec
+
+    width = student_width(name)
+    spec = make_spec("student" if width else name, (16, 16), width=width or 8)
+    mat = NeuralModel(spec, 5).to_material()
+    if mat.arch == "coarse_fine":  # M_c once per 2x2 block, M_f per texel
+        parts = [(mat.networks["coarse"], 0.25), (mat.networks["fine"], 1.0)]
     else:
-        m = random_material(7, "single", width=25, channels=7, layers=3, output="log1p")
-        parts = [(m.networks["mlp"], 1.0)]
-    return parts, sum(sum(lay.n_in * lay.n_out for lay in p) * f for p, f in parts)
+        parts = [(mat.networks["mlp"], 1.0)]
+    return parts, mat.macs_per_texel
 
 
 def sgemm_gflops(n: int, repeats: int) -> float:
@@ -132,10 +173,8 @@ def run_kernels(cfg: KernelsConfig) -> dict:
     check_range("--texels", c.texels, 64, 1 << 22)
     check_range("--repeats", c.repeats, 1, 100)
     check_range("--sgemm-n", c.sgemm_n, 16, 8192)
-    nets = rp.choice_list("--networks", c.networks, NETWORKS)
+    nets = network_names(c.networks)
     precs = rp.choice_list("--precisions", c.precisions, ("f32", "f16"))
-    if not nets:
-        raise VrnError(f"--networks is empty; choose from {', '.join(NETWORKS)}")
     if not precs:
         raise VrnError("--precisions is empty; choose from f32, f16")
     if "f16" in precs and not adapter_summary().features.get("shader-f16"):
