@@ -260,3 +260,16 @@ def test_finished_run_resumed_names_the_benchs_flag(btf, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "already trained for 1 epoch, nothing left" in err
     assert "(--teacher-epochs N with N > 1 continues it)" in err
+
+
+def test_finished_run_resumed_where_no_flag_sets_its_epochs_shows_nothing(btf, tmp_path, capsys):
+    """A finished `bench quality --wide-start` half resumed (no option sets a half's epochs,
+    so no "nothing left" note): no empty progress bar either."""
+    from vrneural.config import mark_explicit, name_flag
+
+    t = tmp_path / "t.pt"
+    kw = dict(btf=str(btf), output=str(t), epochs=1, width=32, export=False)
+    run_teach(TeachConfig(**kw, progress=False))
+    capsys.readouterr()
+    run_teach(name_flag(mark_explicit(TeachConfig(**kw, resume=True), "epochs"), "epochs", ""))
+    assert capsys.readouterr().err == ""

@@ -248,7 +248,7 @@ def fit(
             f"({flag(cfg, 'epochs')} N with N > {epoch} continues it)",
             file=sys.stderr,
         )
-    elif rank == 0 and cfg.progress:
+    elif rank == 0 and cfg.progress and epoch < cfg.epochs:  # no empty bar for a finished run
         from tqdm import tqdm
 
         bar = tqdm(
