@@ -70,13 +70,15 @@ def test_gpu_matches_twin(arch, precision, weights):
 
 @pytest.mark.gpu
 @pytest.mark.parametrize("precision", ["f32", "f16"])
-def test_gpu_matches_twin_for_a_16_wide_student(precision):
-    """`distill --width 16` packs: the generated kernel handles any M_c/M_f/z width."""
+@pytest.mark.parametrize("width", [12, 16])
+def test_gpu_matches_twin_for_a_wider_student(precision, width):
+    """`distill --width 12/16` packs (the width sweep's): the generated kernel handles any
+    M_c/M_f/z width, also one that is not a power of two."""
     from vrneural.runtime import texture_pass
 
     at = quad_atlas(32)
-    mat = random_material(4, "coarse_fine", width=16)
-    assert mat.networks["fine"][0].weight.shape[0] == 16
+    mat = random_material(4, "coarse_fine", width=width, layers=2)  # M_c 2 layers, as trained
+    assert mat.networks["fine"][0].weight.shape[0] == width
     args = (at, mat, np.eye(4, dtype=np.float32), EYE, LP, LC, TILING, precision)
     got, _ = texture_pass.shade_texture_space(*args)
     want, _ = reference.shade_texture_space(*args)
