@@ -301,6 +301,15 @@ def test_bench_quality_never_writes_into_a_folder_of_the_users_files(tmp_path):
         (["--presets", "leather,leather"], "--presets names leather more than once"),
         (["--resume", "--force"], "contradict"),
         (["--device", "tpu"], "--device 'tpu'"),
+        (["--width", "0"], "--width = 0 is out of range; allowed [1, 64]"),
+        (
+            ["--width", "12", "--wide-start", "12"],
+            "--wide-start 12: 0 (off) or a width in [13, 64]",
+        ),
+        (
+            ["--wide-start", "8"],
+            "--wide-start 8: 0 (off) or a width in [9, 64], wider than --width 8",
+        ),
     ],
 )
 def test_bench_quality_checks_every_option_before_any_work(tmp_path, monkeypatch, argv, needle):
@@ -366,3 +375,38 @@ def test_bench_quality_wide_start(tmp_path):
     par = json.loads((tmp_path / "j" / "results.json").read_text())["results"]["leather"]
     for name, m in methods.items():
         assert par["methods"][name]["whole_l1"] == m["whole_l1"], name
+
+
+def test_bench_quality_width(tmp_path):
+    """--width 4: the single-level net and both students 4 wide (NeuMIP 4 x 25 as ever), said
+    in the labels, the budget and the target headers; with --wide-start pruned to 4; --resume
+    with another width refuses (one line) instead of training over them."""
+    out = tmp_path / "q"
+    base = ["bench", "quality", "--presets", "leather", "--out", out, "--res", 8, "--dirs", 4]
+    base += ["--teacher-epochs", 1, "--epochs", 2, "--lafortune-iters", 1, "--no-progress"]
+    code, err = run_cli(*base, "--width", 4, "--wide-start", 6)
+    assert code == 0, err
+    d = out / "leather"
+    doc = json.loads((out / "results.json").read_text())
+    methods = doc["results"]["leather"]["methods"]
+    for name in ("single8", "student_nodistill", "student"):
+        ck = load_checkpoint(d / f"{name}.pt")
+        assert max(ck["spec"].get("hidden") or ck["spec"]["fine_hidden"]) == 4, name
+        assert methods[name]["wide_start"] == {"width": 6, "epochs": 1}
+    assert load_checkpoint(d / "neumip.pt")["spec"]["hidden"] == [25, 25, 25]
+    assert methods["student"]["weight_bytes"] == 636  # the runtime network: 4 wide
+    assert doc["config"]["width"] == 4 and doc["labels"]["single8"] == "Single-level 4-wide"
+    md = (out / "results.md").read_text()
+    assert "| Ours (coarse-to-fine, distilled, 4 wide) |" in md
+    assert "then pruned to 4 wide (--wide-start)" in md and "| below single-level 4-wide |" in md
+    assert "below single-level 8-wide" not in md
+    code, err = run_cli(*base, "--width", 5, "--wide-start", 6, "--resume")
+    assert code == 2 and err.count("\n") == 1 and "width 4 there, 5 here" in err, err
+    code, err = run_cli(*base, "--width", 4, "--out", tmp_path / "p")  # from random weights
+    assert code == 0, err
+    assert (
+        "; the single-level net and both students 4 wide (--width)"
+        in (tmp_path / "p" / "results.md").read_text()
+    )
+    ck = load_checkpoint(tmp_path / "p" / "leather" / "student.pt")
+    assert ck["spec"]["fine_hidden"] == [4] and ck["init_from"] is None

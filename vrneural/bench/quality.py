@@ -10,6 +10,8 @@ For each preset: synthesise a BTF, train the teacher, then the five methods at o
 - ``student_nodistill``: the coarse-to-fine student on ground truth only (the Fig. 11 ablation);
 - ``student``: the coarse-to-fine student distilled from the teacher (paper Eq. 5).
 
+``--width W`` makes the single-level net and both students W wide instead of 8.
+
 Whole-BTF L1 is the mean absolute error over every (light, view) pair, texel and channel in
 linear BTF units (train and held-out pairs); test L1 uses the held-out pairs only.
 
@@ -52,6 +54,17 @@ LABELS = {
 }
 
 
+def labels(width: int = 8) -> dict[str, str]:
+    """The methods' names in the reports; with ``--width W`` (not 8) the three networks it
+    sets say so: ``Single-level 12-wide``, ``Ours (coarse-to-fine, distilled, 12 wide)``."""
+    if width == 8:
+        return dict(LABELS)
+    out = dict(LABELS, single8=f"Single-level {width}-wide")
+    out["student_nodistill"] = f"Ours w/o distillation ({width} wide)"
+    out["student"] = f"Ours (coarse-to-fine, distilled, {width} wide)"
+    return out
+
+
 @dataclass
 class QualityConfig:
     """`vrneural bench quality`."""
@@ -78,11 +91,16 @@ class QualityConfig:
         "ReduceLROnPlateau patience of every network but the teacher (distill --lr-patience; "
         "see docs/quality-research.md on a gentler schedule)",
     )
+    width: int = opt(
+        8,
+        "hidden width of the single-level net and both students (distill --width; the "
+        "paper's 8; see the width sweep in docs/quality-research.md)",
+    )
     wide_start: int = opt(
         0,
-        "train the 8-wide networks (single8, both students) this wide for the first half of "
-        "--epochs, then prune them to 8 wide for the rest (distill --width/--init-from; "
-        "0 = off, from random weights)",
+        "train the single-level net and both students this wide for the first half of "
+        "--epochs, then prune them to --width for the rest (distill --wide-start; 0 = off, "
+        "from random weights)",
     )
     device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
     compile: str = opt(
@@ -211,11 +229,13 @@ def _distill_configs(
                     **kw,
                     epochs=cfg.epochs - wide_epochs,
                     init_from=str(d / f"{stem}.wide.pt"),
+                    width=cfg.width,
                 )
                 name_flag(dcfg, "epochs", "")
             else:
+                width = {} if name == "neumip" else {"width": cfg.width}  # NeuMIP: 4 x 25
                 dcfg = _network_config(
-                    cfg, d, btf_path, d / f"{stem}.pt", seed=seed, **kw, epochs=cfg.epochs
+                    cfg, d, btf_path, d / f"{stem}.pt", seed=seed, **kw, epochs=cfg.epochs, **width
                 )
             _set_resume(dcfg, cfg.resume, teacher_sha=tsha)
             out.append((name, stem, dcfg))
@@ -611,9 +631,13 @@ def validate(cfg: QualityConfig) -> list[str]:
         check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 1, 10_000)
     check_range("--lafortune-iters", cfg.lafortune_iters, 1, 10_000)
     check_range("--jobs", cfg.jobs, 1, 256)
+    check_range("--width", cfg.width, 1, 64)
     if cfg.wide_start:
-        if not 8 <= cfg.wide_start <= 64:
-            raise VrnError(f"--wide-start {cfg.wide_start}: 0 (off) or a width in [8, 64]")
+        if not cfg.width < cfg.wide_start <= 64:
+            raise VrnError(
+                f"--wide-start {cfg.wide_start}: 0 (off) or a width in [{cfg.width + 1}, 64], "
+                f"wider than --width {cfg.width}"
+            )
         if cfg.epochs < 2:
             raise VrnError(
                 f"--epochs {cfg.epochs} with --wide-start: half the epochs go to the wide start, "
@@ -689,7 +713,7 @@ def _run(presets: list[str], cfg: QualityConfig, root: Path) -> dict:
             "machine": {"cpu_count": os.cpu_count(), "torch_threads": 1},
             "total_seconds": time.perf_counter() - t_all,
             "complete": len(results) == len(presets),
-            "labels": LABELS,
+            "labels": labels(cfg.width),
             "results": results,
         }
         write_json(root / "results.json", doc)  # after every material: partial results

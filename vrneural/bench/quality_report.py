@@ -22,6 +22,12 @@ TARGETS = {
 }
 
 
+def target_names(width: int = 8) -> list[str]:
+    """The targets' column headers: :data:`TARGETS`' keys (which results.json keeps), the
+    single-level net at the bench's ``--width``."""
+    return [t.replace("8-wide", f"{width}-wide") for t in TARGETS]
+
+
 def _seeds(r: dict) -> list[float]:
     return r.get("whole_l1_seeds") or [r["whole_l1"]]
 
@@ -83,7 +89,7 @@ def seed_pairs(m: dict) -> dict[str, tuple[int, int]]:
     return out
 
 
-def _several_seeds(res: dict, presets: list[str], lab: dict) -> list[str]:
+def _several_seeds(res: dict, presets: list[str], lab: dict, width: int) -> list[str]:
     """The report's section for ``--repeats`` > 1: seed pairs and test-L1-picked seeds."""
     names = [n for n in ORDER if n != "teacher" and n in res[presets[0]]["methods"]]
     lines = [
@@ -96,7 +102,7 @@ def _several_seeds(res: dict, presets: list[str], lab: dict) -> list[str]:
         "| material | student < single-level (pairs) | student < no-distillation (pairs) | "
         + " | ".join(f"{lab[n]} (picked)" for n in names)
         + " | "
-        + " | ".join(TARGETS)
+        + " | ".join(target_names(width))
         + " |",
         "|---|---|---|" + "---|" * (len(names) + len(TARGETS)),
     ]
@@ -155,6 +161,7 @@ def markdown(doc: dict) -> str:
     cfg = doc["config"]
     presets = list(res)
     lab = doc["labels"]
+    width = int(cfg.get("width", 8))  # older results.json: the paper's 8
     k = int(cfg.get("repeats", 1))
     seeds = (
         f"seed {cfg['seed']}"
@@ -176,9 +183,14 @@ def markdown(doc: dict) -> str:
             else ""
         )
         + (
-            f"; the 8-wide networks (single-level, both students) {cfg['wide_start']} wide for "
-            f"the first {count(cfg['epochs'] // 2, 'epoch')}, then pruned to 8 wide "
-            "(--wide-start)"
+            f"; the single-level net and both students {width} wide (--width)"
+            if width != 8 and not cfg.get("wide_start")
+            else ""
+        )
+        + (
+            f"; the {width}-wide networks (single-level, both students) {cfg['wide_start']} "
+            f"wide for the first {count(cfg['epochs'] // 2, 'epoch')}, then pruned to {width} "
+            "wide (--wide-start)"
             if cfg.get("wide_start")
             else ""
         )
@@ -224,7 +236,7 @@ def markdown(doc: dict) -> str:
         "absolute. A ratio of totals shrinks when the data carry error no model removes "
         "(measured BTFs); the absolute difference does not.",
         "",
-        "| material | " + " | ".join(targets(res[presets[0]]["methods"])) + " |",
+        "| material | " + " | ".join(target_names(width)) + " |",
         "|---|" + "---|" * 4,
     ]
     for p in presets:
@@ -239,7 +251,7 @@ def markdown(doc: dict) -> str:
         lines.append(f"| {p} | " + " | ".join(cells) + " |")
     lines.append("")
     if k > 1:
-        lines += _several_seeds(res, presets, lab)
+        lines += _several_seeds(res, presets, lab, width)
     lines += _psnr_ssim(res, presets, lab)
     lines += [
         "## Held-out test L1 and training time (s)",
@@ -304,7 +316,7 @@ def curves_png(doc: dict, path: Path) -> None:
             cut = doc["config"]["epochs"] // 2 + 0.5
             ax.axvline(cut, c="k", ls=":", lw=0.8)
             ax.annotate(
-                f"{wide} -> 8 wide",
+                f"{wide} -> {doc['config'].get('width', 8)} wide",
                 (cut, 1),
                 xycoords=("data", "axes fraction"),
                 xytext=(3, -10),
