@@ -71,15 +71,10 @@ def student_width(name: str) -> int | None:
 
 def network_names(text: str) -> list[str]:
     """``--networks``: each one of :data:`NETWORKS` or ``student:W``, none twice."""
-    from vrneural.errors import VrnError, check_choice
+    from vrneural.errors import VrnError
 
-    vals = [t.strip() for t in str(text).split(",") if t.strip()]
-    for v in vals:
-        if student_width(v) is None:
-            check_choice("--networks", v, (*NETWORKS, "student:W"))
-    twice = sorted({v for v in vals if vals.count(v) > 1})
-    if twice:
-        raise VrnError(f"--networks names {', '.join(twice)} more than once")
+    # student_width: a width (>= 1) for student and student:W, None otherwise, an error for a bad W
+    vals = rp.choice_list("--networks", text, (*NETWORKS, "student:W"), student_width)
     if not vals:
         raise VrnError(f"--networks is empty; choose from {', '.join(NETWORKS)} or student:W")
     return vals

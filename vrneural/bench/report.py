@@ -182,14 +182,16 @@ FPS_NOTE = (
 )
 
 
-def choice_list(field: str, text: str, allowed) -> list[str]:
-    """The comma-separated values of option ``field``, each one of ``allowed``, none twice (a
-    value named twice would be measured and reported twice)."""
+def choice_list(field: str, text: str, allowed, matches=None) -> list[str]:
+    """The comma-separated values of option ``field``, each one of ``allowed`` (or, with
+    ``matches``, a value it accepts: a pattern such as ``student:W``, named in ``allowed``),
+    none twice (a value named twice would be measured and reported twice)."""
     from vrneural.errors import VrnError, check_choice
 
     vals = [t.strip() for t in str(text).split(",") if t.strip()]
     for v in vals:
-        check_choice(field, v, allowed)
+        if not (matches and matches(v)):
+            check_choice(field, v, allowed)
     twice = sorted({v for v in vals if vals.count(v) > 1})
     if twice:
         raise VrnError(f"{field} names {', '.join(twice)} more than once")
