@@ -200,45 +200,63 @@ def _distill_configs(
         for seed in range(cfg.seed, cfg.seed + cfg.repeats):
             # the first seed keeps the plain name, so a one-seed run's checkpoints are reused
             stem = name if seed == cfg.seed else f"{name}.seed{seed}"
+            neumip = name == "neumip"  # 4 x 25, never pruned
+            out += network_runs(
+                cfg,
+                d,
+                btf_path,
+                tsha,
+                name,
+                stem,
+                dict(kw, seed=seed),
+                width=None if neumip else cfg.width,
+                wide_start=0 if neumip else cfg.wide_start,
+            )
+    return out
 
-            if cfg.wide_start and name != "neumip":
-                # --wide-start: W wide for the first half, then this network pruned from it
-                wide_epochs = cfg.epochs // 2
-                wide = _network_config(
-                    cfg,
-                    d,
-                    btf_path,
-                    d / f"{stem}.wide.pt",
-                    seed=seed,
-                    **kw,
-                    epochs=wide_epochs,
-                    width=cfg.wide_start,
-                    export=False,
-                )
-                name_flag(wide, "epochs", "")  # no option sets its epochs directly
-                _set_resume(wide, cfg.resume, teacher_sha=tsha)
-                out.append((None, f"{stem}.wide", wide))
-                if cfg.resume:
-                    _check_wide_start(d / f"{stem}.pt", wide_epochs, cfg.epochs)
-                dcfg = _network_config(
-                    cfg,
-                    d,
-                    btf_path,
-                    d / f"{stem}.pt",
-                    seed=seed,
-                    **kw,
-                    epochs=cfg.epochs - wide_epochs,
-                    init_from=str(d / f"{stem}.wide.pt"),
-                    width=cfg.width,
-                )
-                name_flag(dcfg, "epochs", "")
-            else:
-                width = {} if name == "neumip" else {"width": cfg.width}  # NeuMIP: 4 x 25
-                dcfg = _network_config(
-                    cfg, d, btf_path, d / f"{stem}.pt", seed=seed, **kw, epochs=cfg.epochs, **width
-                )
-            _set_resume(dcfg, cfg.resume, teacher_sha=tsha)
-            out.append((name, stem, dcfg))
+
+def network_runs(
+    cfg, d: Path, btf_path: Path, tsha, name: str, stem: str, kw: dict, width, wide_start: int
+) -> list:
+    """``(name, stem, config)`` of one network of a bench (``kw``: method, seed, ...; ``width``
+    None for NeuMIP), trained for ``cfg.epochs`` into ``d/stem.pt``: one run, or with
+    ``wide_start`` two, the wide half first (name None) ``wide_start`` wide for half the
+    epochs into ``d/stem.wide.pt``, then the network pruned from it to ``width``. A resumed
+    run must match (``_set_resume``; ``tsha``: the teacher's hash, None to skip it)."""
+    out = []
+    size = {} if width is None else {"width": width}
+    if wide_start:
+        wide_epochs = cfg.epochs // 2
+        wide = _network_config(
+            cfg,
+            d,
+            btf_path,
+            d / f"{stem}.wide.pt",
+            **kw,
+            epochs=wide_epochs,
+            width=wide_start,
+            export=False,
+        )
+        name_flag(wide, "epochs", "")  # no option sets its epochs directly
+        _set_resume(wide, cfg.resume, teacher_sha=tsha)
+        out.append((None, f"{stem}.wide", wide))
+        if cfg.resume:
+            _check_wide_start(d / f"{stem}.pt", wide_epochs, cfg.epochs)
+        dcfg = _network_config(
+            cfg,
+            d,
+            btf_path,
+            d / f"{stem}.pt",
+            **kw,
+            epochs=cfg.epochs - wide_epochs,
+            init_from=str(d / f"{stem}.wide.pt"),
+            **size,
+        )
+        name_flag(dcfg, "epochs", "")
+    else:
+        dcfg = _network_config(cfg, d, btf_path, d / f"{stem}.pt", **kw, epochs=cfg.epochs, **size)
+    _set_resume(dcfg, cfg.resume, teacher_sha=tsha)
+    out.append((name, stem, dcfg))
     return out
 
 
@@ -298,36 +316,44 @@ def _job(kind: str, job_cfg) -> float:
     return float(run_distill(job_cfg)["train_seconds"])
 
 
+def job_pool(jobs: int):
+    """The worker processes of ``--jobs`` (spawned: CUDA-safe, no forked torch thread pools)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"))
+
+
+def run_jobs(pool, jobs: list, log) -> None:
+    """Run ``(label, kind, config)`` steps (:func:`_job`) in ``pool``; log each as it ends.
+    On an error or Ctrl-C the rest are cancelled and running workers save first."""
+    from concurrent.futures import as_completed
+
+    futures = {pool.submit(_job, kind, c): label for label, kind, c in jobs}
+    try:
+        for f in as_completed(futures):
+            log(f"{futures[f]}  {f.result():.0f} s")
+    except BaseException:
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+
+
 def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> None:
     """``--jobs N``: synthesise, then train every teacher, then every other network, N
     processes at a time; the evaluation afterwards finds them finished and reuses them."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
 
     quiet = dataclasses.replace(cfg, progress=False)
     btfs = {p: root / "btf" / f"{p}.btf" for p in presets}
-    ctx = multiprocessing.get_context("spawn")  # CUDA-safe; no forked torch thread pools
-    with ProcessPoolExecutor(max_workers=cfg.jobs, mp_context=ctx) as pool:
-
-        def run(jobs: list) -> None:
-            futures = {pool.submit(_job, kind, c): label for label, kind, c in jobs}
-            try:
-                for f in as_completed(futures):
-                    log(f"{futures[f]}  {f.result():.0f} s")
-            except BaseException:
-                pool.shutdown(wait=True, cancel_futures=True)  # Ctrl-C: workers save first
-                raise
-
-        run([(f"{p}: btf", "synth", (p, quiet, btfs[p])) for p in presets])
+    with job_pool(cfg.jobs) as pool:
+        run_jobs(pool, [(f"{p}: btf", "synth", (p, quiet, btfs[p])) for p in presets], log)
         teach = []
         for p in presets:
             (root / p).mkdir(parents=True, exist_ok=True)
             sha = btf_fingerprint(read_btf(btfs[p]))["sha256"]
             teach.append((f"{p}: teacher", "teach", _teach_config(p, quiet, root, btfs[p], sha)))
-        run(teach)
+        run_jobs(pool, teach, log)
         runs = [
             (p, n, stem, c)
             for p in presets
@@ -335,7 +361,8 @@ def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> 
         ]
         # the wide starts (name None) first: the networks pruned from them read them
         for wide in (True, False):
-            run([(f"{p}: {stem}", "distill", c) for p, n, stem, c in runs if (n is None) == wide])
+            jobs = [(f"{p}: {stem}", "distill", c) for p, n, stem, c in runs if (n is None) == wide]
+            run_jobs(pool, jobs, log)
 
 
 def _with_wide_start(ck: dict, wide_path: str) -> dict:

@@ -39,6 +39,29 @@ def _run_quality(args) -> int:
     return 0
 
 
+def _register_widths(sub) -> None:
+    from vrneural.bench.widths import WidthsConfig
+
+    p = sub.add_parser(
+        "widths",
+        help="what the student's width costs and buys: whole-BTF L1 against MACs per texel",
+        description="Synthesise one preset's BTF, train its teacher, then the student (and "
+        "--methods) at every --widths, from random weights and/or with a wide start, and "
+        "NeuMIP as the reference; write results.json, results.md and widths.png.",
+    )
+    p.add_argument("--out", default="bench-widths", help="output directory (default: bench-widths)")
+    add_config_args(p, WidthsConfig)
+    p.set_defaults(func=_run_widths)
+
+
+def _run_widths(args) -> int:
+    from vrneural.bench.widths import WidthsConfig, run_widths
+
+    doc = run_widths(config_from_args(WidthsConfig, args))
+    print(f"{args.out}: results.json, results.md, widths.png ({doc['total_seconds'] / 60:.1f} min)")
+    return 0
+
+
 def _register_extremes(sub) -> None:
     from vrneural.bench.extremes import ExtremesConfig
 
@@ -67,7 +90,11 @@ def _run_extremes(args) -> int:
     return 1 if doc["n_fail"] else 0
 
 
-BENCHMARKS = {"quality": _register_quality, "extremes": _register_extremes}
+BENCHMARKS = {
+    "quality": _register_quality,
+    "widths": _register_widths,
+    "extremes": _register_extremes,
+}
 
 # frames, lights, materials, kernels, tradeoff, all (vrneural/bench/entries.py)
 from vrneural.bench.entries import ENTRIES  # noqa: E402

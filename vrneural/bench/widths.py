@@ -1,0 +1,350 @@
+"""`vrneural bench widths`: what the student's width costs and what it buys.
+
+One synthetic preset and one teacher. The coarse-to-fine student (and, with ``--methods``, the
+single-level net and the student without distillation) is trained at each of ``--widths``:
+from random weights (``plain``) and/or with a wide start (``wide``: 2W wide for the first half
+of the epochs, then pruned to W, what ``distill --wide-start 2W`` does), ``--repeats`` seeds
+each. NeuMIP (4 x 25, its own inputs) is the reference. Every network gets the same epochs,
+seeds, data split and teacher, as in `bench quality`.
+
+Reported per network: whole-BTF L1 (every (light, view) pair, linear units; mean and standard
+deviation over the seeds), against the MLP multiply-adds per texel and the weight bytes of its
+runtime network, and the narrowest width of each family within 10% of NeuMIP. Writes
+results.json, results.md and widths.png (L1 against multiply-adds). `vrneural bench kernels
+--networks student:W` times the same networks on the GPU adapter. The defaults are the width
+sweep of docs/quality-research.md.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import statistics
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from vrneural.config import config_dict, opt, quick_defaults
+from vrneural.distill.config import COMPILE_MODES
+from vrneural.errors import VrnError, check_range, check_seed, count
+from vrneural.formats.atomic import check_output_dir, check_resume_force, mark_output_dir
+from vrneural.versions import package_versions
+
+#: the networks ``--methods`` may name: their `distill` settings and their names in the report
+METHODS = {
+    "student": (dict(method="student"), "student (coarse-to-fine, distilled)"),
+    "student_nodistill": (
+        dict(method="student", distill=False),
+        "student w/o distillation",
+    ),
+    "single8": (dict(method="single8"), "single-level (distilled)"),
+}
+STARTS = {"plain": "from random weights", "wide": "wide start (2W, pruned to W)"}
+NEUMIP = dict(method="neumip", distill=False)
+#: --wide-start trains 2W wide, and distill's widths end at 64
+MAX_WIDE = 32
+
+
+@dataclass
+class WidthsConfig:
+    """`vrneural bench widths`."""
+
+    preset: str = opt("leather", "synthetic BTF preset (btf synth --preset)")
+    out: str = opt("bench-widths", "output directory", cli=False)
+    res: int = opt(32, "BTF texels per side")
+    dirs: int = opt(16, "light and view directions (dirs^2 slices)")
+    teacher_epochs: int = opt(24, "teacher epochs")
+    epochs: int = opt(24, "epochs of every other network (a wide start takes half of them)")
+    widths: str = opt("4,8,12,16", "comma-separated hidden widths, each in [1, 64] (32 with wide)")
+    methods: str = opt(
+        "student",
+        "networks trained at every width: student (distilled), student_nodistill, single8",
+    )
+    starts: str = opt(
+        "plain,wide",
+        "plain: from random weights; wide: 2W wide for half the epochs, then pruned to W "
+        "(distill --wide-start 2W)",
+    )
+    seed: int = opt(0, "seed of synthesis, initialisation and data order")
+    repeats: int = opt(3, "seeds of every network but the teacher (seed, seed+1, ...)")
+    device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
+    compile: str = opt(
+        "off", "torch.compile the networks (teach/distill --compile)", choices=COMPILE_MODES
+    )
+    jobs: int = opt(1, "train this many networks at once, each in its own process")
+    quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, widths 4,8")
+    progress: bool = opt(True, "show progress bars")
+    force: bool = opt(False, "use an existing --out: retrain every network, rewrite the reports")
+    resume: bool = opt(
+        False,
+        "reuse the checkpoints in OUT that match this run (same settings, BTF and teacher): "
+        "finished ones as they are, interrupted ones continued; train the rest",
+    )
+
+    def resolved(self) -> WidthsConfig:
+        if not self.quick:
+            return self
+        return quick_defaults(
+            self, res=16, dirs=8, teacher_epochs=2, epochs=2, widths="4,8", repeats=1
+        )
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What one run trains: the parsed lists, and the `bench quality` config its shared
+    stages (BTF, teacher, one network) take."""
+
+    widths: list[int]
+    methods: list[str]
+    starts: list[str]
+    quality: object
+
+
+def validate(cfg: WidthsConfig) -> Plan:
+    """Every option, before anything is synthesised, trained or written."""
+    from vrneural.bench import report as rp
+    from vrneural.bench.quality import QualityConfig
+    from vrneural.bench.quality import validate as quality_validate
+
+    if not cfg.out:
+        raise VrnError("--out is empty; pass an output directory")
+    check_resume_force(cfg.resume, cfg.force)
+    widths = sorted(rp.int_list("--widths", cfg.widths, 1, 64))
+    methods = rp.choice_list("--methods", cfg.methods, list(METHODS))
+    starts = rp.choice_list("--starts", cfg.starts, list(STARTS))
+    if not methods:
+        raise VrnError("--methods is empty; name at least one of " + ", ".join(METHODS))
+    if not starts:
+        raise VrnError("--starts is empty; name plain, wide or both")
+    if "wide" in starts:
+        too = [w for w in widths if w > MAX_WIDE]
+        if too:
+            raise VrnError(
+                f"--widths {too[0]} with --starts wide: a wide start trains 2W wide and "
+                f"distill's widths end at 64, so each width must be at most {MAX_WIDE}"
+            )
+        if cfg.epochs < 2:
+            raise VrnError(
+                f"--epochs {cfg.epochs} with --starts wide: half the epochs go to the wide "
+                "start, so at least 2 are needed"
+            )
+    check_range("--repeats", cfg.repeats, 1, 100)
+    check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
+    q = QualityConfig(
+        presets=cfg.preset,
+        out=cfg.out,
+        res=cfg.res,
+        dirs=cfg.dirs,
+        teacher_epochs=cfg.teacher_epochs,
+        epochs=cfg.epochs,
+        seed=cfg.seed,
+        repeats=cfg.repeats,
+        device=cfg.device,
+        compile=cfg.compile,
+        jobs=cfg.jobs,
+        progress=cfg.progress,
+        force=cfg.force,
+        resume=cfg.resume,
+    )
+    try:
+        quality_validate(q)  # the ranges of the options both benches share
+    except VrnError as e:
+        raise VrnError(str(e).replace("--presets", "--preset")) from None
+    return Plan(widths, methods, starts, q)
+
+
+def _key(method: str, width: int | None, start: str) -> str:
+    return "neumip" if method == "neumip" else f"{method}:{width}:{start}"
+
+
+def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = True) -> list:
+    """``(key, stem, config)`` of every network and seed (wide halves: key None), in an order
+    one process can train them in."""
+    from vrneural.bench.quality import network_runs as one
+    from vrneural.formats.atomic import file_sha256
+
+    q = plan.quality
+    d = root / q.presets
+    tsha = file_sha256(d / "teacher.pt") if check_teacher else None
+    out = []
+    for seed in range(q.seed, q.seed + q.repeats):
+        kw = dict(NEUMIP, seed=seed)
+        out += one(q, d, btf_path, tsha, "neumip", f"neumip-s{seed}", kw, None, 0)
+        for m in plan.methods:
+            for start in plan.starts:
+                for w in plan.widths:
+                    stem = f"{m}-w{w}{f'-from{2 * w}' if start == 'wide' else ''}-s{seed}"
+                    kw = dict(METHODS[m][0], seed=seed)
+                    wide = 2 * w if start == "wide" else 0
+                    out += one(q, d, btf_path, tsha, _key(m, w, start), stem, kw, w, wide)
+    return out
+
+
+def run_widths(cfg: WidthsConfig) -> dict:
+    """Run the sweep; writes results.json, results.md and widths.png in ``out``."""
+    cfg = cfg.resolved()
+    plan = validate(cfg)
+    root = Path(cfg.out)
+    if cfg.resume and not root.exists():
+        raise VrnError(
+            f"--resume: nothing to resume, {root} does not exist; drop --resume to start a new "
+            "sweep there"
+        )
+    if not (root.is_dir() and not any(root.iterdir())):
+        check_output_dir(
+            root,
+            cfg.force or cfg.resume,
+            "bench widths",
+            deletes=False,
+            remedy="pass --resume to reuse its checkpoints or --force to retrain",
+        )
+    if cfg.resume:  # every checkpoint it would meet matches, before any work
+        from vrneural.bench.quality import _teach_config
+
+        btf_path = root / "btf" / f"{cfg.preset}.btf"
+        _teach_config(cfg.preset, plan.quality, root, btf_path, None)
+        network_runs(plan, root, btf_path, check_teacher=False)
+    mark_output_dir(root, "bench widths")
+    try:
+        return _run(cfg, plan, root)
+    except KeyboardInterrupt:
+        print(
+            f"{root}: interrupted; finished checkpoints are kept, and interrupted ones continue "
+            "where they stopped: rerun the same command with --resume",
+            file=sys.stderr,
+        )
+        raise
+
+
+def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
+    """Synthesise the BTF, train the teacher and every network (``--jobs`` processes at a
+    time); returns the teacher's checkpoint and ``(key, final checkpoint)`` of each network."""
+    from vrneural.bench.quality import (
+        _finished,
+        _teach_config,
+        _took,
+        job_pool,
+        make_btf,
+        run_jobs,
+    )
+    from vrneural.btf.format import read_btf
+    from vrneural.btf.identity import btf_fingerprint
+    from vrneural.distill.checkpoint import load_checkpoint
+    from vrneural.distill.distill import run_distill
+    from vrneural.distill.teach import run_teach
+
+    q, preset = plan.quality, plan.quality.presets
+    (root / preset).mkdir(parents=True, exist_ok=True)
+    btf_path = make_btf(preset, q, root / "btf" / f"{preset}.btf")
+    sha = btf_fingerprint(read_btf(btf_path))["sha256"]
+    tcfg = _teach_config(preset, q, root, btf_path, sha)
+    if q.jobs == 1:
+        reused = _finished(tcfg)
+        tck = run_teach(tcfg)
+        log(f"{preset}: teacher  {_took(tck, reused)}")
+        done = []
+        for key, stem, c in network_runs(plan, root, btf_path):
+            reused = _finished(c)
+            ck = run_distill(c)
+            log(f"{preset}: {stem}  {_took(ck, reused)}")
+            if key is not None:
+                done.append((key, ck, c.init_from))
+        return tck, done
+    quiet = dataclasses.replace(q, progress=False)
+    tcfg.progress = False
+    with job_pool(q.jobs) as pool:
+        run_jobs(pool, [(f"{preset}: teacher", "teach", tcfg)], log)
+        runs = network_runs(dataclasses.replace(plan, quality=quiet), root, btf_path)
+        for wide in (True, False):  # the wide halves first: the pruned networks read them
+            jobs = [(f"{preset}: {s}", "distill", c) for k, s, c in runs if (k is None) == wide]
+            run_jobs(pool, jobs, log)
+    tck = load_checkpoint(tcfg.output, kind="teacher")
+    done = [(k, load_checkpoint(c.output), c.init_from) for k, _, c in runs if k is not None]
+    return tck, done
+
+
+def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
+    from vrneural.bench.quality import _with_wide_start
+    from vrneural.bench.widths_report import write_report
+    from vrneural.btf.format import read_btf
+    from vrneural.distill.data import SliceData
+    from vrneural.distill.distill import model_from_checkpoint
+    from vrneural.distill.evaluate import mean_l1
+    from vrneural.formats.atomic import write_json
+
+    t0 = time.perf_counter()
+    tck, done = _train(plan, root, print)
+    btf = read_btf(root / "btf" / f"{cfg.preset}.btf")
+    data = SliceData(btf, tck["split"]["test"])
+    every = list(range(len(data.train) + len(data.test)))
+    rows: dict = {}
+    for key, ck, wide_path in done:
+        model = model_from_checkpoint(ck)
+        mat = model.to_material()
+        whole = _with_wide_start(ck, wide_path)  # both halves' seconds and epochs
+        r = rows.setdefault(
+            key,
+            {
+                "method": "neumip" if key == "neumip" else key.split(":")[0],
+                "width": None if key == "neumip" else int(key.split(":")[1]),
+                "start": "plain" if key == "neumip" else key.split(":")[2],
+                "macs_per_texel": mat.macs_per_texel,
+                "weight_bytes": mat.weight_bytes,
+                "texture_bytes": mat.texture_bytes,
+                "seeds": [],
+                "whole_l1_seeds": [],
+                "test_l1_seeds": [],
+                "train_seconds_seeds": [],
+            },
+        )
+        r["seeds"].append(int(ck["config"]["seed"]))
+        r["whole_l1_seeds"].append(mean_l1(model, data, every))
+        r["test_l1_seeds"].append(mean_l1(model, data, data.test))
+        r["train_seconds_seeds"].append(float(whole["train_seconds"]))
+    for r in rows.values():
+        s = r["whole_l1_seeds"]
+        r["whole_l1"] = statistics.fmean(s)
+        r["whole_l1_sd"] = statistics.stdev(s) if len(s) > 1 else 0.0
+        r["test_l1"] = statistics.fmean(r["test_l1_seeds"])
+    doc = {
+        "benchmark": "widths",
+        "config": config_dict(cfg),
+        "versions": package_versions(),
+        "machine": {"cpu_count": os.cpu_count()},
+        "teacher": {
+            "epochs": int(tck["epoch"]),
+            "whole_l1": mean_l1(model_from_checkpoint(tck), data, every),
+        },
+        "btf": tck["btf"],
+        "pairs": len(every),
+        "total_seconds": time.perf_counter() - t0,
+        "rows": rows,
+        "within_10pct": narrowest(rows, plan),
+    }
+    write_json(root / "results.json", doc)
+    write_report(doc, root)
+    return doc
+
+
+def narrowest(rows: dict, plan: Plan) -> dict:
+    """Per ``method:start`` family: the narrowest width whose seed mean is within 10% of
+    NeuMIP's (None where none is)."""
+    nm = rows["neumip"]["whole_l1"]
+    out = {}
+    for m in plan.methods:
+        for start in plan.starts:
+            ok = [w for w in plan.widths if rows[_key(m, w, start)]["whole_l1"] <= 1.1 * nm]
+            out[f"{m}:{start}"] = ok[0] if ok else None
+    return out
+
+
+def describe(cfg: dict) -> str:
+    """The budget line of the report."""
+    reps = cfg["repeats"]
+    seeds = f"seed {cfg['seed']}" if reps == 1 else f"seeds {cfg['seed']}-{cfg['seed'] + reps - 1}"
+    return (
+        f"{cfg['preset']}, {cfg['res']}^2 texels, {cfg['dirs']} x {cfg['dirs']} directions; "
+        f"teacher {count(cfg['teacher_epochs'], 'epoch')}, every other network "
+        f"{count(cfg['epochs'], 'epoch')}, {seeds}"
+    )

@@ -1,0 +1,151 @@
+"""results.md and widths.png of `vrneural bench widths` (from its results.json document)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from vrneural.formats.atomic import atomic_path
+
+
+def _label(r: dict) -> str:
+    from vrneural.bench.widths import METHODS, STARTS
+
+    if r["method"] == "neumip":
+        return "NeuMIP (4 x 25)"
+    return f"{METHODS[r['method']][1]}, {STARTS[r['start']]}"
+
+
+def _family(rows: dict, method: str, start: str) -> list[dict]:
+    fam = [r for r in rows.values() if r["method"] == method and r["start"] == start]
+    return sorted(fam, key=lambda r: r["width"])
+
+
+def families(doc: dict) -> list[tuple[str, str]]:
+    """``(method, start)`` of every family of networks swept over the widths, in the order
+    the config names them."""
+
+    def items(text: str) -> list[str]:
+        return [v.strip() for v in text.split(",") if v.strip()]
+
+    cfg = doc["config"]
+    return [(m, s) for m in items(cfg["methods"]) for s in items(cfg["starts"])]
+
+
+def markdown(doc: dict) -> str:
+    from vrneural.bench.widths import describe
+
+    rows, cfg = doc["rows"], doc["config"]
+    nm = rows["neumip"]
+    lines = [
+        f"# What the student's width costs and buys: {cfg['preset']}",
+        "",
+        f"Budget: {describe(cfg)}. A wide start trains 2W wide for the first "
+        f"{cfg['epochs'] // 2} epochs, then the network pruned to W for the rest "
+        "(`distill --wide-start 2W`). Whole-BTF L1: mean absolute error over all "
+        f"{doc['pairs']} (light, view) pairs, texels and channels, linear units; mean ± sd "
+        f"over the seeds. Teacher (128 wide): {doc['teacher']['whole_l1']:.5f}.",
+        "",
+        "| network | width | MACs / texel | weights (B) | whole-BTF L1 per seed | mean ± sd "
+        "| vs NeuMIP | training s (mean) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+
+    def row(r: dict, label: str, width: str) -> str:
+        seeds = " / ".join(f"{v:.5f}" for v in r["whole_l1_seeds"])
+        gap = r["whole_l1"] / nm["whole_l1"] - 1
+        secs = sum(r["train_seconds_seeds"]) / len(r["train_seconds_seeds"])
+        vs = "" if r is nm else f"{gap:+.1%}"
+        if r is not nm and gap <= 0.1:
+            vs = f"**{vs}**"
+        return (
+            f"| {label} | {width} | {r['macs_per_texel']:g} | {r['weight_bytes']} | {seeds} | "
+            f"{r['whole_l1']:.5f} ± {r['whole_l1_sd']:.5f} | {vs} | {secs:.0f} |"
+        )
+
+    for method, start in families(doc):
+        for r in _family(rows, method, start):
+            lines.append(row(r, _label(r), str(r["width"])))
+    lines.append(row(nm, _label(nm), "25"))
+    lines += ["", "Narrowest width within 10% of NeuMIP (seed means; **bold** above):", ""]
+    for (method, start), w in zip(families(doc), doc["within_10pct"].values(), strict=True):
+        fam = _family(rows, method, start)
+        if w is None:
+            widths = ", ".join(str(r["width"]) for r in fam)
+            lines.append(f"- {_label(fam[0])}: none of {widths}")
+            continue
+        r = next(r for r in fam if r["width"] == w)
+        share = r["macs_per_texel"] / nm["macs_per_texel"]
+        lines.append(
+            f"- {_label(r)}: {w} wide ({r['macs_per_texel']:g} MACs per texel, {share:.0%} of "
+            f"NeuMIP's {nm['macs_per_texel']:g}; {r['whole_l1'] / nm['whole_l1'] - 1:+.1%})"
+        )
+    lines += [
+        "",
+        "![whole-BTF L1 against multiply-adds per texel](widths.png)",
+        "",
+        f"Total {doc['total_seconds'] / 60:.1f} min. Kernel time of the same networks on the "
+        "GPU adapter: `vrneural bench kernels --networks student:W,...`.",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def widths_png(doc: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = doc["rows"]
+    nm = rows["neumip"]
+    fig, ax = plt.subplots(figsize=(7.2, 4.8))
+    marks = {"plain": "o-", "wide": "s--"}
+    for method, start in families(doc):
+        fam = _family(rows, method, start)
+        x = [r["macs_per_texel"] for r in fam]
+        y = [r["whole_l1"] for r in fam]
+        line = ax.errorbar(
+            x,
+            y,
+            yerr=[r["whole_l1_sd"] for r in fam],
+            fmt=marks[start],
+            capsize=3,
+            label=_label(fam[0]),
+        )
+        for r, xi, yi in zip(fam, x, y, strict=True):
+            ax.annotate(
+                str(r["width"]),
+                (xi, yi),
+                textcoords="offset points",
+                xytext=(4, 4),
+                fontsize=7,
+                color=line[0].get_color(),
+            )
+    ax.errorbar(
+        [nm["macs_per_texel"]],
+        [nm["whole_l1"]],
+        yerr=[nm["whole_l1_sd"]],
+        fmt="r*",
+        ms=11,
+        capsize=3,
+        label=_label(nm),
+    )
+    ax.axhline(1.1 * nm["whole_l1"], color="r", lw=0.8, ls=":", label="NeuMIP + 10%")
+    ax.set_xscale("log")
+    ax.set_xlabel("MLP multiply-adds per texel (labels: width)")
+    ax.set_ylabel("whole-BTF L1 (mean ± sd over seeds)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
+    from vrneural.bench.widths import describe
+
+    ax.set_title(describe(doc["config"]), fontsize=8)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    plt.close(fig)
+
+
+def write_report(doc: dict, root: Path) -> None:
+    with atomic_path(root / "results.md") as tmp:
+        tmp.write_text(markdown(doc))
+    widths_png(doc, root / "widths.png")
