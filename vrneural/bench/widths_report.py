@@ -99,16 +99,18 @@ def widths_png(doc: dict, path: Path) -> None:
     rows = doc["rows"]
     nm = rows["neumip"]
     fig, ax = plt.subplots(figsize=(7.2, 4.8))
-    marks = {"plain": "o-", "wide": "s--"}
+    marks = {"plain": "o-", "wide": "s--"}  # a method keeps its colour; the start its line
+    colours = {"student": "C0", "student_nodistill": "C1", "single8": "C2"}
     for method, start in families(doc):
         fam = _family(rows, method, start)
         x = [r["macs_per_texel"] for r in fam]
         y = [r["whole_l1"] for r in fam]
-        line = ax.errorbar(
+        ax.errorbar(
             x,
             y,
             yerr=[r["whole_l1_sd"] for r in fam],
             fmt=marks[start],
+            color=colours[method],
             capsize=3,
             label=_label(fam[0]),
         )
@@ -119,7 +121,7 @@ def widths_png(doc: dict, path: Path) -> None:
                 textcoords="offset points",
                 xytext=(4, 4),
                 fontsize=7,
-                color=line[0].get_color(),
+                color=colours[method],
             )
     ax.errorbar(
         [nm["macs_per_texel"]],
