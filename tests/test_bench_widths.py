@@ -98,3 +98,51 @@ def test_bench_widths_checks_every_option_before_any_work(tmp_path, monkeypatch,
     code, err = run_cli(*BASE, "--out", "w", *argv)
     assert code == 2 and err.count("\n") == 1 and needle in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_bench_jobs_stop_on_sigterm(tmp_path):
+    """`kill` (SIGTERM) of a --jobs run stops it as Ctrl-C does: its workers get SIGINT, save
+    and exit with it (none is left behind), exit code 130, and --resume finishes the sweep."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    argv = [sys.executable, "-m", "vrneural", *map(str, BASE), "--quick", "--jobs", "2"]
+    argv += ["--repeats", "2", "--out", str(tmp_path / "w")]
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(
+        argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True
+    )
+    assert "teacher" in proc.stdout.readline()  # the pool is up and training networks
+    kids = f"/proc/{proc.pid}/task/{proc.pid}/children"
+    workers = [int(p) for p in open(kids).read().split()]
+    assert workers
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "interrupted" in err and "--resume" in err, err
+    deadline = time.monotonic() + 10
+    while any(os.path.exists(f"/proc/{w}") for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    alive = [w for w in workers if os.path.exists(f"/proc/{w}")]
+    assert not alive, f"workers left running: {alive}"
+    done = subprocess.run([*argv, "--resume"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "w" / "results.json").is_file()
+
+
+def test_bench_widths_one_sweep_per_out(tmp_path):
+    """--resume in another preset's OUT would replace its report: refused; --force may."""
+    out = tmp_path / "w"
+    argv = [*BASE, "--out", out, "--widths", 4, "--starts", "plain"]
+    code, err = run_cli(*argv)
+    assert code == 0, err
+    doc = json.loads((out / "results.json").read_text())
+    # the all-black reference: the mean |value| of the BTF, which every row is compared with
+    assert 0 < doc["zero_output_l1"] < 1
+    other = [a if a != "leather" else "wood" for a in argv]
+    code, err = run_cli(*other, "--resume")
+    assert code == 2 and "holds the width sweep of preset leather, not wood" in err, err
+    assert json.loads((out / "results.json").read_text())["config"]["preset"] == "leather"

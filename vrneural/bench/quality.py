@@ -23,9 +23,12 @@ about 10%, as much as the differences the targets ask about.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
+import multiprocessing
 import os
+import signal
 import statistics
 import sys
 import time
@@ -316,26 +319,53 @@ def _job(kind: str, job_cfg) -> float:
     return float(run_distill(job_cfg)["train_seconds"])
 
 
+@contextlib.contextmanager
 def job_pool(jobs: int):
-    """The worker processes of ``--jobs`` (spawned: CUDA-safe, no forked torch thread pools)."""
-    import multiprocessing
+    """The worker processes of ``--jobs`` (spawned: CUDA-safe, no forked torch thread pools).
+
+    Stopping is Ctrl-C's, however it comes: SIGTERM to this process (``kill``, a scheduler)
+    raises KeyboardInterrupt here as SIGINT does, and on any exception every worker gets
+    SIGINT, so a network in training saves at its next step and stops (idle workers ignore
+    it), and no worker outlives the run. ``--resume`` then continues them."""
     from concurrent.futures import ProcessPoolExecutor
 
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"))
+    from vrneural.interrupt import threading_main
+
+    ctx = multiprocessing.get_context("spawn")
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init)
+    old = signal.signal(signal.SIGTERM, _raise_interrupt) if threading_main() else None
+    try:
+        yield pool
+    except BaseException:
+        procs = getattr(pool, "_processes", None) or {}  # pid -> Process (CPython's)
+        for proc in list(procs.values()):
+            with contextlib.suppress(OSError):
+                os.kill(proc.pid, signal.SIGINT)
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    finally:
+        pool.shutdown(wait=True)
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
+
+
+def _worker_init() -> None:
+    """A worker ignores Ctrl-C between jobs; training installs its own handler (save, stop)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _raise_interrupt(*_) -> None:
+    raise KeyboardInterrupt
 
 
 def run_jobs(pool, jobs: list, log) -> None:
-    """Run ``(label, kind, config)`` steps (:func:`_job`) in ``pool``; log each as it ends.
-    On an error or Ctrl-C the rest are cancelled and running workers save first."""
+    """Run ``(label, kind, config)`` steps (:func:`_job`) in ``pool`` (:func:`job_pool`); log
+    each as it ends."""
     from concurrent.futures import as_completed
 
     futures = {pool.submit(_job, kind, c): label for label, kind, c in jobs}
-    try:
-        for f in as_completed(futures):
-            log(f"{futures[f]}  {f.result():.0f} s")
-    except BaseException:
-        pool.shutdown(wait=True, cancel_futures=True)
-        raise
+    for f in as_completed(futures):
+        log(f"{futures[f]}  {f.result():.0f} s")
 
 
 def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> None:

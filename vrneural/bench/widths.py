@@ -25,6 +25,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt, quick_defaults
 from vrneural.distill.config import COMPILE_MODES
 from vrneural.errors import VrnError, check_range, check_seed, count
@@ -50,21 +51,28 @@ MAX_WIDE = 32
 class WidthsConfig:
     """`vrneural bench widths`."""
 
-    preset: str = opt("leather", "synthetic BTF preset (btf synth --preset)")
+    preset: str = opt(
+        "leather", "synthetic BTF preset: " + ", ".join(sorted(PRESETS)) + " (btf synth)"
+    )
     out: str = opt("bench-widths", "output directory", cli=False)
     res: int = opt(32, "BTF texels per side")
     dirs: int = opt(16, "light and view directions (dirs^2 slices)")
     teacher_epochs: int = opt(24, "teacher epochs")
     epochs: int = opt(24, "epochs of every other network (a wide start takes half of them)")
-    widths: str = opt("4,8,12,16", "comma-separated hidden widths, each in [1, 64] (32 with wide)")
+    widths: str = opt(
+        "4,8,12,16", "comma-separated hidden widths W, each in [1, 64] (at most 32 with wide)"
+    )
     methods: str = opt(
         "student",
-        "networks trained at every width: student (distilled), student_nodistill, single8",
+        "comma-separated networks trained at every width: student (coarse-to-fine, "
+        "distilled), student_nodistill (on ground truth alone), single8 (the single-level "
+        "4-layer net, W wide; distill --method single8 --width W); NeuMIP (4 x 25) is always "
+        "trained as the reference",
     )
     starts: str = opt(
         "plain,wide",
-        "plain: from random weights; wide: 2W wide for half the epochs, then pruned to W "
-        "(distill --wide-start 2W)",
+        "comma-separated: plain (from random weights), wide (2W wide for epochs // 2, then "
+        "pruned to W for the rest: distill --wide-start 2W)",
     )
     seed: int = opt(0, "seed of synthesis, initialisation and data order")
     repeats: int = opt(3, "seeds of every network but the teacher (seed, seed+1, ...)")
@@ -73,7 +81,11 @@ class WidthsConfig:
         "off", "torch.compile the networks (teach/distill --compile)", choices=COMPILE_MODES
     )
     jobs: int = opt(1, "train this many networks at once, each in its own process")
-    quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, widths 4,8")
+    quick: bool = opt(
+        False,
+        "CI-sized run: 16^2 texels, 8 directions, 2 epochs, widths 4,8, 1 seed (options "
+        "given explicitly win)",
+    )
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "use an existing --out: retrain every network, rewrite the reports")
     resume: bool = opt(
@@ -110,6 +122,7 @@ def validate(cfg: WidthsConfig) -> Plan:
     if not cfg.out:
         raise VrnError("--out is empty; pass an output directory")
     check_resume_force(cfg.resume, cfg.force)
+    check_seed("--seed", cfg.seed)
     widths = sorted(rp.int_list("--widths", cfg.widths, 1, 64))
     methods = rp.choice_list("--methods", cfg.methods, list(METHODS))
     starts = rp.choice_list("--starts", cfg.starts, list(STARTS))
@@ -199,6 +212,7 @@ def run_widths(cfg: WidthsConfig) -> dict:
             deletes=False,
             remedy="pass --resume to reuse its checkpoints or --force to retrain",
         )
+    _check_same_preset(cfg, root)
     if cfg.resume:  # every checkpoint it would meet matches, before any work
         from vrneural.bench.quality import _teach_config
 
@@ -215,6 +229,22 @@ def run_widths(cfg: WidthsConfig) -> dict:
             file=sys.stderr,
         )
         raise
+
+
+def _check_same_preset(cfg: WidthsConfig, root: Path) -> None:
+    """One sweep per OUT: ``--resume`` in the OUT of another preset's sweep would replace
+    that sweep's report (``--force`` replaces it on purpose)."""
+    import json
+
+    try:
+        have = json.loads((root / "results.json").read_text())["config"]["preset"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return
+    if have != cfg.preset and not cfg.force:
+        raise VrnError(
+            f"{root}: holds the width sweep of preset {have}, not {cfg.preset}; use another "
+            f"--out for {cfg.preset} (or --force to replace that sweep's report)"
+        )
 
 
 def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
@@ -265,6 +295,8 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
 
 
 def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
+    import numpy as np
+
     from vrneural.bench.quality import _with_wide_start
     from vrneural.bench.widths_report import write_report
     from vrneural.btf.format import read_btf
@@ -278,6 +310,8 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
     btf = read_btf(root / "btf" / f"{cfg.preset}.btf")
     data = SliceData(btf, tck["split"]["test"])
     every = list(range(len(data.train) + len(data.test)))
+    # what an all-black output scores: a network at or above it has learned nothing
+    zero = float(np.abs(btf.values).astype(np.float64).mean())
     rows: dict = {}
     for key, ck, wide_path in done:
         model = model_from_checkpoint(ck)
@@ -318,6 +352,7 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
         },
         "btf": tck["btf"],
         "pairs": len(every),
+        "zero_output_l1": zero,
         "total_seconds": time.perf_counter() - t0,
         "rows": rows,
         "within_10pct": narrowest(rows, plan),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from vrneural.errors import count
 from vrneural.formats.atomic import atomic_path
 
 
@@ -40,18 +41,23 @@ def markdown(doc: dict) -> str:
         f"# What the student's width costs and buys: {cfg['preset']}",
         "",
         f"Budget: {describe(cfg)}. A wide start trains 2W wide for the first "
-        f"{cfg['epochs'] // 2} epochs, then the network pruned to W for the rest "
-        "(`distill --wide-start 2W`). Whole-BTF L1: mean absolute error over all "
+        f"{count(cfg['epochs'] // 2, 'epoch')} (epochs // 2), then the network pruned to W "
+        "for the rest (`distill --wide-start 2W`). Whole-BTF L1: mean absolute error over all "
         f"{doc['pairs']} (light, view) pairs, texels and channels, linear units; mean ± sd "
-        f"over the seeds. Teacher (128 wide): {doc['teacher']['whole_l1']:.5f}.",
+        f"over the seeds. Teacher (128 wide): {doc['teacher']['whole_l1']:.5f}; an all-black "
+        f"output: {doc['zero_output_l1']:.5f}. MACs per texel count the student's coarse "
+        "net at a quarter (it runs once per 2x2 texel block).",
         "",
         "| network | width | MACs / texel | weights (B) | whole-BTF L1 per seed | mean ± sd "
-        "| vs NeuMIP | training s (mean) |",
+        "| vs NeuMIP | training s (mean of seeds) |",
         "|---|---|---|---|---|---|---|---|",
     ]
 
     def row(r: dict, label: str, width: str) -> str:
         seeds = " / ".join(f"{v:.5f}" for v in r["whole_l1_seeds"])
+        sd = f" ± {r['whole_l1_sd']:.5f}" if len(r["whole_l1_seeds"]) > 1 else ""
+        if r["whole_l1"] >= doc["zero_output_l1"]:
+            seeds += " (no better than black)"
         gap = r["whole_l1"] / nm["whole_l1"] - 1
         secs = sum(r["train_seconds_seeds"]) / len(r["train_seconds_seeds"])
         vs = "" if r is nm else f"{gap:+.1%}"
@@ -59,7 +65,7 @@ def markdown(doc: dict) -> str:
             vs = f"**{vs}**"
         return (
             f"| {label} | {width} | {r['macs_per_texel']:g} | {r['weight_bytes']} | {seeds} | "
-            f"{r['whole_l1']:.5f} ± {r['whole_l1_sd']:.5f} | {vs} | {secs:.0f} |"
+            f"{r['whole_l1']:.5f}{sd} | {vs} | {secs:.1f} |"
         )
 
     for method, start in families(doc):
@@ -83,8 +89,8 @@ def markdown(doc: dict) -> str:
         "",
         "![whole-BTF L1 against multiply-adds per texel](widths.png)",
         "",
-        f"Total {doc['total_seconds'] / 60:.1f} min. Kernel time of the same networks on the "
-        "GPU adapter: `vrneural bench kernels --networks student:W,...`.",
+        f"Total {doc['total_seconds'] / 60:.1f} min. Kernel time of the students on the GPU "
+        "(wgpu): `vrneural bench kernels --networks student:W,...`.",
         "",
     ]
     return "\n".join(lines)
@@ -133,9 +139,13 @@ def widths_png(doc: dict, path: Path) -> None:
         label=_label(nm),
     )
     ax.axhline(1.1 * nm["whole_l1"], color="r", lw=0.8, ls=":", label="NeuMIP + 10%")
+    top = max(r["whole_l1"] + r["whole_l1_sd"] for r in rows.values())
+    if doc["zero_output_l1"] <= 1.5 * top:  # in view: a network near it learned nothing
+        ax.axhline(doc["zero_output_l1"], color="k", lw=0.8, ls="-.", label="all-black output")
     ax.set_xscale("log")
     ax.set_xlabel("MLP multiply-adds per texel (labels: width)")
-    ax.set_ylabel("whole-BTF L1 (mean ± sd over seeds)")
+    several = doc["config"]["repeats"] > 1
+    ax.set_ylabel("whole-BTF L1" + (" (mean ± sd over seeds)" if several else ""))
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     from vrneural.bench.widths import describe
