@@ -161,8 +161,16 @@ def test_kernels_time_the_networks_distill_trains():
     reading wi.xy and wo.xy), and student:W as distill --width W."""
     from vrneural.errors import VrnError
 
-    macs = {n: kernels.network(n)[1] for n in ("student", "single8", "neumip", "student:16")}
-    assert macs == {"student": 202, "single8": 288, "neumip": 1600, "student:16": 564}
+    names = ("student", "single8", "neumip", "student:16", "single8:12", "single8:8")
+    macs = {n: kernels.network(n)[1] for n in names}
+    assert macs == {
+        "student": 202,
+        "single8": 288,
+        "neumip": 1600,
+        "student:16": 564,
+        "single8:12": 17 * 12 + 2 * 12 * 12 + 12 * 3,
+        "single8:8": 288,
+    }
     coarse, fine = (layers for layers, _ in kernels.network("student:4")[0])
     assert [(x.n_in, x.n_out) for x in coarse + fine] == [(17, 4), (4, 4), (12, 4), (4, 3)]
     assert kernels.network_names("student, student:12,neumip") == [
@@ -174,7 +182,8 @@ def test_kernels_time_the_networks_distill_trains():
         ("student:0", "student:W needs a width W in [1, 64]"),
         ("student:x", "student:W needs a width W in [1, 64]"),
         ("student:8,student:8", "--networks names student:8 more than once"),
-        ("resnet", "choose one of: neumip, single8, student, student:W"),
+        ("single8:65", "single8:W needs a width W in [1, 64]"),
+        ("resnet", "choose one of: neumip, single8, single8:W, student, student:W"),
         (" , ", "--networks is empty"),
     ):
         with pytest.raises(VrnError, match=re.escape(msg)):

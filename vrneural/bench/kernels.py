@@ -3,14 +3,15 @@
 For the networks `distill` trains, in their shapes and with their initial weights (speed does
 not depend on the values): the student (M_c 17 -> 8 -> 8 once per 2x2 block, M_f 16 -> 8 -> 3
 per texel; ``student:W`` the student ``distill --width W`` trains), the single-level 8-wide
-network and NeuMIP (4 x 25, 7-channel texture, reading wi.xy and wo.xy; log1p). Each as the
-generated kernel with constant (unrolled) weights, the same kernel reading weights from a
-storage buffer, each in f32 and f16, and PyTorch CPU (f32). Reports texel evaluations/s,
-achieved GFLOP/s (2 FLOP per multiply-add) and their ratio to this machine's numpy sgemm
-GFLOP/s, the roofline of a CPU adapter (measured before and after the kernels, the better kept;
-a kernel above it is flagged in results.md). Speed-ups are against the same network's constants
-kernel in f32, or in f16 when only f16 was measured (the column header names the reference). GPU
-times come from timestamps around the dispatches (inputs uploaded beforehand, excluded).
+network (``single8:W``: W wide) and NeuMIP (4 x 25, 7-channel texture, reading wi.xy and wo.xy;
+log1p). Each as the generated kernel with constant (unrolled) weights, the same kernel reading
+weights from a storage buffer, each in f32 and f16, and PyTorch CPU (f32). Reports texel
+evaluations/s, achieved GFLOP/s (2 FLOP per multiply-add) and their ratio to this machine's
+numpy sgemm GFLOP/s, the roofline of a CPU adapter (measured before and after the kernels, the
+better kept; a kernel above it is flagged in results.md). Speed-ups are against the same
+network's constants kernel in f32, or in f16 when only f16 was measured (the column header names
+the reference). GPU times come from timestamps around the dispatches (inputs uploaded
+beforehand, excluded).
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ class KernelsConfig:
     repeats: int = opt(3, "timed repeats (median)")
     networks: str = opt(
         "student,single8,neumip",
-        "networks (comma-separated): student, single8, neumip, or student:W (the student W "
+        "networks (comma-separated): student, single8, neumip, or student:W / single8:W (W "
         "wide, as distill --width W)",
     )
     precisions: str = opt("f32,f16", "GPU precisions (f16 needs shader-f16)")
@@ -51,44 +52,51 @@ class KernelsConfig:
         return quick_defaults(self, texels=16384, repeats=2, sgemm_n=256, networks="student,neumip")
 
 
-def student_width(name: str) -> int | None:
-    """The width of a ``student`` (8, the paper's) or ``student:W`` network name (``--networks``;
-    W in [1, 64], as `distill --width`); None for another name. Raises a one-line error for a
-    ``student:`` name whose width is not such an integer."""
+#: the networks ``--networks`` also takes at another width, ``NAME:W`` (distill --width W)
+WIDENED = ("student", "single8")
+
+
+def network_width(name: str) -> tuple[str, int] | None:
+    """``(method, width)`` of ``student``/``single8`` (8 wide, the paper's) or ``student:W``/
+    ``single8:W`` (``--networks``; W in [1, 64], as `distill --width`); None for another
+    name. Raises a one-line error for such a name whose width is not such an integer."""
     from vrneural.errors import VrnError
 
-    if name == "student":
-        return 8
-    if not name.startswith("student:"):
+    method, _, w = name.partition(":")
+    if method not in WIDENED:
         return None
-    w = name.split(":", 1)[1]
+    if not _:
+        return method, 8
     if not (w.isdigit() and 1 <= int(w) <= 64):
         raise VrnError(
-            f"--networks: {name!r}: student:W needs a width W in [1, 64] (distill --width)"
+            f"--networks: {name!r}: {method}:W needs a width W in [1, 64] (distill --width)"
         )
-    return int(w)
+    return method, int(w)
 
 
 def network_names(text: str) -> list[str]:
-    """``--networks``: each one of :data:`NETWORKS` or ``student:W``, none twice."""
+    """``--networks``: each one of :data:`NETWORKS`, ``student:W`` or ``single8:W``, none
+    twice."""
     from vrneural.errors import VrnError
 
-    # student_width: a width (>= 1) for student and student:W, None otherwise, an error for a bad W
-    vals = rp.choice_list("--networks", text, (*NETWORKS, "student:W"), student_width)
+    # network_width: a pair for student(:W) and single8(:W), None otherwise, an error for a bad W
+    patterns = tuple(f"{m}:W" for m in WIDENED)
+    vals = rp.choice_list("--networks", text, (*NETWORKS, *patterns), network_width)
     if not vals:
-        raise VrnError(f"--networks is empty; choose from {', '.join(NETWORKS)} or student:W")
+        raise VrnError(f"--networks is empty; choose from {', '.join(NETWORKS + patterns)}")
     return vals
 
 
 def network(name: str):
     """``[(layers, rows per texel)]`` of a network, and its MACs per texel: the network
     `distill` trains under that name (:func:`~vrneural.distill.models.make_spec`; ``student:W``
-    as ``--width W``), with its initial weights (speed does not depend on their values; the
-    inputs NeuMIP does not read are zero, so the constants kernel skips them as in a pack)."""
+    and ``single8:W`` as ``--width W``), with its initial weights (speed does not depend on
+    their values; the inputs NeuMIP does not read are zero, so the constants kernel skips them
+    as in a pack)."""
     from vrneural.distill.models import NeuralModel, make_spec
 
-    width = student_width(name)
-    spec = make_spec("student" if width else name, (16, 16), width=width or 8)
+    method, width = network_width(name) or (name, 8)
+    spec = make_spec(method, (16, 16), width=width)
     mat = NeuralModel(spec, 5).to_material()
     if mat.arch == "coarse_fine":  # M_c once per 2x2 block, M_f per texel
         parts = [(mat.networks["coarse"], 0.25), (mat.networks["fine"], 1.0)]

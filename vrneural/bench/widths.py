@@ -11,8 +11,8 @@ Reported per network: whole-BTF L1 (every (light, view) pair, linear units; mean
 deviation over the seeds), against the MLP multiply-adds per texel and the weight bytes of its
 runtime network, and the narrowest width of each family within 10% of NeuMIP. Writes
 results.json, results.md and widths.png (L1 against multiply-adds). `vrneural bench kernels
---networks student:W` times the same networks on the GPU adapter. The defaults are the width
-sweep of docs/quality-research.md.
+--networks student:W,single8:W` times the same networks on the GPU (wgpu). The defaults are the
+width sweep of docs/quality-research.md.
 """
 
 from __future__ import annotations

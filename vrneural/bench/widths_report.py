@@ -89,8 +89,8 @@ def markdown(doc: dict) -> str:
         "",
         "![whole-BTF L1 against multiply-adds per texel](widths.png)",
         "",
-        f"Total {doc['total_seconds'] / 60:.1f} min. Kernel time of the students on the GPU "
-        "(wgpu): `vrneural bench kernels --networks student:W,...`.",
+        f"Total {doc['total_seconds'] / 60:.1f} min. Kernel time of the same networks on the GPU "
+        "(wgpu): `vrneural bench kernels --networks student:W,single8:W,...`.",
         "",
     ]
     return "\n".join(lines)
