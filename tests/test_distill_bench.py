@@ -426,3 +426,38 @@ def test_bench_quality_width(tmp_path):
     )
     ck = load_checkpoint(tmp_path / "p" / "leather" / "student.pt")
     assert ck["spec"]["fine_hidden"] == [4] and ck["init_from"] is None
+
+
+def test_bench_quality_resume_takes_a_teacher_trained_without_its_pack(tmp_path):
+    """A teacher trained by hand with `teach --no-export` at the bench's settings is the
+    bench's teacher: --resume reuses it (the flag changes no weight), and the table is the
+    same as with the bench's own teacher."""
+    from vrneural.formats.atomic import mark_output_dir
+
+    out = tmp_path / "q"
+    base = ["bench", "quality", "--presets", "leather", "--out", out, "--res", 8, "--dirs", 4]
+    base += ["--teacher-epochs", 1, "--epochs", 1, "--lafortune-iters", 1, "--no-progress"]
+    code, err = run_cli(*base)
+    assert code == 0, err
+    teacher = out / "leather" / "teacher.pt"
+    want = load_checkpoint(teacher)["net"]
+    fresh = tmp_path / "fresh"
+    mark_output_dir(fresh, "bench quality")
+    (fresh / "leather").mkdir()
+    (fresh / "btf").mkdir()
+    for f in ("leather.btf", "leather.btf.synth.json"):
+        (fresh / "btf" / f).write_bytes((out / "btf" / f).read_bytes())
+    mine = fresh / "leather" / "teacher.pt"
+    argv = ["teach", fresh / "btf" / "leather.btf", "-o", mine, "--epochs", 1, "--no-export"]
+    code, err = run_cli(*argv, "--max-test-slices", 0, "--no-progress")
+    assert code == 0, err
+    stamp = mine.stat().st_mtime_ns
+    code, err = run_cli(*[fresh if a == out else a for a in base], "--resume")
+    assert code == 0, err
+    assert mine.stat().st_mtime_ns == stamp  # reused, not retrained
+    got = load_checkpoint(mine)["net"]
+    assert all(np.array_equal(got[k].numpy(), v.numpy()) for k, v in want.items())
+    a, b = (
+        json.loads((d / "results.json").read_text())["results"]["leather"] for d in (out, fresh)
+    )
+    assert a["methods"]["student"]["whole_l1"] == b["methods"]["student"]["whole_l1"]

@@ -499,8 +499,9 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
 
 
 # Fields that may differ between a reusable checkpoint and this run: paths and workflow flags
-# (the BTF and the teacher are compared by content), the epochs (a shorter run continues), and
-# where and how fast it trains (device, compile), which do not change what is trained.
+# (the BTF and the teacher are compared by content; ``export``: whether a pack was written
+# beside it), the epochs (a shorter run continues), and where and how fast it trains
+# (device, compile), which do not change what is trained.
 _FREE = {
     "btf",
     "output",
@@ -510,6 +511,7 @@ _FREE = {
     "progress",
     "force",
     "resume",
+    "export",
     "device",
     "compile",
 }
