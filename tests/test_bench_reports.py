@@ -183,6 +183,7 @@ def test_kernels_time_the_networks_distill_trains():
         ("student:x", "student:W needs a width W in [1, 64]"),
         ("student:8,student:8", "--networks names student:8 more than once"),
         ("single8:65", "single8:W needs a width W in [1, 64]"),
+        ("single8,single8:8", "--networks names single8 and single8:8, the same network"),
         ("resnet", "choose one of: neumip, single8, single8:W, student, student:W"),
         (" , ", "--networks is empty"),
     ):

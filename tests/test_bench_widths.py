@@ -89,6 +89,7 @@ def test_bench_widths_keeps_what_exists(tmp_path):
         (["--starts", "narrow"], "--starts"),
         (["--epochs", "1"], "--epochs 1 with --starts wide"),
         (["--preset", "velvet"], "--preset"),
+        (["--preset", "leather,wood"], "--preset"),
         (["--repeats", "0"], "--repeats = 0 is out of range"),
         (["--resume", "--force"], "contradict"),
     ],
@@ -115,10 +116,11 @@ def test_bench_jobs_stop_on_sigterm(tmp_path):
     proc = subprocess.Popen(
         argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True
     )
-    assert "teacher" in proc.stdout.readline()  # the pool is up and training networks
+    assert "teacher" in proc.stdout.readline()
+    assert "leather: " in proc.stdout.readline()  # a network done: both workers are up
     kids = f"/proc/{proc.pid}/task/{proc.pid}/children"
     workers = [int(p) for p in open(kids).read().split()]
-    assert workers
+    assert len(workers) >= 2  # the two workers (and the pool's resource tracker)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err

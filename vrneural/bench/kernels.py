@@ -62,10 +62,10 @@ def network_width(name: str) -> tuple[str, int] | None:
     name. Raises a one-line error for such a name whose width is not such an integer."""
     from vrneural.errors import VrnError
 
-    method, _, w = name.partition(":")
+    method, sep, w = name.partition(":")
     if method not in WIDENED:
         return None
-    if not _:
+    if not sep:
         return method, 8
     if not (w.isdigit() and 1 <= int(w) <= 64):
         raise VrnError(
@@ -84,6 +84,12 @@ def network_names(text: str) -> list[str]:
     vals = rp.choice_list("--networks", text, (*NETWORKS, *patterns), network_width)
     if not vals:
         raise VrnError(f"--networks is empty; choose from {', '.join(NETWORKS + patterns)}")
+    seen: dict = {}
+    for v in vals:  # student and student:8 are one network: measured and reported twice
+        key = network_width(v) or v
+        if key in seen:
+            raise VrnError(f"--networks names {seen[key]} and {v}, the same network")
+        seen[key] = v
     return vals
 
 

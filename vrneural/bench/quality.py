@@ -304,8 +304,16 @@ def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
     return dcfg
 
 
+#: in a worker of :func:`job_pool`: the pool's stop event (set when the run is stopped)
+_STOP = None
+
+
 def _job(kind: str, job_cfg) -> float:
-    """One step of ``--jobs`` in a worker process; returns its training seconds."""
+    """One step of ``--jobs`` in a worker process; returns its training seconds. A step that
+    begins after the run was stopped does nothing; one in training stops at its next step
+    (saving, as Ctrl-C does)."""
+    if _STOP is not None and _STOP.is_set():
+        raise VrnError("stopped before it began")
     if kind == "synth":
         preset, qcfg, path = job_cfg
         make_btf(preset, qcfg, path)
@@ -313,10 +321,17 @@ def _job(kind: str, job_cfg) -> float:
     if kind == "teach":
         from vrneural.distill.teach import run_teach
 
-        return float(run_teach(job_cfg)["train_seconds"])
+        return float(run_teach(job_cfg, on_step=_stop_check)["train_seconds"])
     from vrneural.distill.distill import run_distill
 
-    return float(run_distill(job_cfg)["train_seconds"])
+    return float(run_distill(job_cfg, on_step=_stop_check)["train_seconds"])
+
+
+def _stop_check(epoch: int, step: int) -> None:
+    """After every training step of a worker: once the run is stopped, Ctrl-C this process,
+    which the training loop turns into a save and a stop at this very step."""
+    if _STOP is not None and _STOP.is_set():
+        os.kill(os.getpid(), signal.SIGINT)
 
 
 @contextlib.contextmanager
@@ -324,34 +339,40 @@ def job_pool(jobs: int):
     """The worker processes of ``--jobs`` (spawned: CUDA-safe, no forked torch thread pools).
 
     Stopping is Ctrl-C's, however it comes: SIGTERM to this process (``kill``, a scheduler)
-    raises KeyboardInterrupt here as SIGINT does, and on any exception every worker gets
-    SIGINT, so a network in training saves at its next step and stops (idle workers ignore
-    it), and no worker outlives the run. ``--resume`` then continues them."""
+    raises KeyboardInterrupt here as SIGINT does. On any exception a shared event tells the
+    workers: a network in training saves at its next step and stops, a queued one does not
+    begin (the pool hands workers jobs ahead, which cancelling cannot recall), and the run
+    waits for them, so no worker outlives it. Workers ignore Ctrl-C itself outside training
+    (the event stops them). ``--resume`` then continues the interrupted networks."""
     from concurrent.futures import ProcessPoolExecutor
 
     from vrneural.interrupt import threading_main
 
     ctx = multiprocessing.get_context("spawn")
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init)
-    old = signal.signal(signal.SIGTERM, _raise_interrupt) if threading_main() else None
+    stop = ctx.Event()
+    pool = ProcessPoolExecutor(
+        max_workers=jobs, mp_context=ctx, initializer=_worker_init, initargs=(stop,)
+    )
+    main = threading_main()
+    old = signal.signal(signal.SIGTERM, _raise_interrupt) if main else None
     try:
-        yield pool
-    except BaseException:
-        procs = getattr(pool, "_processes", None) or {}  # pid -> Process (CPython's)
-        for proc in list(procs.values()):
-            with contextlib.suppress(OSError):
-                os.kill(proc.pid, signal.SIGINT)
-        pool.shutdown(wait=True, cancel_futures=True)
-        raise
+        try:
+            yield pool
+        except BaseException:
+            stop.set()
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
+        finally:
+            pool.shutdown(wait=True)
     finally:
-        pool.shutdown(wait=True)
-        if old is not None:
+        if main and old is not None:  # None: a handler not set from Python, not restorable
             signal.signal(signal.SIGTERM, old)
 
 
-def _worker_init() -> None:
-    """A worker ignores Ctrl-C between jobs; training installs its own handler (save, stop)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+def _worker_init(stop) -> None:
+    global _STOP
+    _STOP = stop
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # training installs its own handler
 
 
 def _raise_interrupt(*_) -> None:

@@ -1,7 +1,8 @@
 """`vrneural bench widths`: what the student's width costs and what it buys.
 
-One synthetic preset and one teacher. The coarse-to-fine student (and, with ``--methods``, the
-single-level net and the student without distillation) is trained at each of ``--widths``:
+One synthetic preset and one teacher. The ``--methods`` networks (default: the coarse-to-fine
+student; also the single-level net and the student without distillation) are trained at each
+of ``--widths``:
 from random weights (``plain``) and/or with a wide start (``wide``: 2W wide for the first half
 of the epochs, then pruned to W, what ``distill --wide-start 2W`` does), ``--repeats`` seeds
 each. NeuMIP (4 x 25, its own inputs) is the reference. Every network gets the same epochs,
@@ -123,6 +124,9 @@ def validate(cfg: WidthsConfig) -> Plan:
         raise VrnError("--out is empty; pass an output directory")
     check_resume_force(cfg.resume, cfg.force)
     check_seed("--seed", cfg.seed)
+    from vrneural.btf.synth import BtfConfig
+
+    BtfConfig(preset=cfg.preset).validate({"preset": "--preset"})  # one preset, as it is
     widths = sorted(rp.int_list("--widths", cfg.widths, 1, 64))
     methods = rp.choice_list("--methods", cfg.methods, list(METHODS))
     starts = rp.choice_list("--starts", cfg.starts, list(STARTS))
@@ -311,7 +315,7 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
     data = SliceData(btf, tck["split"]["test"])
     every = list(range(len(data.train) + len(data.test)))
     # what an all-black output scores: a network at or above it has learned nothing
-    zero = float(np.abs(btf.values).astype(np.float64).mean())
+    zero = float(np.abs(btf.values).mean(dtype=np.float64))
     rows: dict = {}
     for key, ck, wide_path in done:
         model = model_from_checkpoint(ck)
@@ -365,11 +369,13 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
 def narrowest(rows: dict, plan: Plan) -> dict:
     """Per ``method:start`` family: the narrowest width whose seed mean is within 10% of
     NeuMIP's (None where none is)."""
-    nm = rows["neumip"]["whole_l1"]
+    from vrneural.bench.widths_report import within
+
+    nm = rows["neumip"]
     out = {}
     for m in plan.methods:
         for start in plan.starts:
-            ok = [w for w in plan.widths if rows[_key(m, w, start)]["whole_l1"] <= 1.1 * nm]
+            ok = [w for w in plan.widths if within(rows[_key(m, w, start)], nm)]
             out[f"{m}:{start}"] = ok[0] if ok else None
     return out
 

@@ -45,9 +45,10 @@ def _register_widths(sub) -> None:
     p = sub.add_parser(
         "widths",
         help="what the student's width costs and buys: whole-BTF L1 against MACs per texel",
-        description="Synthesise one preset's BTF, train its teacher, then the student (and "
-        "--methods) at every --widths, from random weights and/or with a wide start, and "
-        "NeuMIP as the reference; write results.json, results.md and widths.png.",
+        description="Synthesise one preset's BTF, train its teacher, then the --methods "
+        "networks (default: the student) at every --widths, from random weights and/or with "
+        "a wide start, and NeuMIP as the reference; write results.json, results.md and "
+        "widths.png.",
     )
     p.add_argument("--out", default="bench-widths", help="output directory (default: bench-widths)")
     add_config_args(p, WidthsConfig)
