@@ -746,25 +746,40 @@ def run_quality(cfg: QualityConfig) -> dict:
     cfg = cfg.resolved()
     presets = validate(cfg)
     root = Path(cfg.out)
+    check_bench_out(root, cfg, "bench quality", "report")
+    if cfg.resume:
+        _check_resumable(presets, cfg, root)
+    mark_output_dir(root, "bench quality")  # its checkpoints stay in it
+    with resume_hint(root):
+        return _run(presets, cfg, root)
+
+
+def check_bench_out(root: Path, cfg, command: str, what: str) -> None:
+    """The output folder of a training bench: ``--resume`` needs it to exist; one with files
+    in it needs ``--resume`` or ``--force`` and must be this command's (its checkpoints are
+    kept either way: --resume reuses them, --force retrains each)."""
     if cfg.resume and not root.exists():  # as teach, distill and btf synth --resume
         raise VrnError(
             f"--resume: nothing to resume, {root} does not exist; drop --resume to start a new "
-            "report there"
+            f"{what} there"
         )
     if not (root.is_dir() and not any(root.iterdir())):  # an empty directory needs no flag
         check_output_dir(
             root,
             cfg.force or cfg.resume,
-            "bench quality",
-            deletes=False,  # it keeps its checkpoints: --resume reuses, --force retrains each
+            command,
+            deletes=False,
             remedy="pass --resume to reuse its checkpoints or --force to retrain",
         )
-    if cfg.resume:
-        _check_resumable(presets, cfg, root)
-    mark_output_dir(root, "bench quality")  # its checkpoints stay in it
+
+
+@contextlib.contextmanager
+def resume_hint(root: Path):
+    """Ctrl-C (or SIGTERM under ``--jobs``) in a training bench: finished networks are kept;
+    say how to continue."""
     try:
-        return _run(presets, cfg, root)
-    except KeyboardInterrupt:  # finished networks are kept: say how to continue
+        yield
+    except KeyboardInterrupt:
         print(
             f"{root}: interrupted; finished checkpoints are kept, and interrupted ones continue "
             "where they stopped: rerun the same command with --resume",

@@ -21,7 +21,6 @@ from __future__ import annotations
 import dataclasses
 import os
 import statistics
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,7 +29,7 @@ from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt, quick_defaults
 from vrneural.distill.config import COMPILE_MODES
 from vrneural.errors import VrnError, check_range, check_seed, count
-from vrneural.formats.atomic import check_output_dir, check_resume_force, mark_output_dir
+from vrneural.formats.atomic import check_resume_force, mark_output_dir
 from vrneural.versions import package_versions
 
 #: the networks ``--methods`` may name: their `distill` settings and their names in the report
@@ -200,22 +199,12 @@ def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = T
 
 def run_widths(cfg: WidthsConfig) -> dict:
     """Run the sweep; writes results.json, results.md and widths.png in ``out``."""
+    from vrneural.bench.quality import check_bench_out, resume_hint
+
     cfg = cfg.resolved()
     plan = validate(cfg)
     root = Path(cfg.out)
-    if cfg.resume and not root.exists():
-        raise VrnError(
-            f"--resume: nothing to resume, {root} does not exist; drop --resume to start a new "
-            "sweep there"
-        )
-    if not (root.is_dir() and not any(root.iterdir())):
-        check_output_dir(
-            root,
-            cfg.force or cfg.resume,
-            "bench widths",
-            deletes=False,
-            remedy="pass --resume to reuse its checkpoints or --force to retrain",
-        )
+    check_bench_out(root, cfg, "bench widths", "sweep")
     _check_same_preset(cfg, root)
     if cfg.resume:  # every checkpoint it would meet matches, before any work
         from vrneural.bench.quality import _teach_config
@@ -224,15 +213,8 @@ def run_widths(cfg: WidthsConfig) -> dict:
         _teach_config(cfg.preset, plan.quality, root, btf_path, None)
         network_runs(plan, root, btf_path, check_teacher=False)
     mark_output_dir(root, "bench widths")
-    try:
+    with resume_hint(root):
         return _run(cfg, plan, root)
-    except KeyboardInterrupt:
-        print(
-            f"{root}: interrupted; finished checkpoints are kept, and interrupted ones continue "
-            "where they stopped: rerun the same command with --resume",
-            file=sys.stderr,
-        )
-        raise
 
 
 def _check_same_preset(cfg: WidthsConfig, root: Path) -> None:
