@@ -410,10 +410,14 @@ def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> 
             for p in presets
             for n, stem, c in _distill_configs(p, quiet, root, btfs[p])
         ]
-        # the wide starts (name None) first: the networks pruned from them read them
-        for wide in (True, False):
-            jobs = [(f"{p}: {stem}", "distill", c) for p, n, stem, c in runs if (n is None) == wide]
-            run_jobs(pool, jobs, log)
+        run_networks(pool, [(f"{p}: {stem}", n, c) for p, n, stem, c in runs], log)
+
+
+def run_networks(pool, runs: list, log) -> None:
+    """``(label, name, config)`` networks of :func:`network_runs` in ``pool``: the wide halves
+    (name None) first, since the networks pruned from them read them."""
+    for wide in (True, False):
+        run_jobs(pool, [(lab, "distill", c) for lab, n, c in runs if (n is None) == wide], log)
 
 
 def _with_wide_start(ck: dict, wide_path: str) -> dict:

@@ -29,7 +29,7 @@ from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt, quick_defaults
 from vrneural.distill.config import COMPILE_MODES
 from vrneural.errors import VrnError, check_range, check_seed, count
-from vrneural.formats.atomic import check_resume_force, mark_output_dir
+from vrneural.formats.atomic import mark_output_dir
 from vrneural.versions import package_versions
 
 #: the networks ``--methods`` may name: their `distill` settings and their names in the report
@@ -118,13 +118,9 @@ def validate(cfg: WidthsConfig) -> Plan:
     from vrneural.bench import report as rp
     from vrneural.bench.quality import QualityConfig
     from vrneural.bench.quality import validate as quality_validate
-
-    if not cfg.out:
-        raise VrnError("--out is empty; pass an output directory")
-    check_resume_force(cfg.resume, cfg.force)
-    check_seed("--seed", cfg.seed)
     from vrneural.btf.synth import BtfConfig
 
+    check_seed("--seed", cfg.seed)
     BtfConfig(preset=cfg.preset).validate({"preset": "--preset"})  # one preset, as it is
     widths = sorted(rp.int_list("--widths", cfg.widths, 1, 64))
     methods = rp.choice_list("--methods", cfg.methods, list(METHODS))
@@ -146,7 +142,6 @@ def validate(cfg: WidthsConfig) -> Plan:
                 "start, so at least 2 are needed"
             )
     check_range("--repeats", cfg.repeats, 1, 100)
-    check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
     q = QualityConfig(
         presets=cfg.preset,
         out=cfg.out,
@@ -163,20 +158,21 @@ def validate(cfg: WidthsConfig) -> Plan:
         force=cfg.force,
         resume=cfg.resume,
     )
-    try:
-        quality_validate(q)  # the ranges of the options both benches share
+    try:  # --out, --resume/--force, the seeds and the ranges of the options both share
+        quality_validate(q)
     except VrnError as e:
         raise VrnError(str(e).replace("--presets", "--preset")) from None
     return Plan(widths, methods, starts, q)
 
 
 def _key(method: str, width: int | None, start: str) -> str:
+    """The network's row in results.json (``neumip``, ``student:12:wide``, ...)."""
     return "neumip" if method == "neumip" else f"{method}:{width}:{start}"
 
 
 def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = True) -> list:
-    """``(key, stem, config)`` of every network and seed (wide halves: key None), in an order
-    one process can train them in."""
+    """``((method, width, start), stem, config)`` of every network and seed (wide halves: None
+    instead of the triple), in an order one process can train them in."""
     from vrneural.bench.quality import network_runs as one
     from vrneural.formats.atomic import file_sha256
 
@@ -186,14 +182,14 @@ def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = T
     out = []
     for seed in range(q.seed, q.seed + q.repeats):
         kw = dict(NEUMIP, seed=seed)
-        out += one(q, d, btf_path, tsha, "neumip", f"neumip-s{seed}", kw, None, 0)
+        out += one(q, d, btf_path, tsha, ("neumip", None, "plain"), f"neumip-s{seed}", kw, None, 0)
         for m in plan.methods:
             for start in plan.starts:
                 for w in plan.widths:
                     stem = f"{m}-w{w}{f'-from{2 * w}' if start == 'wide' else ''}-s{seed}"
                     kw = dict(METHODS[m][0], seed=seed)
                     wide = 2 * w if start == "wide" else 0
-                    out += one(q, d, btf_path, tsha, _key(m, w, start), stem, kw, w, wide)
+                    out += one(q, d, btf_path, tsha, (m, w, start), stem, kw, w, wide)
     return out
 
 
@@ -243,6 +239,7 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
         job_pool,
         make_btf,
         run_jobs,
+        run_networks,
     )
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
@@ -272,9 +269,7 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
     with job_pool(q.jobs) as pool:
         run_jobs(pool, [(f"{preset}: teacher", "teach", tcfg)], log)
         runs = network_runs(dataclasses.replace(plan, quality=quiet), root, btf_path)
-        for wide in (True, False):  # the wide halves first: the pruned networks read them
-            jobs = [(f"{preset}: {s}", "distill", c) for k, s, c in runs if (k is None) == wide]
-            run_jobs(pool, jobs, log)
+        run_networks(pool, [(f"{preset}: {s}", k, c) for k, s, c in runs], log)
     tck = load_checkpoint(tcfg.output, kind="teacher")
     done = [(k, load_checkpoint(c.output), c.init_from) for k, _, c in runs if k is not None]
     return tck, done
@@ -303,12 +298,13 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
         model = model_from_checkpoint(ck)
         mat = model.to_material()
         whole = _with_wide_start(ck, wide_path)  # both halves' seconds and epochs
+        method, width, start = key
         r = rows.setdefault(
-            key,
+            _key(*key),
             {
-                "method": "neumip" if key == "neumip" else key.split(":")[0],
-                "width": None if key == "neumip" else int(key.split(":")[1]),
-                "start": "plain" if key == "neumip" else key.split(":")[2],
+                "method": method,
+                "width": width,
+                "start": start,
                 "macs_per_texel": mat.macs_per_texel,
                 "weight_bytes": mat.weight_bytes,
                 "texture_bytes": mat.texture_bytes,
