@@ -148,3 +148,21 @@ def test_bench_widths_one_sweep_per_out(tmp_path):
     code, err = run_cli(*other, "--resume")
     assert code == 2 and "holds the width sweep of preset leather, not wood" in err, err
     assert json.loads((out / "results.json").read_text())["config"]["preset"] == "leather"
+
+
+def test_sigterm_outside_training_is_a_ctrl_c(tmp_path, capsys):
+    """SIGTERM in any phase of a training bench (here: no worker pool, no training loop, as
+    in the evaluation and report after the networks) stops it as Ctrl-C does, with the
+    --resume hint, and the previous SIGTERM handler comes back afterwards."""
+    import os
+    import signal
+    import time
+
+    from vrneural.bench.quality import resume_hint
+
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(KeyboardInterrupt), resume_hint(tmp_path):
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)  # the handler raises at once
+    assert "rerun the same command with --resume" in capsys.readouterr().err
+    assert signal.getsignal(signal.SIGTERM) is before

@@ -28,6 +28,7 @@ import dataclasses
 import json
 import multiprocessing
 import os
+from functools import partial
 import signal
 import statistics
 import sys
@@ -338,35 +339,27 @@ def _stop_check(epoch: int, step: int) -> None:
 def job_pool(jobs: int):
     """The worker processes of ``--jobs`` (spawned: CUDA-safe, no forked torch thread pools).
 
-    Stopping is Ctrl-C's, however it comes: SIGTERM to this process (``kill``, a scheduler)
-    raises KeyboardInterrupt here as SIGINT does. On any exception a shared event tells the
-    workers: a network in training saves at its next step and stops, a queued one does not
-    begin (the pool hands workers jobs ahead, which cancelling cannot recall), and the run
-    waits for them, so no worker outlives it. Workers ignore Ctrl-C itself outside training
-    (the event stops them). ``--resume`` then continues the interrupted networks."""
+    Used inside :func:`resume_hint`, which makes SIGTERM to this process (``kill``, a
+    scheduler) a Ctrl-C. On any exception a shared event tells the workers: a network in
+    training saves at its next step and stops, a queued one does not begin (the pool hands
+    workers jobs ahead, which cancelling cannot recall), and the run waits for them, so no
+    worker outlives it. Workers ignore Ctrl-C itself outside training (the event stops them).
+    ``--resume`` then continues the interrupted networks."""
     from concurrent.futures import ProcessPoolExecutor
-
-    from vrneural.interrupt import threading_main
 
     ctx = multiprocessing.get_context("spawn")
     stop = ctx.Event()
     pool = ProcessPoolExecutor(
         max_workers=jobs, mp_context=ctx, initializer=_worker_init, initargs=(stop,)
     )
-    main = threading_main()
-    old = signal.signal(signal.SIGTERM, _raise_interrupt) if main else None
     try:
-        try:
-            yield pool
-        except BaseException:
-            stop.set()
-            pool.shutdown(wait=True, cancel_futures=True)
-            raise
-        finally:
-            pool.shutdown(wait=True)
+        yield pool
+    except BaseException:
+        stop.set()
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
     finally:
-        if main and old is not None:  # None: a handler not set from Python, not restorable
-            signal.signal(signal.SIGTERM, old)
+        pool.shutdown(wait=True)
 
 
 def _worker_init(stop) -> None:
@@ -450,9 +443,8 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
     from vrneural.distill.data import SliceData
-    from vrneural.distill.distill import model_from_checkpoint, run_distill
+    from vrneural.distill.distill import model_from_checkpoint
     from vrneural.distill.evaluate import mean_l1, predict_slice
-    from vrneural.distill.teach import run_teach
 
     d = root / preset
     d.mkdir(parents=True, exist_ok=True)
@@ -461,17 +453,11 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     synth_s = time.perf_counter() - t0
     btf = read_btf(btf_path)
     tcfg = _teach_config(preset, cfg, root, btf_path, btf_fingerprint(btf)["sha256"])
-    reused = _finished(tcfg)
-    tck = run_teach(tcfg)
+    runs = partial(_distill_configs, preset, cfg, root, btf_path)  # they read the teacher
+    tck, done = train_in_process(preset, tcfg, runs, log)
     records = {"teacher": [tck]}
-    log(f"{preset}: teacher  {_took(tck, reused)}")
-    for name, stem, dcfg in _distill_configs(preset, cfg, root, btf_path):
-        reused = _finished(dcfg)
-        ck = run_distill(dcfg)
-        log(f"{preset}: {stem}  {_took(ck, reused)}")
-        if name is None:  # a wide start: the network pruned from it is the record
-            continue
-        records.setdefault(name, []).append(_with_wide_start(ck, dcfg.init_from))
+    for name, ck, init_from in done:
+        records.setdefault(name, []).append(_with_wide_start(ck, init_from))
     data = SliceData(btf, tck["split"]["test"])
     every = list(range(len(data.train) + len(data.test)))
     slices = _slice_pairs(data)
@@ -606,6 +592,27 @@ def _check_resumable(presets: list[str], cfg: QualityConfig, root: Path) -> None
         btf_path = root / "btf" / f"{p}.btf"
         _teach_config(p, cfg, root, btf_path, None)
         _distill_configs(p, cfg, root, btf_path, check_teacher=False)
+
+
+def train_in_process(preset: str, tcfg, runs, log) -> tuple[dict, list]:
+    """``--jobs 1``: train the teacher, then each ``(key, stem, DistillConfig)`` of ``runs()``
+    (called once the teacher exists) in order, in this process; log each. Returns the
+    teacher's checkpoint and ``(key, checkpoint, init_from)`` of every network with a key (a
+    wide start's first half has none: the network pruned from it is the record)."""
+    from vrneural.distill.distill import run_distill
+    from vrneural.distill.teach import run_teach
+
+    reused = _finished(tcfg)
+    tck = run_teach(tcfg)
+    log(f"{preset}: teacher  {_took(tck, reused)}")
+    done = []
+    for key, stem, c in runs():
+        reused = _finished(c)
+        ck = run_distill(c)
+        log(f"{preset}: {stem}  {_took(ck, reused)}")
+        if key is not None:
+            done.append((key, ck, c.init_from))
+    return tck, done
 
 
 def _finished(cfg) -> bool:
@@ -779,8 +786,13 @@ def check_bench_out(root: Path, cfg, command: str, what: str) -> None:
 
 @contextlib.contextmanager
 def resume_hint(root: Path):
-    """Ctrl-C (or SIGTERM under ``--jobs``) in a training bench: finished networks are kept;
-    say how to continue."""
+    """Ctrl-C or SIGTERM in a training bench, in any phase (training, fits, evaluation, the
+    report): finished networks are kept; say how to continue. SIGTERM raises
+    KeyboardInterrupt here as SIGINT does (training's own handler saves first)."""
+    from vrneural.interrupt import threading_main
+
+    main = threading_main()
+    old = signal.signal(signal.SIGTERM, _raise_interrupt) if main else None
     try:
         yield
     except KeyboardInterrupt:
@@ -790,6 +802,9 @@ def resume_hint(root: Path):
             file=sys.stderr,
         )
         raise
+    finally:
+        if main and old is not None:  # None: a handler not set from Python, not restorable
+            signal.signal(signal.SIGTERM, old)
 
 
 def _run(presets: list[str], cfg: QualityConfig, root: Path) -> dict:

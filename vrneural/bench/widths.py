@@ -23,6 +23,7 @@ import os
 import statistics
 import time
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 from vrneural.btf.presets import PRESETS
@@ -233,19 +234,16 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
     """Synthesise the BTF, train the teacher and every network (``--jobs`` processes at a
     time); returns the teacher's checkpoint and ``(key, final checkpoint)`` of each network."""
     from vrneural.bench.quality import (
-        _finished,
         _teach_config,
-        _took,
         job_pool,
         make_btf,
         run_jobs,
         run_networks,
+        train_in_process,
     )
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
     from vrneural.distill.checkpoint import load_checkpoint
-    from vrneural.distill.distill import run_distill
-    from vrneural.distill.teach import run_teach
 
     q, preset = plan.quality, plan.quality.presets
     (root / preset).mkdir(parents=True, exist_ok=True)
@@ -253,17 +251,7 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
     sha = btf_fingerprint(read_btf(btf_path))["sha256"]
     tcfg = _teach_config(preset, q, root, btf_path, sha)
     if q.jobs == 1:
-        reused = _finished(tcfg)
-        tck = run_teach(tcfg)
-        log(f"{preset}: teacher  {_took(tck, reused)}")
-        done = []
-        for key, stem, c in network_runs(plan, root, btf_path):
-            reused = _finished(c)
-            ck = run_distill(c)
-            log(f"{preset}: {stem}  {_took(ck, reused)}")
-            if key is not None:
-                done.append((key, ck, c.init_from))
-        return tck, done
+        return train_in_process(preset, tcfg, partial(network_runs, plan, root, btf_path), log)
     quiet = dataclasses.replace(q, progress=False)
     tcfg.progress = False
     with job_pool(q.jobs) as pool:
