@@ -58,6 +58,20 @@ def test_model_equals_its_pack(method, rng):
     assert mat.output == ("log1p" if method == "neumip" else "linear")
 
 
+@pytest.mark.parametrize(("method", "arch"), [("student", "coarse_fine"), ("single8", "single")])
+def test_random_material_has_the_trained_shape(method, arch):
+    """The frame benchmarks time ``random_material`` networks: their layer shapes (hence the
+    generated shader and its multiply-adds) must be what ``vrneural distill`` trains."""
+    trained = models.NeuralModel(models.make_spec(method, (32, 32))).to_material()
+    rand = npm.random_material(0, arch)
+    shapes = {k: [lay.weight.shape for lay in v] for k, v in trained.networks.items()}
+    assert {k: [lay.weight.shape for lay in v] for k, v in rand.networks.items()} == shapes
+    assert [lay.act for v in rand.networks.values() for lay in v] == [
+        lay.act for v in trained.networks.values() for lay in v
+    ]
+    assert rand.macs_per_texel == trained.macs_per_texel
+
+
 def test_sizes_match_the_paper_scale():
     mats = {
         k: models.NeuralModel(models.make_spec(k, (32, 32))).to_material()

@@ -174,10 +174,17 @@ def random_material(
     width: int = 8,
     channels: int = 8,
     tex_res: int = 16,
-    layers: int = 3,
+    layers: int | None = None,
     output: str = "linear",
 ) -> NeuralMaterial:
-    """A material with seeded random weights and textures (for tests before training exists)."""
+    """A material with seeded random weights and textures (tests, and the frame benchmarks,
+    whose timings depend on the networks' shapes, not their values).
+
+    ``layers``: hidden layers of M_c (``coarse_fine``) or of the one MLP (``single``). The
+    default is the trained shape of ``vrneural distill``: M_c 2 x W, M_f W -> 3 (the student);
+    3 x W (the single-level net)."""
+    if layers is None:
+        layers = 2 if arch == "coarse_fine" else 3
     rng = np.random.default_rng(seed)
     if arch == "coarse_fine":
         nets = {
