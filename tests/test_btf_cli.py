@@ -438,3 +438,37 @@ def test_info_shows_light_and_view_theta_ranges(tmp_path, capsys):
     assert info["light_theta_deg"] == pytest.approx([0.0, 75.0], abs=1e-3)
     assert info["view_theta_deg"] == pytest.approx([10.0, 85.0], abs=1e-3)
     assert info["same_light_and_view_dirs"] is False
+
+
+@pytest.mark.parametrize("how", ["SIGTERM", "SIGINT, ignored by the shell that started it"])
+def test_synth_stops_on_a_signal_and_resumes(tmp_path, how):
+    """`kill` (SIGTERM), and Ctrl-C even where a non-interactive shell started the command in
+    the background with SIGINT ignored, stop `btf synth` after a whole view, as they stop
+    `teach`: exit 130, the partial file kept, --resume finishes it. The same signals went
+    unanswered (SIGINT) or killed it without a word (SIGTERM, exit 143) before."""
+    import signal
+    import time
+
+    out = tmp_path / "s.btf"
+    argv = [sys.executable, "-m", "vrneural", "btf", "synth", "--res", 48, "--dirs", 40]
+    argv = [*map(str, argv), "-o", str(out), "--no-progress"]
+    ignore = how.startswith("SIGINT")
+    proc = subprocess.Popen(
+        argv,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=(lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)) if ignore else None,
+    )
+    partial = tmp_path / "s.btf.partial"
+    deadline = time.monotonic() + 60
+    while not partial.exists() and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+    assert proc.poll() is None, "finished before it could be stopped: make it bigger"
+    proc.send_signal(signal.SIGINT if ignore else signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "interrupted after" in err and "--resume" in err, err
+    assert partial.exists() and not out.exists()
+    done = subprocess.run([*argv, "--resume"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert read_btf(out).values.shape[:2] == (40, 40)

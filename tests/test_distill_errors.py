@@ -36,6 +36,12 @@ def bad_checkpoints(tmp_path, trained):  # noqa: F811
     text.write_text("hello world\n")
     short = tmp_path / "short.pt"  # ... and with IndexError on this one
     short.write_text("abc")
+    flipped = tmp_path / "flipped.pt"  # one byte of a weight changed: torch.load would take it
+    flipped.write_bytes(_flip_in_largest_entry(trained["teacher"].read_bytes()))
+    nan = tmp_path / "nan.pt"  # a valid file with NaN in the Adam moments
+    ck = load_checkpoint(trained["teacher"])
+    next(iter(ck["optimizer"]["state"].values()))["exp_avg"].view(-1)[0] = float("nan")
+    _save_like(ck, nan)
     return {
         "evil": evil,
         "corrupt": corrupt,
@@ -43,7 +49,23 @@ def bad_checkpoints(tmp_path, trained):  # noqa: F811
         "plain": plain,
         "text": text,
         "short": short,
+        "flipped": flipped,
+        "nan": nan,
     }
+
+
+def _flip_in_largest_entry(data: bytes) -> bytes:
+    """Change one byte in the middle of the largest tensor entry of a checkpoint's zip."""
+    import io
+    import zipfile
+
+    with zipfile.ZipFile(io.BytesIO(data)) as z:
+        info = max(z.infolist(), key=lambda i: i.compress_size)
+    h = info.header_offset  # local header: 30 bytes, then the name and the extra field
+    start = h + 30 + int.from_bytes(data[h + 26 : h + 28], "little")
+    start += int.from_bytes(data[h + 28 : h + 30], "little")
+    at = start + info.compress_size // 2
+    return data[:at] + bytes([data[at] ^ 0x40]) + data[at + 1 :]
 
 
 @pytest.mark.parametrize(
@@ -56,6 +78,8 @@ def bad_checkpoints(tmp_path, trained):  # noqa: F811
         ("text", "not a PyTorch checkpoint"),
         ("short", "not a PyTorch checkpoint"),
         ("plain", "not a vrneural checkpoint"),
+        ("flipped", "fails its CRC-32 check"),
+        ("nan", "tensor 'optimizer.state.0.exp_avg' holds NaN or Inf"),
         ("student", "expected a 'teacher'"),
         ("btf", "is a BTF file, expected a checkpoint (.pt); train one with `vrneural teach"),
         ("pack", "is a runtime pack (.vrnm), expected a checkpoint"),

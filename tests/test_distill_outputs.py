@@ -280,3 +280,32 @@ def test_force_then_ctrl_c_resumes_the_new_run(trained, tmp_path):  # noqa: F811
     ck = load_checkpoint(s)
     assert ck["epoch"] == 2 and ck["config"]["seed"] == 3
     assert all(Path(o).is_file() for o in olds)
+
+
+def test_a_second_run_on_the_same_output_is_refused_while_the_first_runs(trained, tmp_path):  # noqa: F811
+    """Two commands given the same -o at once (the second started before the first wrote
+    anything) would overwrite each other's checkpoints: while one holds the output, teach,
+    distill and btf synth on it are one-line errors; once it ends, the output is free."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "race.pt"
+    btf_out = tmp_path / "race.btf"
+    hold = (
+        "import sys; from vrneural.formats.atomic import lock_output_file as lock; "
+        f"lock({str(out)!r}); lock({str(btf_out)!r}); print('held', flush=True); sys.stdin.read()"
+    )
+    holder = subprocess.Popen(
+        [sys.executable, "-c", hold], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        busy = "another vrneural process is writing this output right now"
+        expect_one_line_error(["distill", trained["teacher"], "-o", out, *FAST], busy)
+        expect_one_line_error(["teach", trained["btf"], "-o", out, *FAST], busy)
+        expect_one_line_error(["btf", "synth", "--res", 8, "--dirs", 4, "-o", btf_out], busy)
+        assert not out.exists() and not btf_out.exists()
+    finally:
+        holder.communicate("", timeout=30)
+    code, err = run_cli("distill", trained["teacher"], "-o", out, "--epochs", 1, *FAST)
+    assert code == 0, err

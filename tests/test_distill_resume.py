@@ -88,6 +88,12 @@ def test_ctrl_c_saves_and_resume_continues_mid_epoch(btf, tmp_path):
     done = r"holds an unfinished run \(1 of 2 epochs done and 5 steps of the next\); pass --resume"
     with pytest.raises(VrnError, match=done):
         run_teach(TeachConfig(output=str(b), **kw))  # the hint points at --resume, not --force
+    # --epochs 1 would end before the weights it holds (partway through epoch 2): refused, and
+    # the checkpoint keeps its state and its target
+    before = b.read_bytes()
+    code, err = run_cli("teach", btf, "-o", b, "--resume", "--epochs", 1, "--no-progress")
+    assert code == 2 and "stopped partway through epoch 2 (step 5)" in err, err
+    assert "--epochs 2 or more" in err and b.read_bytes() == before
     run_teach(TeachConfig(output=str(b), resume=True, **kw))
     _same(a, b)
 

@@ -20,6 +20,7 @@ from vrneural.btf.format import BtfWriter, check_partial_settings
 from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt
 from vrneural.errors import VrnError, check_choice, check_range, check_seed
+from vrneural.interrupt import Stop
 
 GENERATOR = "vrneural.btf.synth v1"
 
@@ -114,36 +115,44 @@ def synthesize(
     todo = [v for v in range(len(dirs)) if v not in w.done]
     if resume and w.done:
         print(f"{out}: resuming, {len(w.done)}/{len(dirs)} views already done", file=sys.stderr)
-    maps = build_maps(cfg)
-    with tqdm(total=len(dirs), desc="shadow maps", unit="light", disable=not progress) as bar:
-        scene = make_scene(maps, dirs, bar)
-    del maps
-    samples = subsamples(cfg)
-    done_views = len(w.done)
-    bar = tqdm(
-        total=len(dirs),
-        initial=done_views,
-        desc=f"{cfg.preset} views",
-        unit="view",
-        disable=not progress,
-    )
-    try:
-        for v in todo:
-            vals = render_view(scene, dirs[v], samples, (cfg.res, cfg.res))
-            if not np.isfinite(vals).all():
-                raise VrnError(f"internal error: non-finite BTF values at view {v}")
-            w.values[:, v] = np.clip(vals, 0.0, 65504.0).astype(np.float16)
-            w.mark_done(v)
-            done_views += 1
-            bar.update(1)
-    except KeyboardInterrupt:
-        bar.close()
-        w.values.flush()
-        print(
-            f"\n{out}: interrupted after {done_views}/{len(dirs)} views; partial data kept in "
-            f"{w.partial}; rerun the same command with --resume to continue",
-            file=sys.stderr,
-        )
-        raise
+    # Ctrl-C or SIGTERM (also where a non-interactive shell started this in the background
+    # with SIGINT ignored) stops after the current view; a second one at once
+    with Stop() as stop:
+        stop.second_raises = True
+        done_views = len(w.done)
+        bar = None
+        try:
+            maps = build_maps(cfg)
+            with tqdm(total=len(dirs), desc="shadow maps", unit="light", disable=not progress) as b:
+                scene = make_scene(maps, dirs, b)
+            del maps
+            samples = subsamples(cfg)
+            bar = tqdm(
+                total=len(dirs),
+                initial=done_views,
+                desc=f"{cfg.preset} views",
+                unit="view",
+                disable=not progress,
+            )
+            for v in todo:
+                if stop.flag:
+                    raise KeyboardInterrupt
+                vals = render_view(scene, dirs[v], samples, (cfg.res, cfg.res))
+                if not np.isfinite(vals).all():
+                    raise VrnError(f"internal error: non-finite BTF values at view {v}")
+                w.values[:, v] = np.clip(vals, 0.0, 65504.0).astype(np.float16)
+                w.mark_done(v)
+                done_views += 1
+                bar.update(1)
+        except KeyboardInterrupt:
+            if bar is not None:
+                bar.close()
+            w.values.flush()
+            print(
+                f"\n{out}: interrupted after {done_views}/{len(dirs)} views; partial data kept in "
+                f"{w.partial}; rerun the same command with --resume to continue",
+                file=sys.stderr,
+            )
+            raise
     bar.close()
     return w.finalize()

@@ -103,17 +103,26 @@ def run_synth(args) -> int:
     from vrneural.btf.synth import BtfConfig, synthesize
     from vrneural.config import config_from_args, config_path, write_config
     from vrneural.errors import VrnError
-    from vrneural.formats.atomic import check_outputs, check_resume_force
+    from vrneural.formats.atomic import (
+        check_outputs,
+        check_resume_force,
+        lock_output_file,
+        output_locks,
+    )
 
     cfg = config_from_args(BtfConfig, args)
     cfg.validate()
     check_resume_force(args.resume, args.force)
     if not args.output.endswith(".btf"):
         raise VrnError(f"{args.output}: output must end in .btf")
-    out, _ = check_outputs([args.output, config_path(args.output)], args.force)
-    _check_partial(out, args.resume, args.force)
-    path = synthesize(cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force)
-    write_config(path, cfg.resolved())  # grid 0 -> the size used (the header keeps 0)
+    with output_locks():
+        lock_output_file(args.output)  # a second synth on it meanwhile is refused
+        out, _ = check_outputs([args.output, config_path(args.output)], args.force)
+        _check_partial(out, args.resume, args.force)
+        path = synthesize(
+            cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force
+        )
+        write_config(path, cfg.resolved())  # grid 0 -> the size used (the header keeps 0)
     print(path)
     return 0
 

@@ -75,6 +75,7 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
     if p.is_dir():
         raise VrnError(f"{p}: is a directory, expected a checkpoint (.pt)")
     _refuse_our_other_formats(p)
+    _check_crcs(p)
     try:
         with warnings.catch_warnings():  # torch warns about legacy/foreign files before failing
             warnings.simplefilter("ignore")
@@ -107,7 +108,45 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
     arch = ck["spec"].get("arch") if isinstance(ck["spec"], dict) else None
     if arch not in ARCHS:
         raise VrnError(f"{p}: spec.arch {arch!r} unknown (reads {', '.join(ARCHS)})")
+    bad = _non_finite(ck)
+    if bad is not None:  # training never saves one (it stops on a NaN/Inf loss or test L1)
+        raise VrnError(f"{p}: corrupt checkpoint: tensor '{bad}' holds NaN or Inf")
     return ck
+
+
+def _check_crcs(p: Path) -> None:
+    """A checkpoint is a zip whose entries carry CRC-32s that torch.load does not check: a
+    flipped byte in a tensor would load as a wrong weight. Check them all."""
+    import zipfile
+
+    try:
+        if not zipfile.is_zipfile(p):
+            return  # torch.load says what it is
+        with zipfile.ZipFile(p) as z:
+            bad = z.testzip()
+    except (OSError, zipfile.BadZipFile, EOFError, ValueError) as e:
+        raise VrnError(f"{p}: corrupt checkpoint ({_first_sentence(e)})") from None
+    if bad is not None:
+        raise VrnError(f"{p}: corrupt checkpoint: entry '{bad}' fails its CRC-32 check")
+
+
+def _non_finite(obj, name: str = "") -> str | None:
+    """The dotted name of the first floating tensor in ``obj`` with a NaN or Inf, or None."""
+    if isinstance(obj, torch.Tensor):
+        ok = not obj.is_floating_point() or bool(torch.isfinite(obj).all())
+        return None if ok else name
+    items = (
+        obj.items()
+        if isinstance(obj, dict)
+        else enumerate(obj)
+        if isinstance(obj, (list, tuple))
+        else ()
+    )
+    for k, v in items:
+        bad = _non_finite(v, f"{name}.{k}" if name else str(k))
+        if bad is not None:
+            return bad
+    return None
 
 
 def _refuse_our_other_formats(p: Path) -> None:

@@ -392,7 +392,15 @@ def _resume_pruned_half(cfg, narrow, wide_path: str, on_step) -> dict:
 
 
 def run_distill(cfg: DistillConfig, on_step=None) -> dict:
-    """Train (or resume) a student/baseline; returns the final checkpoint dict."""
+    """Train (or resume) a student/baseline; returns the final checkpoint dict. Holds a lock on its
+    outputs while it trains (:func:`vrneural.formats.atomic.lock_output_file`)."""
+    from vrneural.formats.atomic import output_locks
+
+    with output_locks():
+        return _run_distill(cfg, on_step)
+
+
+def _run_distill(cfg: DistillConfig, on_step=None) -> dict:
     check_resume_force(cfg.resume, cfg.force)
     stored = stored_wide_start(cfg.output) if cfg.resume else None
     if cfg.wide_start or stored:

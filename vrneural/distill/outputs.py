@@ -20,7 +20,12 @@ from pathlib import Path
 from vrneural.config import config_path
 from vrneural.distill.checkpoint import load_checkpoint, unfinished_run
 from vrneural.errors import VrnError
-from vrneural.formats.atomic import check_outputs, check_resume_force, json_safe
+from vrneural.formats.atomic import (
+    check_outputs,
+    check_resume_force,
+    json_safe,
+    lock_output_file,
+)
 from vrneural.warn import VrnWarning
 
 
@@ -45,6 +50,7 @@ def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
     --resume a pack or config file that this run did not write (see the module docstring).
     """
     check_resume_force(cfg.resume, cfg.force)
+    lock_output_file(cfg.output)  # before the checks: a run started a moment ago has no file yet
     if cfg.resume:
         check_outputs(outputs, True, inputs)  # inputs and writable directories only
         if not Path(cfg.output).exists():

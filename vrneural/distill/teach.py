@@ -94,11 +94,25 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
             f"{shown('epochs')} = {merged['epochs']}, but {cfg.output} already has "
             f"{count(done, 'epoch')}; pass {shown('epochs')} {done} or more to continue it"
         )
+    if merged["epochs"] == done and int(ck.get("step", 0)):  # its weights are past epoch `done`
+        raise VrnError(
+            f"{shown('epochs')} = {done}, but {cfg.output} stopped partway through epoch "
+            f"{done + 1} (step {int(ck['step'])}); pass {shown('epochs')} {done + 1} or more to "
+            "continue it"
+        )
     return merged
 
 
 def run_teach(cfg: TeachConfig, on_step=None) -> dict:
-    """Train (or resume) a teacher; returns the final checkpoint dict."""
+    """Train (or resume) a teacher; returns the final checkpoint dict. Holds a lock on its
+    outputs while it trains (:func:`vrneural.formats.atomic.lock_output_file`)."""
+    from vrneural.formats.atomic import output_locks
+
+    with output_locks():
+        return _run_teach(cfg, on_step)
+
+
+def _run_teach(cfg: TeachConfig, on_step=None) -> dict:
     check_train_config(cfg)
     check_range("--width", cfg.width, 1, 4096)
     check_range("--layers", cfg.layers, 3, 16)

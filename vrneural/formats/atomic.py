@@ -274,6 +274,60 @@ def lock_output_dir(p: Path) -> None:
     _LOCKS[key] = fd
 
 
+#: output files this process holds the lock of (see :func:`lock_output_file`) -> descriptor
+_FILE_LOCKS: dict[str, int] = {}
+
+
+def lock_output_file(p) -> None:
+    """Take an exclusive ``flock`` for output file ``p`` (a checkpoint, a BTF) for as long as
+    this process trains it, so a second command given the same ``-o`` while the first runs is
+    a one-line error instead of two runs overwriting each other's checkpoints. The lock is on
+    a file in ``$TMPDIR/vrneural-locks`` named by the output's absolute path (the output itself
+    is replaced by renames, so it cannot carry the lock). Released by :func:`output_locks` or
+    by the kernel when the process ends. A no-op where this process holds it already, under
+    ``torchrun`` on ranks other than 0 (rank 0 writes), or where locks are unavailable."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        return
+    if int(os.environ.get("RANK", "0") or 0) != 0:
+        return
+    key = str(Path(p).resolve())
+    if key in _FILE_LOCKS:
+        return
+    name = hashlib.sha256(key.encode()).hexdigest()[:32] + ".lock"
+    try:
+        d = Path(tempfile.gettempdir()) / "vrneural-locks"
+        d.mkdir(mode=0o777, exist_ok=True)
+        fd = os.open(d / name, os.O_RDWR | os.O_CREAT, 0o666)
+    except OSError:
+        return  # no lock directory (read-only /tmp, another user's file): go on without
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)
+        raise VrnError(
+            f"{p}: another vrneural process is writing this output right now; wait for it to "
+            "finish or choose another output"
+        ) from None
+    except OSError:
+        os.close(fd)
+        return
+    _FILE_LOCKS[key] = fd
+
+
+@contextlib.contextmanager
+def output_locks() -> Iterator[None]:
+    """Release the output-file locks taken inside the block (not those held before it), so a
+    process that trains many outputs (a benchmark) does not keep them all."""
+    before = set(_FILE_LOCKS)
+    try:
+        yield
+    finally:
+        for k in set(_FILE_LOCKS) - before:
+            os.close(_FILE_LOCKS.pop(k))
+
+
 def _unlock_output_dir(p: Path) -> None:
     fd = _LOCKS.pop(p.resolve(), None)
     if fd is not None:
