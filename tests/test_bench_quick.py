@@ -105,6 +105,23 @@ def test_kernels_rates_are_finite(results):
 
 
 @pytest.mark.gpu
+def test_kernels_threads_sets_torch_and_sgemm_threads(tmp_path):
+    """--threads N: PyTorch and the numpy sgemm (in a child process: numpy's pool is sized at
+    import) run N threads, and this process's torch threads come back afterwards."""
+    import torch
+
+    before = torch.get_num_threads()
+    argv = ["bench", "kernels", "--quick", "--threads", "1", "--networks", "student"]
+    argv += ["--precisions", "f32", "--no-progress", "--out", str(tmp_path / "k")]
+    assert main(argv) == 0
+    doc = json.loads((tmp_path / "k" / "results.json").read_text())
+    assert doc["torch_threads"] == 1 and doc["sgemm_threads"] == 1
+    assert all(g > 0 for g in doc["sgemm_gflops_runs"])
+    assert "torch threads: 1, sgemm threads: 1." in (tmp_path / "k" / "results.md").read_text()
+    assert torch.get_num_threads() == before
+
+
+@pytest.mark.gpu
 def test_tradeoff_metrics_are_sane(results):
     doc = results[1]["tradeoff"]
     knobs = {r["knob"] for r in doc["records"]}
@@ -136,6 +153,7 @@ def test_bench_user_errors_are_one_line(capsys, tmp_path):
     msg = _err(capsys, ["lights", "--lights", "0,9", "--out", o])
     assert msg.startswith("vrneural bench lights: error: --lights = '0,9': 0 is out of range; ")
     assert "not allowed" in _err(capsys, ["kernels", "--networks", "resnet", "--out", o])
+    assert "--threads" in _err(capsys, ["kernels", "--threads", "-1", "--out", o])
     assert "WIDTHxHEIGHT" in _err(capsys, ["tradeoff", "--eye-res", "big", "--out", o])
     # a training budget out of range: one line under tradeoff's own flag names, and no --out
     for flag, value in (("--btf-res", "0"), ("--btf-dirs", "1"), ("--teacher-epochs", "0")):

@@ -8,6 +8,7 @@ import json
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 from distill_helpers import FAST, expect_one_line_error, run_cli, trained  # noqa: F401 (fixture)
 
@@ -164,6 +165,34 @@ def test_missing_recorded_btf_names_the_teacher_and_btf_flag(trained, tmp_path):
     expect_one_line_error(["distill", t, "-o", out, *FAST], "recorded in", str(t), "--btf PATH")
     expect_one_line_error(["export", t, "-o", tmp_path / "t.vrnm"], "recorded in", "--btf PATH")
     assert not out.exists()
+
+
+def test_a_moved_folder_finds_its_btf_beside_the_checkpoint(trained, tmp_path):  # noqa: F811
+    """BTF, teacher and pack copied to a new folder and the old BTF gone: distill, export and
+    eval take the BTF of the recorded name beside the checkpoint (or pack), because it is the
+    same BTF (fingerprint); another BTF under that name is still an error."""
+    import shutil
+
+    from vrneural.btf import read_btf, write_btf
+
+    new = tmp_path / "moved"
+    new.mkdir()
+    t = _copy(trained, new, "teacher.pt")
+    ck = load_checkpoint(t)
+    ck["btf"]["path"] = str(tmp_path / "gone" / "m.btf")  # where it was
+    save_checkpoint(t, {k: v for k, v in ck.items() if k not in ("format", "version")})
+    shutil.copy(trained["btf"], new / "m.btf")
+    code, err = run_cli("distill", t, "-o", new / "s.pt", "--epochs", 1, *FAST)
+    assert code == 0, err
+    assert f"using the same BTF at {new / 'm.btf'}" in err
+    code, err = run_cli("export", t, "-o", new / "t.vrnm")
+    assert code == 0, err
+    code, err = run_cli("eval", new / "t.vrnm", "--slices", 2, "--no-progress", "-o", new / "ev")
+    assert code == 0, err
+    # another BTF of that name beside it: not taken for the recorded one
+    b = read_btf(trained["btf"])
+    write_btf(new / "m.btf", np.asarray(b.values) * 2, b.light_dirs, b.view_dirs, b.meta)
+    expect_one_line_error(["distill", t, "-o", new / "s2.pt", *FAST], "recorded in", "--btf")
 
 
 def test_only_rank_zero_reports(monkeypatch, capsys):

@@ -16,6 +16,7 @@ beforehand, excluded).
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass
 
@@ -42,6 +43,11 @@ class KernelsConfig:
     )
     precisions: str = opt("f32,f16", "GPU precisions (f16 needs shader-f16)")
     sgemm_n: int = opt(1024, "matrix side of the numpy sgemm roofline")
+    threads: int = opt(
+        0,
+        "CPU threads of PyTorch and of numpy's sgemm (0: their default, every core; 1 avoids "
+        "the oversubscription that makes both many times slower on a loaded machine)",
+    )
     quick: bool = opt(False, "CI-sized: student and NeuMIP, 16384 texels, 2 repeats, sgemm 256")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
@@ -182,6 +188,7 @@ def run_kernels(cfg: KernelsConfig) -> dict:
     check_range("--texels", c.texels, 64, 1 << 22)
     check_range("--repeats", c.repeats, 1, 100)
     check_range("--sgemm-n", c.sgemm_n, 16, 8192)
+    check_range("--threads", c.threads, 0, 1024)
     nets = network_names(c.networks)
     precs = rp.choice_list("--precisions", c.precisions, ("f32", "f16"))
     if not precs:
@@ -193,8 +200,41 @@ def run_kernels(cfg: KernelsConfig) -> dict:
 
     t0 = time.perf_counter()
     doc = rp.header("kernels", c)
-    sg_runs = [sgemm_gflops(c.sgemm_n, c.repeats)]
+    threads_before = torch.get_num_threads()
+    try:
+        if c.threads:
+            torch.set_num_threads(c.threads)
+        return _run(c, doc, nets, precs, root, t0)
+    finally:
+        torch.set_num_threads(threads_before)  # `bench all` goes on in this process
+
+
+def _sgemm(c: KernelsConfig) -> float:
+    """:func:`sgemm_gflops` with ``--threads`` BLAS threads: numpy's thread pool is sized when
+    numpy loads, so a set count runs it in a child process started with that count."""
+    if not c.threads:
+        return sgemm_gflops(c.sgemm_n, c.repeats)
+    import subprocess
+    import sys
+
+    n = str(c.threads)
+    env = dict(os.environ, OMP_NUM_THREADS=n, OPENBLAS_NUM_THREADS=n, MKL_NUM_THREADS=n)
+    code = (
+        "from vrneural.bench.kernels import sgemm_gflops; "
+        f"print(sgemm_gflops({c.sgemm_n}, {c.repeats}))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    return float(out.stdout.split()[-1])
+
+
+def _run(c: KernelsConfig, doc: dict, nets, precs, root, t0) -> dict:
+    import torch
+
+    sg_runs = [_sgemm(c)]
     doc["torch_threads"] = torch.get_num_threads()
+    doc["sgemm_threads"] = c.threads or "default"
     jobs = [(n, v, p) for n in nets for v in ("constants", "buffer") for p in precs]
     jobs += [(n, "torch", "f32") for n in nets]
     bar = rp_progress(len(jobs), c.progress)
@@ -220,7 +260,7 @@ def run_kernels(cfg: KernelsConfig) -> dict:
         )
         bar.update()
     bar.close()
-    sg_runs.append(sgemm_gflops(c.sgemm_n, c.repeats))  # again: a load may have passed
+    sg_runs.append(_sgemm(c))  # again: a load may have passed
     doc["sgemm_gflops_runs"] = sg_runs
     doc["sgemm_gflops"] = sg = max(sg_runs)
     for r in doc["records"]:
@@ -278,7 +318,9 @@ def markdown(doc: dict) -> list[str]:
         f"timestamps). numpy sgemm ({c['sgemm_n']}^2, float32): **{sg:.1f} GFLOP/s** (our "
         "roofline on a CPU adapter; the better of "
         + " and ".join(f"{g:.1f}" for g in runs)
-        + f" measured before and after the kernels); torch threads: {doc['torch_threads']}."
+        + f" measured before and after the kernels); torch threads: {doc['torch_threads']}"
+        + (f", sgemm threads: {doc['sgemm_threads']}" if "sgemm_threads" in doc else "")
+        + "."
         + (" **Quick run.**" if c["quick"] else ""),
         "",
     ]

@@ -73,6 +73,26 @@ def fingerprint_mismatch(have: dict, want: dict, keys=FINGERPRINT_KEYS) -> str |
     return None
 
 
+def moved_btf(record: dict, beside) -> str | None:
+    """Where a recorded BTF went when a folder was moved or copied: the file of the recorded
+    name beside ``beside`` (the checkpoint or pack that records it), if it exists and is that
+    very BTF (every fingerprint key the record has matches, ``values_sha256`` included when
+    recorded); else None."""
+    from vrneural.btf.format import read_btf
+
+    name = Path(str(record.get("path") or "")).name
+    if not name or "sha256" not in record:
+        return None
+    cand = Path(beside).parent / name
+    if not cand.is_file():
+        return None
+    try:
+        fp = btf_fingerprint(read_btf(cand))
+    except (VrnError, OSError, ValueError):
+        return None
+    return None if fingerprint_mismatch(fp, record) else str(cand)
+
+
 def check_btf_record(
     path, fp: dict, want: dict, mismatch: str, recorded: str, remedy: str = ""
 ) -> None:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import os
 import pickle
 import re
+import sys
 import warnings
 from pathlib import Path
 
@@ -169,14 +170,21 @@ def _refuse_our_other_formats(p: Path) -> None:
 
 
 def recorded_btf(ck: dict, source) -> str:
-    """The BTF path recorded in checkpoint ``ck`` (file ``source``), which must still exist."""
+    """The BTF path recorded in checkpoint ``ck`` (file ``source``), which must still exist,
+    or the same BTF (its fingerprint) under the same name beside ``source`` (a moved folder)."""
     path = ck["btf"]["path"]
-    if not Path(path).exists():
+    if Path(path).exists():
+        return path
+    from vrneural.btf.identity import moved_btf
+
+    found = moved_btf(ck["btf"], source) if isinstance(source, (str, Path)) else None
+    if found is None:
         raise VrnError(
             f"{path}: the BTF recorded in {source} does not exist (moved or deleted?); "
             "pass --btf PATH to use another copy"
         )
-    return path
+    print(f"{source}: recorded BTF {path} is gone; using the same BTF at {found}", file=sys.stderr)
+    return found
 
 
 def _first_sentence(e: Exception) -> str:

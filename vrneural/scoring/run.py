@@ -85,6 +85,15 @@ def btf_path(cfg: EvalConfig, mats: list) -> str:
         )
     path = next(iter(recorded))
     if not Path(path).exists():
+        from vrneural.btf.identity import moved_btf
+
+        found = moved_btf(_record(mats[0]), cfg.packs[0])  # a moved folder: the copy beside it
+        if found is not None:
+            print(
+                f"{cfg.packs[0]}: recorded BTF {path} is gone; using the same BTF at {found}",
+                file=sys.stderr,
+            )
+            return found
         raise VrnError(
             f"{cfg.packs[0]}: records BTF {path}, which does not exist (moved, or built on "
             f"another machine); pass --btf BTF{_recipe(mats[0])}"
