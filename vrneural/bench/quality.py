@@ -309,23 +309,23 @@ def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
 _STOP = None
 
 
-def _job(kind: str, job_cfg) -> float:
-    """One step of ``--jobs`` in a worker process; returns its training seconds. A step that
-    begins after the run was stopped does nothing; one in training stops at its next step
-    (saving, as Ctrl-C does)."""
+def _job(kind: str, job_cfg) -> str:
+    """One step of ``--jobs`` in a worker process; returns its time for the log (``reused``
+    for a checkpoint taken as it was). A step that begins after the run was stopped does
+    nothing; one in training stops at its next step (saving, as Ctrl-C does)."""
     if _STOP is not None and _STOP.is_set():
         raise VrnError("stopped before it began")
     if kind == "synth":
         preset, qcfg, path = job_cfg
+        t0 = time.perf_counter()
         make_btf(preset, qcfg, path)
-        return 0.0
-    if kind == "teach":
-        from vrneural.distill.teach import run_teach
-
-        return float(run_teach(job_cfg, on_step=_stop_check)["train_seconds"])
+        return f"{time.perf_counter() - t0:.0f} s"
     from vrneural.distill.distill import run_distill
+    from vrneural.distill.teach import run_teach
 
-    return float(run_distill(job_cfg, on_step=_stop_check)["train_seconds"])
+    reused = _finished(job_cfg)
+    ck = (run_teach if kind == "teach" else run_distill)(job_cfg, on_step=_stop_check)
+    return _took(ck, reused)
 
 
 def _stop_check(epoch: int, step: int) -> None:
@@ -379,7 +379,7 @@ def run_jobs(pool, jobs: list, log) -> None:
 
     futures = {pool.submit(_job, kind, c): label for label, kind, c in jobs}
     for f in as_completed(futures):
-        log(f"{futures[f]}  {f.result():.0f} s")
+        log(f"{futures[f]}  {f.result()}")
 
 
 def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> None:
@@ -438,8 +438,9 @@ def _wide_start_record(ck: dict) -> dict | None:
     return init and {k: init[k] for k in ("width", "epochs")}
 
 
-def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
-    """Train and evaluate every method on one preset; returns its records."""
+def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bool = False) -> dict:
+    """Train and evaluate every method on one preset; returns its records. ``trained``: the
+    ``--jobs`` workers trained them all, so only load them."""
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
     from vrneural.distill.data import SliceData
@@ -454,7 +455,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log) -> dict:
     btf = read_btf(btf_path)
     tcfg = _teach_config(preset, cfg, root, btf_path, btf_fingerprint(btf)["sha256"])
     runs = partial(_distill_configs, preset, cfg, root, btf_path)  # they read the teacher
-    tck, done = train_in_process(preset, tcfg, runs, log)
+    tck, done = load_trained(tcfg, runs) if trained else train_in_process(preset, tcfg, runs, log)
     records = {"teacher": [tck]}
     for name, ck, init_from in done:
         records.setdefault(name, []).append(_with_wide_start(ck, init_from))
@@ -612,6 +613,16 @@ def train_in_process(preset: str, tcfg, runs, log) -> tuple[dict, list]:
         log(f"{preset}: {stem}  {_took(ck, reused)}")
         if key is not None:
             done.append((key, ck, c.init_from))
+    return tck, done
+
+
+def load_trained(tcfg, runs) -> tuple[dict, list]:
+    """What :func:`train_in_process` returns, for networks the ``--jobs`` workers trained: read
+    from their checkpoints, without another pass through the training loop (and its log)."""
+    from vrneural.distill.checkpoint import load_checkpoint
+
+    tck = load_checkpoint(tcfg.output, kind="teacher")
+    done = [(k, load_checkpoint(c.output), c.init_from) for k, _, c in runs() if k is not None]
     return tck, done
 
 
@@ -817,7 +828,7 @@ def _run(presets: list[str], cfg: QualityConfig, root: Path) -> dict:
         cfg = dataclasses.replace(cfg, resume=True)  # evaluate what was just trained
     doc: dict = {}
     for preset in presets:
-        r = bench_material(preset, cfg, root, print)
+        r = bench_material(preset, cfg, root, print, trained=cfg.jobs > 1)
         slices[preset] = (r.pop("slices"), r["slice_pairs"])
         results[preset] = r
         doc = {

@@ -236,6 +236,7 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
     from vrneural.bench.quality import (
         _teach_config,
         job_pool,
+        load_trained,
         make_btf,
         run_jobs,
         run_networks,
@@ -243,7 +244,6 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
     )
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
-    from vrneural.distill.checkpoint import load_checkpoint
 
     q, preset = plan.quality, plan.quality.presets
     (root / preset).mkdir(parents=True, exist_ok=True)
@@ -258,9 +258,7 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
         run_jobs(pool, [(f"{preset}: teacher", "teach", tcfg)], log)
         runs = network_runs(dataclasses.replace(plan, quality=quiet), root, btf_path)
         run_networks(pool, [(f"{preset}: {s}", k, c) for k, s, c in runs], log)
-    tck = load_checkpoint(tcfg.output, kind="teacher")
-    done = [(k, load_checkpoint(c.output), c.init_from) for k, _, c in runs if k is not None]
-    return tck, done
+    return load_trained(tcfg, lambda: runs)
 
 
 def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
