@@ -472,3 +472,19 @@ def test_synth_stops_on_a_signal_and_resumes(tmp_path, how):
     done = subprocess.run([*argv, "--resume"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert read_btf(out).values.shape[:2] == (40, 40)
+
+
+def test_show_brdf_panel_ticks_are_whole_indices(tmp_path):
+    """The unfolded BRDF's axes are light and view indices: with 20 directions matplotlib's
+    default ticks were 2.5, 7.5, ..."""
+    import matplotlib.pyplot as plt
+
+    from vrneural.btf.sheet import sheet_figure
+
+    d = direction_set(20)
+    vals = np.random.default_rng(0).random((20, 20, 4, 4, 3), np.float32)
+    fig = sheet_figure(read_btf(write_btf(tmp_path / "s.btf", vals, d, d, {"name": "s"})))
+    fig.canvas.draw()
+    for ticks in (fig.axes[-1].get_xticks(), fig.axes[-1].get_yticks()):
+        assert len(ticks) and all(float(t).is_integer() for t in ticks), ticks
+    plt.close(fig)

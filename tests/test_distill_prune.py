@@ -219,7 +219,10 @@ def test_init_from_errors(tmp_path):
             ["--init-from", tmp_path / "log.pt"],
             "was trained with --space log, this run with linear",
         ),
-        (["--init-from", tmp_path / "s8.pt", "--width", 9], "at least as wide (e.g. --width 18)"),
+        (
+            ["--init-from", tmp_path / "s8.pt", "--width", 9],
+            "needs a run at least 9 wide (train one with --width 18), or ask for --width 8 or less",
+        ),
     ]
     for flags, needle in cases:
         expect_one_line_error(["distill", t, "-o", out, "--epochs", 1, *flags, *FAST], needle)

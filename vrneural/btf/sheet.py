@@ -183,6 +183,10 @@ def sheet_figure(btf: Btf, texel: tuple[int, int] | None = None):
     )
     ax.set_xlabel("view index")
     ax.set_ylabel("light index")
+    from matplotlib.ticker import MaxNLocator
+
+    for axis in (ax.xaxis, ax.yaxis):  # indices: whole numbers only (few directions: 2.5, ...)
+        axis.set_major_locator(MaxNLocator(integer=True))
     fig.tight_layout()
     return fig
 

@@ -1,4 +1,4 @@
-"""`vrneural distill teacher.pt -o student.pt`: distil the coarse-to-fine student (or train a
+"""`vrneural distill teacher.pt -o student.pt`: distill the coarse-to-fine student (or train a
 baseline with --method)."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ def register(sub) -> None:
 
     p = sub.add_parser(
         "distill",
-        help="distil a student (or baseline) from a teacher checkpoint",
+        help="distill a student (or baseline) from a teacher checkpoint",
         description="Train the 8-wide coarse-to-fine student from a teacher (paper Eq. 5), "
         "or a baseline (--method single8|neumip, --no-distill for ground truth only). The BTF "
         "path recorded in the teacher is used unless --btf is given. Writes the checkpoint, "

@@ -135,8 +135,9 @@ def check_init(path: str, ick: dict, cfg: DistillConfig, spec: dict, teacher_sha
                 raise VrnError(f"{where}: its {k} {wide} has another depth than {mine}")
             if any(w < m for w, m in zip(wide, mine, strict=True)):
                 raise VrnError(
-                    f"{where}: is {max(wide)} wide, narrower than --width {cfg.width}; prune "
-                    f"from a run at least as wide (e.g. --width {max(16, 2 * cfg.width)})"
+                    f"{where}: is {max(wide)} wide, narrower than --width {cfg.width}; "
+                    f"--init-from needs a run at least {cfg.width} wide (train one with "
+                    f"--width {max(16, 2 * cfg.width)}), or ask for --width {max(wide)} or less"
                 )
         elif k not in ("tex_init",) and spec.get(k) != theirs.get(k):
             name, show = SPEC_FLAGS.get(k, (k, lambda v: v))

@@ -52,12 +52,13 @@ def slices_png(mats: list, names: list[str], btf, precision: str) -> bytes:
         for ax in axes[r]:
             ax.axis("off")
     name = btf.meta.get("name", Path(btf.path).stem)
-    fig.suptitle(
-        f"vrneural eval: {name} ({L}x{V} slices of {H}x{W}), {prec}; each row at the BTF "
-        "slice's exposure, error maps on one scale per row",
-        fontsize=9,
-    )
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / fig.get_figheight()))  # room for the title
+    head = f"vrneural eval: {name} ({L}x{V} slices of {H}x{W}), {prec}"
+    note = "each row at the BTF slice's exposure, error maps on one scale per row"
+    # one line where the figure is wide enough (about 11 px per character at 9 pt), else two
+    one = len(head) + 2 + len(note) <= fig.get_figwidth() * 100 / 6.5
+    fig.suptitle(f"{head}; {note}" if one else f"{head}\n{note}", fontsize=9)
+    room = (0.35 if one else 0.55) / fig.get_figheight()
+    fig.tight_layout(rect=(0, 0, 1, 1 - room))  # room for the title
     buf = io.BytesIO()
     fig.savefig(buf, format="png")
     plt.close(fig)
