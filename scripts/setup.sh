@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Idempotent set-up for a fresh Debian machine (also used by CI):
 #   1. a virtual environment in .venv
-#   2. the pinned CPU build of PyTorch, installed BEFORE the package, so pip never resolves
-#      a bare `torch` (which would pull several GB of CUDA packages)
+#   2. the pinned PyTorch (a CPU build: see VRNEURAL_TORCH_INDEX below), installed BEFORE the
+#      package, so pip never resolves a bare `torch` (which would pull several GB of CUDA
+#      packages)
 #   3. vrneural itself, editable, with the train/dev/metrics extras, and btf-extractor
 #      (UBO2014 import; built without isolation, see below)
 #   4. Mesa's lavapipe CPU Vulkan driver, only when wgpu finds no Vulkan (or Metal, D3D12)
@@ -13,16 +14,21 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"   # quiets Mesa's harmless warning
 PY="${PYTHON:-python3}"
 TORCH_SPEC="${VRNEURAL_TORCH:-torch==2.13.0}"
+# Where pip finds that torch. Unset: pip's own configuration (on this project's machines a
+# local CPU wheel). On a machine whose pip reads plain PyPI, where the Linux wheel of that
+# version is the CUDA build, set VRNEURAL_TORCH_INDEX=https://download.pytorch.org/whl/cpu.
+TORCH_INDEX=()
+[ -n "${VRNEURAL_TORCH_INDEX:-}" ] && TORCH_INDEX=(--index-url "$VRNEURAL_TORCH_INDEX")
 
 if [ ! -x .venv/bin/python ]; then
     echo "[setup] creating .venv"
     "$PY" -m venv .venv
 fi
 stamp=.venv/.vrneural-setup
-want="$(cat pyproject.toml scripts/setup.sh | sha256sum | cut -c1-16) $TORCH_SPEC"
+want="$(cat pyproject.toml scripts/setup.sh | sha256sum | cut -c1-16) $TORCH_SPEC ${VRNEURAL_TORCH_INDEX:-}"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
     echo "[setup] installing $TORCH_SPEC (CPU) and vrneural[train,dev,metrics] into .venv"
-    .venv/bin/python -m pip install -q --disable-pip-version-check "$TORCH_SPEC"
+    .venv/bin/python -m pip install -q --disable-pip-version-check "${TORCH_INDEX[@]}" "$TORCH_SPEC"
     .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[train,dev,metrics]"
     # UBO2014 import: btf-extractor's own build pins numpy<1.20 (no Python 3.11 build), so it
     # is built against the installed numpy without build isolation.

@@ -124,3 +124,26 @@ def test_the_packs_that_pass_are_benchmarked(capsys, tmp_path, packs):
     argv = ["bench", "tradeoff", "--quick", "--no-progress", "--shimmer-frames", "0"]
     assert main([*argv, "--packs", str(packs), "--out", str(out)]) == 0, capsys.readouterr().err
     assert (out / "results.json").is_file()
+
+
+@pytest.mark.gpu
+def test_teacher_and_student_alone_score_without_the_other_networks(capsys, tmp_path, packs):
+    """--packs needs the reference and the base network only: a user's own student against
+    its teacher. The other networks' rows are left out and the report says so; without
+    student.vrnm it is a one-line error naming what is needed."""
+    import json
+
+    d = tmp_path / "two"
+    d.mkdir()
+    for k in ("teacher", "student"):
+        shutil.copy(packs / f"{k}.vrnm", d / f"{k}.vrnm")
+    out = tmp_path / "o"
+    argv = ["bench", "tradeoff", "--quick", "--no-progress", "--shimmer-frames", "0"]
+    assert main([*argv, "--packs", str(d), "--out", str(out)]) == 0
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["packs"]["absent"] == ["student_nodistill", "single8", "neumip"]
+    assert doc["records"] and not [r for r in doc["records"] if r["knob"] == "network"]
+    assert "no student_nodistill, single8, neumip pack there" in (out / "results.md").read_text()
+    (d / "student.vrnm").unlink()
+    msg = _err(capsys, d, tmp_path / "o2")
+    assert "student.vrnm' not found (needs teacher and student .vrnm;" in msg, msg

@@ -77,6 +77,21 @@ def train_packs(d: Path, budget: dict, progress: bool, log=print) -> dict[str, P
     return paths
 
 
+#: the packs `bench tradeoff --packs DIR` cannot do without: the reference and the base
+#: network; the other networks' rows are left out where their pack is not there
+REQUIRED = ("teacher", "student")
+
+
+def pack_paths(d) -> dict[str, Path]:
+    """The packs of ``--packs DIR`` that are there (the :data:`REQUIRED` ones always, so that
+    :func:`load_packs` names a missing one)."""
+    return {
+        k: Path(d) / f"{k}.vrnm"
+        for k in PACKS
+        if k in REQUIRED or (Path(d) / f"{k}.vrnm").is_file()
+    }
+
+
 def load_packs(paths: dict[str, Path]) -> dict:
     """name -> NeuralMaterial, each checked against the role its name gives it
     (:func:`check_packs`). Raises a one-line :class:`VrnError` naming the file."""
@@ -85,7 +100,10 @@ def load_packs(paths: dict[str, Path]) -> dict:
     out = {}
     for k, p in paths.items():
         if not Path(p).is_file():
-            raise VrnError(f"--packs: {str(p)!r} not found (needs {', '.join(PACKS)} .vrnm)")
+            raise VrnError(
+                f"--packs: {str(p)!r} not found (needs {' and '.join(REQUIRED)} .vrnm; "
+                f"{', '.join(x for x in PACKS if x not in REQUIRED)} add their rows)"
+            )
         out[k] = read_vrnm(p)
     check_packs(out, paths)
     return out

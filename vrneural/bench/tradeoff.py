@@ -94,7 +94,7 @@ class TradeoffConfig:
 WARMUP_FRAMES = 3
 
 
-def settings(c: TradeoffConfig, has_f16: bool) -> list[dict]:
+def settings(c: TradeoffConfig, has_f16: bool, networks=("student_nodistill", "single8", "neumip")):
     base = dict(
         knob="base",
         value="-",
@@ -115,7 +115,7 @@ def settings(c: TradeoffConfig, has_f16: bool) -> list[dict]:
     out.append({**base, "knob": "schedule", "value": "burst", "schedule": "burst"})
     if has_f16:
         out.append({**base, "knob": "precision", "value": "f16", "precision": "f16"})
-    for m in ("student_nodistill", "single8", "neumip"):
+    for m in networks:  # the other networks at the base settings (those with a pack)
         out.append({**base, "knob": "network", "value": m, "material": m})
     out.append(
         {**base, "knob": "mode", "value": "screen (per pixel)", "mode": "screen", "reuse": 0}
@@ -165,7 +165,7 @@ def check_budget(c: TradeoffConfig) -> None:
 def run_tradeoff(cfg: TradeoffConfig) -> dict:
     from tqdm import tqdm
 
-    from vrneural.bench.packs import PACKS, load_packs, train_packs
+    from vrneural.bench.packs import PACKS, REQUIRED, load_packs, pack_paths, train_packs
     from vrneural.errors import check_range
     from vrneural.gpu.device import adapter_summary
     from vrneural.runtime.config import parse_res
@@ -180,17 +180,19 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     shimmer_res = parse_res(c.shimmer_res, "--shimmer-res")
     check_range("--lights", c.lights, 1, 8)
     check_range("--shimmer-frames", c.shimmer_frames, 0, 100000)
-    sets = settings(c, adapter_summary().features.get("shader-f16", False))
+    have = list(pack_paths(c.packs)) if c.packs else list(PACKS)
+    nets = [k for k in PACKS if k not in REQUIRED and k in have]
+    sets = settings(c, adapter_summary().features.get("shader-f16", False), nets)
     if c.packs:  # fail before any work or output, also on a pack not what its name says
-        load_packs({k: Path(c.packs) / f"{k}.vrnm" for k in PACKS})
+        load_packs(pack_paths(c.packs))
     else:  # the training budget, under this command's own flag names
         check_budget(c)
     root = rp.prepare_out(cfg.out, cfg.force, "tradeoff")
     t0 = time.perf_counter()
     doc = rp.header("tradeoff", c)
     if c.packs:
-        paths = {k: Path(c.packs) / f"{k}.vrnm" for k in PACKS}
-        doc["packs"] = {"source": c.packs}
+        paths = pack_paths(c.packs)
+        doc["packs"] = {"source": c.packs, "absent": [k for k in PACKS if k not in paths]}
     else:
         budget = dict(
             preset=c.preset,
@@ -350,7 +352,10 @@ def markdown(doc: dict) -> list[str]:
 def _packs_line(doc: dict) -> str:
     p = doc["packs"]
     if p["source"] != "trained":
-        return f"from {p['source']}"
+        absent = p.get("absent") or []
+        return f"from {p['source']}" + (
+            f"; no {', '.join(absent)} pack there, so no row for it" if absent else ""
+        )
     b = p["budget"]
     return (
         f"{b['preset']} {b['res']}^2 x {b['dirs']}^2 directions, teacher {b['teacher_width']} wide "
