@@ -338,3 +338,10 @@ def test_a_second_run_on_the_same_output_is_refused_while_the_first_runs(trained
         holder.communicate("", timeout=30)
     code, err = run_cli("distill", trained["teacher"], "-o", out, "--epochs", 1, *FAST)
     assert code == 0, err
+    # a released lock leaves no file behind (the holder above, which never released its own,
+    # left one, which the run took over and removed)
+    import hashlib
+    import tempfile
+
+    name = hashlib.sha256(str(out.resolve()).encode()).hexdigest()[:32] + ".lock"
+    assert not (Path(tempfile.gettempdir()) / "vrneural-locks" / name).exists()

@@ -274,8 +274,8 @@ def lock_output_dir(p: Path) -> None:
     _LOCKS[key] = fd
 
 
-#: output files this process holds the lock of (see :func:`lock_output_file`) -> descriptor
-_FILE_LOCKS: dict[str, int] = {}
+#: output files this process holds the lock of -> (descriptor, lock file)
+_FILE_LOCKS: dict[str, tuple[int, Path]] = {}
 
 
 def lock_output_file(p) -> None:
@@ -283,9 +283,10 @@ def lock_output_file(p) -> None:
     this process trains it, so a second command given the same ``-o`` while the first runs is
     a one-line error instead of two runs overwriting each other's checkpoints. The lock is on
     a file in ``$TMPDIR/vrneural-locks`` named by the output's absolute path (the output itself
-    is replaced by renames, so it cannot carry the lock). Released by :func:`output_locks` or
-    by the kernel when the process ends. A no-op where this process holds it already, under
-    ``torchrun`` on ranks other than 0 (rank 0 writes), or where locks are unavailable."""
+    is replaced by renames, so it cannot carry the lock); :func:`output_locks` removes it when
+    it releases the lock, and the kernel releases it however the process ends. A no-op where
+    this process holds it already, under ``torchrun`` on ranks other than 0 (rank 0 writes),
+    or where locks are unavailable."""
     try:
         import fcntl
     except ImportError:  # not POSIX
@@ -295,25 +296,40 @@ def lock_output_file(p) -> None:
     key = str(Path(p).resolve())
     if key in _FILE_LOCKS:
         return
-    name = hashlib.sha256(key.encode()).hexdigest()[:32] + ".lock"
-    try:
-        d = Path(tempfile.gettempdir()) / "vrneural-locks"
-        d.mkdir(mode=0o777, exist_ok=True)
-        fd = os.open(d / name, os.O_RDWR | os.O_CREAT, 0o666)
-    except OSError:
-        return  # no lock directory (read-only /tmp, another user's file): go on without
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        os.close(fd)
-        raise VrnError(
-            f"{p}: another vrneural process is writing this output right now; wait for it to "
-            "finish or choose another output"
-        ) from None
-    except OSError:
-        os.close(fd)
-        return
-    _FILE_LOCKS[key] = fd
+    path = Path(tempfile.gettempdir()) / "vrneural-locks"
+    path = path / (hashlib.sha256(key.encode()).hexdigest()[:32] + ".lock")
+    for _ in range(100):  # a holder may remove the file between our open and our lock
+        try:
+            path.parent.mkdir(mode=0o777, exist_ok=True)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        except OSError:
+            return  # no lock directory (read-only /tmp, another user's file): go on without
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            raise VrnError(
+                f"{p}: another vrneural process is writing this output right now; wait for it "
+                "to finish or choose another output"
+            ) from None
+        except OSError:
+            os.close(fd)
+            return
+        try:
+            same = os.path.samestat(os.fstat(fd), os.stat(path))
+        except OSError:  # removed by the holder that just released it
+            same = False
+        if same:
+            _FILE_LOCKS[key] = (fd, path)
+            return
+        os.close(fd)  # a file its holder removed: lock the new one
+
+
+def _release_output_file(key: str) -> None:
+    fd, path = _FILE_LOCKS.pop(key)
+    with contextlib.suppress(OSError):
+        path.unlink()  # while still holding it: a waiting process then sees another file
+    os.close(fd)
 
 
 @contextlib.contextmanager
@@ -325,7 +341,7 @@ def output_locks() -> Iterator[None]:
         yield
     finally:
         for k in set(_FILE_LOCKS) - before:
-            os.close(_FILE_LOCKS.pop(k))
+            _release_output_file(k)
 
 
 def _unlock_output_dir(p: Path) -> None:
