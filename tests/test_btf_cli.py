@@ -450,7 +450,7 @@ def test_synth_stops_on_a_signal_and_resumes(tmp_path, how):
     import time
 
     out = tmp_path / "s.btf"
-    argv = [sys.executable, "-m", "vrneural", "btf", "synth", "--res", 48, "--dirs", 40]
+    argv = [sys.executable, "-m", "vrneural", "btf", "synth", "--res", 64, "--dirs", 48]
     argv = [*map(str, argv), "-o", str(out), "--no-progress"]
     ignore = how.startswith("SIGINT")
     proc = subprocess.Popen(
@@ -471,7 +471,7 @@ def test_synth_stops_on_a_signal_and_resumes(tmp_path, how):
     assert partial.exists() and not out.exists()
     done = subprocess.run([*argv, "--resume"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
-    assert read_btf(out).values.shape[:2] == (40, 40)
+    assert read_btf(out).values.shape[:2] == (48, 48)
 
 
 def test_show_brdf_panel_ticks_are_whole_indices(tmp_path):

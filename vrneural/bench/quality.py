@@ -28,12 +28,12 @@ import dataclasses
 import json
 import multiprocessing
 import os
-from functools import partial
 import signal
 import statistics
 import sys
 import time
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 from vrneural.config import config_dict, mark_explicit, name_flag, opt, quick_defaults

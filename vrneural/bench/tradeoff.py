@@ -180,18 +180,18 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     shimmer_res = parse_res(c.shimmer_res, "--shimmer-res")
     check_range("--lights", c.lights, 1, 8)
     check_range("--shimmer-frames", c.shimmer_frames, 0, 100000)
-    have = list(pack_paths(c.packs)) if c.packs else list(PACKS)
-    nets = [k for k in PACKS if k not in REQUIRED and k in have]
+    given = pack_paths(c.packs) if c.packs else None
+    nets = [k for k in PACKS if k not in REQUIRED and (given is None or k in given)]
     sets = settings(c, adapter_summary().features.get("shader-f16", False), nets)
-    if c.packs:  # fail before any work or output, also on a pack not what its name says
-        load_packs(pack_paths(c.packs))
+    if given is not None:  # fail before any work or output, also on a pack not what its name says
+        load_packs(given)
     else:  # the training budget, under this command's own flag names
         check_budget(c)
     root = rp.prepare_out(cfg.out, cfg.force, "tradeoff")
     t0 = time.perf_counter()
     doc = rp.header("tradeoff", c)
-    if c.packs:
-        paths = pack_paths(c.packs)
+    if given is not None:
+        paths = given
         doc["packs"] = {"source": c.packs, "absent": [k for k in PACKS if k not in paths]}
     else:
         budget = dict(

@@ -9,6 +9,7 @@ Training (:mod:`vrneural.distill`) and evaluation without torch (``vrneural eval
 from __future__ import annotations
 
 import hashlib
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -77,7 +78,7 @@ def moved_btf(record: dict, beside) -> str | None:
     """Where a recorded BTF went when a folder was moved or copied: the file of the recorded
     name beside ``beside`` (the checkpoint or pack that records it), if it exists and is that
     very BTF (every fingerprint key the record has matches, ``values_sha256`` included when
-    recorded); else None."""
+    recorded), said on stderr; else None."""
     from vrneural.btf.format import read_btf
 
     name = Path(str(record.get("path") or "")).name
@@ -90,7 +91,11 @@ def moved_btf(record: dict, beside) -> str | None:
         fp = btf_fingerprint(read_btf(cand))
     except (VrnError, OSError, ValueError):
         return None
-    return None if fingerprint_mismatch(fp, record) else str(cand)
+    if fingerprint_mismatch(fp, record):
+        return None
+    gone = record["path"]
+    print(f"{beside}: recorded BTF {gone} is gone; using the same BTF at {cand}", file=sys.stderr)
+    return str(cand)
 
 
 def check_btf_record(

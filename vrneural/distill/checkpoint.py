@@ -21,7 +21,6 @@ from __future__ import annotations
 import os
 import pickle
 import re
-import sys
 import warnings
 from pathlib import Path
 
@@ -183,7 +182,6 @@ def recorded_btf(ck: dict, source) -> str:
             f"{path}: the BTF recorded in {source} does not exist (moved or deleted?); "
             "pass --btf PATH to use another copy"
         )
-    print(f"{source}: recorded BTF {path} is gone; using the same BTF at {found}", file=sys.stderr)
     return found
 
 

@@ -249,29 +249,44 @@ def lock_output_dir(p: Path) -> None:
     commands given the same ``--out`` cannot empty and fill it at the same time: the second is
     a one-line error. A no-op where ``flock`` does not exist, or for a directory this process
     already holds."""
-    try:
-        import fcntl
-    except ImportError:  # not POSIX
-        return
     key = p.resolve()
-    if key in _LOCKS:
+    if _fcntl() is None or key in _LOCKS:
         return
     try:
         fd = os.open(p, os.O_RDONLY)
     except OSError:
         return  # unreadable: the write itself will say so
+    if _flock(fd, p, "--out"):
+        _LOCKS[key] = fd
+
+
+def _fcntl():
+    """The ``fcntl`` module, or None where it does not exist (not POSIX: no output locks)."""
+    try:
+        import fcntl
+    except ImportError:
+        return None
+    return fcntl
+
+
+def _flock(fd: int, p, flag: str) -> bool:
+    """Lock ``fd`` (exclusive, not waiting) for output ``p``: True when held; False, with
+    ``fd`` closed, where the file system has no locks (some network mounts: go on without);
+    a one-line error, naming ``flag``, where another process holds it."""
+    import fcntl  # callers checked :func:`_fcntl`
+
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:  # EWOULDBLOCK: another process holds it
         os.close(fd)
         raise VrnError(
             f"{p}: another vrneural process is writing this output right now; wait for it to "
-            "finish or choose another --out"
+            f"finish or choose another {flag}"
         ) from None
-    except OSError:  # no locks on this file system (some network mounts): go on without
+    except OSError:
         os.close(fd)
-        return
-    _LOCKS[key] = fd
+        return False
+    return True
 
 
 #: output files this process holds the lock of -> (descriptor, lock file)
@@ -287,14 +302,8 @@ def lock_output_file(p) -> None:
     it releases the lock, and the kernel releases it however the process ends. A no-op where
     this process holds it already, under ``torchrun`` on ranks other than 0 (rank 0 writes),
     or where locks are unavailable."""
-    try:
-        import fcntl
-    except ImportError:  # not POSIX
-        return
-    if int(os.environ.get("RANK", "0") or 0) != 0:
-        return
     key = str(Path(p).resolve())
-    if key in _FILE_LOCKS:
+    if _fcntl() is None or int(os.environ.get("RANK", "0") or 0) != 0 or key in _FILE_LOCKS:
         return
     path = Path(tempfile.gettempdir()) / "vrneural-locks"
     path = path / (hashlib.sha256(key.encode()).hexdigest()[:32] + ".lock")
@@ -304,16 +313,7 @@ def lock_output_file(p) -> None:
             fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
         except OSError:
             return  # no lock directory (read-only /tmp, another user's file): go on without
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            os.close(fd)
-            raise VrnError(
-                f"{p}: another vrneural process is writing this output right now; wait for it "
-                "to finish or choose another output"
-            ) from None
-        except OSError:
-            os.close(fd)
+        if not _flock(fd, p, "output"):
             return
         try:
             same = os.path.samestat(os.fstat(fd), os.stat(path))

@@ -89,10 +89,6 @@ def btf_path(cfg: EvalConfig, mats: list) -> str:
 
         found = moved_btf(_record(mats[0]), cfg.packs[0])  # a moved folder: the copy beside it
         if found is not None:
-            print(
-                f"{cfg.packs[0]}: recorded BTF {path} is gone; using the same BTF at {found}",
-                file=sys.stderr,
-            )
             return found
         raise VrnError(
             f"{cfg.packs[0]}: records BTF {path}, which does not exist (moved, or built on "
