@@ -474,6 +474,29 @@ def test_synth_stops_on_a_signal_and_resumes(tmp_path, how):
     assert read_btf(out).values.shape[:2] == (48, 48)
 
 
+def test_synth_catches_signals_before_the_partial_file_appears(tmp_path, monkeypatch):
+    """The signal test above waits for `<out>.partial` and then signals: the handlers must
+    already be in place when that file is created. They were installed just after it, and an
+    ignored SIGINT that arrived in between was lost (the run finished with exit 0)."""
+    import signal
+
+    from vrneural.btf import synth
+    from vrneural.interrupt import Stop
+
+    seen = {}
+
+    def writer(*a, **k):
+        seen.update({sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)})
+        raise KeyboardInterrupt  # stop before any work
+
+    before = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    monkeypatch.setattr(synth, "BtfWriter", writer)
+    with pytest.raises(KeyboardInterrupt):
+        synth.synthesize(synth.BtfConfig(preset="leather", res=4, dirs=5), tmp_path / "s.btf")
+    assert seen and all(getattr(h, "__func__", None) is Stop._handle for h in seen.values())
+    assert before == {sig: signal.getsignal(sig) for sig in before}  # and restored after
+
+
 def test_show_brdf_panel_ticks_are_whole_indices(tmp_path):
     """The unfolded BRDF's axes are light and view indices: with 20 directions matplotlib's
     default ticks were 2.5, 7.5, ..."""

@@ -111,14 +111,16 @@ def synthesize(
     out = Path(out)
     if resume and not force:
         check_partial_settings(out.with_name(out.name + ".partial"), meta["generator"])
-    w = BtfWriter(out, dirs, dirs, (cfg.res, cfg.res), meta, resume=resume and not force)
-    todo = [v for v in range(len(dirs)) if v not in w.done]
-    if resume and w.done:
-        print(f"{out}: resuming, {len(w.done)}/{len(dirs)} views already done", file=sys.stderr)
     # Ctrl-C or SIGTERM (also where a non-interactive shell started this in the background
-    # with SIGINT ignored) stops after the current view; a second one at once
+    # with SIGINT ignored) stops after the current view; a second one at once. The handler is
+    # in place before the .partial file appears, so a signal sent once it exists is never
+    # missed (an ignored SIGINT used to be lost in between, and the run went on to the end)
     with Stop() as stop:
         stop.second_raises = True
+        w = BtfWriter(out, dirs, dirs, (cfg.res, cfg.res), meta, resume=resume and not force)
+        todo = [v for v in range(len(dirs)) if v not in w.done]
+        if resume and w.done:
+            print(f"{out}: resuming, {len(w.done)}/{len(dirs)} views already done", file=sys.stderr)
         done_views = len(w.done)
         bar = None
         try:
