@@ -249,3 +249,18 @@ def test_one_mesh_of_a_file_bad_faces_and_what_is_lost_are_said(tmp_path, capsys
     assert "triangles own no texel at 64^2" in err and "--padding 0" in err
     side = json.loads((tmp_path / "dense.png.config.json").read_text())
     assert any("own no texel" in w for w in side["warnings"])
+
+
+def test_parts_far_smaller_than_the_mesh_are_a_warning(tmp_path, capsys):
+    """A 0.5 m sphere with a 0.5 mm one in the same mesh: xatlas flattens the small one's
+    triangles (they show one texel each at any --res); that was only a "zero-area tris" count."""
+    big = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
+    small = trimesh.creation.icosphere(subdivisions=2, radius=0.0005)
+    small.apply_translation([0.6, 0.0, 0.0])
+    trimesh.util.concatenate([big, small]).export(tmp_path / "mixed.obj")
+    out = tmp_path / "m.png"
+    assert main(["atlas", str(tmp_path / "mixed.obj"), "--res", "128", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "warning: mixed.obj: 320 of 640 triangles have no area in the atlas" in err, err
+    notes = json.loads(out.with_name(out.name + ".config.json").read_text())["warnings"]
+    assert any("have no area in the atlas" in n for n in notes)

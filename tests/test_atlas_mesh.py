@@ -227,6 +227,15 @@ def test_obj_objects_materials_and_latin1(tmp_path):
     assert len(bom.faces) == 1 and bom.positions[:, 0].max() == 1.0
     assert (zebra.name, ant.name) == ("lead.obj:Zebra", "lead.obj:Ant")
     assert first.positions[:, 0].min() == 5.0 and ant.positions[:, 0].min() == 8.0
+    # an ``o`` name repeated later adds to that object, which keeps its first place (it went
+    # last, so ``file.obj:0`` was the second object)
+    again = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\no first\nf 1 2 3\no second\nf 1 2 4\n"
+    (tmp_path / "again.obj").write_text(again + "o first\nf 2 4 3\n")
+    meshes = load_mesh(tmp_path / "again.obj")
+    assert [(m.name, len(m.faces)) for m in meshes] == [
+        ("again.obj:first", 2),
+        ("again.obj:second", 1),
+    ]
 
 
 @pytest.mark.parametrize(

@@ -8,6 +8,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 import trimesh
 
@@ -78,3 +79,30 @@ def test_a_dead_child_is_named_with_its_signal(monkeypatch, how, delay, message)
         unwrap_mod.unwrap(mesh, 64, 2)
     assert str(e.value).startswith(f"plane ({len(mesh.faces)} triangles): ")
     assert message in str(e.value) and "None" not in str(e.value)
+
+
+def test_the_atlas_does_not_depend_on_the_mesh_units():
+    """xatlas has absolute epsilons: a 2 cm icosphere of 20k triangles came back with no
+    charts (then an IndexError from deep inside). The unwrap runs in the mesh's own units, so
+    the same sphere in metres, centimetres and 1.5 mm gets an equally good atlas (not bit for
+    bit: xatlas's charts react to the last bits of a position), and texels_per_unit comes
+    back in the mesh's units."""
+    from vrneural.atlas import build_atlas, make_mesh
+
+    ico = trimesh.creation.icosphere(subdivisions=5)
+    atlases = {}
+    for radius in (1.0, 0.01, 0.0015):
+        mesh = make_mesh(f"ball {radius}", ico.vertices * radius, ico.faces)
+        atlases[radius] = build_atlas(mesh, 128, cache=False).stats
+    metre = atlases.pop(1.0)
+    for r, s in atlases.items():
+        assert s["zero_area_triangles"] == 0 == metre["zero_area_triangles"]
+        assert s["charts"] == pytest.approx(metre["charts"], rel=0.15)
+        assert s["coverage_pct"] == pytest.approx(metre["coverage_pct"], rel=0.15)
+        assert s["texels_per_unit"] == pytest.approx(metre["texels_per_unit"] / r, rel=0.15)
+    # parts far smaller than the extent: no charts at all is one line, not an IndexError
+    tiny = trimesh.creation.icosphere(subdivisions=2, radius=1e-5)
+    pos = np.concatenate([tiny.vertices, tiny.vertices + np.array([100.0, 0.0, 0.0])])
+    far = make_mesh("far", pos, np.concatenate([tiny.faces, tiny.faces + len(tiny.vertices)]))
+    with pytest.raises(VrnError, match="far: xatlas made no charts: all 640 triangles are far"):
+        build_atlas(far, 64, cache=False)

@@ -14,7 +14,7 @@ from vrneural.atlas.raster import rasterize_ids
 from vrneural.atlas.types import EMPTY, Atlas, Mesh
 from vrneural.atlas.unwrap import unwrap
 from vrneural.config import opt
-from vrneural.errors import VrnError, check_range
+from vrneural.errors import VrnError, check_int, check_range
 
 #: largest accepted resolution (WebGPU guarantees 8192 for 2D textures; memory ~1.2 GB there)
 MAX_RESOLUTION = 8192
@@ -71,8 +71,8 @@ def build_atlas(
     Degenerate (zero UV area) triangles are kept, own no texel and are counted in
     ``stats["zero_area_triangles"]``. ``progress`` shows a tqdm bar over the two stages.
     """
-    check_range("resolution", resolution, MIN_RESOLUTION, MAX_RESOLUTION)
-    check_range("padding", padding, 0, MAX_PADDING)
+    check_int("resolution", resolution, MIN_RESOLUTION, MAX_RESOLUTION)
+    check_int("padding", padding, 0, MAX_PADDING)
     resolution, padding = int(resolution), int(padding)
     validate_mesh(mesh)
     t0 = time.perf_counter()

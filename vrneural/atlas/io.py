@@ -102,7 +102,9 @@ def _scene_parts(p: Path, scene, order: list, unnamed_first: bool = False) -> li
     file's order (``order``: node names as the file lists them; trimesh walks glTF nodes and
     OBJ objects backwards), so ``file:0`` is the first, not the last. Nodes not in ``order``
     go last, or first with ``unnamed_first`` (an OBJ's faces before its first ``o`` line)."""
-    rank = {n: i for i, n in enumerate(order)}
+    rank: dict = {}
+    for i, n in enumerate(order):  # a name listed again (an OBJ's repeated `o`) keeps its first
+        rank.setdefault(n, i)
     other = -1 if unnamed_first else len(rank)
     nodes = sorted(scene.graph.nodes_geometry, key=lambda n: rank.get(n, other))
     parts = []

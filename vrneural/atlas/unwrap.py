@@ -27,6 +27,17 @@ So meshes above :data:`FAST_FACES` triangles use ``max_chart_area`` for about
 charts (more seams and gutter texels, a few % lower fill) for a 10-20x faster unwrap.
 Random (not brute-force) placement is xatlas's default and kept.
 
+**In the mesh's own units.** xatlas compares areas and lengths with fixed epsilons: a 2 cm
+icosphere of 20k triangles (edges of about 0.4 mm) came back with no charts at all, and so
+did one of 1.5 mm radius. So a mesh much smaller or larger than a unit is scaled by a power
+of two to about unit size before the unwrap (:func:`normalized_positions`), which makes its
+atlas as good whether it is modelled in metres or millimetres (not bit for bit: xatlas's charts
+react to the last bits of a position, so meshes of ordinary size are left exactly as they are);
+``texels_per_unit`` is converted back to the mesh's units.
+Triangles that are still far smaller than the mesh (a 0.5 mm part of a 1 m model) can come
+back with no area in the atlas: they are counted in ``zero_area_triangles`` and `run` and
+`atlas` warn about them.
+
 **In a child process.** xatlas destroys an atlas by stopping its worker threads, and that
 shutdown can lose its wake-up (it sets the flag and notifies without holding the worker's
 mutex): the join then waits forever, with the GIL held. We saw it once in CI, in a test that
@@ -55,7 +66,9 @@ FACES_PER_CHART = 300
 TARGET_FILL = 0.5
 #: a packed atlas with max(W, H) in [GOOD_FIT R, R] is accepted without re-packing
 GOOD_FIT = 0.93
-MAX_PACKS = 6
+#: pack tries in all; a fixed ring and gap per chart make the size converge slowly where they
+#: dominate (the 698 charts of the 100k-triangle knot fit 64^2 on the 6th try)
+MAX_PACKS = 8
 
 
 def _pack_options(tpu: float, padding: int):
@@ -170,12 +183,32 @@ def _child(conn, mesh: Mesh, resolution: int, padding: int) -> None:
         os._exit(0)
 
 
+def normalized_positions(positions) -> tuple[np.ndarray, float]:
+    """``(positions / unit, unit)`` in float64 for xatlas (module docstring): a mesh whose
+    bounding box is between a quarter and 16 units wide is left as it is (``unit`` = 1, so
+    its atlas is bit for bit what it was); a smaller or larger one is scaled by a power of two
+    (exact in floating point) to about 2 units wide, and one far from its own origin (more
+    than 4 half-widths) is centred first."""
+    pos = np.asarray(positions, dtype=np.float64)
+    lo, hi = pos.min(0), pos.max(0)
+    half = float(np.max(hi - lo)) / 2.0
+    if not (half > 0 and np.isfinite(half) and np.isfinite(1.0 / half)):
+        return pos, 1.0
+    centre = (lo + hi) / 2.0
+    if float(np.abs(centre).max()) > 4.0 * half:
+        pos = pos - centre
+    unit = 1.0 if 0.125 <= half <= 8.0 else 2.0 ** round(np.log2(half))
+    return pos / unit, unit
+
+
 def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list):
     import xatlas
 
-    pos = np.ascontiguousarray(mesh.positions, dtype=np.float32)
+    # xatlas in units of the mesh's own size (module docstring: its absolute epsilons)
+    pos64, unit = normalized_positions(mesh.positions)
+    pos = np.ascontiguousarray(pos64, dtype=np.float32)
     faces = np.ascontiguousarray(mesh.faces, dtype=np.uint32)
-    p = pos.astype(np.float64)[faces]
+    p = pos64[faces]
     area3d = float(np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum())
     area3d = max(area3d / 2.0, 1e-12)
     R = resolution
@@ -188,6 +221,11 @@ def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list):
         co.max_chart_area = float(area3d * FACES_PER_CHART / len(faces))
         co.max_iterations = 0
     atlas.generate(co, _pack_options(tpu, padding))
+    if int(atlas.atlas_count) == 0:  # atlas[0] would be an IndexError
+        raise VrnError(
+            f"{mesh.name}: xatlas made no charts: all {len(faces)} triangles are far smaller "
+            "than the mesh's extent (several tiny parts far apart?); make them separate meshes"
+        )
     vmap, idx, uv = atlas[0]
     if idx.shape != faces.shape or not np.array_equal(vmap[idx], faces):
         raise VrnError(f"{mesh.name}: xatlas changed the face list (degenerate input?)")
@@ -227,7 +265,7 @@ def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list):
     info = {
         "faces": idx.astype(np.int64),
         "charts": charts,
-        "texels_per_unit": float(tpu * scale),
+        "texels_per_unit": float(tpu * scale / unit),  # per metre (mesh unit), not per `unit`
         "packed_size": [W, H],
         "packs": packs,
         "xatlas_utilization": float(util),

@@ -91,7 +91,7 @@ def run(args) -> int:
     from vrneural.config import config_from_args
     from vrneural.errors import VrnError, check_range
     from vrneural.formats.atomic import check_output
-    from vrneural.runtime.assets import lost_triangles
+    from vrneural.runtime.assets import collapsed_triangles, lost_triangles
 
     cfg = config_from_args(AtlasConfig, args)
     check_texture_resolution("--res", cfg.res)
@@ -119,6 +119,9 @@ def run(args) -> int:
         lost = lost_triangles(r, cfg.res, "a renderer shows their neighbours' shading")
         if lost:
             notes.append(f"{r['mesh']}: {lost}; raise --res")
+        flat = collapsed_triangles(r)
+        if flat:
+            notes.append(f"{r['mesh']}: {flat}")
     _write_sidecar(out, cfg, results, notes, args.crease_angle)
     for n in notes:  # stderr: stdout is the stats alone (valid JSON with --json)
         print(f"warning: {n}", file=sys.stderr)

@@ -44,6 +44,20 @@ def lost_triangles(stats: dict, res: int, shown_as: str) -> str | None:
     )
 
 
+def collapsed_triangles(stats: dict) -> str | None:
+    """The warning for an atlas (its ``stats``) in which xatlas gave triangles no area (each
+    far smaller than the mesh, or degenerate), else None. Unlike texel-less triangles this is
+    not a matter of resolution: every such triangle shows the one texel its uvs fall on."""
+    n, n_tri = int(stats.get("zero_area_triangles", 0)), int(stats.get("triangles", 0))
+    if not n:
+        return None
+    return (
+        f"{n} of {n_tri} triangles have no area in the atlas (far smaller than the rest of the "
+        "mesh, so xatlas flattened them; each shows one texel's shading at any resolution): "
+        "make such small parts separate objects or meshes"
+    )
+
+
 def builtin_names() -> tuple[str, ...]:
     a = _atlas_api()
     return tuple(a.BUILTIN_MESHES) if a is not None else FALLBACK_MESHES
