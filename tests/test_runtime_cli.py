@@ -261,9 +261,11 @@ mesh = "{mesh}"
             "s.toml: objects[0].position = [0, 1e+300, 0] is out",
         ),
         ({"extra": "scale = 1e300"}, "s.toml: objects[0].scale = 1e+300 is out of range"),
+        # 1e-100 was a singular-matrix traceback (0 in float32)
+        ({"extra": "scale = 1e-100"}, "objects[0].scale = 1e-100 is out of range; allowed [1e-09"),
         (
             {"light": 'motion = "circle"\nradius = 1e9'},
-            "s.toml: lights[0].radius = 1000000000.0 is out of range; allowed [0, 1e+07]",
+            "s.toml: lights[0].radius = 1000000000.0 is out of range; allowed [0, 10000000]",
         ),
         (
             {"extra": "texture_res = 6"},
@@ -273,6 +275,10 @@ mesh = "{mesh}"
         ({"extra": "min_texture_res = 255"}, "objects[0].min_texture_res = 255 must be even"),
         ({"mat": 'pack = "leather.vrnm"\nprocedural = "random"'}, "procedural and pack are both"),
         ({"mat": 'pack = "leather.vrnm"\nseed = 3'}, "material.seed only applies to procedural"),
+        (  # the seed options' range (it had no upper bound)
+            {"mat": 'procedural = "random"\nseed = 4294967296'},
+            "material.seed = 4294967296 is out of range; allowed [0, 4294967295]",
+        ),
         (
             {"mat": 'procedural = "random"\nseed = 3\nalbedo = [1, 1, 1]'},
             'material.albedo only applies to procedural = "lambertian"',
@@ -340,7 +346,7 @@ def test_scene_mesh_files_by_name_or_index_and_bundled_packs(tmp_path):
         )
     )
     o = sc.objects[0]
-    assert o.min_texture_res == 64 and o.texture_res is None and o.name == "two"
+    assert o.min_texture_res == 64 and o.texture_res is None and o.name == "two:box"
     assert o.material.source.endswith("vrneural/data/materials/leather.vrnm")
     assert o.material.reference.arch == "single" and sc.src.endswith("/s.toml")
     assert o.crease_angle is None
@@ -632,6 +638,20 @@ def test_pose_log_times_count_from_its_first_row_and_separators_are_named(tmp_pa
     semi.write_text("0;0;1;2;0;0;0;1\n")
     with pytest.raises(VrnError, match=r"no rows of 8 numbers .*not ';'"):
         PoseLogPath(semi)
+    # a bad row is named by its line (they were "the log has ..."), and a quaternion must be
+    # a unit one (0 0 0 2 was taken)
+    head = "t,x,y,z,qx,qy,qz,qw\n0,0,1,2,0,0,0,1\n"
+    for row, msg in (
+        ("1,0,nan,2,0,0,0,1", "NaN/Inf value in the row"),
+        ("0,0,1,2,0,0,0,1", "time is not after the previous row's"),
+        ("1,0,1,2,0,0,0,0", r"zero quaternion \(qx qy qz qw = 0 0 0 0\)"),
+        ("1,0,1,2,0,0,0,2", r"quaternion of length 2; a unit one expected \(\+-0.01\)"),
+    ):
+        p.write_text(head + row + "\n")
+        with pytest.raises(VrnError, match=rf"abs.csv:3: {msg}"):
+            PoseLogPath(p)
+    p.write_text(head + "1,0,1,2,0,0,0.0001,1.0004\n")  # few decimals: within the tolerance
+    PoseLogPath(p)
 
 
 def test_save_frames_parsing():
@@ -656,6 +676,10 @@ def test_object_names_are_unique(tmp_path):
     text = (one + one).replace("[[lights]]\n", "") + "[[lights]]\nposition = [0, 1, 0]\n"
     sc = load_scene(_scene(tmp_path, text))
     assert [o.name for o in sc.objects] == ["sphere", "sphere 2"]
+    # a part of a mesh file is named with its part (both were "room")
+    parts = text.replace('"sphere"', '"room.obj:0"', 1).replace('"sphere"', '"room.obj:1"')
+    sc = load_scene(_scene(tmp_path, parts, "p.toml"))
+    assert [o.name for o in sc.objects] == ["room:0", "room:1"]
     named = text.replace('mesh = "sphere"', 'mesh = "sphere"\nname = "ball"')
     with pytest.raises(VrnError, match=r"objects\[1\]\.name = 'ball' is already another object's"):
         load_scene(_scene(tmp_path, named, "n.toml"))
@@ -714,3 +738,23 @@ def test_run_line_names_the_objects_texture_sides():
     assert _texture_text(128, sm()) == "128^2"
     assert _texture_text(128, sm(1024)) == "1024^2 (per object; profile 128^2)"
     assert _texture_text(128, sm(256, 128, 1024)) == "128^2-1024^2 (per object; profile 128^2)"
+    # a scene's min_texture_res over --texture-res 96: the 96 is the command line's
+    assert _texture_text(96, sm(256), True) == "256^2 (per object; --texture-res 96^2)"
+
+
+def test_a_pack_or_mesh_given_as_the_scene_says_where_it_goes(tmp_path):
+    """`vrneural run leather.vrnm` said only "not a text file"."""
+    from vrneural.errors import VrnError
+    from vrneural.runtime.scene import load_scene
+
+    for name, hint in (("m.vrnm", "goes to --pack"), ("m.glb", r"into a scene file's \[\[objects")):
+        (tmp_path / name).write_bytes(b"\xff\xfe\x00binary")
+        with pytest.raises(
+            VrnError, match=rf"m\.\w+: not a text file \(a scene is TOML\);.*{hint}"
+        ):
+            load_scene(tmp_path / name)
+    text = '[head]\npath = "spiral"\n' + OBJ.format(
+        mesh="plane", extra="", mat="", light="position = [0, 1, 0]"
+    )
+    with pytest.raises(VrnError, match=r"pose log not found .*; the built-in path is orbit"):
+        load_scene(_scene(tmp_path, text))

@@ -25,9 +25,19 @@ def check_range(name: str, value: float, lo: float | None = None, hi: float | No
     bad = isinstance(value, float) and not math.isfinite(value)
     bad = bad or (lo is not None and value < lo) or (hi is not None and value > hi)
     if bad:
-        lo_s = "-inf" if lo is None else _num(lo)
-        hi_s = "inf" if hi is None else _num(hi)
+        lo_s = "-inf" if lo is None else number_text(lo)
+        hi_s = "inf" if hi is None else number_text(hi)
         raise VrnError(f"{name} = {value!r} is out of range; allowed [{lo_s}, {hi_s}]")
+
+
+def check_int(name: str, value, lo: int | None = None, hi: int | None = None) -> None:
+    """Raise :class:`VrnError` unless ``value`` is a whole number (an int, not a bool, a float
+    or a string) with ``lo <= value <= hi`` (bounds optional)."""
+    import numbers
+
+    if not isinstance(value, numbers.Integral) or isinstance(value, bool):
+        raise VrnError(f"{name} = {value!r} must be a whole number")
+    check_range(name, value, lo, hi)
 
 
 #: Every seed option (teach, distill, btf synth, bench quality, split seeds) takes [0, SEED_MAX]:
@@ -41,7 +51,7 @@ def check_seed(name: str, value: int) -> None:
     check_range(name, value, 0, SEED_MAX)
 
 
-def _num(x: float) -> str:
+def number_text(x: float) -> str:
     """A bound as people write it: whole numbers in full (16777216, not 1.67772e+07)."""
     if float(x).is_integer() and abs(x) < 1e15:
         return str(int(x))

@@ -152,6 +152,8 @@ def material_forward(
             raise VrnError(
                 f"material_forward: {name} has shape {list(a.shape)}, expected {shape} with N = {n}"
             )
+        if not np.isfinite(a).all():  # NaN in, NaN out, silently
+            raise VrnError(f"material_forward: {name} holds NaN/Inf values")
     dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)  # [N, 9]
     if mat.arch == "coarse_fine":
         uc = uv.mean(axis=1)

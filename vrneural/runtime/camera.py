@@ -100,6 +100,10 @@ class OrbitPath(HeadPath):
         return p, look_rotation(np.asarray(self.target) - p)
 
 
+#: How far a pose log's quaternion length may be from 1 (logs written with few decimals)
+QUAT_TOLERANCE = 0.01
+
+
 class PoseLogPath(HeadPath):
     """A recorded pose log: CSV rows ``t, x, y, z, qx, qy, qz, qw`` (header optional), times
     in seconds, increasing, counted from the first row (a log of absolute timestamps plays from
@@ -109,7 +113,7 @@ class PoseLogPath(HeadPath):
         self.path = Path(path)
         if not self.path.is_file():
             raise VrnError(f"{self.path}: head-motion pose log not found")
-        rows, hint = [], ""
+        rows, lines, hint = [], [], ""
         with open(self.path, newline="", encoding="utf-8-sig") as f:
             for i, row in enumerate(csv.reader(f)):
                 if not row or row[0].strip().startswith("#"):
@@ -127,15 +131,24 @@ class PoseLogPath(HeadPath):
                 if len(vals) != 8:
                     raise VrnError(f"{self.path}:{i + 1}: expected 8 columns, got {len(vals)}")
                 rows.append(vals)
+                lines.append(i + 1)
         a = np.asarray(rows, np.float64)
         if len(a) < 1:
             raise VrnError(f"{self.path}: pose log has no rows of 8 numbers{hint}")
-        if not np.isfinite(a).all():
-            raise VrnError(f"{self.path}: pose log has non-finite values")
-        if (np.diff(a[:, 0]) <= 0).any():
-            raise VrnError(f"{self.path}: pose log times must increase")
-        if (np.linalg.norm(a[:, 4:8], axis=1) < 1e-6).any():
-            raise VrnError(f"{self.path}: pose log has a zero quaternion")
+
+        def first(bad: np.ndarray, what: str) -> None:  # the first bad row, by its line
+            if bad.any():
+                raise VrnError(f"{self.path}:{lines[int(np.argmax(bad))]}: {what}")
+
+        first(~np.isfinite(a).all(axis=1), "NaN/Inf value in the row")
+        first(np.append(False, np.diff(a[:, 0]) <= 0), "time is not after the previous row's")
+        norm = np.linalg.norm(a[:, 4:8], axis=1)
+        first(norm < 1e-6, "zero quaternion (qx qy qz qw = 0 0 0 0)")
+        off = np.abs(norm - 1.0) > QUAT_TOLERANCE
+        k = int(np.argmax(off))
+        first(
+            off, f"quaternion of length {norm[k]:.4g}; a unit one expected (+-{QUAT_TOLERANCE:g})"
+        )
         self.t, self.p, self.q = a[:, 0] - a[0, 0], a[:, 1:4], a[:, 4:8]
 
     def pose(self, t: float):

@@ -4,12 +4,11 @@ resolution against a device profile, the scene and the adapter."""
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
 
 from vrneural.config import opt
-from vrneural.errors import VrnError, check_range, count
-from vrneural.runtime.profiles import get_profile
+from vrneural.errors import VrnError, check_int, check_range, count
+from vrneural.runtime.profiles import PROFILES, get_profile
 from vrneural.runtime.renderer import MODES, Settings
 from vrneural.runtime.schedule import SCHEDULES
 
@@ -96,10 +95,23 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
             raise VrnError(
                 f"--{name} = {getattr(cfg, name)!r} is not allowed; choose {', '.join(allowed)}"
             )
-    for name in ("frames", "eyes"):
+    for name in ("frames", "eyes", "reuse", "texture_res", "lights"):
         v = getattr(cfg, name)
-        if not isinstance(v, numbers.Integral) or isinstance(v, bool):
-            raise VrnError(f"--{name} = {v!r} must be a whole number")
+        if v is not None:  # None: the profile's
+            check_int(f"--{name.replace('_', '-')}", v)
+    # run-only fields: `vrneural run` applies them before it calls resolve
+    if cfg.scene is not None:
+        raise VrnError(
+            f"RunConfig.scene = {cfg.scene!r} is the command line's; in Python pass the scene "
+            "to resolve (load_scene(path) or builtin_scene())"
+        )
+    if cfg.pack is not None:
+        raise VrnError(
+            f"RunConfig.pack = {cfg.pack!r} is the command line's; in Python call "
+            "vrneural.runtime.run.use_pack(scene, path) and pass that scene to resolve"
+        )
+    if cfg.profile is not None and not cfg.profile:  # "" fell through to the scene's
+        raise VrnError(f"--profile is empty; choose one of: {', '.join(PROFILES)}")
     prof = get_profile(cfg.profile or scene.profile or "quest3")  # the scene's is checked
     if cfg.eyes not in (1, 2):
         raise VrnError(f"--eyes = {cfg.eyes} is not allowed; choose 1 or 2")

@@ -12,12 +12,12 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.errors import VrnError, count
+from vrneural.errors import VrnError, check_int, count
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
 from vrneural.runtime import forward as fw
-from vrneural.runtime.assets import get_atlas, get_mesh, lost_triangles
+from vrneural.runtime.assets import collapsed_triangles, get_atlas, get_mesh, lost_triangles
 from vrneural.runtime.camera import OrbitPath, PoseLogPath, eyes_from_pose, sphere_in_frustum
 from vrneural.runtime.codegen import reference_weights
 from vrneural.runtime.gpu_material import GpuAtlas
@@ -157,6 +157,9 @@ class Renderer:
             self.warnings.append(
                 f"{scene.src}: objects[{i}] ({o.name}): {lost}; raise texture_res / min_texture_res"
             )
+        flat = collapsed_triangles(atlas.stats)
+        if flat and s.mode == "texture":
+            self.warnings.append(f"{scene.src}: objects[{i}] ({o.name}): {flat}")
         c, r = bounding_sphere(atlas.mesh)
         n = _Neural(i, o, atlas, GpuAtlas(atlas), c, r)
         mat = o.material.neural
@@ -231,6 +234,7 @@ class Renderer:
 
     def frame(self, f: int) -> FrameStats:
         """Render display frame ``f`` (waits for the GPU); returns its statistics."""
+        check_int("frame", f, 0)
         s = self.s
         t0 = time.perf_counter()
         eyes = self.eyes_at(f)
@@ -333,11 +337,13 @@ class Renderer:
                 f"is in mode {self.s.mode!r})"
             )
         n = len(self.neural)
-        if not (isinstance(obj, int) and 0 <= obj < n):
+        check_int("radiance: obj", obj)
+        check_int("radiance: eye", eye)
+        if not 0 <= obj < n:
             raise VrnError(
                 f"radiance: obj = {obj!r} is out of range; the scene has "
                 f"{count(n, 'neural object')} (0..{n - 1}; plain objects are not counted)"
             )
-        if not (isinstance(eye, int) and 0 <= eye < self.s.eyes):
+        if not 0 <= eye < self.s.eyes:
             raise VrnError(f"radiance: eye = {eye!r} is out of range; eyes 0..{self.s.eyes - 1}")
         return read_texture(self.neural[obj].targets[eye].texture).astype(np.float32)

@@ -232,7 +232,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         if cfg.pack:
             use_pack(scene, cfg.pack)
     adapter = adapter_summary()
-    s = resolve(cfg, scene, adapter)
+    s = resolve(replace_config(cfg, scene=None, pack=None), scene, adapter)  # both applied
     save = selected_frames(cfg.save_frames, s.frames)
     video = None
     if cfg.video:  # every eye keeps at least 2 x 2 pixels (libx264's minimum, 2x2 blocks)
@@ -428,14 +428,15 @@ def reference_of(cfg, material) -> str | None:
     return material.reference_source or None
 
 
-def _texture_text(profile_res: int, sm: dict) -> str:
-    """The run line's texture side: the profile's, or the objects' own where a scene's
-    ``texture_res`` / ``min_texture_res`` changed it (listed per object on the next lines)."""
+def _texture_text(profile_res: int, sm: dict, given: bool = False) -> str:
+    """The run line's texture side: the profile's (or ``--texture-res``, ``given``), or the
+    objects' own where a scene's ``texture_res`` / ``min_texture_res`` changed it (listed per
+    object on the next lines)."""
     sides = sorted({o["texture_res"] for o in sm["scene"]["objects"] if "texture_res" in o})
     if not sides or sides == [profile_res]:
         return f"{profile_res}^2"
     shown = f"{sides[0]}^2" if len(sides) == 1 else f"{sides[0]}^2-{sides[-1]}^2"
-    return f"{shown} (per object; profile {profile_res}^2)"
+    return f"{shown} (per object; {'--texture-res' if given else 'profile'} {profile_res}^2)"
 
 
 def human_summary(sm: dict) -> str:
@@ -446,7 +447,8 @@ def human_summary(sm: dict) -> str:
     space = (
         f"reuse={r['reuse']} schedule={r['schedule']} " if texture else "(per pixel, every frame) "
     )
-    tex = f" texture={_texture_text(r['texture_res'], sm)}" if texture else ""
+    given = r.get("texture_res_given", False)
+    tex = f" texture={_texture_text(r['texture_res'], sm, given)}" if texture else ""
     updates = f" (updates in {sm['updates']})" if texture else ""
     lines = [
         f"adapter   {sm['adapter']['name']} ({sm['adapter']['backend']})",

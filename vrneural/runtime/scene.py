@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.errors import VrnError
+from vrneural.errors import SEED_MAX, VrnError, check_int, number_text
 from vrneural.material import NeuralMaterial, lambertian_material, random_material
 from vrneural.runtime.lights import MAX_INTENSITY, MOTIONS, PointLight, default_lights
 
@@ -85,6 +85,9 @@ class Scene:
 #: far beyond any VR scene, and far inside float32 (what the GPU gets, after the floating origin)
 MAX_COORD = 1e7
 MAX_SCALE = 1e6
+#: Smallest object scale: a nanometre per mesh unit. Far smaller ones vanish in float32 (below
+#: about 1e-45 the model matrix became 0 and its normal matrix a singular-matrix traceback)
+MIN_SCALE = 1e-9
 
 
 def euler_matrix(deg) -> np.ndarray:
@@ -124,8 +127,8 @@ class _Fields:
         bad = not math.isfinite(v) or (lo is not None and (v <= lo if lo_open else v < lo))
         bad = bad or (hi is not None and v > hi)
         if bad:
-            lo_s = "-inf" if lo is None else f"{lo:g}"
-            hi_s = "inf" if hi is None else f"{hi:g}"
+            lo_s = "-inf" if lo is None else number_text(lo)
+            hi_s = "inf" if hi is None else number_text(hi)
             br = "(" if lo_open else "["
             raise self.err(
                 key,
@@ -217,7 +220,7 @@ def _material(src: str, path: str, t: dict, base: Path) -> MaterialDesc:
     if proc == "random":
         if "albedo" in t:
             raise f.err("albedo", 'only applies to procedural = "lambertian"')
-        mat = random_material(f.num("seed", 0, 0, integer=True))
+        mat = random_material(f.num("seed", 0, 0, SEED_MAX, integer=True))  # the CLI's seeds
     else:
         if "seed" in t:
             raise f.err("seed", 'only applies to procedural = "random"')
@@ -241,7 +244,9 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
             p = Path(head)
             p = p if p.is_absolute() else base / p
             if not p.is_file():
-                raise h.err("path", f"= {head!r}: pose log not found ({p})")
+                raise h.err(
+                    "path", f"= {head!r}: pose log not found ({p}); the built-in path is orbit"
+                )
             head = str(p)
     objs_raw = data.get("objects", [])
     if not isinstance(objs_raw, list) or not objs_raw:
@@ -267,7 +272,7 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         model = model_matrix(
             f.vec("position", (0, 0, 0), bound=MAX_COORD),
             f.vec("rotation", (0, 0, 0), bound=1e6),
-            f.num("scale", 1.0, 0.0, MAX_SCALE, lo_open=True),
+            f.num("scale", 1.0, MIN_SCALE, MAX_SCALE),
         )
         mat = _material(src, f"objects[{i}].material", o.get("material", {}), base)
         tres, floor = (_texture_res(f, k) for k in ("texture_res", "min_texture_res"))
@@ -284,8 +289,10 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
             name = f.str("name")
             if name in taken:
                 raise f.err("name", f"= {name!r} is already another object's; names are unique")
-        else:  # the mesh's stem, numbered where several objects show one mesh: "sphere 2"
-            name = stem = Path(mesh).stem
+        else:  # the mesh's stem (and part: "room:chair"), numbered where several objects
+            # show one mesh: "sphere 2"
+            file, colon, part = Path(mesh).name.partition(":")
+            name = stem = Path(file).stem + colon + part
             k = 1
             while name in taken:
                 k += 1
@@ -351,7 +358,12 @@ def load_scene(path: str | Path) -> Scene:
     except tomllib.TOMLDecodeError as e:
         raise VrnError(f"{p}: invalid TOML ({e})") from None
     except UnicodeDecodeError:
-        raise VrnError(f"{p}: not a text file") from None
+        hint = ""
+        if p.suffix.lower() == ".vrnm":
+            hint = "; a runtime pack goes to --pack (the built-in scene with that material)"
+        elif p.suffix.lower() in (".obj", ".ply", ".stl", ".glb", ".gltf", ".off"):
+            hint = "; a mesh goes into a scene file's [[objects]] mesh = ..."
+        raise VrnError(f"{p}: not a text file (a scene is TOML){hint}") from None
     return parse_scene(data, str(p), p.parent.resolve())  # messages name it as given
 
 
@@ -378,7 +390,7 @@ def builtin_pack(name: str) -> Path:
     if not p.is_file():
         raise VrnError(
             f"built-in scene: material pack {p} is missing; rebuild the bundled packs with "
-            "`.venv/bin/python demo/make_assets.py` (about 30 min) or reinstall vrneural"
+            "`.venv/bin/python demo/make_assets.py` (about 15 min) or reinstall vrneural"
         )
     return p
 
@@ -410,6 +422,8 @@ def builtin_scene(n_lights: int = 3) -> Scene:
     on a plain floor; the first ``n_lights`` of three point lights (one circling slowly), the
     quest3 profile and the built-in head orbit. Same as ``demo/scene.toml``."""
     from vrneural.runtime.assets import get_mesh
+
+    check_int("builtin_scene: n_lights", n_lights, 0, 64)  # `run --lights`' range
 
     def fit(name: str, size: float) -> float:  # scale so the mesh's largest extent is ``size``
         p = get_mesh(name).positions

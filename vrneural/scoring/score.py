@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -175,6 +176,12 @@ def score(
     L, V, H, W = btf.shape
     if H % 2 or W % 2:
         raise VrnError(f"{btf.path}: resolution {H}x{W} must be even (packs shade 2x2 blocks)")
+    for p in pairs:  # an index beyond L V was an IndexError, a negative one wrapped around
+        if not isinstance(p, numbers.Integral) or isinstance(p, bool) or not 0 <= p < L * V:
+            raise VrnError(
+                f"score: pair {p!r} is out of range; allowed whole numbers [0, {L * V - 1}] "
+                f"(light * {V} + view)"
+            )
     uv = texel_blocks(H, W)
     accs = [[_Acc() for _ in precs] for _ in mats]
     gt_sum = 0.0
