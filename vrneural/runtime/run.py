@@ -464,7 +464,7 @@ def human_summary(sm: dict) -> str:
         f"{sm['mlp_evaluations_per_frame'].get('median', 0):.0f} (median)",
     ]
     objs = [o for o in sm["scene"]["objects"] if "texture_res" in o]
-    if objs:  # each neural object's own texture (texture_res / min_texture_res) and atlas
+    if objs and texture:  # each neural object's own texture and atlas (pixel modes: unused)
         lines.append(
             "objects   "
             + ", ".join(
