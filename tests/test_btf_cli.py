@@ -69,6 +69,17 @@ def test_show_writes_png(small_btf, tmp_path, capsys):
     assert main(["btf", "show", str(small_btf), "-o", str(out), "--texel", "1", "2"]) == 0
     img = iio.imread(out)
     assert img.ndim == 3 and img.shape[0] > 500 and img.std() > 5
+    # NaN values: `info` warned, `show` drew them without a word
+    nan = tmp_path / "nan.btf"
+    nan.write_bytes(small_btf.read_bytes())
+    offset = read_btf(nan).values.offset  # the first value (write_btf refuses NaN)
+    with open(nan, "r+b") as f:
+        f.seek(offset)
+        f.write(np.array([np.nan], np.float16).tobytes())
+    from vrneural.btf.sheet import BtfWarning
+
+    with pytest.warns(BtfWarning, match="nan.btf: 1 NaN/Inf values"):
+        assert main(["btf", "show", str(nan), "-o", str(tmp_path / "nan.png")]) == 0
 
 
 def _one_line_error(r, *needles):

@@ -142,6 +142,8 @@ def test_parse_header_rejects_directions_btf_extractor_cannot_tell_apart(
         ({2: ("rad", 0.5, np.inf)}, ["view direction 2 has a non-finite angle", "inf"]),
         ({3: ("rad", 3.0, 0.0)}, ["view direction 3 (theta 171.89 deg", "below the horizon"]),
         ({4: (90.5, 10.0)}, ["view direction 4 (theta 90.50 deg", "theta <= 90 deg"]),
+        # degrees written where radians belong (857 deg is "below the horizon" too)
+        ({1: ("rad", 15.0, 0.0)}, ["view direction 1 has theta 15, not an angle in radians"]),
     ],
 )
 def test_parse_header_rejects_bad_angles(tmp_path, rng, capsys, repl, needles):
@@ -215,3 +217,33 @@ def test_resume_from_another_source_names_it(tmp_path, rng, capsys, monkeypatch)
     assert partial.read_bytes() == before
     assert _import(a, out, "--resume") == 0  # the same source continues it
     assert read_btf(out).shape == (6, 6, 5, 7)
+
+
+@needs_extractor
+def test_bad_values_odd_sizes_and_output_names(tmp_path, rng, capsys):
+    """From a user's trial: a source with a NaN left a .partial that the next run called "an
+    interrupted run" (and --resume stopped at the same slice again); values clamped to the
+    float16 maximum went unmentioned; an odd size imported silently and only eval refused it;
+    `-o out.png` wrote a BTF named out.png; a raw UBO2014 file given to a reader got no hint."""
+    import struct
+
+    src, _, _ = _fixture(tmp_path, rng)  # 5 x 7 texels
+    data = bytearray(src.read_bytes())
+    assert _import(src, tmp_path / "o.png") == 2
+    assert "o.png: output must end in .btf" in capsys.readouterr().err
+    assert not (tmp_path / "o.png").exists()
+    data[-4:] = struct.pack("<f", 1e30)  # the last stored float: some texels far above 65504
+    (tmp_path / "huge_ubo.btf").write_bytes(data)
+    assert _import(tmp_path / "huge_ubo.btf", tmp_path / "h.btf") == 0
+    err = capsys.readouterr().err
+    assert "values above 65504 (the float16 maximum) to 65504" in err, err
+    assert "h.btf: 5x7 texels, odd: packs shade 2x2 blocks" in err
+    data[-4:] = struct.pack("<f", float("nan"))
+    (tmp_path / "nan_ubo.btf").write_bytes(data)
+    assert _import(tmp_path / "nan_ubo.btf", tmp_path / "n.btf") == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "non-finite values at light" in err
+    assert "nothing was written (no n.btf, no .partial)" in err
+    assert sorted(p.name for p in tmp_path.glob("n.btf*")) == []
+    with pytest.raises(VrnError, match=r"is a UBO2014 BTF .*`vrneural btf import UBO.btf"):
+        read_btf(src)

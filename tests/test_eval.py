@@ -110,6 +110,11 @@ def test_held_out_split_and_another_btf(tmp_path, capsys):
     assert "trained on another BTF" in doc["warnings"][0]
     assert doc["packs"][0]["scores"][0]["l1_held_out"] is None
     assert "trained on another BTF" in capsys.readouterr().err
+    # results.md gives them a section (they were bullets under "Worst slices")
+    from vrneural.scoring.run import markdown
+
+    md = markdown(doc)
+    assert md.index("## Worst slices") < md.index("## Warnings\n\n- ") < md.index("another BTF")
 
 
 def test_cli_writes_results_and_refuses_to_overwrite(tmp_path, capsys):

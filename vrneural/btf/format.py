@@ -251,6 +251,14 @@ class BtfWriter:
             f.write(f"{view}\n")
         self.done.add(view)
 
+    def discard(self) -> None:
+        """Remove the unfinished files: for a source that cannot be converted, whose
+        ``--resume`` would only stop at the same place again."""
+        if hasattr(self, "values"):
+            del self.values
+        self.partial.unlink(missing_ok=True)
+        self.progress_file.unlink(missing_ok=True)
+
     def finalize(self) -> Path:
         self.values.flush()
         del self.values

@@ -157,6 +157,11 @@ def _check_directions(p: Path, kind: str, angles: list) -> None:
                 f"{p}: {kind} direction {i} has a non-finite angle (theta {a[i, 0]}, phi "
                 f"{a[i, 1]} rad); UBO2014 angles must be finite numbers"
             )
+        if abs(a[i, 0]) > 2 * np.pi:  # no radian value: degrees, most likely
+            raise VrnError(
+                f"{p}: {kind} direction {i} has theta {a[i, 0]:g}, not an angle in radians "
+                "(UBO2014 stores radians; were degrees written?)"
+            )
         if np.cos(a[i, 0]) < -1e-6:  # z < 0 (the margin lets float32 pi/2 through)
             raise VrnError(
                 f"{p}: {shown(i)} is below the horizon; directions must have theta <= 90 deg "
@@ -264,7 +269,7 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
         meta,
         resume=resume,
     )
-    neg = 0
+    neg = huge = 0
     bar = tqdm(total=V, initial=len(w.done), desc="import views", unit="view", disable=not progress)
     try:
         for v in range(V):
@@ -273,10 +278,16 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
             for li in range(L):
                 img = np.asarray(btf.angles_to_image(*light_ang[li], *view_ang[v]), np.float32)
                 rgb = img[..., ::-1]  # BGR -> RGB
-                if not np.isfinite(rgb).all():
-                    raise VrnError(f"{src}: non-finite values at light {li}, view {v}")
+                if not np.isfinite(rgb).all():  # --resume would stop here again
+                    bar.close()
+                    w.discard()
+                    raise VrnError(
+                        f"{src}: non-finite values at light {li}, view {v}; nothing was written "
+                        f"(no {Path(out).name}, no .partial)"
+                    )
                 neg += int((rgb < 0).sum())
-                w.values[li, v] = np.clip(rgb, 0.0, 65504.0).astype(np.float16)
+                huge += int((rgb > F16_MAX).sum())
+                w.values[li, v] = np.clip(rgb, 0.0, F16_MAX).astype(np.float16)
             w.mark_done(v)
             bar.update(1)
     except KeyboardInterrupt:
@@ -286,7 +297,22 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
     bar.close()
     if neg:
         print(f"{src}: clamped {neg} negative values to 0", file=sys.stderr)
+    if huge:
+        print(
+            f"{src}: clamped {huge} values above {F16_MAX:g} (the float16 maximum) to {F16_MAX:g}",
+            file=sys.stderr,
+        )
+    if h_img % 2 or w_img % 2:
+        print(
+            f"warning: {out}: {h_img}x{w_img} texels, odd: packs shade 2x2 blocks, so teach, "
+            "distill and eval refuse it; crop it to an even size",
+            file=sys.stderr,
+        )
     return w.finalize()
+
+
+#: largest float16 value: the BTF format stores float16
+F16_MAX = 65504.0
 
 
 def write_dfmf(path, values: np.ndarray, light_angles: np.ndarray, view_angles: np.ndarray):

@@ -46,7 +46,7 @@ def register(sub) -> None:
     i = bsub.add_parser(
         "info",
         help="shape, directions, value range, size and metadata",
-        description="shape, directions, value range, size and metadata.",
+        description="Shape, directions, value range, size and metadata.",
     )
     i.add_argument("file", help="a .btf file")
     i.add_argument("--json", action="store_true", help="print machine-readable JSON")
@@ -127,23 +127,28 @@ def run_synth(args) -> int:
     return 0
 
 
-def run_info(args) -> int:
-    from vrneural.btf.format import read_btf
-    from vrneural.btf.sheet import summary
-
-    s = summary(read_btf(args.file))
+def _warn_nonfinite(file: str, s: dict) -> None:
+    """Warn about NaN/Inf values (``s``: :func:`vrneural.btf.sheet.summary`)."""
     if s["nonfinite_values"]:
         import warnings
 
         from vrneural.btf.sheet import BtfWarning
 
         warnings.warn(
-            f"{args.file}: {s['nonfinite_values']} NaN/Inf values"
+            f"{file}: {s['nonfinite_values']} NaN/Inf values"
             f"{' in the sampled slices' if s['value_range_sampled'] else ''}; training refuses "
             "them (re-synthesise or re-import the BTF)",
             BtfWarning,
-            stacklevel=1,
+            stacklevel=2,
         )
+
+
+def run_info(args) -> int:
+    from vrneural.btf.format import read_btf
+    from vrneural.btf.sheet import summary
+
+    s = summary(read_btf(args.file))
+    _warn_nonfinite(args.file, s)
     if args.json:
         print(json.dumps(s, indent=2, default=str))
         return 0
@@ -189,6 +194,9 @@ def run_show(args) -> int:
         check_range("--texel X", args.texel[0], 0, W - 1)
         check_range("--texel Y", args.texel[1], 0, H - 1)
     out = check_output(args.output, args.force)
+    from vrneural.btf.sheet import summary
+
+    _warn_nonfinite(args.file, summary(btf))  # the sheet shows them as black or white
     print(contact_sheet(btf, out, tuple(args.texel) if args.texel else None))
     for p in sheet_panels(btf):  # say so when this BTF's directions cannot tell pairs apart
         if len(p.names) > 1:
@@ -205,9 +213,12 @@ def run_show(args) -> int:
 
 def run_import(args) -> int:
     from vrneural.btf.ubo2014 import import_ubo, load_extractor, parse_header
+    from vrneural.errors import VrnError
     from vrneural.formats.atomic import check_outputs, check_resume_force
 
     check_resume_force(args.resume, args.force)
+    if not args.output.endswith(".btf"):  # as btf synth
+        raise VrnError(f"{args.output}: output must end in .btf")
     load_extractor()
     parse_header(args.file)
     (out,) = check_outputs([args.output], args.force, inputs=[args.file])

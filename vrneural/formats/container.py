@@ -217,6 +217,11 @@ def read_container(
                     else ""
                 )
                 raise VrnError(f"{p}: is {other}, expected a {what}{hint}")
+            if got_magic.startswith(b"!DFMF"):  # a measured UBO2014 BTF, not converted yet
+                raise VrnError(
+                    f"{p}: is a UBO2014 BTF (magic {got_magic!r}), not a {what}; convert it "
+                    "with `vrneural btf import UBO.btf -o OUT.btf`"
+                )
             raise VrnError(f"{p}: wrong magic {got_magic!r}, not a {what} (expected {magic!r})")
         if version not in versions:
             raise VrnError(

@@ -375,6 +375,7 @@ def markdown(doc: dict) -> str:
             worst = ", ".join(f"l{w['light']} v{w['view']} ({w['angles']}) {w['l1']:.4g}"
                               for w in s["worst"])  # fmt: skip
             md.append(f"- {p['name']} ({s['precision']}): {worst}")
-    md += [f"- warning: {w}" for w in doc["warnings"]]
+    if doc["warnings"]:  # their own section, not bullets of the worst slices
+        md += ["", "## Warnings", "", *[f"- {w}" for w in doc["warnings"]]]
     md += ["", f"Run time {doc['seconds']:.1f} s. Figure: slices.png. Raw records: results.json."]
     return "\n".join(md)

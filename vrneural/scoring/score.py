@@ -83,7 +83,9 @@ def pick_slices(spec: str, n_pairs: int, texels_per_slice: int) -> list[int]:
                 f"--slices = {spec!r}: expected 'all', 'auto' or a whole number of slices"
             ) from None
         if not 1 <= n <= n_pairs:
-            raise VrnError(f"--slices = {n} is out of range: the BTF has 1 to {n_pairs} slices")
+            raise VrnError(
+                f"--slices = {n} is out of range; allowed [1, {n_pairs}] (the BTF's slices)"
+            )
     if n >= n_pairs:
         return list(range(n_pairs))
     # drawn, not strided: pair index l * V + v in even steps would pair few views with lights
