@@ -56,3 +56,15 @@ def test_info_human():
     assert r.returncode == 0, r.stderr
     for word in ("adapter", "features", "limits", "MLP f32", "versions"):
         assert word in r.stdout
+
+
+def test_ctrl_c_while_the_commands_load_is_one_line(monkeypatch, capsys):
+    """Ctrl-C in the first half second (the subcommand modules importing) was a traceback."""
+    import vrneural.cli as cli
+
+    def interrupted():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "build_parser", interrupted)
+    assert cli.main(["info"]) == 130
+    assert capsys.readouterr().err == "vrneural: interrupted\n"

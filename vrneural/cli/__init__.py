@@ -84,7 +84,11 @@ def _command_parser(
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    parser = build_parser()
+    try:  # the subcommand modules are imported here: Ctrl-C at start-up, no traceback
+        parser = build_parser()
+    except KeyboardInterrupt:
+        print("vrneural: interrupted", file=sys.stderr)
+        return 130
     args, extra = parser.parse_known_args(argv)
     if extra:  # named by the subcommand's parser: its usage line, not the top level's
         _command_parser(parser, args).error(f"unrecognized arguments: {' '.join(extra)}")
