@@ -25,7 +25,7 @@ from vrneural.errors import VrnError
 from vrneural.formats.container import read_container, write_container
 from vrneural.warn import VrnWarning
 
-ATLAS_CODE_VERSION = 4
+ATLAS_CODE_VERSION = 5
 MAGIC = b"VRNATLAS"
 FORMAT_VERSION = 1
 
