@@ -401,10 +401,12 @@ def builtin_material(key: str) -> MaterialDesc:
 
     spec = BUILTIN_MATERIALS[key]
     stem = spec["pack"].removesuffix(".vrnm")
-    desc = MaterialDesc("neural", read_vrnm(builtin_pack(spec["pack"])), stem, spec["scale"])
-    teacher = Path(str(builtin_pack(spec["pack"]))).with_name(f"{stem}.teacher.vrnm")
+    pack = Path(str(builtin_pack(spec["pack"])))
+    # sources by path, as for a scene's or --pack's packs (summary.json had bare names here)
+    desc = MaterialDesc("neural", read_vrnm(pack), str(pack), spec["scale"])
+    teacher = pack.with_name(f"{stem}.teacher.vrnm")
     if teacher.is_file():
-        desc.reference, desc.reference_source = read_vrnm(teacher), teacher.name
+        desc.reference, desc.reference_source = read_vrnm(teacher), str(teacher)
     return desc
 
 
