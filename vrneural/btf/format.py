@@ -25,6 +25,8 @@ from vrneural.formats.container import ContainerWriter, read_container, write_co
 
 BTF_MAGIC = b"VRNBTF"
 BTF_VERSION = 1
+#: largest stored value: BTF values are float16, clamped into [0, F16_MAX] when written
+F16_MAX = 65504.0
 CONVENTION = "cos_inside"
 #: header keys a writer's ``meta`` may not set: the container's own (array table, file size,
 #: per-array CRC32s, the unfinished-write mark) and the BTF convention
@@ -126,7 +128,7 @@ def write_btf(
     if not np.isfinite(values).all():
         raise VrnError(f"{path}: BTF values contain NaN or Inf")
     header = _header(path, meta)
-    v16 = np.clip(values, 0, 65504).astype(np.float16)
+    v16 = np.clip(values, 0, F16_MAX).astype(np.float16)
     return write_container(
         path,
         BTF_MAGIC,

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.btf.dirs import direction_set
-from vrneural.btf.format import BtfWriter, check_partial_settings
+from vrneural.btf.format import F16_MAX, BtfWriter, check_partial_settings
 from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt
 from vrneural.errors import VrnError, check_choice, check_range, check_seed
@@ -142,7 +142,7 @@ def synthesize(
                 vals = render_view(scene, dirs[v], samples, (cfg.res, cfg.res))
                 if not np.isfinite(vals).all():
                     raise VrnError(f"internal error: non-finite BTF values at view {v}")
-                w.values[:, v] = np.clip(vals, 0.0, 65504.0).astype(np.float16)
+                w.values[:, v] = np.clip(vals, 0.0, F16_MAX).astype(np.float16)
                 w.mark_done(v)
                 done_views += 1
                 bar.update(1)

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.btf.dirs import spherical
-from vrneural.btf.format import BtfWriter, check_partial_settings
+from vrneural.btf.format import F16_MAX, BtfWriter, check_partial_settings
 from vrneural.errors import VrnError
 
 INSTALL_HINT = "pip install 'vrneural[ubo]' (or: pip install btf-extractor)"
@@ -309,10 +309,6 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
             file=sys.stderr,
         )
     return w.finalize()
-
-
-#: largest float16 value: the BTF format stores float16
-F16_MAX = 65504.0
 
 
 def write_dfmf(path, values: np.ndarray, light_angles: np.ndarray, view_angles: np.ndarray):

@@ -358,10 +358,12 @@ def load_scene(path: str | Path) -> Scene:
     except tomllib.TOMLDecodeError as e:
         raise VrnError(f"{p}: invalid TOML ({e})") from None
     except UnicodeDecodeError:
+        from vrneural.atlas.io import MESH_SUFFIXES
+
         hint = ""
         if p.suffix.lower() == ".vrnm":
             hint = "; a runtime pack goes to --pack (the built-in scene with that material)"
-        elif p.suffix.lower() in (".obj", ".ply", ".stl", ".glb", ".gltf", ".off"):
+        elif p.suffix.lower() in MESH_SUFFIXES:
             hint = "; a mesh goes into a scene file's [[objects]] mesh = ..."
         raise VrnError(f"{p}: not a text file (a scene is TOML){hint}") from None
     return parse_scene(data, str(p), p.parent.resolve())  # messages name it as given
