@@ -68,3 +68,25 @@ def test_ctrl_c_while_the_commands_load_is_one_line(monkeypatch, capsys):
     monkeypatch.setattr(cli, "build_parser", interrupted)
     assert cli.main(["info"]) == 130
     assert capsys.readouterr().err == "vrneural: interrupted\n"
+
+
+def test_config_switches_off_by_default_have_no_negative_form():
+    import argparse
+    import dataclasses
+
+    from vrneural.config import add_config_args, config_from_args, opt
+
+    @dataclasses.dataclass
+    class C:
+        force: bool = opt(False, "overwrite")
+        progress: bool = opt(True, "bar")
+
+    p = argparse.ArgumentParser()
+    add_config_args(p, C)
+    helps = p.format_help()
+    assert "--force" in helps and "--no-force" not in helps and "--no-progress" in helps
+    c = config_from_args(C, p.parse_args(["--force", "--no-progress"]))
+    assert c.force is True and c.progress is False
+    assert config_from_args(C, p.parse_args([])) == C()
+    with pytest.raises(SystemExit):
+        p.parse_args(["--no-force"])

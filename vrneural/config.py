@@ -30,7 +30,11 @@ def opt(default, help: str, **kw):
 def add_config_args(
     parser: argparse.ArgumentParser, cls, skip: tuple[str, ...] = (), prefix: str = ""
 ) -> None:
-    """Add one ``--field-name`` option per dataclass field of ``cls`` (bools become flags)."""
+    """Add one ``--field-name`` option per dataclass field of ``cls``.
+
+    A bool that is off by default becomes a switch (``--force``); one that is on by default
+    also gets ``--no-<name>`` (``--no-progress``).
+    """
     hints = typing.get_type_hints(cls)
     for f in dataclasses.fields(cls):
         if f.name in skip or f.metadata.get("cli") is False:
@@ -39,10 +43,13 @@ def add_config_args(
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
         tp = hints[f.name]
         help_ = f.metadata.get("help", "")
+        if tp is bool and not default:  # an off switch: --force, not --force/--no-force
+            parser.add_argument(flag, dest=f.name, action="store_true", help=help_)
+            continue
         if not re.search(r"default\s*[:)]", help_):  # a help that explains its default: once
             shown = "none" if default in ("", None) else default
             help_ += f" (default: {shown})"
-        if tp is bool:
+        if tp is bool:  # on by default: --no-<name> turns it off
             parser.add_argument(
                 flag,
                 dest=f.name,
