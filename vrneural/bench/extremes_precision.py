@@ -12,7 +12,8 @@ import time
 import numpy as np
 
 from vrneural.bench.extremes_fixtures import direction, finite_nonneg, quad_atlas, quad_mesh
-from vrneural.bench.extremes_shading import F16_MAX, F16_MIN_NORMAL, GpuShade
+from vrneural.bench.extremes_shading import GpuShade
+from vrneural.formats.f16 import F16_MAX, F16_MIN_NORMAL
 from vrneural.material import lambertian_material, random_material
 from vrneural.runtime import reference as ref
 

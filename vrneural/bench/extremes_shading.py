@@ -20,8 +20,6 @@ from vrneural.bench.extremes_fixtures import (
 from vrneural.material import lambertian_material, material_forward, random_material
 from vrneural.runtime import reference as ref
 
-F16_MAX = 65504.0
-F16_MIN_NORMAL = 2.0**-14  # 6.1e-5: smaller radiance is subnormal in rgba16float
 GRAZING = 89.99  # degrees
 
 

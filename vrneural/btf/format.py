@@ -22,11 +22,10 @@ import numpy as np
 
 from vrneural.errors import VrnError
 from vrneural.formats.container import ContainerWriter, read_container, write_container
+from vrneural.formats.f16 import F16_MAX
 
 BTF_MAGIC = b"VRNBTF"
 BTF_VERSION = 1
-#: largest stored value: BTF values are float16, clamped into [0, F16_MAX] when written
-F16_MAX = 65504.0
 CONVENTION = "cos_inside"
 #: header keys a writer's ``meta`` may not set: the container's own (array table, file size,
 #: per-array CRC32s, the unfinished-write mark) and the BTF convention

@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.btf.dirs import spherical
-from vrneural.btf.format import F16_MAX, BtfWriter, check_partial_settings
+from vrneural.btf.format import BtfWriter, check_partial_settings
+from vrneural.formats.f16 import F16_MAX
 from vrneural.errors import VrnError
 
 INSTALL_HINT = "pip install 'vrneural[ubo]' (or: pip install btf-extractor)"

@@ -16,9 +16,8 @@ import torch
 from vrneural.distill.data import SliceData
 from vrneural.errors import VrnError
 from vrneural.material import NeuralMaterial, half_vector, material_forward, sample_bilinear_wrap
+from vrneural.formats.f16 import F16_MAX, F16_MIN_NORMAL
 
-F16_MAX = 65504.0
-F16_NORMAL_MIN = 6.103515625e-05
 RANGE_PAIRS = 16  # training slices used for activation ranges
 
 
@@ -30,7 +29,7 @@ def value_range(a: np.ndarray) -> dict:
     return {
         "max_abs": m,
         "headroom": float(F16_MAX / m) if m > 0 else None,
-        "frac_below_f16_normal": float((nz < F16_NORMAL_MIN).mean()) if nz.size else 0.0,
+        "frac_below_f16_normal": float((nz < F16_MIN_NORMAL).mean()) if nz.size else 0.0,
         "frac_zero": float(1 - nz.size / max(a.size, 1)),
     }
 

@@ -13,8 +13,7 @@ import numpy as np
 
 from vrneural.atlas.types import EMPTY, Atlas
 from vrneural.material import NeuralMaterial, material_forward
-
-F16_MAX = 65504.0
+from vrneural.formats.f16 import F16_MAX
 
 
 def barycentric_2d(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
