@@ -173,6 +173,55 @@ def test_bench_user_errors_are_one_line(capsys, tmp_path):
     assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["mine.txt"]
 
 
+@pytest.mark.gpu
+def test_bench_options_are_checked_before_anything_is_replaced(capsys, tmp_path):
+    """Empty lists, tradeoff's base setting and shimmer length, and the limits `run` has: one
+    line each, before --force empties the folder (they crashed after it, deleting old results)."""
+    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+
+    o = tmp_path / "o"
+    for bench in ("frames", "tradeoff", "extremes"):
+        make_output_dir(o / bench, f"bench {bench}")
+        (o / bench / "results.json").write_text("old")
+        seal_output_dir(o / bench, f"bench {bench}")
+    cases = [
+        (["frames", "--schedules", ""], "--schedules is empty; choose from burst, staggered"),
+        (["frames", "--schedules", "burst,"], "--schedules = 'burst,' has an empty item"),
+        (
+            ["frames", "--reuse", "1001"],
+            "--reuse = '1001': 1001 is out of range; allowed [0, 1000]",
+        ),
+        (["frames", "--lights", "65"], "--lights = 65 is out of range; allowed [1, 64]"),
+        (["tradeoff", "--base-res", "201"], "--base-res = 201 must be even"),
+        (["tradeoff", "--base-res", "7"], "--base-res = 7 is out of range; allowed [8, "),
+        (
+            ["tradeoff", "--base-reuse", "-1"],
+            "--base-reuse = -1 is out of range; allowed [0, 1000]",
+        ),
+        (["tradeoff", "--shimmer-frames", "2"], "--shimmer-frames = 2 is too few; allowed 0"),
+        (["extremes", "--only", ""], "--only is empty"),
+        (["extremes", "--only", "directions,"], "--only = 'directions,' has an empty item"),
+    ]
+    for argv, want in cases:
+        bench = argv[0]
+        msg = _err(capsys, [*argv, "--quick", "--force", "--out", str(o / bench)])
+        assert msg.startswith(f"vrneural bench {bench}: error: {want}"), msg
+        assert (o / bench / "results.json").read_text() == "old"
+    assert "allowed [1, 64]" in _err(capsys, ["lights", "--lights", "65", "--out", str(o / "l")])
+
+
+@pytest.mark.gpu
+def test_a_bench_that_fails_in_its_set_up_leaves_no_folder(capsys, tmp_path):
+    """A user error found once --out exists (the bench scene does not fit 8^2 texels) takes
+    back the new folder, as `run` leaves nothing; a rerun needs no --force. The message names
+    the bench's scene and the option that set the resolution."""
+    o = tmp_path / "f"
+    argv = ["frames", "--texture-res", "8", "--eye-res", "32x32", "--no-screen", "--warmup", "0"]
+    msg = _err(capsys, [*argv, "--no-progress", "--out", str(o)])
+    assert "bench scene: objects[0] (sphere) at 8^2 texels (--texture-res): " in msg, msg
+    assert not o.exists() and not tmp_path.joinpath("f").exists()
+
+
 def test_a_bench_that_fails_after_making_its_folder_still_tells_your_files_apart(capsys, tmp_path):
     """tradeoff fails on free space once --out exists; the CLI seals it all the same, so
     notes added afterwards stop a later --force instead of being deleted by it."""
@@ -216,3 +265,35 @@ def test_bench_output_of_one_command_is_not_replaced_by_another(capsys, tmp_path
 def test_tradeoff_missing_packs_is_one_line(capsys, tmp_path):
     msg = _err(capsys, ["tradeoff", "--packs", str(tmp_path), "--out", str(tmp_path / "o")])
     assert "--packs" in msg and "teacher.vrnm" in msg and "not found" in msg
+
+
+@pytest.mark.gpu
+def test_sigterm_stops_a_bench_as_ctrl_c_does(tmp_path):
+    """`kill`/`timeout` (SIGTERM) of a bench without a stopping point of its own: exit 130 with
+    one line, and its new folder, which holds nothing yet, is taken back (it was exit 143 and
+    an unsealed folder that only a manual delete could clear)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    o = tmp_path / "k"
+    argv = ["bench", "kernels", "--texels", "65536", "--repeats", "50", "--threads", "1"]
+    env = {**os.environ, "XDG_RUNTIME_DIR": os.environ.get("XDG_RUNTIME_DIR", "/tmp")}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "vrneural", *argv, "--no-progress", "--out", str(o)],
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    t0 = time.monotonic()
+    while not (o / ".vrneural-output").exists() and time.monotonic() - t0 < 120:
+        assert proc.poll() is None, proc.stderr.read()
+        time.sleep(0.05)
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGTERM)
+    err = proc.communicate(timeout=120)[1]
+    assert proc.returncode == 130, err
+    assert err.strip() == "vrneural bench kernels: interrupted"
+    assert not o.exists()

@@ -20,7 +20,7 @@ from vrneural.bench import extremes_settings as sett
 from vrneural.bench import extremes_shading as shd
 from vrneural.bench import extremes_training as trn
 from vrneural.bench.extremes_fixtures import run_case
-from vrneural.config import opt
+from vrneural.config import is_explicit, opt
 
 W, R = "works", "rejected"
 #: (case, group, function, expected outcome, what it checks)
@@ -86,12 +86,18 @@ class ExtremesConfig:
     progress: bool = opt(True, "show a progress bar (--no-progress: none)")
 
 
-def selected(only: str) -> list:
+def selected(only: str, given: bool = False) -> list:
+    """The cases ``--only`` names (all of them when it is not ``given`` and empty)."""
     from vrneural.errors import VrnError
 
-    if not only:
+    if not only and not given:
         return CASES
-    keys = {t.strip() for t in only.split(",") if t.strip()}
+    items = [t.strip() for t in only.split(",")]
+    if not all(items):
+        what = "is empty" if not any(items) else f"= {only!r} has an empty item"
+        groups = ", ".join(sorted({c[1] for c in CASES}))
+        raise VrnError(f"--only {what}; name cases or groups ({groups}), or leave it out")
+    keys = set(items)
     known = {c[0] for c in CASES} | {c[1] for c in CASES}
     bad = sorted(keys - known)
     if bad:
@@ -108,7 +114,7 @@ def run_extremes(cfg: ExtremesConfig, out: str) -> dict:
     from vrneural.bench.extremes_report import write_report
     from vrneural.bench.report import header, prepare_out
 
-    cases = selected(cfg.only)
+    cases = selected(cfg.only, is_explicit(cfg, "only"))
     root = prepare_out(out, cfg.force, "extremes")
     t0 = time.perf_counter()
     doc = header("extremes", cfg)

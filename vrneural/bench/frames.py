@@ -47,17 +47,17 @@ class FramesConfig:
 
 def run_frames(cfg: FramesConfig) -> dict:
     from vrneural.errors import check_range
-    from vrneural.runtime.config import parse_res
+    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
     from vrneural.runtime.profiles import get_profile
     from vrneural.runtime.schedule import SCHEDULES
 
     c = cfg.resolved()
     texs = rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True)
-    reuses = rp.int_list("--reuse", c.reuse, 0, 64)
+    reuses = rp.int_list("--reuse", c.reuse, 0, REUSE_MAX)
     scheds = rp.choice_list("--schedules", c.schedules, SCHEDULES)
     eye_res = parse_res(c.eye_res)
     check_range("--eyes", c.eyes, 1, 2)
-    check_range("--lights", c.lights, 1, 8)
+    check_range("--lights", c.lights, 1, LIGHTS_MAX)
     check_range("--cycles", c.cycles, 1, 100)
     check_range("--warmup", c.warmup, 0.0, 60.0)
     check_range("--min-frames", c.min_frames, 1, 1000)

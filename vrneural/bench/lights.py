@@ -21,7 +21,7 @@ class LightsConfig:
     """`vrneural bench lights`."""
 
     out: str = opt("bench-lights", "output directory", cli=False)
-    lights: str = opt("1,2,3,4,5,6,7,8", "light counts (comma-separated, 1..8)")
+    lights: str = opt("1,2,3,4,5,6,7,8", "light counts (comma-separated, 1..64)")
     texture_res: int = opt(1200, "radiance texture side")
     reuse: int = opt(4, "update interval N")
     schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
@@ -43,13 +43,13 @@ class LightsConfig:
 
 def run_lights(cfg: LightsConfig) -> dict:
     from vrneural.errors import check_range
-    from vrneural.runtime.config import parse_res
+    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
     from vrneural.runtime.profiles import get_profile
 
     c = cfg.resolved()
-    counts = rp.int_list("--lights", c.lights, 1, 8)
+    counts = rp.int_list("--lights", c.lights, 1, LIGHTS_MAX)
     rp.check_texture_res(c.texture_res)
-    check_range("--reuse", c.reuse, 0, 64)
+    check_range("--reuse", c.reuse, 0, REUSE_MAX)
     check_range("--eyes", c.eyes, 1, 2)
     check_range("--cycles", c.cycles, 1, 100)
     check_range("--warmup", c.warmup, 0.0, 60.0)
@@ -58,7 +58,7 @@ def run_lights(cfg: LightsConfig) -> dict:
     t0 = time.perf_counter()
     prof = get_profile("quest3")
     doc = rp.header("lights", c)
-    scene = timing.bench_scene(8)
+    scene = timing.bench_scene(max(counts))
     n = timing.frames_for(c.reuse, c.cycles, 1)
     bar = timing.progress(n * len(counts), "bench lights", c.progress)
     for k in counts:

@@ -58,14 +58,14 @@ def squares_scene(k: int, n_lights: int):
 
 def run_materials(cfg: MaterialsConfig) -> dict:
     from vrneural.errors import check_range
-    from vrneural.runtime.config import parse_res
+    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
     from vrneural.runtime.profiles import get_profile
 
     c = cfg.resolved()
     counts = rp.int_list("--materials", c.materials, 1, 8)
     rp.check_texture_res(c.texture_res)
-    check_range("--reuse", c.reuse, 0, 64)
-    check_range("--lights", c.lights, 1, 8)
+    check_range("--reuse", c.reuse, 0, REUSE_MAX)
+    check_range("--lights", c.lights, 1, LIGHTS_MAX)
     check_range("--eyes", c.eyes, 1, 2)
     check_range("--cycles", c.cycles, 1, 100)
     check_range("--warmup", c.warmup, 0.0, 60.0)

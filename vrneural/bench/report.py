@@ -185,10 +185,16 @@ FPS_NOTE = (
 def choice_list(field: str, text: str, allowed, matches=None) -> list[str]:
     """The comma-separated values of option ``field``, each one of ``allowed`` (or, with
     ``matches``, a value it accepts: a pattern such as ``student:W``, named in ``allowed``),
-    none twice (a value named twice would be measured and reported twice)."""
+    none twice (a value named twice would be measured and reported twice), at least one."""
     from vrneural.errors import VrnError, check_choice
 
-    vals = [t.strip() for t in str(text).split(",") if t.strip()]
+    items = [t.strip() for t in str(text).split(",")]
+    names = ", ".join(map(str, allowed))
+    if not any(items):
+        raise VrnError(f"{field} is empty; choose from {names}")
+    if not all(items):
+        raise VrnError(f"{field} = {text!r} has an empty item; choose from {names}")
+    vals = items
     for v in vals:
         if not (matches and matches(v)):
             check_choice(field, v, allowed)

@@ -178,4 +178,13 @@ def bench_scene(n_lights: int, materials=None):
         ),
         ObjectDesc("floor", "plane", model_matrix((0, 0, 0), (0, 0, 0), fit("plane", 6.0)), floor),
     ]
-    return Scene("bench", objects, default_lights(n_lights), None, None, "orbit", Path.cwd())
+    return Scene(
+        "bench",
+        objects,
+        default_lights(n_lights),
+        None,
+        None,
+        "orbit",
+        Path.cwd(),
+        src="bench scene",
+    )

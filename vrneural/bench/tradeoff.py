@@ -95,6 +95,8 @@ WARMUP_FRAMES = 3
 
 
 def settings(c: TradeoffConfig, has_f16: bool, networks=("student_nodistill", "single8", "neumip")):
+    from vrneural.runtime.config import REUSE_MAX
+
     base = dict(
         knob="base",
         value="-",
@@ -109,7 +111,7 @@ def settings(c: TradeoffConfig, has_f16: bool, networks=("student_nodistill", "s
     for t in rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True):
         if t != c.base_res:
             out.append({**base, "knob": "texture_res", "value": t, "texture_res": t})
-    for n in rp.int_list("--reuse", c.reuse, 0, 64):
+    for n in rp.int_list("--reuse", c.reuse, 0, REUSE_MAX):
         if n != c.base_reuse:
             out.append({**base, "knob": "reuse", "value": n, "reuse": n})
     out.append({**base, "knob": "schedule", "value": "burst", "schedule": "burst"})
@@ -166,9 +168,9 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     from tqdm import tqdm
 
     from vrneural.bench.packs import PACKS, REQUIRED, load_packs, pack_paths, train_packs
-    from vrneural.errors import check_range
+    from vrneural.errors import VrnError, check_range
     from vrneural.gpu.device import adapter_summary
-    from vrneural.runtime.config import parse_res
+    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
     from vrneural.runtime.profiles import get_profile
     from vrneural.runtime.renderer import Settings
 
@@ -178,8 +180,15 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     check_range("--scored", c.scored, 1, c.frames - 1)
     check_range("--teacher-width", c.teacher_width, 4, 512)
     shimmer_res = parse_res(c.shimmer_res, "--shimmer-res")
-    check_range("--lights", c.lights, 1, 8)
+    check_range("--lights", c.lights, 1, LIGHTS_MAX)
+    rp.check_texture_res(c.base_res, "--base-res")
+    check_range("--base-reuse", c.base_reuse, 0, REUSE_MAX)
     check_range("--shimmer-frames", c.shimmer_frames, 0, 100000)
+    if 0 < c.shimmer_frames < 3:  # frame 0 is the first update; its change needs two more
+        raise VrnError(
+            f"--shimmer-frames = {c.shimmer_frames} is too few; allowed 0 (skip the test) or "
+            "[3, 100000]"
+        )
     given = pack_paths(c.packs) if c.packs else None
     nets = [k for k in PACKS if k not in REQUIRED and (given is None or k in given)]
     sets = settings(c, adapter_summary().features.get("shader-f16", False), nets)

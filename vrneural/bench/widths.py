@@ -126,10 +126,6 @@ def validate(cfg: WidthsConfig) -> Plan:
     widths = sorted(rp.int_list("--widths", cfg.widths, 1, 64))
     methods = rp.choice_list("--methods", cfg.methods, list(METHODS))
     starts = rp.choice_list("--starts", cfg.starts, list(STARTS))
-    if not methods:
-        raise VrnError("--methods is empty; name at least one of " + ", ".join(METHODS))
-    if not starts:
-        raise VrnError("--starts is empty; name plain, wide or both")
     if "wide" in starts:
         too = [w for w in widths if w > MAX_WIDE]
         if too:

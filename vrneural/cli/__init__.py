@@ -93,6 +93,8 @@ def main(argv: list[str] | None = None) -> int:
     if extra:  # named by the subcommand's parser: its usage line, not the top level's
         _command_parser(parser, args).error(f"unrecognized arguments: {' '.join(extra)}")
     args._explicit = explicit_dests(argv, parser)  # "--epochs 20" counts even at the default
+    restore = terminate_as_interrupt()
+    code = 1  # an exception that escapes: the command failed
     try:
         code = int(args.func(args) or 0)
         sys.stdout.flush()  # a closed pipe (`| head`) shows here, not at interpreter exit
@@ -100,18 +102,42 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # the reader went away: stop quietly, as `cat` does
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
-        return 141  # 128 + SIGPIPE, what a shell reports for a command killed by it
+        code = 141  # 128 + SIGPIPE, what a shell reports for a command killed by it
+        return code
     except VrnError as e:
         print(f"{command_name(args)}: error: {e}", file=sys.stderr)
-        return e.exit_code
+        code = e.exit_code
+        return code
     except KeyboardInterrupt:
         print(f"{command_name(args)}: interrupted", file=sys.stderr)
-        return 130
+        code = 130
+        return code
     finally:  # however the command ended, record what it wrote in its output directories
         from vrneural.formats.atomic import remove_empty_created_dirs, seal_marked
 
-        seal_marked()
+        seal_marked(failed=code != 0)  # a failed command's new, still empty --out: removed
         remove_empty_created_dirs()  # and take back folders made for outputs never written
+        restore()
+
+
+def terminate_as_interrupt():
+    """SIGTERM (``kill``, ``timeout``, batch schedulers) stops a command as Ctrl-C does: exit
+    130, outputs sealed, nothing half-written. Commands with a safe stopping point
+    (:class:`vrneural.interrupt.Stop`) handle both signals themselves; this covers the rest.
+    A SIGTERM ignored by whoever started us stays ignored. Returns a function that puts the
+    previous handler back (``main`` called in-process, as the tests do, leaves none behind)."""
+    import signal
+
+    from vrneural.interrupt import threading_main
+
+    if not threading_main() or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        return lambda: None
+    signal.signal(signal.SIGTERM, _raise_interrupt)
+    return lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _raise_interrupt(*_):
+    raise KeyboardInterrupt
 
 
 if __name__ == "__main__":

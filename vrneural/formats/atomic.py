@@ -227,7 +227,7 @@ def mark_output_dir(path: str | os.PathLike, command: str) -> Path:
     its contents; the mark lists no entries until :func:`seal_output_dir` (a run in progress)."""
     p = Path(path)
     try:
-        p.mkdir(parents=True, exist_ok=True)
+        _mkdirs(p)
     except OSError as e:
         raise VrnError(f"{p}: cannot create output directory ({_why(p, e)})") from None
     lock_output_dir(p)
@@ -359,16 +359,36 @@ def _why(p: Path, e: OSError) -> str:
     return e.strerror or str(e)
 
 
-def seal_marked() -> None:
+def seal_marked(failed: bool = False) -> None:
     """Seal every output this process marked and did not seal: called when a command ends in
     any way (an error, Ctrl-C), so what it wrote is recorded and a later ``--force`` can still
-    tell it from files added afterwards. Only a killed process leaves an output unsealed."""
+    tell it from files added afterwards. Only a killed process leaves an output unsealed.
+    A ``failed`` command's output directory that this process created and that holds nothing
+    but the marker is removed instead: a run that fails in its set-up leaves nothing behind."""
     for p, command in list(_MARKED.items()):
+        if failed and p in _created_resolved() and _only_mark(p):
+            with contextlib.suppress(OSError):
+                (p / OUTPUT_MARK).unlink()
+                _unlock_output_dir(p)
+                p.rmdir()
+            _MARKED.pop(p, None)
+            continue
         mark = read_mark(p) if p.is_dir() else None
         if mark is not None and mark.get("command") == command and mark.get("entries") is None:
             with contextlib.suppress(VrnError, OSError):
                 seal_output_dir(p, command)
         _MARKED.pop(p, None)
+
+
+def _created_resolved() -> set[Path]:
+    return {d.resolve() for d in _CREATED}
+
+
+def _only_mark(p: Path) -> bool:
+    try:
+        return [c.name for c in p.iterdir()] == [OUTPUT_MARK]
+    except OSError:
+        return False
 
 
 def seal_output_dir(path: str | os.PathLike, command: str) -> Path:

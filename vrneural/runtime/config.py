@@ -49,6 +49,12 @@ class RunConfig:
     force: bool = opt(False, "overwrite an existing output directory")
 
 
+#: the longest update interval N (`run --reuse`, every bench): 1000 frames between updates
+REUSE_MAX = 1000
+#: the most point lights a frame shades (`run --lights`, every bench; the shaders loop over them)
+LIGHTS_MAX = 64
+
+
 def parse_res(s, field: str = "--eye-res") -> tuple[int, int]:
     """``"2064x2208"`` (or, from Python, ``(2064, 2208)``) -> ``(width, height)``, checked."""
     if isinstance(s, (tuple, list)) and len(s) == 2:
@@ -113,10 +119,9 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     if cfg.profile is not None and not cfg.profile:  # "" fell through to the scene's
         raise VrnError(f"--profile is empty; choose one of: {', '.join(PROFILES)}")
     prof = get_profile(cfg.profile or scene.profile or "quest3")  # the scene's is checked
-    if cfg.eyes not in (1, 2):
-        raise VrnError(f"--eyes = {cfg.eyes} is not allowed; choose 1 or 2")
+    check_range("--eyes", cfg.eyes, 1, 2)
     reuse = prof.reuse if cfg.reuse is None else cfg.reuse
-    check_range("--reuse", reuse, 0, 1000)
+    check_range("--reuse", reuse, 0, REUSE_MAX)
     check_range("--frames", cfg.frames, 1, 1_000_000)
     tex = prof.texture_res if cfg.texture_res is None else cfg.texture_res
     max_tex = adapter.limits["max_texture_dimension_2d"]
@@ -141,7 +146,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         n_lights = min(prof.lights, len(scene.lights))
     else:
         n_lights = cfg.lights
-        check_range("--lights", n_lights, 0, 64)  # 0: neural objects render black
+        check_range("--lights", n_lights, 0, LIGHTS_MAX)  # 0: neural objects render black
         if n_lights > len(scene.lights):
             raise VrnError(
                 f"--lights = {n_lights} but the scene has {count(len(scene.lights), 'light')}"

@@ -137,8 +137,9 @@ class Renderer:
             self.draws.append((fw.DrawObject(mesh, None, self.rebase(o.model), i, plain), None))
             return
         res = max(s.texture_res, o.min_texture_res or 0)
+        knob = "--texture-res" if res == s.texture_res else "its min_texture_res"
         if o.texture_res and not s.texture_res_given:
-            res = o.texture_res
+            res, knob = o.texture_res, "its texture_res"
         elif o.texture_res and res != o.texture_res:
             self.warnings.append(
                 f"{scene.src}: objects[{i}] ({o.name}): --texture-res {s.texture_res} overrides "
@@ -149,8 +150,7 @@ class Renderer:
             atlas = get_atlas(mesh, res)
         except VrnError as e:  # name the object and the knobs that set its resolution
             raise VrnError(
-                f"{scene.src}: objects[{i}] ({o.name}) at {res}^2 texels "
-                f"(texture_res / min_texture_res): {e}"
+                f"{scene.src}: objects[{i}] ({o.name}) at {res}^2 texels ({knob}): {e}"
             ) from None
         lost = lost_triangles(atlas.stats, res, "they show their neighbours' shading")
         if lost and s.mode == "texture":  # the other modes shade pixels, not texels

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.config import config_dict, is_explicit, replace_config
-from vrneural.errors import VrnError, check_range, count
+from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.interrupt import Stop
 from vrneural.formats.atomic import (
     OUTPUT_MARK,
@@ -22,7 +22,7 @@ from vrneural.formats.atomic import (
     seal_output_dir,
     write_json,
 )
-from vrneural.runtime.config import RunConfig, resolve
+from vrneural.runtime.config import LIGHTS_MAX, RunConfig, resolve
 from vrneural.runtime.output import (
     VideoWriter,
     check_video,
@@ -228,6 +228,8 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         scene = load_scene(cfg.scene)
     else:
         # its three lights (more generated for --lights N > 3); the profile shades the first
+        if cfg.lights is not None:  # named as the option, before the scene would name it
+            check_int("--lights", cfg.lights, 0, LIGHTS_MAX)
         scene = builtin_scene(max(n_builtin, cfg.lights or 0))
         if cfg.pack:
             use_pack(scene, cfg.pack)
