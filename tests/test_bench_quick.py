@@ -208,6 +208,9 @@ def test_bench_options_are_checked_before_anything_is_replaced(capsys, tmp_path)
         assert msg.startswith(f"vrneural bench {bench}: error: {want}"), msg
         assert (o / bench / "results.json").read_text() == "old"
     assert "allowed [1, 64]" in _err(capsys, ["lights", "--lights", "65", "--out", str(o / "l")])
+    assert _err(capsys, ["frames", "--out", ""]).endswith(
+        "error: --out is empty; name the output directory"
+    )
 
 
 @pytest.mark.gpu

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrneural.bench import report as rp
+from vrneural.errors import count
 from vrneural.config import opt, quick_defaults
 
 NETWORKS = ("student", "single8", "neumip")
@@ -312,7 +313,8 @@ def markdown(doc: dict) -> list[str]:
         "# Kernels: generated constants vs storage buffer vs PyTorch CPU, f32 vs f16",
         "",
         rp.adapter_line(doc),
-        f"{c['texels']} texels per evaluation, median of {c['repeats']} timed repeats (GPU: "
+        f"{c['texels']} texels per evaluation, median of "
+        f"{count(c['repeats'], 'timed repeat')} (GPU: "
         f"timestamps). numpy sgemm ({c['sgemm_n']}^2, float32): **{sg:.1f} GFLOP/s** (our "
         "roofline on a CPU adapter; the better of "
         + " and ".join(f"{g:.1f}" for g in runs)

@@ -11,6 +11,7 @@ import time
 from dataclasses import dataclass
 
 from vrneural.bench import report as rp
+from vrneural.errors import count
 from vrneural.bench import timing
 from vrneural.config import opt, quick_defaults
 
@@ -100,7 +101,8 @@ def run_materials(cfg: MaterialsConfig) -> dict:
         "# Materials: several materials at once (paper Table 3)",
         "",
         rp.adapter_line(doc),
-        f"k squares with distinct materials, {c.lights} lights, {c.eyes} eye(s) at {c.eye_res}, "
+        f"k squares with distinct materials, {count(c.lights, 'light')}, {c.eyes} eye(s) at "
+        f"{c.eye_res}, "
         f"texture {c.texture_res}^2 per material, N = {c.reuse} ({c.schedule}), {n} frames per "
         f"count after frame 0 and {c.warmup} s of unmeasured frames."
         + (" **Quick run: reduced grid.**" if c.quick else ""),
@@ -126,7 +128,7 @@ def run_materials(cfg: MaterialsConfig) -> dict:
             "frame ms p99",
             "shading ms/frame",
             "forward ms",
-            "radiance textures MB",
+            "radiance textures MiB",
         ],
         rows,
     )

@@ -22,6 +22,7 @@ import numpy as np
 
 from vrneural.bench import metrics, shimmer
 from vrneural.bench import report as rp
+from vrneural.errors import count
 from vrneural.config import opt, quick_defaults
 
 LABELS = {
@@ -319,7 +320,8 @@ def markdown(doc: dict) -> list[str]:
         "# Trade-off: each knob against the per-pixel teacher",
         "",
         rp.adapter_line(doc),
-        f"Benchmark scene with trained packs ({_packs_line(doc)}), {c['lights']} lights, both eyes "
+        f"Benchmark scene with trained packs ({_packs_line(doc)}), {count(c['lights'], 'light')}, "
+        "both eyes "
         f"at {c['eye_res']}, {c['frames']} frames along the built-in head path. Base: texture "
         f"{c['base_res']}^2, N = {c['base_reuse']}, staggered, f32, distilled student. FLIP: "
         f"HDR, {doc['ppd']:.2f} ppd (eye height / FOV; {doc['profile_ppd']:.1f} at the full "

@@ -158,6 +158,8 @@ def check_output_dir(
     still running in another process) is refused too, since nobody knows what in it is ours.
     ``deletes=False``: the caller keeps what is there (``bench quality``), so neither applies.
     """
+    if not str(path).strip():  # Path("") is ".": the current directory, never meant
+        raise VrnError("--out is empty; name the output directory")
     p = Path(path)
     if p.exists() or p.is_symlink():
         if not p.is_dir():
