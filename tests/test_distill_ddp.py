@@ -67,3 +67,6 @@ def test_ddp_equals_single_process(trained, tmp_path, wide):  # noqa: F811
     for k in a["net"]:
         torch.testing.assert_close(b["net"][k], a["net"][k], atol=2e-5, rtol=1e-4)
     assert abs(a["history"][-1]["test_l1"] - b["history"][-1]["test_l1"]) < 1e-5
+    # the recorded loss is the whole slice's (it was rank 0's half: 0.5% off)
+    ta, tb = a["history"][-1]["train_loss"], b["history"][-1]["train_loss"]
+    assert abs(ta - tb) < 1e-5 * ta, (ta, tb)

@@ -381,3 +381,30 @@ def test_config_json_never_holds_bare_nan(tmp_path):
     text = p.read_text()
     assert "NaN" not in text
     assert json.loads(text, parse_constant=lambda c: 1 / 0)["history"] == [{"test_l1": None}]
+
+
+def test_force_keeps_the_old_run_whole_when_one_file_cannot_be_removed(tmp_path, monkeypatch):
+    """`--force` over an old run with one file that cannot go (immutable, or someone else's in
+    a sticky folder) was a PermissionError traceback after the checkpoint had been deleted."""
+    from vrneural.distill.outputs import clear_outputs
+    from vrneural.errors import VrnError
+
+    files = [tmp_path / n for n in ("s.pt", "s.pt.config.json", "s.vrnm", "s.vrnm.config.json")]
+    for f in files:
+        f.write_text(f.name)
+    real = Path.rename
+
+    def rename(self, target):
+        if self.name == "s.vrnm":
+            raise PermissionError(1, "Operation not permitted")
+        return real(self, target)
+
+    monkeypatch.setattr(Path, "rename", rename)
+    with pytest.raises(VrnError, match=r"s.vrnm: cannot remove the old output to replace it "
+                       r"\(Operation not permitted\); nothing was changed"):  # fmt: skip
+        clear_outputs([str(f) for f in files])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(f.name for f in files)
+    assert all(f.read_text() == f.name for f in files)
+    monkeypatch.setattr(Path, "rename", real)
+    clear_outputs([str(f) for f in files])
+    assert list(tmp_path.iterdir()) == []

@@ -92,9 +92,29 @@ def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
 def clear_outputs(outputs: list[str]) -> None:
     """``--force``, once every check has passed and just before training: remove the old
     run's files (checkpoint, config, pack), so that a new run interrupted before its first
-    save cannot be taken for the old one by ``--resume``, nor the old files for its own."""
-    for o in outputs:
-        Path(o).unlink(missing_ok=True)
+    save cannot be taken for the old one by ``--resume``, nor the old files for its own.
+    All or nothing: each is first renamed aside; if one cannot be (an immutable file, a folder
+    of someone else's with the sticky bit), the others are put back and it is a one-line
+    error, so the old run stays whole."""
+    import os
+
+    moved: list[tuple[Path, Path]] = []
+    for o in map(Path, outputs):
+        if not (o.exists() or o.is_symlink()):
+            continue
+        aside = o.with_name(f".{o.name}.old-{os.getpid()}")
+        try:
+            o.rename(aside)
+        except OSError as e:
+            for orig, back in reversed(moved):
+                back.rename(orig)
+            raise VrnError(
+                f"{o}: cannot remove the old output to replace it ({e.strerror or e}); "
+                "nothing was changed"
+            ) from None
+        moved.append((o, aside))
+    for _, aside in moved:
+        aside.unlink(missing_ok=True)
 
 
 class StalePackWarning(VrnWarning):

@@ -272,7 +272,7 @@ def fit(
                 wi, wo = data.dirs(pair)
                 uv = data.uv(gen if cfg.jitter else None)
                 loss, _ = model(wi, wo, uv, pair)
-                value = float(loss.detach())
+                value = _mean_over_ranks(loss.detach(), world)  # the whole slice's loss
                 if not math.isfinite(value):  # before the step: the weights stay finite
                     raise _diverged(f"loss is {value}", epoch, step + 1, n, out)
                 opt.zero_grad(set_to_none=True)
@@ -334,6 +334,17 @@ def _diverged(what: str, epoch: int, step: int, n: int, out: str) -> VrnError:
 def _l1_text(v: float) -> str:
     """The progress bar's test L1: ``-`` before the first epoch's evaluation."""
     return "-" if math.isnan(v) else f"{v:.4g}"
+
+
+def _mean_over_ranks(loss: torch.Tensor, world: int) -> float:
+    """The loss of the whole slice: each rank's is the mean over its equal share, so their
+    mean (the curve, the checkpoint and the bar say what one process would; every rank sees a
+    NaN together, so none waits for one that stopped)."""
+    if world == 1:
+        return float(loss)
+    t = loss.reshape(1).clone()
+    dist.all_reduce(t)
+    return float(t) / world
 
 
 def _stopping(flag: bool, world: int, device: torch.device) -> bool:
