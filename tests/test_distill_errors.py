@@ -182,6 +182,27 @@ def test_bad_training_options_are_one_line(trained, tmp_path, flag, value):  # n
     assert not out.exists()
 
 
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (
+            ["--method", "neumip", "--no-distill", "--coarse-channels", "4"],
+            "--coarse-channels sets",
+        ),
+        (["--method", "single8", "--fine-channels", "4"], "nothing for --method single8"),
+        (["--neumip-dirs", "full"], "--neumip-dirs sets NeuMIP's direction inputs"),
+        (["--no-distill", "--sigma", "0.5", "--lambda2", "1"], "--sigma, --lambda2 weigh"),
+    ],
+)
+def test_options_the_method_does_not_use_are_one_line(trained, tmp_path, args, needle):  # noqa: F811
+    """They were recorded in the config as if used, and changed nothing."""
+    out = tmp_path / "x.pt"
+    expect_one_line_error(
+        ["distill", trained["teacher"], "-o", out, "--epochs", "1", *args], needle
+    )
+    assert not out.exists()
+
+
 def _save_like(ck: dict, path) -> None:
     from vrneural.distill.checkpoint import save_checkpoint
 

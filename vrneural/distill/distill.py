@@ -401,8 +401,38 @@ def run_distill(cfg: DistillConfig, on_step=None) -> dict:
         return _run_distill(cfg, on_step)
 
 
+#: options that shape one method only: (field, the methods it applies to, what it is)
+METHOD_OPTIONS = (
+    ("coarse_channels", ("student",), "the coarse-to-fine student's U_c channels"),
+    ("fine_channels", ("student",), "the coarse-to-fine student's U_f channels"),
+    ("neumip_dirs", ("neumip",), "NeuMIP's direction inputs"),
+)
+
+
+def check_method_options(cfg: DistillConfig) -> None:
+    """An option typed on the command line that the run would not use is a one-line error
+    (it was recorded in the config as if it had been, and did nothing): the student's texture
+    channels for single8 or NeuMIP, ``--neumip-dirs`` for the others, Eq. 5's weights with
+    ``--no-distill``."""
+    given = cfg.__dict__.get("_explicit") or ()
+    for name, methods, what in METHOD_OPTIONS:
+        if name in given and cfg.method not in methods:
+            raise VrnError(
+                f"--{name.replace('_', '-')} sets {what}; it does nothing for --method "
+                f"{cfg.method} (drop the flag)"
+            )
+    unused = [f"--{k}" for k in ("sigma", "lambda1", "lambda2") if k in given]
+    if unused and not cfg.distill:
+        raise VrnError(
+            f"{', '.join(unused)} {'weighs' if len(unused) == 1 else 'weigh'} the teacher's "
+            "terms of the loss (Eq. 5); --no-distill trains on the ground truth alone "
+            "(drop the flag)"
+        )
+
+
 def _run_distill(cfg: DistillConfig, on_step=None) -> dict:
     check_resume_force(cfg.resume, cfg.force)
+    check_method_options(cfg)
     stored = stored_wide_start(cfg.output) if cfg.resume else None
     if cfg.wide_start or stored:
         return run_wide_start(cfg, on_step, stored)
