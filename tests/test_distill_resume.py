@@ -219,6 +219,13 @@ def test_resume_messages_name_the_option_that_set_the_field():
     with pytest.raises(VrnError, match="pass --teacher-epochs 2 or more") as e:
         resumed_config(bench, {"epochs": 3}, {"epoch": 2})
     assert str(e.value).startswith("--teacher-epochs = 1, but t.pt")
+    # stopped partway through epoch 3: the least --epochs that continues it is 3, not 2
+    with pytest.raises(VrnError, match="pass --epochs 3 or more to continue it"):
+        resumed_config(
+            mark_explicit(TeachConfig(output="t.pt", epochs=1), "epochs"),
+            {"epochs": 3},
+            {"epoch": 2, "step": 5},
+        )
 
 
 def test_unfinished_teacher_warns_and_exported_unfinished_student_resumes(btf, tmp_path):

@@ -291,9 +291,13 @@ def curves_png(doc: dict, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     res = doc["results"]
-    fig, axes = plt.subplots(1, len(res), figsize=(4.2 * len(res), 3.4), squeeze=False)
+    n_rows = -(-len(ORDER) // (2 * len(res)))  # legend rows (at most one entry per method)
+    fig, axes = plt.subplots(
+        1, len(res), figsize=(4.2 * len(res), 3.4 + 0.15 * n_rows), squeeze=False
+    )
     for ax, (p, r) in zip(axes[0], res.items(), strict=True):
         for name in ORDER:
             m = r["methods"].get(name)
@@ -326,11 +330,14 @@ def curves_png(doc: dict, path: Path) -> None:
         ax.set_yscale("log")
         ax.set_title(p)
         ax.set_xlabel("epoch")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # no epoch 1.5 on short runs
         ax.set_ylabel("test L1")
         ax.grid(alpha=0.3)
     handles, labels = axes[0][0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))  # the legend below the panels, never over a curve
+    ncol = min(len(labels), 2 * len(res))  # one panel: the legend in rows, not a wide strip
+    rows = -(-len(labels) // max(ncol, 1))
+    fig.legend(handles, labels, loc="lower center", ncol=ncol, fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0.04 + 0.04 * rows, 1, 1))  # below the panels, never over a curve
     _save(fig, path)
     plt.close(fig)
 

@@ -77,8 +77,11 @@ def _report(fn, output: str) -> int:
         was = spec_width(init["spec"])
         cut = f"pruned to {width}" if was != width else "not pruned"
         method += f", from {init['path']} ({was} wide, {count(init['epochs'], 'epoch')}, {cut})"
+    epochs = f"epochs {ck['epoch']}"
+    if init:  # the result line counts both halves: "epochs 2 (4 in all)"
+        epochs += f" ({int(init['epochs']) + int(ck['epoch'])} in all)"
     print(
-        f"{output}: {method} epochs {ck['epoch']}  test L1 {test:.5f}"
+        f"{output}: {method} {epochs}  test L1 {test:.5f}"
         f"  train {ck.get('train_seconds', 0):.1f} s{wrote}"
     )
     ref = ck.get("teacher_test_l1")

@@ -32,9 +32,13 @@ from vrneural.warn import VrnWarning
 def outputs_of(output: str, export: bool) -> list[str]:
     """Files a stage writes: the checkpoint, its config and (optionally) the ``.vrnm`` beside
     it with its config."""
+    if not str(output).strip():
+        raise VrnError("-o is empty; name the output checkpoint (e.g. -o student.pt)")
     p = Path(output)
+    if p.name == ".pt":  # a hidden file without a suffix, to Path
+        raise VrnError(f"{output}: the output checkpoint needs a name before .pt (student.pt)")
     if p.suffix != ".pt":  # the pack beside it is <stem>.vrnm: keep the pair unambiguous
-        raise VrnError(f"{p}: output checkpoint must end in .pt")
+        raise VrnError(f"{output}: output checkpoint must end in .pt")
     files = [p, config_path(p)]
     if export:
         pack = p.with_suffix(".vrnm")

@@ -90,9 +90,10 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
         merged["epochs"] = stored["epochs"]
     done = int(ck["epoch"])
     if merged["epochs"] < done:
+        least = done + 1 if int(ck.get("step", 0)) else done  # partway through the next one
         raise VrnError(
             f"{shown('epochs')} = {merged['epochs']}, but {cfg.output} already has "
-            f"{count(done, 'epoch')}; pass {shown('epochs')} {done} or more to continue it"
+            f"{count(done, 'epoch')}; pass {shown('epochs')} {least} or more to continue it"
         )
     if merged["epochs"] == done and int(ck.get("step", 0)):  # its weights are past epoch `done`
         raise VrnError(
