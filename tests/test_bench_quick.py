@@ -102,6 +102,11 @@ def test_kernels_rates_are_finite(results):
         assert _finite(r["gflops"], r["texels_per_s"], r["fraction_of_sgemm"]) and r["gflops"] > 0
     neumip = [r for r in recs if r["network"] == "neumip"]
     assert neumip and all(r["macs_per_texel"] == 1600 for r in neumip)  # wi.xy, wo.xy read
+    # the Markdown's warnings are in the JSON too, and agree with its numbers
+    runs = doc["sgemm_gflops_runs"]
+    assert doc["sgemm_varied"] == (max(runs) > 2 * min(runs))
+    over = doc["adapter"]["is_cpu"] and any(r["fraction_of_sgemm"] > 1 for r in recs)
+    assert doc["roofline_unreliable"] == over
 
 
 @pytest.mark.gpu

@@ -265,6 +265,10 @@ def _run(c: KernelsConfig, doc: dict, nets, precs, root, t0) -> dict:
     for r in doc["records"]:
         r["fraction_of_sgemm"] = r["gflops"] / sg
     add_speedups(doc)
+    # the Markdown's two warnings, for scripts reading the JSON: sgemm varied more than 2x in
+    # this run; a kernel measured above the sgemm roofline (so `fraction_of_sgemm` overstates)
+    doc["sgemm_varied"] = max(sg_runs) > 2 * min(sg_runs)
+    doc["roofline_unreliable"] = bool(roofline_exceeded(doc))
     md = markdown(doc)
     plot(doc, root / "kernels.png")
     md += ["", "![kernels](kernels.png)"]

@@ -85,6 +85,12 @@ REQUIRED = ("teacher", "student")
 def pack_paths(d) -> dict[str, Path]:
     """The packs of ``--packs DIR`` that are there (the :data:`REQUIRED` ones always, so that
     :func:`load_packs` names a missing one)."""
+    if not Path(d).is_dir():
+        what = "is a file" if Path(d).exists() else "does not exist"
+        raise VrnError(
+            f"--packs = {str(d)!r} {what}; name the folder that holds "
+            f"{' and '.join(f'{k}.vrnm' for k in REQUIRED)} (from `bench tradeoff`'s packs/)"
+        )
     return {
         k: Path(d) / f"{k}.vrnm"
         for k in PACKS
@@ -99,6 +105,8 @@ def load_packs(paths: dict[str, Path]) -> dict:
 
     out = {}
     for k, p in paths.items():
+        if Path(p).is_dir():
+            raise VrnError(f"--packs: {str(p)!r} is a folder, not a runtime pack")
         if not Path(p).is_file():
             raise VrnError(
                 f"--packs: {str(p)!r} not found (needs {' and '.join(REQUIRED)} .vrnm; "

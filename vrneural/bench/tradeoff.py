@@ -23,7 +23,7 @@ import numpy as np
 from vrneural.bench import metrics, shimmer
 from vrneural.bench import report as rp
 from vrneural.errors import count
-from vrneural.config import opt, quick_defaults
+from vrneural.config import is_explicit, mark_explicit, opt, quick_defaults, replace_config
 
 LABELS = {
     "student": "student (distilled)",
@@ -178,6 +178,8 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     c = cfg.resolved()
     eye_res = parse_res(c.eye_res)
     check_range("--frames", c.frames, 2, 10000)
+    if not is_explicit(c, "scored"):  # --quick's or the default's count, within your --frames
+        c = mark_explicit(replace_config(c, scored=min(c.scored, c.frames - 1)), "scored")
     check_range("--scored", c.scored, 1, c.frames - 1)
     check_range("--teacher-width", c.teacher_width, 4, 512)
     shimmer_res = parse_res(c.shimmer_res, "--shimmer-res")
