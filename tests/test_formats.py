@@ -220,6 +220,44 @@ def test_an_output_directory_another_process_writes_is_refused(tmp_path):
     seal_output_dir(d, "run")
 
 
+def test_an_unfinished_output_says_whether_its_writer_still_runs(tmp_path):
+    """A second `--force` while the first command still writes its (unsealed) output was told
+    "killed, or still running elsewhere"; the lock tells which."""
+    import json
+    import subprocess
+    import sys
+
+    from vrneural.formats.atomic import OUTPUT_MARK, check_output_dir
+
+    d = tmp_path / "o"
+    d.mkdir()
+    (d / OUTPUT_MARK).write_text(json.dumps({"command": "run", "entries": None}))
+    (d / "frame.png").write_bytes(b"x")
+    with pytest.raises(
+        VrnError, match=r"unfinished `vrneural run` output \(its process was killed"
+    ):
+        check_output_dir(d, True, "run")
+    holder = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import fcntl, os, sys, time; fd = os.open(sys.argv[1], os.O_RDONLY); "
+            "fcntl.flock(fd, fcntl.LOCK_EX); print('locked', flush=True); time.sleep(60)",
+            str(d),
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert holder.stdout.readline().strip() == "locked"
+        with pytest.raises(VrnError, match="another vrneural process is writing this output"):
+            check_output_dir(d, True, "run")
+    finally:
+        holder.kill()
+        holder.wait()
+    assert sorted(p.name for p in d.iterdir()) == [OUTPUT_MARK, "frame.png"]
+
+
 def test_an_old_output_that_cannot_be_removed_is_one_line(tmp_path, monkeypatch):
     import pathlib
 

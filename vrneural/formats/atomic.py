@@ -189,10 +189,15 @@ def check_output_dir(
 def _check_replaceable(p: Path, mark: dict, command: str) -> None:
     """``--force`` may empty ``p`` only when its command sealed it and nothing was added."""
     if not isinstance(mark.get("entries"), list):
+        if _held_elsewhere(p):
+            raise VrnError(
+                f"{p}: another vrneural process is writing this output right now; wait for "
+                "it to finish or choose another --out"
+            )
         raise VrnError(
-            f"{p}: an unfinished `vrneural {command}` output (killed, or still running "
-            "elsewhere), so --force cannot tell its files from others; check it and "
-            "delete it yourself, or choose another --out"
+            f"{p}: an unfinished `vrneural {command}` output (its process was killed), so "
+            "--force cannot tell its files from others; check it and delete it yourself, or "
+            "choose another --out"
         )
     ours = {*mark["entries"], OUTPUT_MARK}
     foreign = sorted(c.name for c in p.iterdir() if c.name not in ours)
@@ -202,6 +207,27 @@ def _check_replaceable(p: Path, mark: dict, command: str) -> None:
             f"{p}: holds {len(foreign)} file(s) vrneural did not write there ({shown}); "
             "--force never deletes them: move them away or choose another --out"
         )
+
+
+def _held_elsewhere(p: Path) -> bool:
+    """Whether another process holds the lock of output directory ``p`` (see
+    :func:`lock_output_dir`); False where there are no locks."""
+    fcntl = _fcntl()
+    if fcntl is None or p.resolve() in _LOCKS:
+        return False
+    try:
+        fd = os.open(p, os.O_RDONLY)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    except OSError:
+        return False
+    finally:
+        os.close(fd)  # closing it releases a lock taken here
+    return False
 
 
 def read_mark(p: Path) -> dict | None:
