@@ -1,5 +1,9 @@
 """The array container and atomic outputs: round trips and clear errors on bad files."""
 
+import contextlib
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -188,16 +192,10 @@ def test_an_unfinished_output_is_refused_and_every_ending_seals(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == [OUTPUT_MARK, "frame0000_eye0.png", "notes.md"]
 
 
-def test_an_output_directory_another_process_writes_is_refused(tmp_path):
-    """Two commands given one --out: the second is a one-line error, not a race that empties
-    the folder under the first (the lock is a flock, released however its holder ends)."""
-    import subprocess
-    import sys
-
-    from vrneural.formats.atomic import make_output_dir, seal_output_dir
-
-    d = make_output_dir(tmp_path / "o", "run")
-    seal_output_dir(d, "run")  # a finished output: --force may replace it
+@contextlib.contextmanager
+def _lock_held_by_another_process(d):
+    """An exclusive flock on directory ``d`` held by a child process, as a running command
+    holds its output's."""
     holder = subprocess.Popen(
         [
             sys.executable,
@@ -211,11 +209,23 @@ def test_an_output_directory_another_process_writes_is_refused(tmp_path):
     )
     try:
         assert holder.stdout.readline().strip() == "locked"
-        with pytest.raises(VrnError, match="another vrneural process is writing this output"):
-            make_output_dir(d, "run")
+        yield
     finally:
         holder.kill()
         holder.wait()
+
+
+def test_an_output_directory_another_process_writes_is_refused(tmp_path):
+    """Two commands given one --out: the second is a one-line error, not a race that empties
+    the folder under the first (the lock is a flock, released however its holder ends)."""
+
+    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+
+    d = make_output_dir(tmp_path / "o", "run")
+    seal_output_dir(d, "run")  # a finished output: --force may replace it
+    with _lock_held_by_another_process(d):
+        with pytest.raises(VrnError, match="another vrneural process is writing this output"):
+            make_output_dir(d, "run")
     make_output_dir(d, "run")  # the holder is gone: its lock went with it
     seal_output_dir(d, "run")
 
@@ -224,8 +234,6 @@ def test_an_unfinished_output_says_whether_its_writer_still_runs(tmp_path):
     """A second `--force` while the first command still writes its (unsealed) output was told
     "killed, or still running elsewhere"; the lock tells which."""
     import json
-    import subprocess
-    import sys
 
     from vrneural.formats.atomic import OUTPUT_MARK, check_output_dir
 
@@ -237,24 +245,9 @@ def test_an_unfinished_output_says_whether_its_writer_still_runs(tmp_path):
         VrnError, match=r"unfinished `vrneural run` output \(its process was killed"
     ):
         check_output_dir(d, True, "run")
-    holder = subprocess.Popen(
-        [
-            sys.executable,
-            "-c",
-            "import fcntl, os, sys, time; fd = os.open(sys.argv[1], os.O_RDONLY); "
-            "fcntl.flock(fd, fcntl.LOCK_EX); print('locked', flush=True); time.sleep(60)",
-            str(d),
-        ],
-        stdout=subprocess.PIPE,
-        text=True,
-    )
-    try:
-        assert holder.stdout.readline().strip() == "locked"
+    with _lock_held_by_another_process(d):
         with pytest.raises(VrnError, match="another vrneural process is writing this output"):
             check_output_dir(d, True, "run")
-    finally:
-        holder.kill()
-        holder.wait()
     assert sorted(p.name for p in d.iterdir()) == [OUTPUT_MARK, "frame.png"]
 
 
