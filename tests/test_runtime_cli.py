@@ -367,6 +367,15 @@ def test_scene_crease_angle_reaches_the_mesh(tmp_path):
 
 
 @pytest.mark.gpu
+@pytest.mark.gpu
+def test_video_scale_without_a_video_is_a_warning(capsys, tmp_path):
+    argv = ["run", "--profile", "tiny", "--frames", "1", "--quiet", "--no-video"]
+    assert main([*argv, "--video-scale", "-5", "--out", str(tmp_path / "o")]) == 0
+    assert "--video-scale only applies to the video, and --no-video writes none" in (
+        capsys.readouterr().err
+    )
+
+
 def test_video_scale_that_leaves_no_pixels_is_refused_before_rendering(capsys, tmp_path):
     msg = _err(capsys, ["--profile", "tiny", "--video-scale", "1000", "--out", str(tmp_path / "o")])
     assert "--video-scale = 1000 is out of range; allowed [1, " in msg

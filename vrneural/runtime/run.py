@@ -274,6 +274,8 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
             f"--mode texture; --mode {s.mode} shades "
             "every pixel every frame"
         )
+    if not cfg.video and is_explicit(cfg, "video_scale"):  # does nothing: say so
+        r.warnings.append("--video-scale only applies to the video, and --no-video writes none")
     for w in r.warnings:
         print(f"warning: {w}", file=sys.stderr)
     make_output_dir(out, "run")
