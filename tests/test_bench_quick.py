@@ -205,6 +205,7 @@ def test_bench_options_are_checked_before_anything_is_replaced(capsys, tmp_path)
         ),
         (["tradeoff", "--shimmer-frames", "2"], "--shimmer-frames = 2 is too few; allowed 0"),
         (["extremes", "--only", ""], "--only is empty"),
+        (["tradeoff", "--packs", ""], "--packs is empty; name the folder of packs"),
         (["extremes", "--only", "directions,"], "--only = 'directions,' has an empty item"),
     ]
     for argv, want in cases:
@@ -301,6 +302,8 @@ def test_sigterm_stops_a_bench_as_ctrl_c_does(tmp_path):
         time.sleep(0.05)
     time.sleep(0.5)
     proc.send_signal(signal.SIGTERM)
+    time.sleep(0.001)
+    proc.send_signal(signal.SIGTERM)  # a second one while it stops: ignored, no traceback
     err = proc.communicate(timeout=120)[1]
     assert proc.returncode == 130, err
     assert err.strip() == "vrneural bench kernels: interrupted"

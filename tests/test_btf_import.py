@@ -230,7 +230,7 @@ def test_bad_values_odd_sizes_and_output_names(tmp_path, rng, capsys):
     src, _, _ = _fixture(tmp_path, rng)  # 5 x 7 texels
     data = bytearray(src.read_bytes())
     assert _import(src, tmp_path / "o.png") == 2
-    assert "o.png: output must end in .btf" in capsys.readouterr().err
+    assert "o.png: output BTF must end in .btf" in capsys.readouterr().err
     assert not (tmp_path / "o.png").exists()
     data[-4:] = struct.pack("<f", 1e30)  # the last stored float: some texels far above 65504
     (tmp_path / "huge_ubo.btf").write_bytes(data)

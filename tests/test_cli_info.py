@@ -90,3 +90,33 @@ def test_config_switches_off_by_default_have_no_negative_form():
     assert config_from_args(C, p.parse_args([])) == C()
     with pytest.raises(SystemExit):
         p.parse_args(["--no-force"])
+
+
+def test_an_ignored_sigterm_stays_ignored_and_sigint_is_taken_even_so():
+    """`trap '' TERM` (or nohup-like wrappers) means the user wants SIGTERM ignored: neither
+    the CLI nor a training/render loop's Stop takes it. SIGINT is taken even when ignored, as
+    shells start background jobs with it ignored."""
+    import signal
+
+    from vrneural.interrupt import Stop, terminate_as_interrupt
+
+    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        assert terminate_as_interrupt() is None
+        with Stop():
+            assert signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
+            assert getattr(signal.getsignal(signal.SIGINT), "__func__", None) is Stop._handle
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+def test_main_in_process_leaves_the_signal_handlers_as_it_found_them(capsys):
+    import signal
+
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    assert main(["info", "--texels", "5"]) == 2
+    assert before == {s: signal.getsignal(s) for s in before}

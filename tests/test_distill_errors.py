@@ -205,6 +205,26 @@ def test_options_the_method_does_not_use_are_one_line(trained, tmp_path, args, n
     assert not out.exists()
 
 
+def test_a_resume_judges_the_flags_by_the_runs_own_method(trained, tmp_path):  # noqa: F811
+    """`--resume` without `--method` continues the checkpoint's method: a NeuMIP run resumed
+    with its own `--neumip-dirs` goes on, a single8 run resumed with `--coarse-channels` (its
+    stored 8, so a no-op) is refused (both were judged as the default student before)."""
+    base = ["distill", trained["teacher"], "--epochs", "1", *FAST]
+    nm, s8 = tmp_path / "nm.pt", tmp_path / "s8.pt"
+    code, err = run_cli(
+        *base, "-o", nm, "--method", "neumip", "--no-distill", "--neumip-dirs", "full"
+    )
+    assert code == 0, err
+    code, err = run_cli(*base, "-o", s8, "--method", "single8")
+    assert code == 0, err
+    more = ["distill", trained["teacher"], "--epochs", "2", "--resume", *FAST]
+    code, err = run_cli(*more, "-o", nm, "--neumip-dirs", "full")
+    assert code == 0, err
+    expect_one_line_error(
+        [*more, "-o", s8, "--coarse-channels", "8"], "nothing for --method single8"
+    )
+
+
 def _save_like(ck: dict, path) -> None:
     from vrneural.distill.checkpoint import save_checkpoint
 

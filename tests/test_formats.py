@@ -1,6 +1,7 @@
 """The array container and atomic outputs: round trips and clear errors on bad files."""
 
 import contextlib
+import re
 import subprocess
 import sys
 
@@ -283,3 +284,35 @@ def test_a_file_system_without_locks_still_takes_outputs(tmp_path, monkeypatch):
     d = make_output_dir(tmp_path / "o", "run")
     seal_output_dir(d, "run")
     make_output_dir(d, "run")
+
+
+def test_output_names_are_checked_in_one_place():
+    from vrneural.formats.atomic import check_suffix
+
+    check_suffix("a/b.PT", ".pt", "checkpoint", "run.pt")
+    for path, msg in (
+        ("", "-o is empty; name the output checkpoint (e.g. -o run.pt)"),
+        ("  ", "-o is empty"),
+        ("x/.pt", "x/.pt: the output checkpoint needs a name before .pt (run.pt)"),
+        ("x.pt/", "x.pt/: output checkpoint must end in .pt"),
+        ("x.vrnm", "x.vrnm: output checkpoint must end in .pt"),
+    ):
+        with pytest.raises(VrnError, match=re.escape(msg)):
+            check_suffix(path, ".pt", "checkpoint", "run.pt")
+
+
+def test_a_failed_bench_all_takes_back_its_folders_deepest_first(tmp_path):
+    """`bench all` stopped before any bench wrote: its sub-folder goes first, then its own
+    folder, which held nothing else (it was sealed with a sub-folder that was gone)."""
+    from vrneural.formats.atomic import (
+        mark_output_dir,
+        remove_empty_created_dirs,
+        seal_marked,
+    )
+
+    ba = tmp_path / "new" / "ba"
+    mark_output_dir(ba, "bench all")
+    mark_output_dir(ba / "frames", "bench frames")
+    seal_marked(failed=True)
+    remove_empty_created_dirs()
+    assert list(tmp_path.iterdir()) == []

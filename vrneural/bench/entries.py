@@ -24,7 +24,7 @@ SPECS = {
         "lights",
         "LightsConfig",
         "run_lights",
-        "paper Fig. 10: frame time with 1 to 8 point lights",
+        "paper Fig. 10: frame time over the number of point lights (1 to 8 by default)",
     ),
     "materials": (
         "materials",

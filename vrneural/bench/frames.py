@@ -12,6 +12,7 @@ import time
 from dataclasses import dataclass
 
 from vrneural.bench import report as rp
+from vrneural.errors import count
 from vrneural.bench import timing
 from vrneural.config import opt, quick_defaults
 
@@ -106,8 +107,9 @@ def markdown(doc: dict) -> list[str]:
         "",
         rp.adapter_line(doc),
         "Benchmark scene (2 neural objects with random student weights + plain floor), "
-        f"{c['lights']} light(s), {c['eyes']} eye(s) at {c['eye_res']}; >= {c['min_frames']} "
-        f"frames and {c['cycles']} update cycle(s) per configuration after "
+        f"{count(c['lights'], 'light')}, {count(c['eyes'], 'eye')} at {c['eye_res']}; "
+        f">= {c['min_frames']} frames and {count(c['cycles'], 'update cycle')} per configuration "
+        "after "
         f"{c.get('warmup', 0)} s of unmeasured frames (frame 0 of each renderer excluded)."
         + (" **Quick run: reduced grid.**" if c["quick"] else ""),
         "Cells: FPS from the mean frame time (median / p99 frame ms, wall clock incl. GPU wait).",

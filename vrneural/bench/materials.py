@@ -101,7 +101,7 @@ def run_materials(cfg: MaterialsConfig) -> dict:
         "# Materials: several materials at once (paper Table 3)",
         "",
         rp.adapter_line(doc),
-        f"k squares with distinct materials, {count(c.lights, 'light')}, {c.eyes} eye(s) at "
+        f"k squares with distinct materials, {count(c.lights, 'light')}, {count(c.eyes, 'eye')} at "
         f"{c.eye_res}, "
         f"texture {c.texture_res}^2 per material, N = {c.reuse} ({c.schedule}), {n} frames per "
         f"count after frame 0 and {c.warmup} s of unmeasured frames."

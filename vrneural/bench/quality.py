@@ -368,10 +368,6 @@ def _worker_init(stop) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # training installs its own handler
 
 
-def _raise_interrupt(*_) -> None:
-    raise KeyboardInterrupt
-
-
 def run_jobs(pool, jobs: list, log) -> None:
     """Run ``(label, kind, config)`` steps (:func:`_job`) in ``pool`` (:func:`job_pool`); log
     each as it ends."""
@@ -800,10 +796,10 @@ def resume_hint(root: Path):
     """Ctrl-C or SIGTERM in a training bench, in any phase (training, fits, evaluation, the
     report): finished networks are kept; say how to continue. SIGTERM raises
     KeyboardInterrupt here as SIGINT does (training's own handler saves first)."""
-    from vrneural.interrupt import threading_main
+    from vrneural.interrupt import raise_terminated, threading_main
 
-    main = threading_main()
-    old = signal.signal(signal.SIGTERM, _raise_interrupt) if main else None
+    main = threading_main() and signal.getsignal(signal.SIGTERM) is not signal.SIG_IGN
+    old = signal.signal(signal.SIGTERM, raise_terminated) if main else None
     try:
         yield
     except KeyboardInterrupt:

@@ -192,6 +192,8 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
             f"--shimmer-frames = {c.shimmer_frames} is too few; allowed 0 (skip the test) or "
             "[3, 100000]"
         )
+    if is_explicit(c, "packs") and not c.packs.strip():  # "" trains; typed, it was a slip
+        raise VrnError("--packs is empty; name the folder of packs, or leave it out to train them")
     given = pack_paths(c.packs) if c.packs else None
     nets = [k for k in PACKS if k not in REQUIRED and (given is None or k in given)]
     sets = settings(c, adapter_summary().features.get("shader-f16", False), nets)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 
 from vrneural import __version__
@@ -83,17 +84,41 @@ def _command_parser(
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The command line (``argv``: default ``sys.argv[1:]``, the process's own; a list given
+    here is an in-process call, as the tests make, and gets its signal handlers back)."""
+    from vrneural import interrupt
+
+    in_process = argv is not None
     argv = sys.argv[1:] if argv is None else list(argv)
-    try:  # the subcommand modules are imported here: Ctrl-C at start-up, no traceback
-        parser = build_parser()
-    except KeyboardInterrupt:
-        print("vrneural: interrupted", file=sys.stderr)
-        return 130
+    before_term = interrupt.terminate_as_interrupt()  # before the imports, as Ctrl-C is
+    code = 130
+    try:
+        try:  # the subcommand modules are imported here: Ctrl-C at start-up, no traceback
+            parser = build_parser()
+        except KeyboardInterrupt:
+            print("vrneural: interrupted", file=sys.stderr)
+            return code
+        code = _run(parser, argv)
+        return code
+    finally:
+        if in_process:
+            interrupt.put_back({} if before_term is None else {signal.SIGTERM: before_term})
+        else:  # the interpreter shuts down (under a second): the command's outcome stands.
+            # SIGTERM is ignored (Python puts back the default for its own handlers while it
+            # shuts down, so a handler would not last); Ctrl-C exits at once with the code
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)
+            signal.signal(signal.SIGINT, lambda *_: os._exit(code))
+
+
+def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
+    """Parse ``argv`` and run its command; user errors, Ctrl-C and SIGTERM become exit codes,
+    and the command's outputs are sealed however it ends."""
+    from vrneural import interrupt
+
     args, extra = parser.parse_known_args(argv)
     if extra:  # named by the subcommand's parser: its usage line, not the top level's
         _command_parser(parser, args).error(f"unrecognized arguments: {' '.join(extra)}")
     args._explicit = explicit_dests(argv, parser)  # "--epochs 20" counts even at the default
-    restore = terminate_as_interrupt()
     code = 1  # an exception that escapes: the command failed
     try:
         code = int(args.func(args) or 0)
@@ -115,38 +140,12 @@ def main(argv: list[str] | None = None) -> int:
     finally:  # however the command ended, record what it wrote in its output directories
         from vrneural.formats.atomic import remove_empty_created_dirs, seal_marked
 
-        seal_marked(failed=code != 0)  # a failed command's new, still empty --out: removed
-        remove_empty_created_dirs()  # and take back folders made for outputs never written
-        restore()
-
-
-def terminate_as_interrupt():
-    """SIGTERM (``kill``, ``timeout``, batch schedulers) stops a command as Ctrl-C does: exit
-    130, outputs sealed, nothing half-written. Commands with a safe stopping point
-    (:class:`vrneural.interrupt.Stop`) handle both signals themselves; this covers the rest.
-    A SIGTERM ignored by whoever started us stays ignored. Returns a function that puts the
-    previous handler back (``main`` called in-process, as the tests do, leaves none behind)."""
-    import signal
-
-    from vrneural.interrupt import threading_main
-
-    if not threading_main() or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
-        return lambda: None
-    signal.signal(signal.SIGTERM, _raise_interrupt)
-    return lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL)
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised where Ctrl-C's KeyboardInterrupt would be (every ``except
-    KeyboardInterrupt`` cleans up after it too). Its own type because CPython, having marked
-    a KeyboardInterrupt as unhandled (it compares the exact type), ends the process by
-    SIGINT after our handler returned 130: a plain KeyboardInterrupt here exited -2 in 2 of
-    6 SIGTERM tests under pytest (the cause inside CPython not pinned down), this subclass in
-    none of 8."""
-
-
-def _raise_interrupt(*_):
-    raise Terminated
+        held = interrupt.hold_signals()  # a second Ctrl-C or SIGTERM waits for this
+        try:
+            seal_marked(failed=code != 0)  # a failed command's new, still empty --out: removed
+            remove_empty_created_dirs()  # and take back folders made for outputs never written
+        finally:
+            interrupt.put_back(held)
 
 
 if __name__ == "__main__":

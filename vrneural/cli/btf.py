@@ -102,9 +102,9 @@ def _check_partial(out: Path, resume: bool, force: bool) -> None:
 def run_synth(args) -> int:
     from vrneural.btf.synth import BtfConfig, synthesize
     from vrneural.config import config_from_args, config_path, write_config
-    from vrneural.errors import VrnError
     from vrneural.formats.atomic import (
         check_outputs,
+        check_suffix,
         check_resume_force,
         lock_output_file,
         output_locks,
@@ -113,8 +113,7 @@ def run_synth(args) -> int:
     cfg = config_from_args(BtfConfig, args)
     cfg.validate()
     check_resume_force(args.resume, args.force)
-    if not args.output.endswith(".btf"):
-        raise VrnError(f"{args.output}: output must end in .btf")
+    check_suffix(args.output, ".btf", "BTF", "leather.btf")
     with output_locks():
         lock_output_file(args.output)  # a second synth on it meanwhile is refused
         out, _ = check_outputs([args.output, config_path(args.output)], args.force)
@@ -183,11 +182,10 @@ def run_info(args) -> int:
 def run_show(args) -> int:
     from vrneural.btf.format import read_btf
     from vrneural.btf.sheet import contact_sheet, sheet_panels
-    from vrneural.errors import VrnError, check_range
-    from vrneural.formats.atomic import check_output
+    from vrneural.errors import check_range
+    from vrneural.formats.atomic import check_output, check_suffix
 
-    if not args.output.lower().endswith(".png"):
-        raise VrnError(f"{args.output}: output must end in .png")
+    check_suffix(args.output, ".png", "image", "sheet.png")
     btf = read_btf(args.file)
     if args.texel:
         _, _, H, W = btf.shape
@@ -213,12 +211,10 @@ def run_show(args) -> int:
 
 def run_import(args) -> int:
     from vrneural.btf.ubo2014 import import_ubo, load_extractor, parse_header
-    from vrneural.errors import VrnError
-    from vrneural.formats.atomic import check_outputs, check_resume_force
+    from vrneural.formats.atomic import check_outputs, check_resume_force, check_suffix
 
     check_resume_force(args.resume, args.force)
-    if not args.output.endswith(".btf"):  # as btf synth
-        raise VrnError(f"{args.output}: output must end in .btf")
+    check_suffix(args.output, ".btf", "BTF", "leather.btf")  # as btf synth
     load_extractor()
     parse_header(args.file)
     (out,) = check_outputs([args.output], args.force, inputs=[args.file])

@@ -409,12 +409,13 @@ METHOD_OPTIONS = (
 )
 
 
-def check_method_options(cfg: DistillConfig) -> None:
-    """An option typed on the command line that the run would not use is a one-line error
-    (it was recorded in the config as if it had been, and did nothing): the student's texture
-    channels for single8 or NeuMIP, ``--neumip-dirs`` for the others, Eq. 5's weights with
-    ``--no-distill``."""
-    given = cfg.__dict__.get("_explicit") or ()
+def check_method_options(cfg: DistillConfig, given=None) -> None:
+    """An option typed on the command line (``given``, default: ``cfg``'s record) that the run
+    would not use is a one-line error (it was recorded in the config as if it had been, and
+    did nothing): the student's texture channels for single8 or NeuMIP, ``--neumip-dirs`` for
+    the others, Eq. 5's weights with ``--no-distill``. ``cfg``: the run's config as trained
+    (a resumed run's method is its checkpoint's)."""
+    given = (cfg.__dict__.get("_explicit") or ()) if given is None else given
     for name, methods, what in METHOD_OPTIONS:
         if name in given and cfg.method not in methods:
             raise VrnError(
@@ -432,7 +433,8 @@ def check_method_options(cfg: DistillConfig) -> None:
 
 def _run_distill(cfg: DistillConfig, on_step=None) -> dict:
     check_resume_force(cfg.resume, cfg.force)
-    check_method_options(cfg)
+    if not cfg.resume:  # a resumed run's method is its checkpoint's: checked in _train
+        check_method_options(cfg)
     stored = stored_wide_start(cfg.output) if cfg.resume else None
     if cfg.wide_start or stored:
         return run_wide_start(cfg, on_step, stored)
@@ -477,7 +479,9 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
         old["teacher"] = cfg.teacher
         if cfg.btf:
             old["btf"] = cfg.btf
+        given = cfg.__dict__.get("_explicit") or ()
         cfg = keep_flag_names(cfg, DistillConfig(**old))
+        check_method_options(cfg, given)
     tck = load_checkpoint(cfg.teacher, kind="teacher")
     if resume is None and not tck.get("finished", True):
         warnings.warn(

@@ -23,6 +23,7 @@ from vrneural.errors import VrnError
 from vrneural.formats.atomic import (
     check_outputs,
     check_resume_force,
+    check_suffix,
     json_safe,
     lock_output_file,
 )
@@ -32,11 +33,8 @@ from vrneural.warn import VrnWarning
 def outputs_of(output: str, export: bool) -> list[str]:
     """Files a stage writes: the checkpoint, its config and (optionally) the ``.vrnm`` beside
     it with its config."""
-    if not str(output).strip():
-        raise VrnError("-o is empty; name the output checkpoint (e.g. -o student.pt)")
+    check_suffix(output, ".pt", "checkpoint", "run.pt")
     p = Path(output)
-    if p.name == ".pt":  # a hidden file without a suffix, to Path
-        raise VrnError(f"{output}: the output checkpoint needs a name before .pt (student.pt)")
     if p.suffix != ".pt":  # the pack beside it is <stem>.vrnm: keep the pair unambiguous
         raise VrnError(f"{output}: output checkpoint must end in .pt")
     files = [p, config_path(p)]
@@ -107,16 +105,19 @@ def clear_outputs(outputs: list[str]) -> None:
         if not (o.exists() or o.is_symlink()):
             continue
         aside = o.with_name(f".{o.name}.old-{os.getpid()}")
+        moved.append((o, aside))
         try:
             o.rename(aside)
-        except OSError as e:
+        except BaseException as e:  # Ctrl-C between two renames too: put them back
             for orig, back in reversed(moved):
-                back.rename(orig)
+                if (back.exists() or back.is_symlink()) and not orig.exists():
+                    back.rename(orig)
+            if not isinstance(e, OSError):
+                raise
             raise VrnError(
                 f"{o}: cannot remove the old output to replace it ({e.strerror or e}); "
                 "nothing was changed"
             ) from None
-        moved.append((o, aside))
     for _, aside in moved:
         aside.unlink(missing_ok=True)
 

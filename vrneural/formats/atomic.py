@@ -15,6 +15,19 @@ from pathlib import Path
 from vrneural.errors import VrnError
 
 
+def check_suffix(path: str, suffix: str, what: str, example: str) -> None:
+    """A one-line error unless output ``path`` (``-o``) names a file ending in ``suffix``
+    (case-insensitive): an empty ``-o``, a bare ``.pt`` (a hidden file without a suffix to
+    Path) and another ending each get their own message. ``example``: a name to suggest."""
+    if not str(path).strip():
+        raise VrnError(f"-o is empty; name the output {what} (e.g. -o {example})")
+    name = Path(path).name
+    if name.lower() == suffix:
+        raise VrnError(f"{path}: the output {what} needs a name before {suffix} ({example})")
+    if not name.lower().endswith(suffix) or str(path).endswith(("/", os.sep)):
+        raise VrnError(f"{path}: output {what} must end in {suffix}")
+
+
 def check_output(path: str | os.PathLike, force: bool) -> Path:
     """Validate an output path before any work starts.
 
@@ -393,7 +406,8 @@ def seal_marked(failed: bool = False) -> None:
     tell it from files added afterwards. Only a killed process leaves an output unsealed.
     A ``failed`` command's output directory that this process created and that holds nothing
     but the marker is removed instead: a run that fails in its set-up leaves nothing behind."""
-    for p, command in list(_MARKED.items()):
+    # deepest first: `bench all`'s sub-folders go before the folder that holds them is judged
+    for p, command in sorted(_MARKED.items(), key=lambda kv: len(kv[0].parts), reverse=True):
         if failed and p in _created_resolved() and _only_mark(p):
             with contextlib.suppress(OSError):
                 (p / OUTPUT_MARK).unlink()
