@@ -247,8 +247,9 @@ def test_an_unfinished_output_says_whether_its_writer_still_runs(tmp_path):
     ):
         check_output_dir(d, True, "run")
     with _lock_held_by_another_process(d):
-        with pytest.raises(VrnError, match="another vrneural process is writing this output"):
-            check_output_dir(d, True, "run")
+        for force in (True, False):  # without --force too: "pass --force" would not help
+            with pytest.raises(VrnError, match="another vrneural process is writing this"):
+                check_output_dir(d, force, "run")
     assert sorted(p.name for p in d.iterdir()) == [OUTPUT_MARK, "frame.png"]
 
 

@@ -191,6 +191,11 @@ def check_output_dir(
                     f"{p}: holds the output of {by}, not of `vrneural {command}`; choose "
                     "another --out"
                 )
+            if mark.get("entries") is None and _held_elsewhere(p):  # --force would not help
+                raise VrnError(
+                    f"{p}: another vrneural process is writing this output right now; wait "
+                    "for it to finish or choose another --out"
+                )
             if not force:
                 raise VrnError(f"{p}: output exists; {remedy}")
             if deletes:
@@ -201,12 +206,7 @@ def check_output_dir(
 
 def _check_replaceable(p: Path, mark: dict, command: str) -> None:
     """``--force`` may empty ``p`` only when its command sealed it and nothing was added."""
-    if not isinstance(mark.get("entries"), list):
-        if _held_elsewhere(p):
-            raise VrnError(
-                f"{p}: another vrneural process is writing this output right now; wait for "
-                "it to finish or choose another --out"
-            )
+    if not isinstance(mark.get("entries"), list):  # (a running writer: refused before)
         raise VrnError(
             f"{p}: an unfinished `vrneural {command}` output (its process was killed), so "
             "--force cannot tell its files from others; check it and delete it yourself, or "
