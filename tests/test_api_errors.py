@@ -67,7 +67,16 @@ def test_renderer_wants_resolved_settings():
 
 
 def test_parse_res_takes_a_tuple():
-    assert parse_res((64, 48)) == parse_res("64x48") == (64, 48)
+    assert parse_res((64, 48)) == parse_res("64x48") == parse_res(" 64 X 48 ") == (64, 48)
+
+
+@pytest.mark.parametrize(
+    "text", ["+32x+32", "\u0663\u0662x\u0663\u0662", "32x", "32x32x1", "1e2x32"]
+)
+def test_parse_res_takes_plain_digits_only(text):
+    """int() takes signs, other scripts' digits and spaces inside: those were accepted."""
+    with pytest.raises(VrnError, match="must be WIDTHxHEIGHT"):
+        parse_res(text)
 
 
 @pytest.mark.gpu

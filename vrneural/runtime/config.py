@@ -4,6 +4,7 @@ resolution against a device profile, the scene and the adapter."""
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 from vrneural.config import opt
@@ -59,10 +60,10 @@ def parse_res(s, field: str = "--eye-res") -> tuple[int, int]:
     """``"2064x2208"`` (or, from Python, ``(2064, 2208)``) -> ``(width, height)``, checked."""
     if isinstance(s, (tuple, list)) and len(s) == 2:
         s = f"{s[0]}x{s[1]}"
-    try:
-        w, h = (int(v) for v in str(s).lower().split("x"))
-    except ValueError:
-        raise VrnError(f"{field} = {s!r} must be WIDTHxHEIGHT, e.g. 2064x2208") from None
+    m = re.fullmatch(r"\s*([0-9]+)\s*[xX]\s*([0-9]+)\s*", str(s))  # ASCII digits, no signs
+    if m is None:
+        raise VrnError(f"{field} = {s!r} must be WIDTHxHEIGHT, e.g. 2064x2208")
+    w, h = int(m[1]), int(m[2])
     if not (16 <= w <= 16384 and 16 <= h <= 16384):
         raise VrnError(f"{field} = {s!r} is out of range; each side in [16, 16384]")
     return w, h
