@@ -41,6 +41,7 @@ def test_kernels_speedups_with_f16_only_compare_with_f16_constants():
     doc = _doc([_rec("student", "constants", "f16", 2.0), _rec("student", "torch", "f32", 4.0)])
     assert kernels.add_speedups(doc) == "f16" and doc["speedup_reference"] == "constants f16"
     assert [r["speedup_vs_constants_f16"] for r in doc["records"]] == [1.0, 0.5]
+    assert [r["speedup_vs_constants"] for r in doc["records"]] == [1.0, 0.5]
     md = "\n".join(kernels.markdown(doc))
     assert "| speed vs constants f16 |" in md
     assert "No f32 kernel was measured, so the reference is f16" in md

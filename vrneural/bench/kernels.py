@@ -276,8 +276,9 @@ def _run(c: KernelsConfig, doc: dict, nets, precs, root, t0) -> dict:
 
 
 def add_speedups(doc: dict) -> str:
-    """Give every record ``speedup_vs_constants_<p>`` (the same network's constants kernel's ms
-    over the record's ms; None when that network has no constants record) and set
+    """Give every record ``speedup_vs_constants`` and ``speedup_vs_constants_<p>`` (the same
+    value, the same network's constants kernel's ms over the record's ms; None when that
+    network has no constants record) and set
     ``doc["speedup_reference"]``: constants in f32 when f32 was measured, else in the first GPU
     precision measured (f16 alone: torch, always f32, is then compared with an f16 kernel)."""
     precs = [r["precision"] for r in doc["records"] if r["variant"] == "constants"]
@@ -290,7 +291,9 @@ def add_speedups(doc: dict) -> str:
     }
     for r in doc["records"]:
         base = ref.get(r["network"])
-        r[f"speedup_vs_constants_{prec}"] = None if base is None else base / r["ms"]
+        v = None if base is None else base / r["ms"]
+        r[f"speedup_vs_constants_{prec}"] = v  # the name says which precision: as before
+        r["speedup_vs_constants"] = v  # the same under one name ("speedup_reference" says it)
     return prec
 
 
