@@ -159,6 +159,8 @@ def test_bad_values_are_one_line(trained, tmp_path):  # noqa: F811
     )
     expect_one_line_error(["export", trained["student"], "-o", tmp_path / "m.txt"], "end in .vrnm")
     expect_one_line_error(["teach", trained["btf"], "-o", "", *FAST], "-o is empty")
+    g = tmp_path / "g.pt"  # missing, and the output too: named as missing, not as overwritten
+    expect_one_line_error(["distill", trained["teacher"], "-o", g, "--init-from", g], "no such")
     expect_one_line_error(["distill", trained["teacher"], "-o", tmp_path / ".pt"], "a name before")
     assert not (tmp_path / "t.vrnm").exists() and not (tmp_path / "m.txt").exists()
 

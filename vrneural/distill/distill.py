@@ -465,6 +465,8 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
     if cfg.method == "neumip" and is_explicit(cfg, "width"):
         raise VrnError("--width: NeuMIP is always 4 x 25 (the paper's baseline); drop --width")
     cfg = resolve_method(cfg)
+    if cfg.init_from and not cfg.resume and not Path(cfg.init_from).is_file():  # named first
+        raise VrnError(f"--init-from {cfg.init_from}: no such checkpoint")
     export = cfg.export and not is_wide_half(dataclasses.asdict(cfg))  # a wide half: no pack
     outs = outputs_of(cfg.output, export)
     resume = prepare_outputs(cfg, outs, inputs=[cfg.teacher, cfg.btf, cfg.init_from])
