@@ -290,7 +290,10 @@ def test_a_file_system_without_locks_still_takes_outputs(tmp_path, monkeypatch):
 def test_output_names_are_checked_in_one_place():
     from vrneural.formats.atomic import check_suffix
 
-    check_suffix("a/b.PT", ".pt", "checkpoint", "run.pt")
+    check_suffix("a/b.pt", ".pt", "checkpoint", "run.pt")
+    check_suffix("a/b.PNG", ".png", "image", "sheet.png", ignore_case=True)
+    with pytest.raises(VrnError, match=re.escape("a/b.PT: output checkpoint must end in .pt")):
+        check_suffix("a/b.PT", ".pt", "checkpoint", "run.pt")  # the pack would be a/b.vrnm
     for path, msg in (
         ("", "-o is empty; name the output checkpoint (e.g. -o run.pt)"),
         ("  ", "-o is empty"),

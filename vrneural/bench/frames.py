@@ -12,9 +12,9 @@ import time
 from dataclasses import dataclass
 
 from vrneural.bench import report as rp
-from vrneural.errors import count
 from vrneural.bench import timing
 from vrneural.config import opt, quick_defaults
+from vrneural.errors import count
 
 
 @dataclass

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrneural.bench import report as rp
-from vrneural.errors import count
 from vrneural.config import opt, quick_defaults
+from vrneural.errors import count
 
 NETWORKS = ("student", "single8", "neumip")
 VARIANTS = ("constants", "buffer", "torch")

@@ -22,8 +22,8 @@ import numpy as np
 
 from vrneural.bench import metrics, shimmer
 from vrneural.bench import report as rp
-from vrneural.errors import count
 from vrneural.config import is_explicit, mark_explicit, opt, quick_defaults, replace_config
+from vrneural.errors import count
 
 LABELS = {
     "student": "student (distilled)",

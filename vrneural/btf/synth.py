@@ -17,10 +17,10 @@ import numpy as np
 
 from vrneural.btf.dirs import direction_set
 from vrneural.btf.format import BtfWriter, check_partial_settings
-from vrneural.formats.f16 import F16_MAX
 from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt
 from vrneural.errors import VrnError, check_choice, check_range, check_seed
+from vrneural.formats.f16 import F16_MAX
 from vrneural.interrupt import Stop
 
 GENERATOR = "vrneural.btf.synth v1"

@@ -24,8 +24,8 @@ import numpy as np
 
 from vrneural.btf.dirs import spherical
 from vrneural.btf.format import BtfWriter, check_partial_settings
-from vrneural.formats.f16 import F16_MAX
 from vrneural.errors import VrnError
+from vrneural.formats.f16 import F16_MAX
 
 INSTALL_HINT = "pip install 'vrneural[ubo]' (or: pip install btf-extractor)"
 _COMMON = struct.Struct("<II80s80s80sf3f")  # BTFCommonHeader, 264 bytes

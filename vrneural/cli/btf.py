@@ -185,7 +185,7 @@ def run_show(args) -> int:
     from vrneural.errors import check_range
     from vrneural.formats.atomic import check_output, check_suffix
 
-    check_suffix(args.output, ".png", "image", "sheet.png")
+    check_suffix(args.output, ".png", "image", "sheet.png", ignore_case=True)
     btf = read_btf(args.file)
     if args.texel:
         _, _, H, W = btf.shape

@@ -22,19 +22,15 @@ def register(sub) -> None:
 
 def run(args) -> int:
     import json
-    from pathlib import Path
 
     from vrneural.bench.packs import width_words
     from vrneural.config import config_path
     from vrneural.distill.checkpoint import load_checkpoint
     from vrneural.distill.export import export_checkpoint, ranges_table
-    from vrneural.errors import VrnError
     from vrneural.formats.atomic import check_outputs, check_suffix, write_json
     from vrneural.formats.vrnm import read_vrnm
 
     check_suffix(args.output, ".vrnm", "pack", "material.vrnm")
-    if Path(args.output).suffix != ".vrnm":  # .VRNM: the runtime looks for .vrnm
-        raise VrnError(f"{args.output}: output pack must end in .vrnm")
     sidecar = config_path(args.output)
     check_outputs([args.output, sidecar], args.force, inputs=[args.checkpoint, args.btf])
     ck = load_checkpoint(args.checkpoint)

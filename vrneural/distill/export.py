@@ -15,8 +15,8 @@ import torch
 
 from vrneural.distill.data import SliceData
 from vrneural.errors import VrnError
-from vrneural.material import NeuralMaterial, half_vector, material_forward, sample_bilinear_wrap
 from vrneural.formats.f16 import F16_MAX, F16_MIN_NORMAL
+from vrneural.material import NeuralMaterial, half_vector, material_forward, sample_bilinear_wrap
 
 RANGE_PAIRS = 16  # training slices used for activation ranges
 

@@ -33,10 +33,8 @@ from vrneural.warn import VrnWarning
 def outputs_of(output: str, export: bool) -> list[str]:
     """Files a stage writes: the checkpoint, its config and (optionally) the ``.vrnm`` beside
     it with its config."""
-    check_suffix(output, ".pt", "checkpoint", "run.pt")
+    check_suffix(output, ".pt", "checkpoint", "run.pt")  # the pack beside it: <stem>.vrnm
     p = Path(output)
-    if p.suffix != ".pt":  # the pack beside it is <stem>.vrnm: keep the pair unambiguous
-        raise VrnError(f"{output}: output checkpoint must end in .pt")
     files = [p, config_path(p)]
     if export:
         pack = p.with_suffix(".vrnm")

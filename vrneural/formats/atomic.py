@@ -15,16 +15,19 @@ from pathlib import Path
 from vrneural.errors import VrnError
 
 
-def check_suffix(path: str, suffix: str, what: str, example: str) -> None:
+def check_suffix(
+    path: str, suffix: str, what: str, example: str, ignore_case: bool = False
+) -> None:
     """A one-line error unless output ``path`` (``-o``) names a file ending in ``suffix``
-    (case-insensitive): an empty ``-o``, a bare ``.pt`` (a hidden file without a suffix to
-    Path) and another ending each get their own message. ``example``: a name to suggest."""
+    (exactly, or with ``ignore_case`` in any case): an empty ``-o``, a bare ``.pt`` (a hidden
+    file without a suffix to Path) and another ending each get their own message.
+    ``example``: a name to suggest."""
     if not str(path).strip():
         raise VrnError(f"-o is empty; name the output {what} (e.g. -o {example})")
-    name = Path(path).name
-    if name.lower() == suffix:
+    name = Path(path).name.lower() if ignore_case else Path(path).name
+    if name == suffix:
         raise VrnError(f"{path}: the output {what} needs a name before {suffix} ({example})")
-    if not name.lower().endswith(suffix) or str(path).endswith(("/", os.sep)):
+    if not name.endswith(suffix) or str(path).endswith(("/", os.sep)):
         raise VrnError(f"{path}: output {what} must end in {suffix}")
 
 
@@ -406,13 +409,10 @@ def seal_marked(failed: bool = False) -> None:
     tell it from files added afterwards. Only a killed process leaves an output unsealed.
     A ``failed`` command's output directory that this process created and that holds nothing
     but the marker is removed instead: a run that fails in its set-up leaves nothing behind."""
+    created = {d.resolve() for d in _CREATED} if failed else set()
     # deepest first: `bench all`'s sub-folders go before the folder that holds them is judged
     for p, command in sorted(_MARKED.items(), key=lambda kv: len(kv[0].parts), reverse=True):
-        if failed and p in _created_resolved() and _only_mark(p):
-            with contextlib.suppress(OSError):
-                (p / OUTPUT_MARK).unlink()
-                _unlock_output_dir(p)
-                p.rmdir()
+        if p in created and _only_mark(p) and _remove_marked(p):
             _MARKED.pop(p, None)
             continue
         mark = read_mark(p) if p.is_dir() else None
@@ -422,8 +422,16 @@ def seal_marked(failed: bool = False) -> None:
         _MARKED.pop(p, None)
 
 
-def _created_resolved() -> set[Path]:
-    return {d.resolve() for d in _CREATED}
+def _remove_marked(p: Path) -> bool:
+    """Remove output directory ``p`` that holds only its marker; False (it is then sealed
+    as usual) where it cannot be."""
+    _unlock_output_dir(p)
+    try:
+        (p / OUTPUT_MARK).unlink()
+        p.rmdir()
+    except OSError:
+        return False
+    return True
 
 
 def _only_mark(p: Path) -> bool:

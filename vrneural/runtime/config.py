@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 from vrneural.config import opt
 from vrneural.errors import VrnError, check_int, check_range, count
+from vrneural.runtime.lights import LIGHTS_MAX
 from vrneural.runtime.profiles import PROFILES, get_profile
 from vrneural.runtime.renderer import MODES, Settings
 from vrneural.runtime.schedule import SCHEDULES
@@ -52,8 +53,6 @@ class RunConfig:
 
 #: the longest update interval N (`run --reuse`, every bench): 1000 frames between updates
 REUSE_MAX = 1000
-#: the most point lights a frame shades (`run --lights`, every bench; the shaders loop over them)
-LIGHTS_MAX = 64
 
 
 def parse_res(s, field: str = "--eye-res") -> tuple[int, int]:

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from vrneural.atlas.types import EMPTY, Atlas
-from vrneural.material import NeuralMaterial, material_forward
 from vrneural.formats.f16 import F16_MAX
+from vrneural.material import NeuralMaterial, material_forward
 
 
 def barycentric_2d(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:

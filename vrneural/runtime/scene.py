@@ -41,7 +41,13 @@ import numpy as np
 
 from vrneural.errors import SEED_MAX, VrnError, check_int, number_text
 from vrneural.material import NeuralMaterial, lambertian_material, random_material
-from vrneural.runtime.lights import MAX_INTENSITY, MOTIONS, PointLight, default_lights
+from vrneural.runtime.lights import (
+    LIGHTS_MAX,
+    MAX_INTENSITY,
+    MOTIONS,
+    PointLight,
+    default_lights,
+)
 
 
 @dataclass
@@ -427,7 +433,7 @@ def builtin_scene(n_lights: int = 3) -> Scene:
     quest3 profile and the built-in head orbit. Same as ``demo/scene.toml``."""
     from vrneural.runtime.assets import get_mesh
 
-    check_int("builtin_scene: n_lights", n_lights, 0, 64)  # `run --lights`' range
+    check_int("builtin_scene: n_lights", n_lights, 0, LIGHTS_MAX)  # `run --lights`' range
 
     def fit(name: str, size: float) -> float:  # scale so the mesh's largest extent is ``size``
         p = get_mesh(name).positions
