@@ -58,6 +58,14 @@ def test_pack_meta_and_config(trained):  # noqa: F811
     r = meta["ranges"]
     assert {"weight.coarse.0", "texture.fine", "act.coarse.1", "act.fine.1"} <= set(r)
     assert all(0 < v["max_abs"] < 65504 for v in r.values())
+    # the BTF's direction range, from the checkpoint (docs/conventions.md section 2b)
+    from vrneural.btf import read_btf
+    from vrneural.grazing import directions_range
+
+    btf = read_btf(meta["provenance"]["btf"]["path"])
+    want = directions_range(btf.light_dirs, btf.view_dirs)
+    assert mat.dir_range == want == tuple(load_checkpoint(trained["student"])["btf"]["dir_range"])
+    assert read_vrnm(trained["teacher"].with_suffix(".vrnm")).dir_range == want
     cfg = json.loads((trained["dir"] / "student.pt.config.json").read_text())
     assert cfg["config"] == "DistillConfig" and cfg["sigma"] == 0.1 and cfg["epochs"] == 2
     assert len(cfg["history"]) == 2

@@ -148,5 +148,6 @@ position = [-1, 2.5, 1.5]
         stats.append(r.frame(0))
         imgs.append(r.read_eyes()[0][..., :3])
     assert stats[0].pixels_shaded == stats[1].pixels_shaded > 300
-    assert imgs[0].mean() > 0.005  # lit (0.0077 measured)
+    # lit: 0.0045 measured (0.0077 before lights beyond the 75-degree range were tapered)
+    assert imgs[0].mean() > 0.003
     np.testing.assert_allclose(imgs[1], imgs[0], rtol=2e-3, atol=1e-5)

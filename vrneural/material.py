@@ -19,7 +19,10 @@ Shared definitions:
 - neural textures ``[H, W, C]`` float16 are sampled bilinearly with wrap-around addressing,
   texel ``(x, y)`` centred at UV ``((x + 0.5) / W, (y + 0.5) / H)`` (:func:`sample_bilinear_wrap`);
 - ``output`` transform of the last layer's raw value ``r``: ``"linear"``: ``max(r, 0)``;
-  ``"log1p"``: ``expm1(max(r, 0))`` (the network predicts ``log(1 + y)``).
+  ``"log1p"``: ``expm1(max(r, 0))`` (the network predicts ``log(1 + y)``);
+- directions beyond the training data's range ``dir_range`` (the largest light and view polar
+  angles of its BTF) are extended as :mod:`vrneural.grazing` defines: the network is evaluated
+  at the range's boundary, a light's value tapering to 0 at the horizon.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vrneural.errors import VrnError
+from vrneural.grazing import DEFAULT_THETA_MAX_DEG, check_dir_range, extend
 from vrneural.mlp import Layer, mlp_forward, random_mlp
 
 ARCHS = {
@@ -49,8 +53,11 @@ class NeuralMaterial:
     textures: dict[str, np.ndarray]  # name -> [H, W, C] float16
     output: str = "linear"
     meta: dict = field(default_factory=dict)  # name, provenance, metrics, ranges
+    #: (theta_i_max, theta_o_max) degrees: the largest light and view polar angles of the data
+    dir_range: tuple[float, float] = (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
 
     def __post_init__(self):
+        self.dir_range = check_dir_range(self.dir_range)
         if self.arch not in ARCHS:
             raise ValueError(f"arch {self.arch!r} not in {sorted(ARCHS)}")
         if self.output not in OUTPUTS:
@@ -135,7 +142,9 @@ def material_forward(
 
     ``wi, wo: [N, 3]`` unit vectors (one angular condition per block); ``uv: [N, 4, 2]`` the
     material UVs of the block's 4 texels. Returns ``[N, 4, 3]`` float32. For ``"single"`` each
-    texel is independent (the 4 share only the directions).
+    texel is independent (the 4 share only the directions). Directions beyond
+    ``mat.dir_range`` are extended (:func:`vrneural.grazing.extend`): 0 for a light at or
+    below the horizon.
     """
     wi = np.asarray(wi, np.float32)
     wo = np.asarray(wo, np.float32)
@@ -154,6 +163,7 @@ def material_forward(
             )
         if not np.isfinite(a).all():  # NaN in, NaN out, silently
             raise VrnError(f"material_forward: {name} holds NaN/Inf values")
+    wi, wo, weight = extend(wi, wo, mat.dir_range)
     dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)  # [N, 9]
     if mat.arch == "coarse_fine":
         uc = uv.mean(axis=1)
@@ -167,7 +177,8 @@ def material_forward(
         raw = mlp_forward(
             np.concatenate([np.repeat(dirs, 4, axis=0), f], -1), mat.networks["mlp"], precision
         )
-    return apply_output(raw, mat.output).reshape(n, 4, 3).astype(np.float32)
+    y = apply_output(raw, mat.output).reshape(n, 4, 3) * weight[:, None, None]
+    return y.astype(np.float32)
 
 
 def random_material(

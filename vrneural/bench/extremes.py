@@ -19,6 +19,7 @@ from vrneural.bench import extremes_precision as prec
 from vrneural.bench import extremes_settings as sett
 from vrneural.bench import extremes_shading as shd
 from vrneural.bench import extremes_training as trn
+from vrneural.bench import terminator as term
 from vrneural.bench.extremes_fixtures import run_case
 from vrneural.config import is_explicit, opt
 
@@ -33,9 +34,10 @@ CASES = [
         "finite, >= 0, Lipschitz-continuous",
     ),
     ("normal_and_wi=-wo", "directions", shd.case_dir_normal_and_opposite, W, "h fallback (0,0,1)"),
-    ("horizon_twin", "directions", shd.case_dir_horizon, W, "jump = network value; 0 below"),
+    ("horizon_twin", "directions", shd.case_dir_horizon, W, "tapers to 0, no jump; 0 below"),
     ("horizon_gpu", "directions", shd.case_dir_horizon_gpu, W, "same on the GPU, f32 + f16"),
     ("grazing_gpu", "directions", shd.case_dir_grazing_gpu, W, "GPU vs twin at 89.99 deg"),
+    ("terminator", "directions", term.case_dir_terminator, W, "step <= 1% of peak, 3 modes"),
     ("unnormalized_frames", "directions", shd.case_dir_unnormalized, W, "scaled frames = unit"),
     ("f16_vs_f32", "precision", prec.case_prec_f16_vs_f32, W, "max / p99.9 relative error"),
     ("clamp_1e6_at_1e-4m", "precision", prec.case_prec_clamp, W, "clamped to 65504, finite"),

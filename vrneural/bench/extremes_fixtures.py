@@ -116,6 +116,23 @@ def dirs9(wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
     return np.concatenate([wi, wo, half_vector(wi, wo)], -1).astype(np.float64)
 
 
+def step_bounds(mat, wi: np.ndarray, wo: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """Upper bounds ``[N - 1]`` of ``|y[k+1] - y[k]|`` along a path of directions ``wi, wo:
+    [N, 3]`` (texel uvs ``uv: [N, 4, 2]``, the same texels at every step), as
+    :func:`vrneural.material.material_forward` extends them beyond the data's range
+    (:func:`vrneural.grazing.extend`): the network sees the extended directions and its value
+    is scaled by the light weight ``w``, so a step is at most
+    ``lip |d_ext[k+1] - d_ext[k]| + max(|net[k]|, |net[k+1]|) |w[k+1] - w[k]|``."""
+    from vrneural.grazing import extend
+    from vrneural.material import material_forward
+
+    wi_e, wo_e, w = extend(wi.astype(np.float32), wo.astype(np.float32), mat.dir_range)
+    net = np.abs(material_forward(mat, wi_e, wo_e, uv).astype(np.float64)).max(axis=(1, 2))
+    dd = np.linalg.norm(np.diff(dirs9(wi_e, wo_e), axis=0), axis=1)
+    dw = np.abs(np.diff(w.astype(np.float64)))
+    return lipschitz_bound(mat) * dd + np.maximum(net[1:], net[:-1]) * dw
+
+
 def finite_nonneg(a: np.ndarray) -> bool:
     a = np.asarray(a)
     return bool(np.isfinite(a).all() and (a >= 0).all())

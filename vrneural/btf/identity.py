@@ -16,6 +16,7 @@ import numpy as np
 
 from vrneural.btf.format import Btf
 from vrneural.errors import VrnError
+from vrneural.grazing import directions_range
 
 #: The value sample of :func:`btf_fingerprint`: this many evenly spaced runs of ``SAMPLE_RUN``
 #: float16 values (2 MiB in all; a file up to that size is hashed whole).
@@ -25,7 +26,9 @@ SAMPLE_RUN = 16_384
 
 def btf_fingerprint(btf: Btf) -> dict:
     """Identity of a BTF: name, shape, a SHA-256 of its header (``sha256``) and one of a fixed
-    sample of its values (``values_sha256``).
+    sample of its values (``values_sha256``); also its directions' range ``dir_range``
+    (largest light and view polar angles, degrees: :mod:`vrneural.grazing`), which checkpoints
+    carry to the packs.
 
     The header holds the generator settings and directions' layout but not the values (a
     streamed file has no per-array checksum), so the values are sampled: ``SAMPLE_RUNS``
@@ -46,6 +49,7 @@ def btf_fingerprint(btf: Btf) -> dict:
         "sha256": hashlib.sha256(head).hexdigest(),
         "values_sha256": _values_sha256(btf.values),
         "shape": [L, V, H, W],
+        "dir_range": list(directions_range(btf.light_dirs, btf.view_dirs)),
     }
 
 

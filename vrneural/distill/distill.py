@@ -48,6 +48,7 @@ from vrneural.distill.prune import prune_to
 from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import Interrupted, compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, count
+from vrneural.grazing import DEFAULT_THETA_MAX_DEG
 from vrneural.formats.atomic import check_not_input, check_resume_force, file_sha256, same_file
 
 
@@ -71,7 +72,15 @@ def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
     model.eval()
     for p in model.parameters():
         p.requires_grad_(False)
+    model.dir_range = recorded_dir_range(ck)
     return model
+
+
+def recorded_dir_range(ck: dict) -> tuple[float, float]:
+    """The direction range of a checkpoint's BTF (its record; checkpoints from before it was
+    recorded: the default, which is what ``btf synth`` and UBO2014 hold)."""
+    rng = ck.get("btf", {}).get("dir_range")
+    return tuple(rng) if rng else (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
 
 
 class DistillNet(nn.Module):

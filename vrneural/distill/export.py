@@ -16,6 +16,7 @@ import torch
 from vrneural.distill.data import SliceData
 from vrneural.errors import VrnError
 from vrneural.formats.f16 import F16_MAX, F16_MIN_NORMAL
+from vrneural.grazing import directions_range
 from vrneural.material import NeuralMaterial, half_vector, material_forward, sample_bilinear_wrap
 
 RANGE_PAIRS = 16  # training slices used for activation ranges
@@ -82,6 +83,8 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None):
     from vrneural.distill.distill import model_from_checkpoint
 
     model = model_from_checkpoint(ck, source)
+    if "dir_range" not in ck["btf"]:  # a checkpoint from before it was recorded: the BTF's
+        model.dir_range = directions_range(data.btf.light_dirs, data.btf.view_dirs)
     for k, v in model.state_dict().items():
         if not torch.isfinite(v).all():
             raise VrnError(f"{source or 'checkpoint'}: refusing to export: '{k}' has NaN/Inf")

@@ -21,6 +21,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from vrneural.grazing import boundary_consts
 from vrneural.material import DIR_INPUTS, HALF_EPS2, NeuralMaterial
 from vrneural.mlp import Layer
 
@@ -32,6 +33,17 @@ def half_vector(wi: torch.Tensor, wo: torch.Tensor) -> torch.Tensor:
     ok = n2 >= HALF_EPS2
     up = torch.tensor([0.0, 0.0, 1.0], dtype=s.dtype, device=s.device)
     return torch.where(ok, s / torch.sqrt(torch.where(ok, n2, torch.ones_like(n2))), up)
+
+
+def to_range(w: torch.Tensor, cos_max: float, sin_max: float) -> torch.Tensor:
+    """Twin of :func:`vrneural.grazing.to_range` for ``w: [..., 3]``: a direction below polar
+    angle ``acos(cos_max)`` moved onto it at the same azimuth (``+x`` where undefined)."""
+    r2 = (w[..., :2] * w[..., :2]).sum(-1, keepdim=True)
+    ok = r2 >= 1e-20
+    fallback = torch.tensor([sin_max, 0.0], dtype=w.dtype, device=w.device)
+    xy = torch.where(ok, w[..., :2] * (sin_max / torch.sqrt(torch.where(ok, r2, 1.0))), fallback)
+    edge = torch.cat([xy, torch.full_like(r2, cos_max)], -1)
+    return torch.where(w[..., 2:] >= cos_max, w, edge)
 
 
 def sample_bilinear_wrap(tex: torch.Tensor, uv: torch.Tensor) -> torch.Tensor:
@@ -133,6 +145,19 @@ class NeuralModel(nn.Module):
             raise ValueError(f"unknown arch {self.arch!r}")
         self.latent_layers = spec["latent_layers"]
         self.register_buffer("dir_mask", dir_mask(spec), persistent=False)
+        #: (theta_i_max, theta_o_max) degrees of the training data, set for evaluation
+        #: (:func:`vrneural.distill.distill.model_from_checkpoint`); None while training on
+        #: the BTF's own directions, where the extension beyond them is the identity
+        self.dir_range: tuple[float, float] | None = None
+
+    def _extended(self, wi: torch.Tensor, wo: torch.Tensor):
+        """``(wi, wo, light weight)`` as :func:`vrneural.grazing.extend` gives them."""
+        if self.dir_range is None:
+            return wi, wo, None
+        ci, si = (float(x) for x in boundary_consts(self.dir_range[0]))
+        co, so = (float(x) for x in boundary_consts(self.dir_range[1]))
+        weight = torch.clamp(wi[..., 2] / ci, 0.0, 1.0)
+        return to_range(wi, ci, si), to_range(wo, co, so), weight
 
     def forward(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor):
         raw, acts = self.activations(wi, wo, uv)
@@ -147,6 +172,7 @@ class NeuralModel(nn.Module):
         """``raw [N, 4, 3]`` and every layer's output per network: ``{"mlp": [...]}``
         (``[N, 4, D]`` each) or ``{"coarse": [...] ([N, D], once per block), "fine": [...]}``."""
         n = uv.shape[0]
+        wi, wo, _ = self._extended(wi, wo)
         dirs = torch.cat([wi, wo, half_vector(wi, wo)]) * self.dir_mask  # [9]
         if self.arch == "single":
             f = sample_bilinear_wrap(f16_round(self.tex["features"]), uv)  # [N, 4, C]
@@ -161,8 +187,11 @@ class NeuralModel(nn.Module):
         return raw, {"coarse": hc, "fine": hf}
 
     def predict(self, wi, wo, uv) -> torch.Tensor:
-        """BTF values ``[N, 4, 3]`` (output transform applied)."""
-        return apply_output(self(wi, wo, uv)[0], self.output)
+        """BTF values ``[N, 4, 3]`` (output transform applied; beyond ``dir_range`` extended as
+        :func:`vrneural.grazing.extend` does)."""
+        y = apply_output(self(wi, wo, uv)[0], self.output)
+        weight = self._extended(wi, wo)[2]
+        return y if weight is None else y * weight
 
     def to_material(self, meta: dict | None = None) -> NeuralMaterial:
         """The runtime form (weights float32, textures float16)."""
@@ -172,7 +201,8 @@ class NeuralModel(nn.Module):
             nets["mlp"][0].weight[:, :DIR_INPUTS] *= self.dir_mask.cpu().numpy()  # unread: 0
         else:
             nets = {"coarse": self.coarse.to_layers(), "fine": self.fine.to_layers()}
-        return NeuralMaterial(self.arch, nets, texs, self.output, meta or {})
+        rng = {} if self.dir_range is None else {"dir_range": self.dir_range}
+        return NeuralMaterial(self.arch, nets, texs, self.output, meta or {}, **rng)
 
 
 DIR_MODES = {

@@ -1,11 +1,14 @@
 """The runtime pack (``.vrnm``): one neural material, readable with numpy alone. No pickle.
 
-Container (:mod:`vrneural.formats.container`), magic ``b"VRNM"``, version 1. Header::
+Container (:mod:`vrneural.formats.container`), magic ``b"VRNM"``, version 2. Header::
 
     {"arch": "coarse_fine" | "single", "output": "linear" | "log1p",
      "networks": {name: [{"n_in": int, "n_out": int, "act": str}, ...]},
      "textures": {name: [H, W, C]},
+     "dir_range": [theta_i_max, theta_o_max],   # degrees, each in (0, 90); since version 2
      "meta": {"name": ..., "provenance": {...}, "metrics": {...}, "ranges": {...}}}
+
+Version 1 packs (no ``dir_range``) load with the default 75 degrees, said once per file.
 
 Arrays: ``net.<name>.<i>.weight`` ``[out, in]`` float32, ``net.<name>.<i>.bias`` ``[out]``
 float32, ``tex.<name>`` ``[H, W, C]`` float16, each with a CRC32. Writing refuses NaN/Inf.
@@ -13,17 +16,22 @@ float32, ``tex.<name>`` ``[H, W, C]`` float16, each with a CRC32. Writing refuse
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from vrneural.errors import VrnError
 from vrneural.formats.container import read_container, write_container
+from vrneural.grazing import DEFAULT_THETA_MAX_DEG
 from vrneural.material import NeuralMaterial
 from vrneural.mlp import Layer
 
 VRNM_MAGIC = b"VRNM"
-VRNM_VERSION = 1
+VRNM_VERSION = 2
+#: versions this reader takes (1: before the recorded direction range)
+VRNM_READS = (1, 2)
+_said_default_range: set[str] = set()
 
 
 def write_vrnm(path, mat: NeuralMaterial) -> Path:
@@ -47,6 +55,7 @@ def write_vrnm(path, mat: NeuralMaterial) -> Path:
         "output": mat.output,
         "networks": nets,
         "textures": {k: list(t.shape) for k, t in mat.textures.items()},
+        "dir_range": [float(x) for x in mat.dir_range],
         "meta": mat.meta,
     }
     return write_container(path, VRNM_MAGIC, VRNM_VERSION, header, arrays)
@@ -54,7 +63,7 @@ def write_vrnm(path, mat: NeuralMaterial) -> Path:
 
 def read_vrnm(path) -> NeuralMaterial:
     """Read and validate a ``.vrnm`` pack into a :class:`NeuralMaterial`."""
-    header, arrays, _ = read_container(path, VRNM_MAGIC, (VRNM_VERSION,), what="runtime pack")
+    header, arrays, version = read_container(path, VRNM_MAGIC, VRNM_READS, what="runtime pack")
     try:
         nets = {}
         for name, specs in header["networks"].items():
@@ -70,7 +79,10 @@ def read_vrnm(path) -> NeuralMaterial:
                 layers.append(Layer(w, b, s["act"]))
             nets[name] = layers
         texs = {name: np.array(arrays[f"tex.{name}"], np.float16) for name in header["textures"]}
-        mat = NeuralMaterial(header["arch"], nets, texs, header["output"], header.get("meta", {}))
+        dir_range = header["dir_range"] if version >= 2 else _default_range(path)
+        mat = NeuralMaterial(
+            header["arch"], nets, texs, header["output"], header.get("meta", {}), dir_range
+        )
     except KeyError as e:
         raise VrnError(f"{path}: runtime pack lacks {e}") from None
     except ValueError as e:
@@ -79,3 +91,16 @@ def read_vrnm(path) -> NeuralMaterial:
         if not np.isfinite(np.asarray(a, np.float32)).all():
             raise VrnError(f"{path}: '{k}' contains NaN/Inf")
     return mat
+
+
+def _default_range(path) -> tuple[float, float]:
+    """The direction range of a version-1 pack (none recorded): the default, said once."""
+    key = str(Path(path).resolve())
+    if key not in _said_default_range:
+        _said_default_range.add(key)
+        print(
+            f"{path}: pack from before recorded direction ranges; assuming the BTF's directions "
+            f"reach {DEFAULT_THETA_MAX_DEG:g} degrees (re-export it to record its own)",
+            file=sys.stderr,
+        )
+    return (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)

@@ -25,6 +25,7 @@ import numpy as np
 
 from vrneural.errors import VrnError
 from vrneural.gpu.shaders import render_wgsl
+from vrneural.grazing import boundary_consts
 from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.mlp import pack_weights, wgsl_type
 
@@ -65,6 +66,9 @@ class MaterialSpec:
     buf_acts: list
     buf_bias_offsets: list  # per layer, into the uniform bias buffer (uniform weights)
     uniform_binding: int
+    #: WGSL literals of (cos, sin) of theta_i_max, then of theta_o_max (the data's direction
+    #: range, vrneural.grazing); exact float32 values, as the numpy twin uses
+    dir_consts: tuple = ()
 
     @property
     def buffer_weights(self) -> bool:
@@ -171,6 +175,7 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
         buf_acts=[_ACT_CODE[lay.act] for lay in layers],
         buf_bias_offsets=boffs,
         uniform_binding=UNIFORM_WEIGHTS_BINDING,
+        dir_consts=tuple(repr(float(c)) for t in mat.dir_range for c in boundary_consts(t)),
     )
 
 

@@ -271,6 +271,31 @@ fn eval_single(d: array<f32, 9>, f: array<{{ T }}, {{ mat.ca }}>) -> vec3<f32> {
 
 {% macro material_fns(mat, T) %}
 {{ wrap_fn() }}
+// The training data's direction range (vrneural/grazing.py): cos and sin of theta_i_max and
+// theta_o_max, exact float32 values.
+const COS_I_MAX: f32 = {{ mat.dir_consts[0] }};
+const SIN_I_MAX: f32 = {{ mat.dir_consts[1] }};
+const COS_O_MAX: f32 = {{ mat.dir_consts[2] }};
+const SIN_O_MAX: f32 = {{ mat.dir_consts[3] }};
+
+// A direction below polar angle acos(c) moved onto it at the same azimuth (+x where the
+// azimuth is undefined); others unchanged. Twin: vrneural/grazing.py:to_range.
+fn to_range(w: vec3<f32>, c: f32, s: f32) -> vec3<f32> {
+    if (w.z >= c) { return w; }
+    let r2 = dot(w.xy, w.xy);
+    if (r2 < 1e-20) { return vec3<f32>(s, 0.0, c); }
+    return vec3<f32>(w.xy * (s / sqrt(r2)), c);
+}
+
+// Scale of a light's value: 1 inside the range, wi.z / cos(theta_i_max) beyond it, 0 at the
+// horizon. Twin: vrneural/grazing.py:light_weight.
+fn light_weight(wi_z: f32) -> f32 { return clamp(wi_z / COS_I_MAX, 0.0, 1.0); }
+
+// The network inputs (wi, wo, h) for a light and view extended beyond the range.
+fn dirs9_ext(wi: vec3<f32>, wo_ext: vec3<f32>) -> array<f32, 9> {
+    return dirs9(to_range(wi, COS_I_MAX, SIN_I_MAX), wo_ext);
+}
+fn view_ext(wo: vec3<f32>) -> vec3<f32> { return to_range(wo, COS_O_MAX, SIN_O_MAX); }
 {{ sampler_fn('sample_a', 'tex_a', mat.ca) }}
 {% if mat.arch == 'coarse_fine' %}
 {{ sampler_fn('sample_b', 'tex_b', mat.cb) }}

@@ -81,6 +81,8 @@ fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
 {% if mat.arch == 'coarse_fine' %}
     let pb = pre_b(sample_b(uv));
 {% endif %}
+    // directions beyond the data's range: evaluated at its boundary (neural_material.to_range)
+    let wo_e = view_ext(wo);
     var acc = vec3<f32>(0.0);
     var n = 0u;
     for (var li = 0u; li < {{ n_active }}u; li++) {
@@ -88,12 +90,13 @@ fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
         let d2 = max(dot(lv, lv), 1e-12);
         let wi = to_local(s, lv * inverseSqrt(d2));
         if (wi.z <= 0.0) { continue; }
-        let d = dirs9(wi, wo);
+        let d = dirs9_ext(wi, wo_e);
+        let lw = light_weight(wi.z);  // 1 inside the range: the same arithmetic as before
         n += 1u;
 {% if mat.arch == 'coarse_fine' %}
-        acc += eval_fine(fine_z(eval_coarse(d, pa)), pb) * lights[li].radiance.rgb / d2;
+        acc += eval_fine(fine_z(eval_coarse(d, pa)), pb) * lw * lights[li].radiance.rgb / d2;
 {% else %}
-        acc += eval_single(d, pa) * lights[li].radiance.rgb / d2;
+        acc += eval_single(d, pa) * lw * lights[li].radiance.rgb / d2;
 {% endif %}
     }
     textureStore(out_tex, px, vec4<f32>(clamp(acc, vec3<f32>(0.0), vec3<f32>(F16_MAX)), 1.0));

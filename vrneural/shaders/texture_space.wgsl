@@ -88,6 +88,8 @@ fn shade_block(k: u32) -> vec4<u32> {
     let pa{{ k }} = pre_a(sample_a(uv{{ k }}));
 {% endfor %}
 {% endif %}
+    // directions beyond the data's range: evaluated at its boundary (neural_material.to_range)
+    let wo_e = view_ext(wo);
     var n_coarse = 0u;
     for (var li = 0u; li < {{ n_active }}u; li++) {
         let lv = lights[li].pos.xyz - s.pos;
@@ -95,16 +97,17 @@ fn shade_block(k: u32) -> vec4<u32> {
         let wi = to_local(s, lv * inverseSqrt(d2));
         if (wi.z > 0.0) {
             let e = lights[li].radiance.rgb / d2;
-            let d = dirs9(wi, wo);
+            let lw = light_weight(wi.z);  // 1 inside the range: the same arithmetic as before
+            let d = dirs9_ext(wi, wo_e);
             n_coarse += 1u;
 {% if mat.arch == 'coarse_fine' %}
             let zz = fine_z(eval_coarse(d, pa));  // W_z z_c, shared by the 4 texels
 {% for k in range(4) %}
-            acc{{ k }} += eval_fine(zz, pb{{ k }}) * e;
+            acc{{ k }} += eval_fine(zz, pb{{ k }}) * lw * e;
 {% endfor %}
 {% else %}
 {% for k in range(4) %}
-            acc{{ k }} += eval_single(d, pa{{ k }}) * e;
+            acc{{ k }} += eval_single(d, pa{{ k }}) * lw * e;
 {% endfor %}
 {% endif %}
         }
