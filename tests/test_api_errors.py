@@ -91,7 +91,7 @@ def test_resolve_and_radiance_checks(adapter):
         (dict(schedule="Burst"), r"--schedule = 'Burst' is not allowed"),
         (dict(frames="4"), r"--frames = '4' must be a whole number"),
         # these were TypeErrors from a comparison, or (floats) silently truncated
-        (dict(reuse="4"), r"--reuse = '4' must be a whole number"),
+        (dict(reuse="4"), r"--reuse = '4' must be a whole number"),  # or 'auto'
         (dict(reuse=2.5), r"--reuse = 2.5 must be a whole number"),
         (dict(texture_res="128"), r"--texture-res = '128' must be a whole number"),
         (dict(lights=1.7), r"--lights = 1.7 must be a whole number"),

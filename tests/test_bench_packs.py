@@ -121,7 +121,7 @@ def test_a_pack_that_records_no_method_is_refused(tmp_path, packs):
 @pytest.mark.gpu
 def test_the_packs_that_pass_are_benchmarked(capsys, tmp_path, packs):
     out = tmp_path / "o"
-    argv = ["bench", "tradeoff", "--quick", "--no-progress", "--shimmer-frames", "0"]
+    argv = ["bench", "tradeoff", "--quick", "--no-progress"]
     assert main([*argv, "--packs", str(packs), "--out", str(out)]) == 0, capsys.readouterr().err
     assert (out / "results.json").is_file()
 
@@ -138,11 +138,12 @@ def test_teacher_and_student_alone_score_without_the_other_networks(capsys, tmp_
     for k in ("teacher", "student"):
         shutil.copy(packs / f"{k}.vrnm", d / f"{k}.vrnm")
     out = tmp_path / "o"
-    argv = ["bench", "tradeoff", "--quick", "--no-progress", "--shimmer-frames", "0"]
+    argv = ["bench", "tradeoff", "--quick", "--no-progress"]
     assert main([*argv, "--packs", str(d), "--out", str(out)]) == 0
     doc = json.loads((out / "results.json").read_text())
     assert doc["packs"]["absent"] == ["student_nodistill", "single8", "neumip"]
-    assert doc["records"] and not [r for r in doc["records"] if r["knob"] == "network"]
+    variants = [v for r in doc["records"] for v in r["variants"]]
+    assert variants and not [v for v in variants if v["knob"] == "network"]
     assert "no student_nodistill, single8, neumip pack there" in (out / "results.md").read_text()
     (d / "student.vrnm").unlink()
     msg = _err(capsys, d, tmp_path / "o2")

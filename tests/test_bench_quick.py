@@ -15,7 +15,7 @@ PNGS = {
     "lights": ["lights.png"],
     "materials": ["materials.png"],
     "kernels": ["kernels.png"],
-    "tradeoff": ["pareto.png", "shimmer.png"],
+    "tradeoff": ["pareto.png", "speed.png"],
 }
 
 
@@ -129,14 +129,34 @@ def test_kernels_threads_sets_torch_and_sgemm_threads(tmp_path):
 @pytest.mark.gpu
 def test_tradeoff_metrics_are_sane(results):
     doc = results[1]["tradeoff"]
-    knobs = {r["knob"] for r in doc["records"]}
-    assert {"base", "texture_res", "reuse", "schedule", "network", "mode"} <= knobs
-    for r in doc["records"]:
-        assert 0.0 <= r["flip"] <= 1.0 and math.isfinite(r["psnr"]) and -1 <= r["ssim"] <= 1
-        assert _finite(r["frame_ms"]["mean"])
-    sh = doc["shimmer"]["variants"]
-    assert sh["reference (teacher per pixel)"]["ratio_to_reference"] == pytest.approx(1.0)
-    assert all(_finite(v["mean_change"], v["ratio_to_reference"]) for v in sh.values())
+    fams = {r["family"] for r in doc["records"]}
+    assert {"rest", "turn", "smooth"} <= fams
+    smooth = next(r for r in doc["records"] if r["family"] == "smooth")
+    knobs = {v["knob"] for v in smooth["variants"]}
+    assert {"base", "texture_res", "reuse", "schedule", "radiance", "network", "mode"} <= knobs
+    for rec in doc["records"]:
+        assert 0.0 <= rec["noise_floor"]["flip"] <= 1.0
+        for v in rec["variants"]:
+            f = v["flip"]
+            assert 0.0 <= f["mean"] <= f["worst"] <= 1.0 and len(f["per_frame"]) == 3
+            assert math.isfinite(v["psnr"]) and -1 <= v["ssim"] <= 1
+            assert _finite(v["frame_ms"]["mean"], v["blocks_per_frame"])
+    # shared radiance halves the texture-space work (blocks shaded, a counter: deterministic)
+    for rec in doc["records"]:
+        by = {(v["knob"], v["value"]): v for v in rec["variants"]}
+        if ("radiance", "shared") in by:
+            ratio = (
+                by[("radiance", "shared")]["blocks_per_frame"]
+                / by[("base", "-")]["blocks_per_frame"]
+            )
+            assert 0.45 < ratio < 0.6, (rec["condition"], ratio)
+    # adaptive reuse does no work at rest, and its budget matched the base N's on the turn
+    rest = next(r for r in doc["records"] if r["family"] == "rest")
+    auto = next(v for v in rest["variants"] if v["value"] == "auto")
+    assert auto["blocks_per_frame"] == 0
+    a = doc["adaptive"]
+    assert abs(a["matched_candidates_per_frame"] / a["base_candidates_per_frame"] - 1) < 0.05
+    assert {r["setting"] for r in doc["ranking"]} >= {"radiance=shared", "reuse=auto"}
     assert (results[0] / "tradeoff" / "packs" / "student.vrnm").is_file()
 
 
@@ -159,12 +179,12 @@ def test_bench_user_errors_are_one_line(capsys, tmp_path):
     assert msg.startswith("vrneural bench lights: error: --lights = '0,9': 0 is out of range; ")
     assert "not allowed" in _err(capsys, ["kernels", "--networks", "resnet", "--out", o])
     assert "--threads" in _err(capsys, ["kernels", "--threads", "-1", "--out", o])
-    assert "WIDTHxHEIGHT" in _err(capsys, ["tradeoff", "--eye-res", "big", "--out", o])
+    assert "--crop = 8 is out of range" in _err(capsys, ["tradeoff", "--crop", "8", "--out", o])
     # a training budget out of range: one line under tradeoff's own flag names, and no --out
     for flag, value in (("--btf-res", "0"), ("--btf-dirs", "1"), ("--teacher-epochs", "0")):
         msg = _err(capsys, ["tradeoff", "--quick", flag, value, "--out", o])
         assert msg.startswith(f"vrneural bench tradeoff: error: {flag} = {value} "), msg
-    assert "--preset" in _err(capsys, ["tradeoff", "--preset", "plastic", "--out", o])
+    assert "--presets" in _err(capsys, ["tradeoff", "--presets", "plastic", "--out", o])
     assert "--presets = 'nope' is not allowed" in _err(capsys, ["quality", "--presets", "nope",
                                                              "--out", o])  # fmt: skip
     msg = _err(capsys, ["extremes", "--no-progress", "--only", "nope", "--out", o])
@@ -180,7 +200,7 @@ def test_bench_user_errors_are_one_line(capsys, tmp_path):
 
 @pytest.mark.gpu
 def test_bench_options_are_checked_before_anything_is_replaced(capsys, tmp_path):
-    """Empty lists, tradeoff's base setting and shimmer length, and the limits `run` has: one
+    """Empty lists, tradeoff's base setting and sample count, and the limits `run` has: one
     line each, before --force empties the folder (they crashed after it, deleting old results)."""
     from vrneural.formats.atomic import make_output_dir, seal_output_dir
 
@@ -203,7 +223,9 @@ def test_bench_options_are_checked_before_anything_is_replaced(capsys, tmp_path)
             ["tradeoff", "--base-reuse", "-1"],
             "--base-reuse = -1 is out of range; allowed [0, 1000]",
         ),
-        (["tradeoff", "--shimmer-frames", "2"], "--shimmer-frames = 2 is too few; allowed 0"),
+        (["tradeoff", "--spp", "0"], "--spp = 0 is out of range; allowed [1, 256]"),
+        (["tradeoff", "--speeds", ""], "--speeds is empty"),
+        (["tradeoff", "--speeds", "100,fast"], "--speeds = '100,fast': 'fast' is not a number"),
         (["extremes", "--only", ""], "--only is empty"),
         (["tradeoff", "--packs", ""], "--packs is empty; name the folder of packs"),
         (["extremes", "--only", "directions,"], "--only = 'directions,' has an empty item"),

@@ -60,7 +60,7 @@ def add_config_args(
             continue
         if typing.get_origin(tp) in (typing.Union, types.UnionType):  # X | None -> X
             tp = next(a for a in typing.get_args(tp) if a is not type(None))
-        kw = {"type": tp if tp in (int, float, str) else str}
+        kw = {"type": f.metadata.get("type") or (tp if tp in (int, float, str) else str)}
         if "choices" in f.metadata:
             kw["choices"] = f.metadata["choices"]
         parser.add_argument(flag, dest=f.name, default=default, help=help_, **kw)

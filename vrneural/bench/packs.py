@@ -25,15 +25,19 @@ RUNS = {
 PACKS = ("teacher", *RUNS)
 
 
-def train_packs(d: Path, budget: dict, progress: bool, log=print) -> dict[str, Path]:
+def train_packs(
+    d: Path, budget: dict, progress: bool, log=print, only: tuple | None = None
+) -> dict[str, Path]:
     """Train (or reuse) every pack under ``d``; ``budget``: preset, res, dirs, teacher_width,
-    teacher_epochs, epochs, seed. Returns name -> .vrnm path."""
+    teacher_epochs, epochs, seed; ``only``: the networks of :data:`RUNS` to train (default all;
+    the teacher always). Returns name -> .vrnm path."""
     from vrneural.btf.synth import BtfConfig, synthesize
     from vrneural.distill.config import DistillConfig, TeachConfig
     from vrneural.distill.distill import run_distill
     from vrneural.distill.teach import run_teach
 
-    paths = {k: d / f"{k}.vrnm" for k in PACKS}
+    runs = {k: v for k, v in RUNS.items() if only is None or k in only}
+    paths = {k: d / f"{k}.vrnm" for k in ("teacher", *runs)}
     stamp = d / "budget.json"
     want = json.dumps(budget, sort_keys=True)
     if stamp.exists() and stamp.read_text() == want and all(p.exists() for p in paths.values()):
@@ -60,7 +64,7 @@ def train_packs(d: Path, budget: dict, progress: bool, log=print) -> dict[str, P
             **common,
         )
     )
-    for name, kw in RUNS.items():
+    for name, kw in runs.items():
         run_distill(
             DistillConfig(
                 teacher=str(d / "teacher.pt"),

@@ -1,29 +1,35 @@
-"""`vrneural bench tradeoff`: what each knob buys and costs, against the per-pixel teacher.
+"""`vrneural bench tradeoff`: what each knob buys and costs, where it bites.
 
-Along the standard head-motion path (the built-in orbit) through the benchmark scene, with its
-neural objects given a trained pack, each knob is varied alone from a base setting (texture
-``base_res``^2, N = ``base_reuse``, staggered, f32, the distilled coarse-to-fine student, per-eye
-radiance textures): texture resolution, N, schedule, precision, the network (student without
-distillation, single-level 8-wide, NeuMIP-sized) and per-pixel screen space. Every displayed
-frame (both eyes side by side) is compared with the teacher rendered per pixel every frame
-(``--mode reference``): HDR-FLIP at the eye image's pixels per degree (eye height / profile
-FOV), PSNR and SSIM on the tone-mapped display image (:mod:`vrneural.bench.metrics`). Frame time:
-mean wall ms per displayed frame (1000 / FPS; amortised updates included), frame 0 excluded.
-Shared (both-eye) radiance textures do not exist in this runtime (it shades per eye).
+The ground truth is the teacher per pixel in f32, supersampled (``--spp`` stratified sub-pixel
+samples, :mod:`vrneural.bench.supersample`); a second reference with other sample positions gives
+its noise floor, and every difference is read against it. The images are crops of the full quest3
+eye (23 pixels per degree) that follow a neural sphere (:mod:`vrneural.bench.trade_scene`), under
+conditions that make reuse and resolution matter: head turns from rest to 400 deg/s about the
+neck, a moving light, distances from 0.3 to 20 m, material tiling, and the built-in slow orbit
+(where every knob is varied, as before). Knobs: N (staggered; burst), texture resolution,
+radiance textures shared by both eyes, adaptive reuse (``--reuse auto``, its budget matched to the
+fixed N's mean shading work on the fastest turn), precision, the network, per-pixel shading.
+
+Per condition and variant, over the scored frames (both eyes): HDR-FLIP against the reference at
+the headset's pixels per degree (mean, p95, worst frame), PSNR and SSIM of the displayed image,
+the temporal change (mean |frame - previous| of the display image, and FLIP between consecutive
+frames, against the reference's own), the reuse error (FLIP against the N = 0 render of the same
+frame), the work (2x2 blocks shaded, MLP evaluations per frame) and the frame time.
 """
 
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from vrneural.bench import metrics, shimmer
+from vrneural.bench import metrics
 from vrneural.bench import report as rp
-from vrneural.config import is_explicit, mark_explicit, opt, quick_defaults, replace_config
-from vrneural.errors import count
+from vrneural.bench import trade_scene as ts
+from vrneural.config import is_explicit, opt, quick_defaults
 
 LABELS = {
     "student": "student (distilled)",
@@ -38,34 +44,41 @@ class TradeoffConfig:
     """`vrneural bench tradeoff`."""
 
     out: str = opt("bench-tradeoff", "output directory", cli=False)
-    eye_res: str = opt("344x368", "pixels per eye (quest3 / 6), WIDTHxHEIGHT")
-    frames: int = opt(16, "displayed frames per setting (frame 0 is never scored)")
-    scored: int = opt(4, "frames (evenly spaced in 1..frames-1) scored with FLIP, PSNR, SSIM")
-    texture_res: str = opt("100,200,400", "texture sides compared (comma-separated)")
-    base_res: int = opt(200, "texture side of the base setting (~ quest3's ratio 1200 / 2208)")
-    reuse: str = opt("0,1,2,4,6", "update intervals N compared")
+    crop: int = opt(128, "side (pixels) of the scored window of each quest3 eye image")
+    spp: int = opt(16, "reference samples per pixel (stratified; its noise floor is measured)")
+    scored: int = opt(6, "consecutive frames scored per condition")
+    speeds: str = opt("0,100,200,300,400", "head-turn speeds (deg/s) of the built-in logs")
+    turn: float = opt(30.0, "yaw of each built-in head turn, degrees")
+    poses: str = opt("", "more pose logs (CSV: t,x,y,z,qx,qy,qz,qw) scored as conditions")
+    light_speed: float = opt(120.0, "the moving light's speed about the sphere, deg/s (0: none)")
+    distances: str = opt("0.3,1,3,10,20", "sphere distances (m) of the distance sweep")
+    tilings: str = opt("1,4,16", "material tilings of the tiling sweep")
+    texture_res: str = opt("256,512,1024", "texture sides compared")
+    base_res: int = opt(512, "texture side of the base setting (the sphere is ~105 px across)")
+    reuse: str = opt("0,2,4,8", "update intervals N compared")
     base_reuse: int = opt(4, "N of the base setting")
-    lights: int = opt(2, "point lights")
-    preset: str = opt("leather", "synthetic BTF preset of the trained packs")
+    lights: int = opt(2, "point lights (the key light moves in the moving-light condition)")
+    presets: str = opt(
+        "leather,metal",
+        "synthetic BTF presets of the trained packs: the first for every condition, the others "
+        "(glossy metal: staleness and eye disparity show on highlights) for the base and the "
+        "fastest turn",
+    )
     btf_res: int = opt(32, "BTF texels per side (training budget)")
     btf_dirs: int = opt(10, "BTF light and view directions (dirs^2 slices)")
-    teacher_width: int = opt(
-        128, "teacher hidden width (the paper's; the streamed reference kernel makes it cheap)"
-    )
+    teacher_width: int = opt(128, "teacher hidden width (the paper's)")
     teacher_epochs: int = opt(4, "teacher epochs")
     epochs: int = opt(4, "epochs of each small network")
     seed: int = opt(0, "training seed")
     packs: str = opt(
         "",
         "directory with teacher/student/student_nodistill/single8/neumip.vrnm (skips training; "
-        "each must be what its name says, all from one BTF and its teacher)",
+        "each must be what its name says, all from one BTF and its teacher); replaces --presets",
     )
-    shimmer_frames: int = opt(24, "frames of the temporal-shimmer test (0 = skip it)")
-    shimmer_res: str = opt("258x276", "eye resolution of the shimmer test (one eye)")
     quick: bool = opt(
         False,
-        "CI-sized: eyes 172x184, 6 frames (2 scored), textures 100,200, N 0,4, tiny training "
-        "(16^2 texels, 6 dirs, 1 epoch, teacher 32 wide), shimmer 6 frames at 129x138",
+        "CI-sized: 48-pixel crops, 2 spp, 3 frames, rest and one 300 deg/s turn, no light, "
+        "distance or tiling sweep, textures 128,256 (base 256), N 0,4, one tiny-trained preset",
     )
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
@@ -75,222 +88,43 @@ class TradeoffConfig:
             return self
         return quick_defaults(
             self,
-            eye_res="172x184",
-            frames=6,
-            scored=2,
-            texture_res="100,200",
-            base_res=200,
+            crop=48,
+            spp=2,
+            scored=3,
+            speeds="0,300",
+            light_speed=0.0,
+            distances="",
+            tilings="",
+            texture_res="128,256",
+            base_res=256,
             reuse="0,4",
+            presets="leather",
             btf_res=16,
             btf_dirs=6,
             teacher_width=32,
             teacher_epochs=1,
             epochs=1,
-            shimmer_frames=6,
-            shimmer_res="129x138",
         )
 
 
-#: Frames of the first setting rendered, untimed, before any setting is timed
-WARMUP_FRAMES = 3
+#: the full quest3 eye image the crops are cut from (pixels) and its pixels per degree
+QUEST3 = "quest3"
 
 
-def settings(c: TradeoffConfig, has_f16: bool, networks=("student_nodistill", "single8", "neumip")):
-    from vrneural.runtime.config import REUSE_MAX
-
+def variant(knob="base", value="-", **kw) -> dict:
     base = dict(
-        knob="base",
-        value="-",
+        knob=knob,
+        value=value,
         mode="texture",
-        texture_res=c.base_res,
-        reuse=c.base_reuse,
+        texture_res=None,
+        reuse=None,
         schedule="staggered",
         precision="f32",
         material="student",
+        radiance="per-eye",
+        budget=None,
     )
-    out = [base]
-    for t in rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True):
-        if t != c.base_res:
-            out.append({**base, "knob": "texture_res", "value": t, "texture_res": t})
-    for n in rp.int_list("--reuse", c.reuse, 0, REUSE_MAX):
-        if n != c.base_reuse:
-            out.append({**base, "knob": "reuse", "value": n, "reuse": n})
-    out.append({**base, "knob": "schedule", "value": "burst", "schedule": "burst"})
-    if has_f16:
-        out.append({**base, "knob": "precision", "value": "f16", "precision": "f16"})
-    for m in networks:  # the other networks at the base settings (those with a pack)
-        out.append({**base, "knob": "network", "value": m, "material": m})
-    out.append(
-        {**base, "knob": "mode", "value": "screen (per pixel)", "mode": "screen", "reuse": 0}
-    )
-    return out
-
-
-def scene_with(mat, n_lights: int):
-    """The benchmark scene (:func:`~vrneural.bench.timing.bench_scene`), both neural objects
-    using material ``mat``."""
-    from vrneural.bench.timing import bench_scene
-
-    return bench_scene(n_lights, (mat, mat))
-
-
-def render(scene, s, frames: list[int], bar=None, keep=None):
-    """Render ``frames`` in order. Returns (frame -> HDR image ``[H, 2W, 3]``, both eyes side by
-    side, for the frames in ``keep`` (default all); every frame's FrameStats). A reference
-    renderer has no temporal state, so it may skip frames."""
-    from vrneural.runtime.renderer import Renderer
-
-    r = Renderer(scene, s)
-    keep = set(frames if keep is None else keep)
-    imgs, st = {}, []
-    for f in frames:
-        st.append(r.frame(f))
-        if f in keep:
-            imgs[f] = np.concatenate([e[..., :3] for e in r.read_eyes()], 1)
-        if bar:
-            bar.update()
-    return imgs, st
-
-
-def check_budget(c: TradeoffConfig) -> None:
-    """Validate the packs' training budget before any output exists (``train_packs`` would
-    check it too, but only after the output directory was made, naming its own flags): the
-    BTF as `btf synth` checks it, the epochs as `bench quality` does."""
-    from vrneural.btf.synth import BtfConfig
-    from vrneural.errors import check_range
-
-    btf = BtfConfig(preset=c.preset, res=c.btf_res, dirs=c.btf_dirs, seed=c.seed)
-    btf.validate(flags={"res": "--btf-res", "dirs": "--btf-dirs"})
-    for k in ("teacher_epochs", "epochs"):
-        check_range(f"--{k.replace('_', '-')}", getattr(c, k), 1, 10_000)
-
-
-def run_tradeoff(cfg: TradeoffConfig) -> dict:
-    from tqdm import tqdm
-
-    from vrneural.bench.packs import PACKS, REQUIRED, load_packs, pack_paths, train_packs
-    from vrneural.errors import VrnError, check_range
-    from vrneural.gpu.device import adapter_summary
-    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
-    from vrneural.runtime.profiles import get_profile
-    from vrneural.runtime.renderer import Settings
-
-    c = cfg.resolved()
-    eye_res = parse_res(c.eye_res)
-    check_range("--frames", c.frames, 2, 10000)
-    if not is_explicit(c, "scored"):  # --quick's or the default's count, within your --frames
-        c = mark_explicit(replace_config(c, scored=min(c.scored, c.frames - 1)), "scored")
-    check_range("--scored", c.scored, 1, c.frames - 1)
-    check_range("--teacher-width", c.teacher_width, 4, 512)
-    shimmer_res = parse_res(c.shimmer_res, "--shimmer-res")
-    check_range("--lights", c.lights, 1, LIGHTS_MAX)
-    rp.check_texture_res(c.base_res, "--base-res")
-    check_range("--base-reuse", c.base_reuse, 0, REUSE_MAX)
-    check_range("--shimmer-frames", c.shimmer_frames, 0, 100000)
-    if 0 < c.shimmer_frames < 3:  # frame 0 is the first update; its change needs two more
-        raise VrnError(
-            f"--shimmer-frames = {c.shimmer_frames} is too few; allowed 0 (skip the test) or "
-            "[3, 100000]"
-        )
-    if is_explicit(c, "packs") and not c.packs.strip():  # "" trains; typed, it was a slip
-        raise VrnError("--packs is empty; name the folder of packs, or leave it out to train them")
-    given = pack_paths(c.packs) if c.packs else None
-    nets = [k for k in PACKS if k not in REQUIRED and (given is None or k in given)]
-    sets = settings(c, adapter_summary().features.get("shader-f16", False), nets)
-    if given is not None:  # fail before any work or output, also on a pack not what its name says
-        load_packs(given)
-    else:  # the training budget, under this command's own flag names
-        check_budget(c)
-    root = rp.prepare_out(cfg.out, cfg.force, "tradeoff")
-    t0 = time.perf_counter()
-    doc = rp.header("tradeoff", c)
-    if given is not None:
-        paths = given
-        doc["packs"] = {"source": c.packs, "absent": [k for k in PACKS if k not in paths]}
-    else:
-        budget = dict(
-            preset=c.preset,
-            res=c.btf_res,
-            dirs=c.btf_dirs,
-            teacher_width=c.teacher_width,
-            teacher_epochs=c.teacher_epochs,
-            epochs=c.epochs,
-            seed=c.seed,
-        )
-        tt = time.perf_counter()
-        paths = train_packs(root / "packs", budget, c.progress, log=lambda m: None)
-        doc["packs"] = {"source": "trained", "budget": budget, "seconds": time.perf_counter() - tt}
-    mats = load_packs(paths)
-    prof = get_profile("quest3")
-    ppd = metrics.pixels_per_degree(eye_res[1], prof.fov_y)
-    doc["ppd"] = ppd
-    doc["profile_ppd"] = metrics.pixels_per_degree(prof.eye_res[1], prof.fov_y)
-
-    def settings_of(st: dict, mode: str, ref=None) -> Settings:
-        return Settings(
-            eyes=2,
-            reuse=st["reuse"],
-            texture_res=st["texture_res"],
-            eye_res=eye_res,
-            frames=c.frames,
-            fps=prof.fps,
-            fov_y=prof.fov_y,
-            n_lights=c.lights,
-            mode=mode,
-            schedule=st["schedule"],
-            precision=st["precision"],
-            reference=ref,
-        )
-
-    scored = np.unique(np.linspace(1, c.frames - 1, c.scored).round().astype(int)).tolist()
-    doc["scored_frames"] = scored
-    bar = tqdm(
-        total=c.frames * len(sets) + len(scored) + 1,
-        desc="bench tradeoff",
-        unit="frame",
-        disable=not c.progress,
-    )
-    teacher = mats["teacher"]
-    ref_imgs, ref_st = render(
-        scene_with(teacher, c.lights), settings_of(sets[0], "reference", teacher), [0, *scored], bar
-    )
-    doc["reference"] = _timing(ref_st)
-    ref_disp = {f: metrics.display(x) for f, x in ref_imgs.items()}
-    # untimed warm-up of the first texture-space setting: without it the row measured first
-    # (base) paid the driver's and caches' first use and read slower than it is
-    warm = sets[0]
-    render(scene_with(mats[warm["material"]], c.lights), settings_of(warm, warm["mode"]),
-           list(range(WARMUP_FRAMES)), keep=[])  # fmt: skip
-    doc["warmup_frames"] = WARMUP_FRAMES
-    for st in sets:
-        scene = scene_with(mats[st["material"]], c.lights)
-        imgs, stats = render(scene, settings_of(st, st["mode"]), list(range(c.frames)), bar, scored)
-        disp = {f: metrics.display(imgs[f]) for f in scored}
-        rec = {**st, **_timing(stats)}
-        rec["flip"] = float(np.mean([metrics.flip_hdr(ref_imgs[f], imgs[f], ppd) for f in scored]))
-        rec["psnr"] = float(np.mean([metrics.psnr(ref_disp[f], disp[f]) for f in scored]))
-        rec["ssim"] = float(np.mean([metrics.ssim(ref_disp[f], disp[f]) for f in scored]))
-        doc["records"].append(rec)
-    bar.close()
-    if c.shimmer_frames:
-        doc["shimmer"] = shimmer.run_shimmer(mats, c, shimmer_res, root / "shimmer.png")
-    md = markdown(doc)
-    pareto_png(doc, root / "pareto.png")
-    md += ["", "![pareto](pareto.png)"]
-    if c.shimmer_frames:
-        md += [*shimmer.markdown(doc["shimmer"]), "", "![shimmer](shimmer.png)"]
-    return rp.finish(root, doc, md, t0)
-
-
-def _timing(stats) -> dict:
-    w = [s.wall_ms for s in stats[1:]]
-    shade = [s.gpu_ms.get("texture", 0.0) + s.gpu_ms.get("screen", 0.0) for s in stats[1:]]
-    return {
-        "frame_ms": rp.stats(w),
-        "fps": 1e3 / float(np.mean(w)),
-        "shading_ms_per_frame": float(np.mean(shade)),
-        "forward_ms": float(np.median([s.gpu_ms.get("forward", 0.0) for s in stats[1:]])),
-    }
+    return {**base, **kw}
 
 
 def label(r: dict) -> str:
@@ -316,91 +150,376 @@ def pareto(points: list[tuple[float, float]], lower_better: bool) -> list[int]:
     return out
 
 
-def markdown(doc: dict) -> list[str]:
-    c = doc["config"]
-    recs = doc["records"]
-    front = set(pareto([(r["frame_ms"]["mean"], r["flip"]) for r in recs], True))
-    md = [
-        "# Trade-off: each knob against the per-pixel teacher",
-        "",
-        rp.adapter_line(doc),
-        f"Benchmark scene with trained packs ({_packs_line(doc)}), {count(c['lights'], 'light')}, "
-        "both eyes "
-        f"at {c['eye_res']}, {c['frames']} frames along the built-in head path. Base: texture "
-        f"{c['base_res']}^2, N = {c['base_reuse']}, staggered, f32, distilled student. FLIP: "
-        f"HDR, {doc['ppd']:.2f} ppd (eye height / FOV; {doc['profile_ppd']:.1f} at the full "
-        f"quest3 resolution); PSNR (dB) and SSIM on the tone-mapped display; each the mean over "
-        f"frames {doc['scored_frames']}. Frame ms: mean wall time per displayed frame "
-        f"(frame 0 excluded; {doc.get('warmup_frames', 0)} untimed warm-up frames first). "
-        f"Reference (teacher per pixel): {doc['reference']['frame_ms']['mean']:.1f} ms/frame."
-        + (" **Quick run: reduced settings.**" if c["quick"] else ""),
-        "Shared vs per-eye radiance textures: not available (this runtime shades per eye).",
-        "",
-    ]
-    rows = [
-        [
-            label(r) + (" *" if i in front else ""),
-            r["frame_ms"]["mean"],
-            r["fps"],
-            r["shading_ms_per_frame"],
-            r["flip"],
-            r["psnr"],
-            r["ssim"],
+def variants_for(c, cond: ts.Condition, nets, has_f16: bool, budget: float | None) -> list:
+    """The variants scored under ``cond`` (the first is N = 0: the reuse error's reference;
+    the second the base)."""
+    res_list = rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True)
+    from vrneural.runtime.config import REUSE_MAX
+
+    reuses = rp.int_list("--reuse", c.reuse, 0, REUSE_MAX)
+    out = [variant("reuse", 0, reuse=0), variant()]
+    reuse_rows = [variant("reuse", n, reuse=n) for n in reuses if n not in (0, c.base_reuse)]
+    burst = variant("schedule", "burst", schedule="burst")
+    shared = variant("radiance", "shared", radiance="shared")
+    auto = [variant("reuse", "auto", budget=budget)] if budget else []
+    res_rows = [variant("texture_res", t, texture_res=t) for t in res_list if t != c.base_res]
+    if cond.family in ("rest", "turn", "log"):
+        return out + reuse_rows + [burst, shared, *auto]
+    if cond.family == "light":
+        return [*out, shared, *auto]
+    if cond.family in ("distance", "tiling"):
+        return out + res_rows
+    rows = out + res_rows + reuse_rows + [burst, shared, *auto]  # smooth: every knob
+    if has_f16:
+        rows.append(variant("precision", "f16", precision="f16"))
+    rows += [variant("network", m, material=m) for m in nets]
+    rows.append(variant("mode", "screen (per pixel)", mode="screen", reuse=0))
+    return rows
+
+
+def conditions(c, fps: float, d: Path) -> list[ts.Condition]:
+    from vrneural.errors import VrnError
+
+    d.mkdir(parents=True, exist_ok=True)
+    out = []
+    speeds = _floats("--speeds", c.speeds, 0.0, 2000.0)
+    for v in speeds:
+        out.append(ts.turn_condition(v, c.turn, fps, c.scored, d))
+    for p in [x.strip() for x in c.poses.split(",")] if c.poses.strip() else []:
+        if not p:
+            raise VrnError(f"--poses = {c.poses!r} has an empty item")
+        out.append(ts.log_condition(Path(p), fps, c.scored))
+    first = 8  # frames before scoring: every staggered phase of N <= 7 has run once
+    window = list(range(first, first + c.scored))
+    frames = window[-1] + 1
+    out.append(ts.Condition("smooth orbit", "smooth", 0.0, frames, window))
+    if c.light_speed:
+        out.append(
+            ts.Condition(
+                f"light {c.light_speed:g} deg/s", "light", c.light_speed, frames, window,
+                light_speed=c.light_speed,
+            )
+        )  # fmt: skip
+    for dist in _floats("--distances", c.distances, 0.2, 100.0):
+        out.append(ts.Condition(f"distance {dist:g} m", "distance", dist, frames, window, dist))
+    for t in _floats("--tilings", c.tilings, 0.01, 1000.0):
+        out.append(ts.Condition(f"tiling {t:g}", "tiling", t, frames, window, tiling=t))
+    return out
+
+
+def _floats(field: str, text: str, lo: float, hi: float) -> list[float]:
+    from vrneural.errors import VrnError, check_range
+
+    if not text.strip():
+        return []
+    out = []
+    for item in text.split(","):
+        try:
+            v = float(item)
+        except ValueError:
+            raise VrnError(f"{field} = {text!r}: {item.strip()!r} is not a number") from None
+        check_range(field, v, lo, hi)
+        out.append(v)
+    return out
+
+
+def settings_for(c, v: dict, cond: ts.Condition, prof, ref=None):
+    from vrneural.runtime.renderer import Settings
+
+    return Settings(
+        eyes=2,
+        reuse=c.base_reuse if v["reuse"] is None else v["reuse"],
+        texture_res=v["texture_res"] or c.base_res,
+        eye_res=(c.crop, c.crop),
+        frames=cond.frames,
+        fps=prof.fps,
+        fov_y=prof.fov_y,
+        ipd=prof.ipd,
+        n_lights=c.lights,
+        mode=v["mode"],
+        schedule=v["schedule"],
+        precision=v["precision"],
+        reference=ref,
+        radiance=v["radiance"],
+        reuse_budget=v["budget"],
+        crop=(0, 0, *prof.eye_res),
+    )
+
+
+def render(scene, s, cond, crop, full, keep) -> tuple[dict, list]:
+    """Frames ``0 .. cond.frames - 1`` in order; returns (frame -> ``[2, H, W, 3]`` for the
+    frames in ``keep``, every frame's FrameStats)."""
+    from vrneural.runtime.renderer import Renderer
+
+    r = Renderer(scene, s)
+    ts.track(r, cond, crop, full)
+    imgs, st = {}, []
+    for f in range(cond.frames):
+        st.append(r.frame(f))
+        if f in keep:
+            imgs[f] = np.stack([e[..., :3] for e in r.read_eyes()])
+    return imgs, st
+
+
+def reference(scene, s, cond, crop, full, frames, spp, seed) -> dict:
+    from vrneural.bench.supersample import SupersampledReference
+
+    ref = SupersampledReference(scene, s, spp, seed)
+    ts.track(ref.r, cond, crop, full)
+    return {f: ref.frame(f) for f in frames}
+
+
+def match_budget(scene, c, cond, prof, target_blocks: float) -> tuple[float, float]:
+    """The adaptive budget (degrees) whose candidate-block work over ``cond``'s frames equals
+    ``target_blocks`` (fixed N's), by bisection on the CPU-side schedule alone (no shading);
+    returns (budget, its work)."""
+    from vrneural.runtime.adaptive import AdaptiveState
+    from vrneural.runtime.lights import light_arrays
+    from vrneural.runtime.renderer import Renderer
+
+    s = settings_for(c, variant(budget=1.0), cond, prof)
+    r = Renderer(scene, s)
+    r.head = cond.head()
+
+    def work(budget: float) -> float:
+        r.s.reuse_budget = budget
+        for n in r.neural:
+            n.fresh, n.adapt = False, AdaptiveState()
+        total = 0
+        for f in range(cond.frames):
+            todo, _, _ = r._slices(f, r.eyes_at(f), light_arrays(r.lights, f / s.fps)[0])
+            if f:
+                total += sum(n.gatlas.block_list(per)[1][ph][1] for _, n, ph, per in todo)
+        return total * s.eyes / max(cond.frames - 1, 1)
+
+    lo, hi = 1e-3, 90.0
+    for _ in range(30):  # log-space bisection: more budget, less work
+        mid = float(np.sqrt(lo * hi))
+        if work(mid) > target_blocks:
+            lo = mid
+        else:
+            hi = mid
+        if hi / lo < 1.02:
+            break
+    return hi, work(hi)
+
+
+def scores(ref: dict, imgs: dict, n0: dict | None, ppd: float, frames: list) -> dict:
+    """The metrics of one variant over the scored ``frames`` (see the module docstring)."""
+    flips, psnrs, ssims, reuse_err = [], [], [], []
+    disp = {f: [metrics.display(e) for e in imgs[f]] for f in frames}
+    rdisp = {f: [metrics.display(e) for e in ref[f]] for f in frames}
+
+    def per_eye(fn, a, b) -> float:  # the mean over both eyes
+        return float(np.mean([fn(x, y) for x, y in zip(a, b, strict=True)]))
+
+    def flip(x, y):
+        return metrics.flip_hdr(x, y, ppd)
+
+    def change(x, y):
+        return float(np.abs(y - x).mean())
+
+    for f in frames:
+        flips.append(per_eye(flip, ref[f], imgs[f]))
+        psnrs.append(per_eye(metrics.psnr, rdisp[f], disp[f]))
+        ssims.append(per_eye(metrics.ssim, rdisp[f], disp[f]))
+        if n0 is not None:
+            reuse_err.append(per_eye(flip, n0[f], imgs[f]))
+    ch, rch, tf, rtf = [], [], [], []
+    for a, b in itertools.pairwise(frames):
+        ch.append(per_eye(change, disp[a], disp[b]))
+        rch.append(per_eye(change, rdisp[a], rdisp[b]))
+        tf.append(per_eye(flip, imgs[a], imgs[b]))
+        rtf.append(per_eye(flip, ref[a], ref[b]))
+    out = {
+        "flip": _dist(flips),
+        "psnr": float(np.mean(psnrs)),
+        "ssim": float(np.mean(ssims)),
+        "change": float(np.mean(ch)) if ch else None,
+        "change_ref": float(np.mean(rch)) if rch else None,
+        "flip_consecutive": float(np.mean(tf)) if tf else None,
+        "flip_consecutive_ref": float(np.mean(rtf)) if rtf else None,
+    }
+    out["reuse_error"] = _dist(reuse_err) if reuse_err else None
+    return out
+
+
+def _dist(x) -> dict:
+    a = np.asarray(x, np.float64)
+    return {"mean": float(a.mean()), "p95": float(np.percentile(a, 95)), "worst": float(a.max()),
+            "per_frame": a.tolist()}  # fmt: skip
+
+
+def work(stats) -> dict:
+    """Frame time and shading work per displayed frame (frame 0, the first update, excluded)."""
+    s = stats[1:] or stats
+    w = [x.wall_ms for x in s]
+    shade = [x.gpu_ms.get("texture", 0.0) + x.gpu_ms.get("screen", 0.0) for x in s]
+    return {
+        "frame_ms": rp.stats(w),
+        "shading_ms_per_frame": float(np.mean(shade)),
+        "blocks_per_frame": float(np.mean([x.blocks_shaded for x in s])),
+        "mlp_per_frame": float(np.mean([x.mlp_coarse + x.mlp_fine for x in s])),
+        "updated_frames": int(sum(x.blocks_shaded > 0 for x in s)),
+    }
+
+
+def check(c) -> None:
+    """Every option, before any output exists."""
+    from vrneural.bench.supersample import SPP_MAX
+    from vrneural.btf.synth import BtfConfig
+    from vrneural.errors import VrnError, check_range
+    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
+
+    check_range("--crop", c.crop, 16, 2064)
+    check_range("--spp", c.spp, 1, SPP_MAX)
+    check_range("--scored", c.scored, 2, 1000)
+    check_range("--turn", c.turn, 1.0, 180.0)
+    check_range("--lights", c.lights, 1, LIGHTS_MAX)
+    check_range("--light-speed", c.light_speed, 0.0, 3600.0)
+    rp.check_texture_res(c.base_res, "--base-res")
+    check_range("--base-reuse", c.base_reuse, 0, REUSE_MAX)
+    rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True)
+    rp.int_list("--reuse", c.reuse, 0, REUSE_MAX)
+    for field, text, lo, hi in (("--speeds", c.speeds, 0.0, 2000.0),
+                                ("--distances", c.distances, 0.2, 100.0),
+                                ("--tilings", c.tilings, 0.01, 1000.0)):  # fmt: skip
+        _floats(field, text, lo, hi)
+    if not c.speeds.strip():
+        raise VrnError("--speeds is empty; give at least one turn speed (0 = at rest)")
+    for p in [x.strip() for x in c.poses.split(",")] if c.poses.strip() else []:
+        from vrneural.runtime.camera import PoseLogPath
+
+        PoseLogPath(p)  # its one-line errors: missing, columns, time order, quaternion
+    if is_explicit(c, "packs") and not c.packs.strip():  # "" trains; typed, it was a slip
+        raise VrnError("--packs is empty; name the folder of packs, or leave it out to train them")
+    if c.packs:  # every pack what its name says, before any work or output
+        from vrneural.bench.packs import load_packs, pack_paths
+
+        load_packs(pack_paths(c.packs))
+    else:
+        presets = [p.strip() for p in c.presets.split(",")]
+        if not all(presets):
+            raise VrnError(f"--presets = {c.presets!r} has an empty item")
+        for p in presets:
+            BtfConfig(preset=p, res=c.btf_res, dirs=c.btf_dirs, seed=c.seed).validate(
+                flags={"res": "--btf-res", "dirs": "--btf-dirs", "preset": "--presets"}
+            )
+        for k in ("teacher_epochs", "epochs"):
+            check_range(f"--{k.replace('_', '-')}", getattr(c, k), 1, 10_000)
+        check_range("--teacher-width", c.teacher_width, 4, 512)
+
+
+def load_materials(c, root: Path) -> dict:
+    """``{preset or pack folder: {pack name: NeuralMaterial}}`` (trained into ``root/packs``)."""
+    from vrneural.bench.packs import load_packs, pack_paths, train_packs
+
+    if c.packs:
+        return {Path(c.packs).name: load_packs(pack_paths(c.packs))}
+    out = {}
+    for i, preset in enumerate(p.strip() for p in c.presets.split(",")):
+        budget = dict(preset=preset, res=c.btf_res, dirs=c.btf_dirs,
+                      teacher_width=c.teacher_width, teacher_epochs=c.teacher_epochs,
+                      epochs=c.epochs, seed=c.seed)  # fmt: skip
+        d = root / "packs" / (preset if i else "")  # the first where earlier releases kept it
+        only = None if i == 0 else ("student",)  # other presets: teacher and student
+        out[preset] = load_packs(train_packs(d, budget, c.progress, log=lambda m: None, only=only))
+    return out
+
+
+def run_tradeoff(cfg: TradeoffConfig) -> dict:
+    from tqdm import tqdm
+
+    from vrneural.bench.packs import REQUIRED
+    from vrneural.bench.tradeoff_report import finish_report
+    from vrneural.gpu.device import adapter_summary
+    from vrneural.runtime.profiles import get_profile
+
+    c = cfg.resolved()
+    check(c)
+    root = rp.prepare_out(cfg.out, cfg.force, "tradeoff")
+    t0 = time.perf_counter()
+    doc = rp.header("tradeoff", c)
+    tt = time.perf_counter()
+    mats = load_materials(c, root)
+    doc["packs"] = {"source": c.packs or "trained", "seconds": time.perf_counter() - tt,
+                    "materials": {k: sorted(v) for k, v in mats.items()}}  # fmt: skip
+    if c.packs:
+        from vrneural.bench.packs import PACKS
+
+        doc["packs"]["absent"] = [k for k in PACKS if k not in next(iter(mats.values()))]
+    prof = get_profile(QUEST3)
+    full = prof.eye_res
+    ppd = metrics.pixels_per_degree(full[1], prof.fov_y)
+    doc["ppd"] = ppd
+    conds = conditions(c, prof.fps, root / "poses")
+    first = next(iter(mats))
+    nets = [k for k in mats[first] if k not in REQUIRED]
+    has_f16 = adapter_summary().features.get("shader-f16", False)
+    # adaptive reuse at the fixed N's mean work, matched on the fastest turn
+    fastest = max((x for x in conds if x.family in ("turn", "log")), key=lambda x: x.value,
+                  default=None)  # fmt: skip
+    budget = None
+    if fastest is not None:
+        scene = ts.scene_for(fastest, mats[first]["student"], n_lights=c.lights)
+        target = _candidates(scene, c, fastest, prof)
+        budget, matched = match_budget(scene, c, fastest, prof, target)
+        doc["adaptive"] = {"condition": fastest.name, "budget_deg": budget,
+                           "base_candidates_per_frame": target,
+                           "matched_candidates_per_frame": matched}  # fmt: skip
+    jobs = []
+    for cond in conds:
+        presets = list(mats) if cond.family == "smooth" or cond is fastest else [first]
+        for preset in presets:
+            vs = variants_for(c, cond, nets if preset == first else [], has_f16, budget)
+            jobs.append((cond, preset, vs))
+    total = sum(len(vs) for _, _, vs in jobs)
+    bar = tqdm(total=total, desc="bench tradeoff", unit="variant", disable=not c.progress)
+    for cond, preset, vs in jobs:
+        pm = mats[preset]
+        teacher = pm["teacher"]
+        rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
+               "preset": preset, "scored_frames": cond.scored, "variants": []}  # fmt: skip
+        rs = settings_for(c, variant(mode="reference"), cond, prof, teacher)
+        rscene = ts.scene_for(cond, pm["student"], teacher, c.lights)
+        bar.set_postfix_str(f"{cond.name} / {preset}: reference")
+        ref = reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
+        nf = cond.scored[: max(2, len(cond.scored) // 2)]
+        ref2 = reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
+        floor = [
+            metrics.flip_hdr(a, b, ppd) for f in nf for a, b in zip(ref[f], ref2[f], strict=True)
         ]
-        for i, r in enumerate(recs)
-    ]
-    md += rp.table(
-        [
-            "setting (* Pareto-optimal in FLIP)",
-            "frame ms",
-            "FPS",
-            "shading ms/frame",
-            "FLIP",
-            "PSNR dB",
-            "SSIM",
-        ],
-        rows,
-    )
-    return md
+        rec["noise_floor"] = {"flip": float(np.mean(floor)), "frames": nf}
+        n0 = None
+        for v in vs:
+            bar.set_postfix_str(f"{cond.name} / {preset}: {label(v)}")
+            mat = pm.get(v["material"], pm["student"])
+            scene = ts.scene_for(cond, mat, None, c.lights)
+            imgs, st = render(scene, settings_for(c, v, cond, prof), cond, c.crop, full,
+                              set(cond.scored))  # fmt: skip
+            if v["knob"] == "reuse" and v["value"] == 0:
+                n0 = imgs
+            r = {**v, **work(st), **scores(ref, imgs, n0 if v is not vs[0] else None, ppd,
+                                           cond.scored)}  # fmt: skip
+            rec["variants"].append(r)
+            bar.update()
+        doc["records"].append(rec)
+    bar.close()
+    return finish_report(root, doc, t0)
 
 
-def _packs_line(doc: dict) -> str:
-    p = doc["packs"]
-    if p["source"] != "trained":
-        absent = p.get("absent") or []
-        return f"from {p['source']}" + (
-            f"; no {', '.join(absent)} pack there, so no row for it" if absent else ""
-        )
-    b = p["budget"]
-    return (
-        f"{b['preset']} {b['res']}^2 x {b['dirs']}^2 directions, teacher {b['teacher_width']} wide "
-        f"{b['teacher_epochs']}"
-        f" epochs, others {b['epochs']}, trained in {p['seconds']:.0f} s"
-    )
+def _candidates(scene, c, cond, prof) -> float:
+    """Candidate blocks per frame of the fixed base N over ``cond`` (CPU-side, as
+    :func:`match_budget` counts them)."""
+    from vrneural.runtime.lights import light_arrays
+    from vrneural.runtime.renderer import Renderer
 
-
-def pareto_png(doc: dict, path: Path) -> None:
-    recs = doc["records"]
-    fig, axes = rp.figure(14, 4.2, 3)
-    for ax, key, lower in zip(axes, ("flip", "psnr", "ssim"), (True, False, False), strict=True):
-        pts = [(r["frame_ms"]["mean"], r[key]) for r in recs]
-        front = sorted(pareto(pts, lower), key=lambda i: pts[i][0])
-        for i, (r, (x, y)) in enumerate(zip(recs, pts, strict=True)):
-            ax.scatter(x, y, s=18, color="C3" if r["knob"] == "base" else "C0")
-            if i in front or r["knob"] == "base":  # the rest are in the table: no label pile
-                ax.annotate(label(r), (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points")
-        ax.plot(
-            [pts[i][0] for i in front],
-            [pts[i][1] for i in front],
-            "k--",
-            lw=0.8,
-            label="Pareto front",
-        )
-        ax.set_xscale("log")
-        rp.plain_log_ticks(ax.xaxis)
-        ax.set_xlabel("frame ms (mean, wall)")
-        ax.set_ylabel(key.upper() + (" (lower is better)" if lower else " (higher is better)"))
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.suptitle(f"bench tradeoff on {doc['adapter']['name']}", fontsize=9)
-    rp.save_png(fig, path)
+    s = settings_for(c, variant(), cond, prof)
+    r = Renderer(scene, s)
+    r.head = cond.head()
+    total = 0
+    for f in range(cond.frames):
+        todo, _, _ = r._slices(f, r.eyes_at(f), light_arrays(r.lights, f / s.fps)[0])
+        if f:
+            total += sum(n.gatlas.block_list(per)[1][ph][1] for _, n, ph, per in todo)
+    return total * s.eyes / max(cond.frames - 1, 1)

@@ -64,6 +64,24 @@ class Eye:
         return self.proj @ self.view
 
 
+def window_matrix(size, crop=None, jitter=(0.0, 0.0)) -> np.ndarray:
+    """Clip-space matrix ``[4, 4]`` (applied after the projection) that renders the window
+    ``crop = (x0, y0, full_w, full_h)`` of a ``full_w x full_h`` image into an image of ``size =
+    (w, h)`` pixels (no crop: the whole image, ``size`` itself), shifted by ``jitter`` pixels
+    (x right, y down) of that image: a sub-pixel offset for supersampling."""
+    w, h = size
+    x0, y0, fw, fh = crop if crop is not None else (0, 0, w, h)
+    # NDC x of the window's left and right edges in the full image; y up (row 0 at the top)
+    left, right = 2 * x0 / fw - 1, 2 * (x0 + w) / fw - 1
+    top, bottom = 1 - 2 * y0 / fh, 1 - 2 * (y0 + h) / fh
+    sx, sy = 2 / (right - left), 2 / (top - bottom)
+    m = np.eye(4)
+    m[0, 0], m[1, 1] = sx, sy
+    m[0, 3] = -sx * (left + right) / 2 - 2 * jitter[0] / w
+    m[1, 3] = -sy * (top + bottom) / 2 + 2 * jitter[1] / h
+    return m
+
+
 def eyes_from_pose(pos, rot, ipd: float, n_eyes: int, fov_y: float, aspect: float) -> list[Eye]:
     """Eye(s) of a head at ``pos [3]`` with rotation ``rot [3, 3]`` (one eye: the head centre)."""
     offsets = [-ipd / 2, ipd / 2] if n_eyes == 2 else [0.0]

@@ -11,7 +11,7 @@ from vrneural.config import opt
 from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.runtime.lights import LIGHTS_MAX
 from vrneural.runtime.profiles import PROFILES, get_profile
-from vrneural.runtime.renderer import MODES, Settings
+from vrneural.runtime.renderer import MODES, RADIANCE, Settings
 from vrneural.runtime.schedule import SCHEDULES
 
 
@@ -19,7 +19,21 @@ from vrneural.runtime.schedule import SCHEDULES
 class RunConfig:
     scene: str | None = opt(None, "scene file (TOML); the built-in scene when omitted", cli=False)
     eyes: int = opt(2, "number of eyes (1 or 2)")
-    reuse: int | None = opt(None, "N: frames reusing one update (profile default: 4)")
+    reuse: int | str | None = opt(
+        None,
+        "N: frames reusing one update (profile default: 4), or 'auto': refresh each object "
+        "when its view or light directions have turned by --reuse-budget degrees",
+        type=lambda text: int(text) if re.fullmatch(r"\s*[+-]?[0-9]+\s*", text) else text,
+    )
+    reuse_budget: float = opt(
+        2.0, "--reuse auto: degrees a view or light direction may turn before a refresh"
+    )
+    radiance: str = opt(
+        "per-eye",
+        "radiance textures per object: per-eye, or shared by both eyes (shaded from their "
+        "centre: half the texture-space work)",
+        choices=RADIANCE,
+    )
     profile: str | None = opt(None, "device profile: quest3 (default), quest2, preview, tiny")
     texture_res: int | None = opt(
         None, "radiance texture side per eye per object (default: the profile's)"
@@ -101,7 +115,8 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
             raise VrnError(
                 f"--{name} = {getattr(cfg, name)!r} is not allowed; choose {', '.join(allowed)}"
             )
-    for name in ("frames", "eyes", "reuse", "texture_res", "lights"):
+    reuse_given, budget = parse_reuse(cfg.reuse, cfg.reuse_budget, cfg.mode)
+    for name in ("frames", "eyes", "texture_res", "lights"):
         v = getattr(cfg, name)
         if v is not None:  # None: the profile's
             check_int(f"--{name.replace('_', '-')}", v)
@@ -120,8 +135,14 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         raise VrnError(f"--profile is empty; choose one of: {', '.join(PROFILES)}")
     prof = get_profile(cfg.profile or scene.profile or "quest3")  # the scene's is checked
     check_range("--eyes", cfg.eyes, 1, 2)
-    reuse = prof.reuse if cfg.reuse is None else cfg.reuse
+    reuse = prof.reuse if reuse_given is None else reuse_given
     check_range("--reuse", reuse, 0, REUSE_MAX)
+    if cfg.radiance not in RADIANCE:
+        raise VrnError(f"--radiance = {cfg.radiance!r} is not allowed; choose per-eye or shared")
+    if cfg.radiance == "shared" and cfg.eyes != 2:
+        raise VrnError(
+            f"--radiance shared needs --eyes 2 (one texture for both eyes); --eyes is {cfg.eyes}"
+        )
     check_range("--frames", cfg.frames, 1, 1_000_000)
     tex = prof.texture_res if cfg.texture_res is None else cfg.texture_res
     max_tex = adapter.limits["max_texture_dimension_2d"]
@@ -190,4 +211,22 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         schedule=cfg.schedule,
         precision=precision,
         reference=ref,
+        radiance=cfg.radiance,
+        reuse_budget=budget,
     )
+
+
+def parse_reuse(reuse, budget: float, mode: str) -> tuple[int | None, float | None]:
+    """``--reuse`` (None, a whole number, or ``"auto"``) and ``--reuse-budget`` ->
+    ``(N or None for the profile's, the adaptive budget or None)``."""
+    if isinstance(reuse, str) and reuse.strip().lower() == "auto":
+        if not (isinstance(budget, (int, float)) and 0 < budget <= 180):
+            raise VrnError(f"--reuse-budget = {budget!r} is out of range; allowed (0, 180] degrees")
+        return None, float(budget)
+    if isinstance(reuse, str):
+        raise VrnError(
+            f"--reuse = {reuse!r} must be a whole number of frames in [0, {REUSE_MAX}], or 'auto'"
+        )
+    if reuse is not None:
+        check_int("--reuse", reuse)
+    return reuse, None

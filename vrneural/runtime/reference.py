@@ -106,14 +106,18 @@ def count_non_empty_blocks(tri_ids: np.ndarray) -> int:
     return len(non_empty_blocks(tri_ids)[0])
 
 
-def shade_points(mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f32"):
+def shade_points(mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f32", margin=0.0):
     """Radiance ``[N, 4, 3]`` of ``N`` points (frames ``[N, 3]``) whose 4 texels have material
     UVs ``uvs: [N, 4, 2]``, lit by point lights ``light_pos, light_rgb: [L, 3]`` (W/sr), seen
-    from ``eye: [3]``. Returns (radiance, front ``[N]`` bool, coarse evals, fine evals)."""
+    from ``eye: [3]``. Returns (radiance, front ``[N]`` bool, coarse evals, fine evals).
+    ``margin`` (m): a point also counts as front when it faces any point within ``margin`` of
+    the eye (the shared radiance texture of both eyes); its view beyond the horizon is then
+    evaluated at the range's edge (:mod:`vrneural.grazing`)."""
     f32 = np.float32
-    wo_w = safe_normalize(np.asarray(eye, f32) - pos, n)
+    v = np.asarray(eye, f32) - pos
+    wo_w = safe_normalize(v, n)
     wo = np.stack([(wo_w * t).sum(-1), (wo_w * b).sum(-1), (wo_w * n).sum(-1)], -1)
-    front = wo[:, 2] > 0
+    front = (wo[:, 2] > 0) | ((v * n).sum(-1) > -f32(margin))
     acc = np.zeros((pos.shape[0], 4, 3), f32)
     n_coarse = 0
     for lp, lc in zip(np.asarray(light_pos, f32), np.asarray(light_rgb, f32), strict=True):
@@ -181,19 +185,23 @@ def shade_texture_space(
     phase: int = 0,
     period: int = 1,
     previous: np.ndarray | None = None,
+    margin: float = 0.0,
 ):
     """Twin of the texture-space pass. Returns ``(radiance [R, R, 4] float32, counters [4])``.
 
     Only block rows ``by % period == phase`` are processed; texels not written keep
-    ``previous`` (zeros by default). Counters: blocks shaded, back-facing blocks skipped, coarse
-    MLP evaluations, fine MLP evaluations (``single``: 0 and per-texel evaluations).
+    ``previous`` (zeros by default). ``margin``: see :func:`shade_points`. Counters: blocks
+    shaded, back-facing blocks skipped, coarse MLP evaluations, fine MLP evaluations
+    (``single``: 0 and per-texel evaluations).
     """
     R = atlas.resolution
     out = np.zeros((R, R, 4), np.float32) if previous is None else previous.copy()
     model, eye, light_pos = camera_relative(model, eye, light_pos)
     g = texture_blocks(atlas, model, tiling, phase, period)
     tx, ty, pos, n, t, b, uvs = (g[k] for k in ("tx", "ty", "pos", "n", "t", "b", "uvs"))
-    rad, front, nc, nf = shade_points(mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision)
+    rad, front, nc, nf = shade_points(
+        mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision, margin
+    )
     w = front
     out[ty[w], tx[w], :3] = rad[w]
     out[ty[w], tx[w], 3] = 1.0

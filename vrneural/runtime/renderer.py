@@ -17,8 +17,16 @@ from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
 from vrneural.runtime import forward as fw
+from vrneural.runtime.adaptive import AdaptiveState, coverage_slack, near_scale, object_directions
 from vrneural.runtime.assets import collapsed_triangles, get_atlas, get_mesh, lost_triangles
-from vrneural.runtime.camera import OrbitPath, PoseLogPath, eyes_from_pose, sphere_in_frustum
+from vrneural.runtime.camera import (
+    Eye,
+    OrbitPath,
+    PoseLogPath,
+    eyes_from_pose,
+    sphere_in_frustum,
+    window_matrix,
+)
 from vrneural.runtime.codegen import reference_weights
 from vrneural.runtime.gpu_material import GpuAtlas
 from vrneural.runtime.lights import light_arrays
@@ -28,6 +36,9 @@ from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, Textu
 from vrneural.warn import VrnWarning
 
 MODES = ("texture", "screen", "reference")
+RADIANCE = ("per-eye", "shared")
+#: the longest refresh sweep of adaptive reuse, in frames
+ADAPTIVE_PERIOD_MAX = 16
 
 
 @dataclass
@@ -48,6 +59,15 @@ class Settings:
     schedule: str = "staggered"
     precision: str = "f32"  # resolved (f32 | f16)
     reference: object = None  # NeuralMaterial used by every object in reference mode
+    #: "per-eye": a radiance texture per object and eye; "shared": one per object, shaded from
+    #: the eyes' centre and sampled by both (half the texture-space work)
+    radiance: str = "per-eye"
+    #: adaptive reuse (``--reuse auto``): refresh an object when its view or light directions
+    #: have turned by this many degrees (runtime/adaptive.py); None: every reuse + 1 frames
+    reuse_budget: float | None = None
+    #: render the window ``(x0, y0)`` of a ``full_w x full_h`` eye image, ``eye_res`` in size
+    #: (``(x0, y0, full_w, full_h)``; the bench's crops at the headset's pixel density)
+    crop: tuple | None = None
 
 
 @dataclass
@@ -78,6 +98,7 @@ class _Neural:
     radius: float
     targets: list = field(default_factory=list)  # per eye: TextureTarget | ScreenTarget
     fresh: bool = False  # its radiance textures hold a complete update since it was last culled
+    adapt: AdaptiveState = field(default_factory=AdaptiveState)  # --reuse auto
 
 
 def bounding_sphere(mesh) -> tuple[np.ndarray, float]:
@@ -95,7 +116,20 @@ class Renderer:
                 f"Renderer: settings are a {type(s).__name__}, expected Settings: pass "
                 "resolve(run_config, scene, adapter_summary())"
             )
+        if s.radiance not in RADIANCE:
+            raise VrnError(
+                f"radiance = {s.radiance!r} is not allowed; choose {', '.join(RADIANCE)}"
+            )
+        if s.radiance == "shared" and s.eyes != 2:
+            raise VrnError(
+                f"--radiance shared needs two eyes (a texture shared by both); --eyes is {s.eyes}"
+            )
         self.scene, self.s = scene, s
+        #: sub-pixel offset (x, y) of the rendered image in pixels (supersampled references)
+        self.jitter = (0.0, 0.0)
+        #: per eye, the crop window's top-left pixel ``(x0, y0)`` in the whole eye image for
+        #: the next frame (a window that follows an object); None: ``Settings.crop``'s
+        self.crop_origins: list | None = None
         self.dev = get_device()
         w, h = s.eye_res
         screen = s.mode != "texture"
@@ -190,7 +224,8 @@ class Renderer:
             except VrnError as e:  # name the object and its pack, not the BTF inside
                 src = o.material.source or "procedural"
                 raise VrnError(f"{scene.src}: objects[{i}] ({o.name}, {src}): {e}") from None
-        for e in range(s.eyes):
+        shared = s.mode == "texture" and s.radiance == "shared"
+        for e in range(1 if shared else s.eyes):
             n.targets.append(self._make_target(passes[key], n, e))
         self.neural.append(n)
         draw = fw.DrawObject(atlas.mesh, atlas.uv_atlas, self.rebase(o.model), i)
@@ -228,9 +263,70 @@ class Renderer:
         return any(sphere_in_frustum(c, r, e.view_proj) for e in eyes)
 
     def eyes_at(self, frame: int):
+        """The eyes at display frame ``frame`` (whole view: visibility and shading)."""
         s = self.s
         pos, rot = self.head.pose(frame / s.fps)
-        return eyes_from_pose(pos, rot, s.ipd, s.eyes, s.fov_y, s.eye_res[0] / s.eye_res[1])
+        w, h = s.crop[2:] if s.crop else s.eye_res
+        return eyes_from_pose(pos, rot, s.ipd, s.eyes, s.fov_y, w / h)
+
+    def raster_eyes(self, eyes) -> list:
+        """``eyes`` with the projection the images are rendered with: the crop window
+        (``Settings.crop``) and the sub-pixel :attr:`jitter` applied."""
+        s = self.s
+        if s.crop is None and self.jitter == (0.0, 0.0):
+            return eyes
+        out = []
+        for e, eye in enumerate(eyes):
+            crop = s.crop
+            if crop is not None and self.crop_origins is not None:
+                crop = (*self.crop_origins[e], *crop[2:])
+            m = window_matrix(s.eye_res, crop, self.jitter)
+            out.append(Eye(eye.position, eye.view, m @ eye.proj))
+        return out
+
+    def _slices(self, f: int, eyes, lp) -> tuple[list, int, int]:
+        """The texture-space work of frame ``f``: ``[(k, object, phase, period)]``, and the
+        counts of objects updated and culled."""
+        s = self.s
+        sl = frame_slice(f, s.reuse, s.schedule)
+        centre = np.mean([e.position for e in eyes], axis=0)
+        todo, updated, culled = [], 0, 0
+        for k, n in enumerate(self.neural):
+            if not self._visible(n, eyes):
+                culled += 1
+                n.fresh = False
+                continue
+            if not n.fresh:  # first sight (or back in view): one full update
+                n.fresh = True
+                todo.append((k, n, 0, 1))
+                if s.reuse_budget is not None:
+                    n.adapt.restart(object_directions(n.desc.model, n.centre, centre, lp))
+                continue
+            if s.reuse_budget is not None:
+                model = n.desc.model
+                dirs = object_directions(model, n.centre, centre, lp)
+                scale = near_scale(model, n.centre, n.radius, np.vstack([centre[None], lp]))
+                budget = s.reuse_budget * coverage_slack(self._coverage(n, eyes[0]))
+                staggered = s.schedule == "staggered"
+                a = n.adapt.step(dirs, scale, budget, ADAPTIVE_PERIOD_MAX, staggered)
+                if a.update:
+                    todo.append((k, n, a.phase, a.period))
+            elif sl.update:
+                todo.append((k, n, sl.phase, sl.period))
+        updated = len(todo)
+        return todo, updated, culled
+
+    def _coverage(self, n: _Neural, eye) -> float:
+        """The fraction of the (whole) eye image the object's bounding sphere covers."""
+        c, r = self.world_sphere(n)
+        d = float(np.linalg.norm(c - eye.position))
+        if d <= r:
+            return 1.0
+        w, h = self.s.crop[2:] if self.s.crop else self.s.eye_res
+        ang = np.arcsin(r / d)  # the sphere's angular radius
+        half = np.radians(self.s.fov_y) / 2
+        frac = np.pi * (np.tan(ang) / np.tan(half)) ** 2 / (4 * w / h)
+        return float(min(frac, 1.0))
 
     def frame(self, f: int) -> FrameStats:
         """Render display frame ``f`` (waits for the GPU); returns its statistics."""
@@ -241,33 +337,23 @@ class Renderer:
         lp, lc = light_arrays(self.lights, f / s.fps)
         self.counters.clear()
         enc = self.dev.create_command_encoder()
-        sl = frame_slice(f, s.reuse, s.schedule)
         updated = culled = 0
         if s.mode == "texture":
-            todo = []
-            for k, n in enumerate(self.neural):
-                if not self._visible(n, eyes):
-                    culled += 1
-                    n.fresh = False
-                elif not n.fresh:  # first sight (or back in view): one full update
-                    updated += 1
-                    todo.append((k, n, 0, 1))
-                    n.fresh = True
-                elif sl.update:
-                    updated += 1
-                    todo.append((k, n, sl.phase, sl.period))
+            todo, updated, culled = self._slices(f, eyes, lp)
             if todo:
                 # all of a frame's texture-space dispatches in one compute pass: one timestamp
                 # pair around them (lavapipe's per-pass timestamps are unreliable when several
                 # independent compute passes follow each other)
                 cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("texture"))
+                shading = self._shading_eyes(eyes)
                 for k, n, phase, period in todo:
                     tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
-                    for e, (eye, tgt) in enumerate(zip(eyes, n.targets, strict=True)):
+                    for e, ((pos, margin), tgt) in enumerate(zip(shading, n.targets, strict=True)):
                         slot = k * s.eyes + e
-                        tgt.update(n.desc.model, eye.position, tiling, lp, lc, phase, period, slot)
+                        tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, slot, margin)
                         tgt.dispatch(cp, phase, period)
                 cp.end()
+        eyes = self.raster_eyes(eyes)
         shift = np.eye(4)
         shift[:3, 3] = self.origin
         lp_r = lp - self.origin
@@ -302,6 +388,14 @@ class Renderer:
             )
         return FrameStats(f, wall, gpu, updated, culled, int(c[0]), int(c[1]), int(c[2]), int(c[3]))
 
+    def _shading_eyes(self, eyes) -> list[tuple[np.ndarray, float]]:
+        """Where each radiance texture is shaded from: ``(eye position, facing margin)`` per
+        eye, or once from the eyes' centre with a margin of half their distance (shared)."""
+        if self.s.radiance == "shared":
+            a, b = eyes[0].position, eyes[1].position
+            return [((a + b) / 2, float(np.linalg.norm(a - b)) / 2)]
+        return [(e.position, 0.0) for e in eyes]
+
     def _draw(self, enc, e: int, et) -> None:
         vis = self.s.mode != "texture"
         rp = fw.begin_pass(enc, et, self.timer.writes("forward"))
@@ -315,7 +409,8 @@ class Renderer:
                 bg = d.bind_group(None, "plain")
             else:
                 pipe = fw.render_pipeline(nl, "fs_neural", False)
-                bg = d.bind_group(n.targets[e].view, ("eye", e))
+                tgt = n.targets[e if len(n.targets) > 1 else 0]  # shared: one for both
+                bg = d.bind_group(tgt.view, ("eye", e))
             rp.set_pipeline(pipe)
             rp.set_bind_group(0, fw.frame_bind_group(et))
             rp.set_bind_group(1, bg)
@@ -346,4 +441,5 @@ class Renderer:
             )
         if not 0 <= eye < self.s.eyes:
             raise VrnError(f"radiance: eye = {eye!r} is out of range; eyes 0..{self.s.eyes - 1}")
-        return read_texture(self.neural[obj].targets[eye].texture).astype(np.float32)
+        tgts = self.neural[obj].targets
+        return read_texture(tgts[eye if len(tgts) > 1 else 0].texture).astype(np.float32)

@@ -267,7 +267,8 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
             f"{count(s.n_lights - n_builtin, 'generated light')} added (a SCENE "
             "file has only the lights it defines)"
         )
-    unused = [f"--{k}" for k in ("reuse", "schedule") if is_explicit(cfg, k)]
+    knobs = ("reuse", "schedule", "radiance", "reuse_budget")
+    unused = [f"--{k.replace('_', '-')}" for k in knobs if is_explicit(cfg, k)]
     if s.mode != "texture" and unused:  # texture space's knobs: say they do nothing here
         r.warnings.append(
             f"{' and '.join(unused)} only {'apply' if len(unused) > 1 else 'applies'} to "
@@ -448,8 +449,12 @@ def human_summary(sm: dict) -> str:
     fw = sm["frame_wall_ms"]
     texture = r["mode"] == "texture"  # reuse, schedule and the texture only exist there
     unit = "blocks" if texture else "pixels"
+    reuse = r["reuse"] if r.get("reuse_budget") is None else f"auto({r['reuse_budget']:g} deg)"
+    shared = " radiance=shared" if r.get("radiance") == "shared" else ""
     space = (
-        f"reuse={r['reuse']} schedule={r['schedule']} " if texture else "(per pixel, every frame) "
+        f"reuse={reuse} schedule={r['schedule']}{shared} "
+        if texture
+        else "(per pixel, every frame) "
     )
     given = r.get("texture_res_given", False)
     tex = f" texture={_texture_text(r['texture_res'], sm, given)}" if texture else ""

@@ -24,13 +24,15 @@ PARAMS_BYTES = 176  # mat4 model, mat4 normal_mat, vec4 eye, vec4 tiling, vec4<u
 WORKGROUP_SIZE = 64  # 1D workgroups of the cull and shade kernels
 
 
-def pack_params(model, eye, tiling, offset=0, count=0, slot=0) -> bytes:
+def pack_params(model, eye, tiling, offset=0, count=0, slot=0, margin=0.0) -> bytes:
     """The ``Params`` uniform of texture_space.wgsl (matrices column-major); ``offset, count``:
-    this dispatch's span of the atlas's candidate block list."""
+    this dispatch's span of the atlas's candidate block list; ``margin`` (m): blocks facing any
+    point within it of ``eye`` are shaded (a radiance texture shared by both eyes)."""
     f = np.zeros(40, np.float32)
     f[0:16] = np.asarray(model, np.float32).T.ravel()
     f[16:32] = normal_matrix(np.asarray(model, np.float32)).T.ravel()
     f[32:35] = np.asarray(eye, np.float32)[:3]
+    f[35] = margin
     f[36:40] = np.asarray(tiling, np.float32)
     u = np.array([offset, count, slot, 0], np.uint32)
     return f.tobytes() + u.tobytes()
@@ -191,13 +193,16 @@ class TextureTarget:
             )
         return self.binds[key]
 
-    def update(self, model, eye, tiling, light_pos, light_rgb, phase=0, period=1, slot=0):
+    def update(
+        self, model, eye, tiling, light_pos, light_rgb, phase=0, period=1, slot=0, margin=0.0
+    ):
         """Write this dispatch's uniforms (call before encoding it). World quantities are made
-        camera-relative in float64 first (:func:`~vrneural.runtime.reference.camera_relative`)."""
+        camera-relative in float64 first (:func:`~vrneural.runtime.reference.camera_relative`).
+        ``margin``: see :func:`pack_params`."""
         model, eye, light_pos = camera_relative(model, eye, light_pos)
         span = self.gatlas.block_list(period)[1][phase]
         q = get_device().queue
-        q.write_buffer(self.params, 0, pack_params(model, eye, tiling, *span, slot))
+        q.write_buffer(self.params, 0, pack_params(model, eye, tiling, *span, slot, margin))
         q.write_buffer(self.lights, 0, pack_lights(light_pos, light_rgb, self.tpass.n_lights))
 
     def encode(self, encoder, phase=0, period=1, timestamp_writes=None) -> None:
@@ -229,10 +234,11 @@ def shade_texture_space(
     weights: str = "constants",
     radiance_format: str = "rgba16float",
     subgroups: bool | None = None,
+    margin: float = 0.0,
 ):
     """GPU texture-space pass on a fresh (zeroed) texture; returns ``(radiance [R, R, 4]
     float32, counters [4])`` like the numpy twin of the same name. ``subgroups``: None = use
-    them where the device has the feature."""
+    them where the device has the feature; ``margin``: see :func:`pack_params`."""
     lp = np.asarray(light_pos, np.float64).reshape(-1, 3)
     tp = TextureSpacePass(
         mat,
@@ -244,7 +250,7 @@ def shade_texture_space(
     )
     counters = CounterBuffer(1)
     tgt = TextureTarget(tp, GpuAtlas(atlas), counters)
-    tgt.update(model, eye, tiling, lp, light_rgb, phase, period, 0)
+    tgt.update(model, eye, tiling, lp, light_rgb, phase, period, 0, margin)
     enc = get_device().create_command_encoder()
     tgt.encode(enc, phase, period)
     get_device().queue.submit([enc.finish()])

@@ -16,7 +16,9 @@ enable f16;
 struct Params {
     model: mat4x4<f32>,       // object -> world
     normal_mat: mat4x4<f32>,  // inverse transpose of the model's 3x3 (upper-left)
-    eye: vec4<f32>,           // eye position, world, metres
+    eye: vec4<f32>,           // eye position, world, metres; w: facing margin, metres (a block
+                              // is front when it faces any point within w of the eye: the
+                              // shared radiance texture of both eyes, shaded from their centre)
     tiling: vec4<f32>,        // material uv = uv * tiling.xy + tiling.zw
     sched: vec4<u32>,         // (candidate list offset, candidate count, counter slot, unused)
 }
@@ -66,7 +68,9 @@ fn shade_block(k: u32) -> vec4<u32> {
     let y0 = (packed >> 16u) * 2u;
     let s = frame_of(g0.xyz, g1.xyz, vec4<f32>(geo_tan[k].xyz, g1.w));
     let wo = to_local(s, safe_normalize(P.eye.xyz - s.pos, s.n));
-    if (wo.z <= 0.0) { return vec4<u32>(0u, 1u, 0u, 0u); }
+    if (wo.z <= 0.0 && dot(P.eye.xyz - s.pos, s.n) <= -P.eye.w) {
+        return vec4<u32>(0u, 1u, 0u, 0u);
+    }
     let q01 = geo_uv01[k];
     let q23 = geo_uv23[k];
     let uv0 = tiled(q01.xy);
@@ -124,10 +128,12 @@ fn shade_block(k: u32) -> vec4<u32> {
 }
 
 // Facing test of block k (same rule as shade_block, so a block it keeps never turns out
-// back-facing there): true when the eye sees its front.
+// back-facing there): true when the eye, or a point within the margin P.eye.w of it, sees its
+// front.
 fn block_front(k: u32) -> bool {
     let pn = pos_normal_of(geo_pos[k].xyz, geo_nrm[k].xyz);
-    return dot(safe_normalize(P.eye.xyz - pn[0], pn[1]), pn[1]) > 0.0;
+    let v = P.eye.xyz - pn[0];
+    return dot(safe_normalize(v, pn[1]), pn[1]) > 0.0 || dot(v, pn[1]) > -P.eye.w;
 }
 
 // Three dispatches per (object, eye) update, in one compute pass:

@@ -1,0 +1,160 @@
+"""The report of `vrneural bench tradeoff`: tables per condition, the knobs ranked by what they
+cost and buy, and the plots (``speed.png``, ``pareto.png``). Every FLIP difference is read
+against the condition's noise floor: FLIP between two references with different sample
+positions."""
+
+from __future__ import annotations
+
+from vrneural.bench import report as rp
+from vrneural.bench.tradeoff import label, pareto
+
+
+def base_of(rec: dict) -> dict:
+    return next(v for v in rec["variants"] if v["knob"] == "base")
+
+
+def ranking(doc: dict) -> list[dict]:
+    """Per condition and preset, every variant against the base: FLIP change, frame ms and
+    blocks saved, FLIP change per ms saved, and whether the change is within the noise floor."""
+    out = []
+    for rec in doc["records"]:
+        b = base_of(rec)
+        floor = rec["noise_floor"]["flip"]
+        for v in rec["variants"]:
+            if v is b:
+                continue
+            dflip = v["flip"]["mean"] - b["flip"]["mean"]
+            saved = b["frame_ms"]["mean"] - v["frame_ms"]["mean"]
+            out.append({
+                "condition": rec["condition"], "preset": rec["preset"], "setting": label(v),
+                "dflip": dflip, "ms_saved": saved,
+                "blocks_saved": b["blocks_per_frame"] - v["blocks_per_frame"],
+                "dflip_per_ms": dflip / saved if abs(saved) > 1e-9 else None,
+                "below_floor": abs(dflip) < floor,
+            })  # fmt: skip
+    return out
+
+
+def _f(v, nd=4):
+    return "-" if v is None else f"{v:.{nd}g}"
+
+
+def markdown(doc: dict) -> list[str]:
+    c = doc["config"]
+    adp = doc.get("adaptive")
+    md = [
+        "# Trade-off: each knob where it bites",
+        "",
+        rp.adapter_line(doc),
+        f"Crops of {c['crop']} x {c['crop']} pixels of each quest3 eye image (2064 x 2208, "
+        f"{doc['ppd']:.1f} pixels per degree) following a neural sphere; reference: the teacher "
+        f"per pixel, f32, {c['spp']} stratified samples per pixel; {c['scored']} consecutive "
+        f"frames scored per condition, both eyes. Base: texture {c['base_res']}^2, "
+        f"N = {c['base_reuse']} staggered, per-eye radiance, f32, distilled student. FLIP: HDR at "
+        f"{doc['ppd']:.1f} ppd (mean over frames; worst frame in brackets). **floor**: FLIP "
+        "between two references with different sample positions; a difference below it is "
+        "noise." + (" **Quick run: reduced settings.**" if c["quick"] else ""),
+        "",
+    ]
+    packs = doc["packs"]
+    if packs.get("absent"):
+        md += [f"Packs from {packs['source']}; no {', '.join(packs['absent'])} pack there, so "
+               "no row for it.", ""]  # fmt: skip
+    if adp:
+        md += [
+            f"Adaptive reuse (`--reuse auto`): budget {adp['budget_deg']:.3g} deg, matched on "
+            f"'{adp['condition']}' to the base N's mean work "
+            f"({adp['base_candidates_per_frame']:.0f} candidate blocks per frame; matched "
+            f"{adp['matched_candidates_per_frame']:.0f}).",
+            "",
+        ]
+    for rec in doc["records"]:
+        floor = rec["noise_floor"]["flip"]
+        md += [f"## {rec['condition']} ({rec['preset']})", "",
+               f"floor {floor:.4f} (FLIP, reference vs reference)", ""]  # fmt: skip
+        rows = []
+        for v in rec["variants"]:
+            ch = v["change"]
+            rows.append([
+                label(v), v["frame_ms"]["mean"], v["blocks_per_frame"],
+                f"{v['flip']['mean']:.4f} ({v['flip']['worst']:.4f})", v["psnr"], v["ssim"],
+                "-" if ch is None else f"{ch:.4f} / {v['change_ref']:.4f}",
+                "-" if v["reuse_error"] is None else
+                f"{v['reuse_error']['mean']:.4f} ({v['reuse_error']['worst']:.4f})",
+            ])  # fmt: skip
+        md += rp.table(
+            ["setting", "frame ms", "blocks/frame", "FLIP (worst)", "PSNR", "SSIM",
+             "change / ref's", "reuse error (worst)"],
+            rows,
+        )  # fmt: skip
+        md.append("")
+    md += ["## Ranking: what each knob buys (FLIP change) for the frame time it saves", "",
+           "Against each condition's base; negative FLIP change is better; *: within the noise "
+           "floor (not measurable).", ""]  # fmt: skip
+    rank = ranking(doc)
+    rows = [[r["condition"], r["preset"], r["setting"] + (" *" if r["below_floor"] else ""),
+             f"{r['dflip']:+.4f}", f"{r['ms_saved']:+.1f}", f"{r['blocks_saved']:+.0f}",
+             "-" if r["dflip_per_ms"] is None else f"{r['dflip_per_ms']:+.2e}"]
+            for r in sorted(rank, key=lambda r: (r["condition"], r["dflip"]))]  # fmt: skip
+    md += rp.table(["condition", "preset", "setting", "dFLIP", "ms saved", "blocks saved",
+                    "dFLIP per ms saved"], rows)  # fmt: skip
+    return md
+
+
+def speed_png(doc: dict, path) -> None:
+    """FLIP against the reference and the reuse error over head speed, per variant."""
+    recs = [r for r in doc["records"] if r["family"] in ("rest", "turn")]
+    first = recs[0]["preset"] if recs else None
+    recs = sorted((r for r in recs if r["preset"] == first), key=lambda r: r["value"])
+    fig, axes = rp.figure(12, 4.2, 2)
+    if recs:
+        x = [r["value"] for r in recs]
+        names = [label(v) for v in recs[0]["variants"]]
+        for i, name in enumerate(names):
+            y = [r["variants"][i]["flip"]["mean"] for r in recs]
+            axes[0].plot(x, y, "o-", label=name, lw=1)
+            e = [r["variants"][i]["reuse_error"] for r in recs]
+            if all(v is not None for v in e):
+                axes[1].plot(x, [v["mean"] for v in e], "o-", label=name, lw=1)
+        axes[0].plot(x, [r["noise_floor"]["flip"] for r in recs], "k--", label="noise floor")
+    axes[0].set_ylabel("FLIP vs supersampled teacher (mean)")
+    axes[1].set_ylabel("reuse error: FLIP vs N = 0 (mean)")
+    for ax in axes:
+        ax.set_xlabel("head turn speed, deg/s")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=6)
+    fig.suptitle(f"bench tradeoff on {doc['adapter']['name']}: head speed", fontsize=9)
+    rp.save_png(fig, path)
+
+
+def pareto_png(doc: dict, path) -> None:
+    rec = next((r for r in doc["records"] if r["family"] == "smooth"), doc["records"][0])
+    vs = rec["variants"]
+    fig, axes = rp.figure(6.4, 4.2, 1)
+    ax = axes[0]
+    pts = [(v["frame_ms"]["mean"], v["flip"]["mean"]) for v in vs]
+    front = sorted(pareto(pts, True), key=lambda i: pts[i][0])
+    for v, (x, y) in zip(vs, pts, strict=True):
+        ax.scatter(x, y, s=18, color="C3" if v["knob"] == "base" else "C0")
+        ax.annotate(label(v), (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points")
+    ax.plot([pts[i][0] for i in front], [pts[i][1] for i in front], "k--", lw=0.8,
+            label="Pareto front")  # fmt: skip
+    ax.axhspan(min(p[1] for p in pts), min(p[1] for p in pts) + rec["noise_floor"]["flip"],
+               color="0.85", label="noise floor above the best")  # fmt: skip
+    ax.set_xscale("log")
+    rp.plain_log_ticks(ax.xaxis)
+    ax.set_xlabel("frame ms (mean, wall)")
+    ax.set_ylabel("FLIP (lower is better)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.suptitle(f"{rec['condition']} ({rec['preset']}) on {doc['adapter']['name']}", fontsize=9)
+    rp.save_png(fig, path)
+
+
+def finish_report(root, doc: dict, t0: float) -> dict:
+    doc["ranking"] = ranking(doc)
+    md = markdown(doc)
+    speed_png(doc, root / "speed.png")
+    pareto_png(doc, root / "pareto.png")
+    md += ["", "![speed](speed.png)", "", "![pareto](pareto.png)"]
+    return rp.finish(root, doc, md, t0)
