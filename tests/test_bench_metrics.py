@@ -129,3 +129,21 @@ def test_quick_keeps_explicit_flags_even_at_their_default_value():
     assert q.epochs == default and q.teacher_epochs == 2  # typed: kept; not typed: --quick
     args._explicit = explicit_dests(argv[:3])  # the same values, --epochs not typed
     assert config_from_args(QualityConfig, args).resolved().epochs == 2
+
+
+def test_flip_of_both_eyes_leaves_the_gap_out():
+    """One FLIP evaluation for both eyes side by side: the blank gap between them is not
+    counted, so an error in one eye is halved by the other's exact pixels, no more."""
+    from vrneural.bench.metrics import flip_hdr_eyes
+
+    rng = np.random.default_rng(0)
+    a = rng.uniform(0.05, 0.5, (2, 32, 40, 3)).astype(np.float32)
+    assert flip_hdr_eyes(a, a, 23.0) == 0.0
+    b = a.copy()
+    b[1] *= 1.5  # only the right eye differs
+    both = flip_hdr_eyes(a, b, 23.0)
+    left_only = flip_hdr_eyes(a[:1], b[:1], 23.0)
+    assert left_only == 0.0 and 0 < both < 1
+    c = b.copy()
+    c[0] *= 1.5  # now both differ: about twice the error
+    assert 1.5 < flip_hdr_eyes(a, c, 23.0) / both < 2.5

@@ -79,6 +79,35 @@ def flip_hdr(ref: np.ndarray, test: np.ndarray, ppd: float) -> float:
     return float(mean)
 
 
+#: blank columns between the eyes of :func:`flip_hdr_eyes` (wider than FLIP's filters at the
+#: headset's density, so one eye's error never leaks into the other's pixels)
+EYE_GAP = 16
+
+
+def flip_hdr_eyes(ref: np.ndarray, test: np.ndarray, ppd: float) -> float:
+    """Mean HDR-FLIP of ``test`` against ``ref``, both ``[eyes, H, W, >=3]``, over the eyes'
+    pixels: one evaluation of the eyes side by side (each call has a large fixed cost), the
+    blank gap between them left out of the mean. HDR-FLIP's exposure range comes from the
+    reference frame as a whole (both eyes), as it would for the headset's frame."""
+    import flip_evaluator
+
+    def side_by_side(x):
+        x = np.maximum(np.nan_to_num(np.asarray(x, np.float32)[..., :3]), 0)
+        gap = np.zeros((x.shape[1], EYE_GAP, 3), np.float32)
+        parts = [p for e in x for p in (e, gap)][:-1]
+        return np.ascontiguousarray(np.concatenate(parts, 1))
+
+    a, b = side_by_side(ref), side_by_side(test)
+    err, _, _ = flip_evaluator.evaluate(
+        a, b, "HDR", inputsRGB=True, applyMagma=False, parameters={"ppd": float(ppd)}
+    )
+    w = ref.shape[2]
+    keep = np.zeros(a.shape[1], bool)
+    for e in range(ref.shape[0]):
+        keep[e * (w + EYE_GAP) : e * (w + EYE_GAP) + w] = True
+    return float(np.asarray(err)[:, keep].mean())
+
+
 def pixels_per_degree(eye_height: int, fov_y: float) -> float:
     """Pixels per degree of an eye image ``eye_height`` pixels tall spanning ``fov_y`` degrees."""
     return eye_height / fov_y

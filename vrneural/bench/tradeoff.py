@@ -304,33 +304,38 @@ def match_budget(scene, c, cond, prof, target_blocks: float) -> tuple[float, flo
     return hi, work(hi)
 
 
-def scores(ref: dict, imgs: dict, n0: dict | None, ppd: float, frames: list) -> dict:
-    """The metrics of one variant over the scored ``frames`` (see the module docstring)."""
+def scores(ref: dict, imgs: dict, n0: dict | None, ppd: float, frames: list, cache: dict) -> dict:
+    """The metrics of one variant over the scored ``frames`` (see the module docstring);
+    ``cache`` keeps what depends on the reference alone (its display images, its own
+    frame-to-frame change) across the variants of a condition."""
     flips, psnrs, ssims, reuse_err = [], [], [], []
     disp = {f: [metrics.display(e) for e in imgs[f]] for f in frames}
-    rdisp = {f: [metrics.display(e) for e in ref[f]] for f in frames}
+    if "disp" not in cache:
+        cache["disp"] = {f: [metrics.display(e) for e in ref[f]] for f in frames}
+    rdisp = cache["disp"]
 
     def per_eye(fn, a, b) -> float:  # the mean over both eyes
         return float(np.mean([fn(x, y) for x, y in zip(a, b, strict=True)]))
 
-    def flip(x, y):
-        return metrics.flip_hdr(x, y, ppd)
+    def flip(a, b):  # both eyes in one FLIP evaluation
+        return metrics.flip_hdr_eyes(a, b, ppd)
 
     def change(x, y):
         return float(np.abs(y - x).mean())
 
     for f in frames:
-        flips.append(per_eye(flip, ref[f], imgs[f]))
+        flips.append(flip(ref[f], imgs[f]))
         psnrs.append(per_eye(metrics.psnr, rdisp[f], disp[f]))
         ssims.append(per_eye(metrics.ssim, rdisp[f], disp[f]))
         if n0 is not None:
-            reuse_err.append(per_eye(flip, n0[f], imgs[f]))
-    ch, rch, tf, rtf = [], [], [], []
-    for a, b in itertools.pairwise(frames):
-        ch.append(per_eye(change, disp[a], disp[b]))
-        rch.append(per_eye(change, rdisp[a], rdisp[b]))
-        tf.append(per_eye(flip, imgs[a], imgs[b]))
-        rtf.append(per_eye(flip, ref[a], ref[b]))
+            reuse_err.append(flip(n0[f], imgs[f]))
+    pairs = list(itertools.pairwise(frames))
+    if "change" not in cache:
+        cache["change"] = [per_eye(change, rdisp[a], rdisp[b]) for a, b in pairs]
+        cache["flip_consecutive"] = [flip(ref[a], ref[b]) for a, b in pairs]
+    ch = [per_eye(change, disp[a], disp[b]) for a, b in pairs]
+    tf = [flip(imgs[a], imgs[b]) for a, b in pairs]
+    rch, rtf = cache["change"], cache["flip_consecutive"]
     out = {
         "flip": _dist(flips),
         "psnr": float(np.mean(psnrs)),
@@ -486,10 +491,9 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
         ref = reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
         nf = cond.scored[: max(2, len(cond.scored) // 2)]
         ref2 = reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
-        floor = [
-            metrics.flip_hdr(a, b, ppd) for f in nf for a, b in zip(ref[f], ref2[f], strict=True)
-        ]
+        floor = [metrics.flip_hdr_eyes(ref[f], ref2[f], ppd) for f in nf]
         rec["noise_floor"] = {"flip": float(np.mean(floor)), "frames": nf}
+        cache: dict = {}
         n0 = None
         for v in vs:
             bar.set_postfix_str(f"{cond.name} / {preset}: {label(v)}")
@@ -499,8 +503,8 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
                               set(cond.scored))  # fmt: skip
             if v["knob"] == "reuse" and v["value"] == 0:
                 n0 = imgs
-            r = {**v, **work(st), **scores(ref, imgs, n0 if v is not vs[0] else None, ppd,
-                                           cond.scored)}  # fmt: skip
+            n0_ = n0 if v is not vs[0] else None
+            r = {**v, **work(st), **scores(ref, imgs, n0_, ppd, cond.scored, cache)}
             rec["variants"].append(r)
             bar.update()
         doc["records"].append(rec)
