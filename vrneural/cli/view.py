@@ -37,6 +37,10 @@ def main(args) -> int:
     from vrneural.viewer.config import ViewConfig
     from vrneural.viewer.view import View
 
+    from vrneural.viewer.backends import check_display, import_glfw
+
+    check_display()  # before the scene and its shaders take their seconds
+    import_glfw()
     cfg = config_from_args(RunConfig, args)
     cfg = replace_config(cfg, frames=RunConfig().frames)  # --frames is the viewer's own
     vc = config_from_args(ViewConfig, args)

@@ -118,8 +118,19 @@ class FrameWork:
             self.want_shot = False
             self._screenshot(r, lay)
         end = time.perf_counter()
+        settings = {
+            "mode": r.s.mode,
+            "precision": r.s.precision,
+            "texture_res": r.s.texture_res,
+            "reuse": r.s.reuse,
+            "schedule": r.s.schedule,
+            "lights_on": list(self.live.lights_on),
+            "split": self.live.split,
+            "camera": "head path" if self.live.follow_head else self.camera.mode,
+            "hud": self.live.hud,
+        }
         rec = FrameRecord(
-            self.f, start, end, (t1 - t0) * 1e3, (end - t1) * 1e3, st, self.live.key(), inputs
+            self.f, start, end, (t1 - t0) * 1e3, (end - t1) * 1e3, st, settings, inputs
         )
         self.records.append(rec)
         self.fps_window.append(end)
@@ -136,11 +147,11 @@ class FrameWork:
         without a teacher, say) goes back, with the reason on the HUD."""
         live = self.live
         try:
-            r, _ = self.renderers.get(live)
+            r, built = self.renderers.get(live)
         except VrnError as e:
             self.say(str(e), alert=True)
             live.mode, live.precision, live.texture_res, live.texture_res_given = self.good
-            r, _ = self.renderers.get(live)
+            r, built = self.renderers.get(live)
         self.good = (live.mode, live.precision, live.texture_res, live.texture_res_given)
         if r is not self.r:
             r.invalidate()  # taken up again: its radiance textures are another view's
@@ -150,7 +161,7 @@ class FrameWork:
             took = self.renderers.build_s.get(k)
             self.say(
                 f"{k[0]} mode, {k[1]}, {k[2]}^2"
-                + (f" (built in {took:.1f} s)" if took is not None else "")
+                + (f" (built in {took:.1f} s)" if built else " (kept from before)")
                 + (f"; {r.warnings[0]}" if r.warnings else "")
             )
         r.s.reuse, r.s.schedule = live.reuse, live.schedule
@@ -212,8 +223,9 @@ class FrameWork:
                 (w, h, 1),
             )  # fmt: skip
         else:
+            tu = wgpu.TextureUsage  # (COPY_SRC: a test reads it back)
             self.flip_tex = upload_texture(
-                rgba, "rgba8unorm", wgpu.TextureUsage.TEXTURE_BINDING, "flip map"
+                rgba, "rgba8unorm", tu.TEXTURE_BINDING | tu.COPY_SRC, "flip map"
             )
 
     def _layout(self, r, right, display: bool):

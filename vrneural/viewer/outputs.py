@@ -6,6 +6,7 @@ preview size, which would freeze the window)."""
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -103,11 +104,50 @@ def flip_map(ref: np.ndarray, test: np.ndarray, ppd: float) -> tuple[np.ndarray,
     return rgba, float(mean)
 
 
+def write_array(f, a: np.ndarray) -> None:
+    """One array on a byte stream: a JSON line (dtype, shape), then its bytes."""
+    import json
+
+    a = np.asarray(a)
+    a = a if a.flags.c_contiguous else a.copy(order="C")  # (ascontiguousarray makes 0-d 1-d)
+    f.write((json.dumps({"dtype": a.dtype.str, "shape": a.shape}) + "\n").encode())
+    f.write(a.tobytes())
+    f.flush()
+
+
+def read_array(f) -> np.ndarray | None:
+    """The next :func:`write_array` array of stream ``f`` (None at its end)."""
+    import json
+
+    line = f.readline()
+    if not line:
+        return None
+    head = json.loads(line)
+    n = int(np.prod(head["shape"])) * np.dtype(head["dtype"]).itemsize
+    data = f.read(n)
+    if len(data) != n:
+        return None
+    return np.frombuffer(data, head["dtype"]).reshape(head["shape"])
+
+
+def serve() -> None:
+    """The worker process (``python -m vrneural.viewer.outputs``): per request ``(ppd, ref,
+    test)`` on stdin, ``(map, mean)`` on stdout, until stdin closes."""
+    inp, out = sys.stdin.buffer, sys.stdout.buffer
+    while (ppd := read_array(inp)) is not None:
+        ref, test = read_array(inp), read_array(inp)
+        m, mean = flip_map(ref, test, float(ppd.reshape(-1)[0]))
+        write_array(out, m)
+        write_array(out, np.float64(mean))
+
+
 class FlipWorker:
-    """One FLIP job at a time in a spawned worker process."""
+    """One FLIP job at a time in a worker process (started on first use, fed through pipes:
+    no multiprocessing, so scripts need no ``__main__`` guard); a thread waits for the answer."""
 
     def __init__(self):
-        self.pool = None
+        self.proc = None
+        self.waiter = None
         self.job = None
 
     @property
@@ -116,6 +156,9 @@ class FlipWorker:
 
     def submit(self, ref: np.ndarray, test: np.ndarray, ppd: float) -> bool:
         """Start a job unless one is running; whether it started."""
+        import subprocess
+        from concurrent.futures import ThreadPoolExecutor
+
         if self.busy:
             return False
         try:
@@ -124,14 +167,25 @@ class FlipWorker:
             raise VrnError(
                 "the FLIP split view needs flip-evaluator: pip install 'vrneural[metrics]'"
             ) from None
-        if self.pool is None:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
-
-            ctx = multiprocessing.get_context("spawn")
-            self.pool = ProcessPoolExecutor(max_workers=1, mp_context=ctx)
-        self.job = self.pool.submit(flip_map, ref, test, ppd)
+        if self.proc is None or self.proc.poll() is not None:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "vrneural.viewer.outputs"],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+            )
+            self.waiter = self.waiter or ThreadPoolExecutor(1, thread_name_prefix="flip")
+        self.job = self.waiter.submit(self._ask, self.proc, ref, test, ppd)
         return True
+
+    @staticmethod
+    def _ask(proc, ref, test, ppd):
+        write_array(proc.stdin, np.float64(ppd))
+        write_array(proc.stdin, np.asarray(ref, np.float32))
+        write_array(proc.stdin, np.asarray(test, np.float32))
+        m, mean = read_array(proc.stdout), read_array(proc.stdout)
+        if m is None or mean is None:
+            raise VrnError("the FLIP worker process stopped (see its message above)")
+        return m, float(mean.reshape(-1)[0])
 
     def result(self, wait: bool = False):
         """``(map, mean)`` of a finished job (once), else None."""
@@ -141,6 +195,17 @@ class FlipWorker:
         return job.result()
 
     def close(self) -> None:
-        if self.pool is not None:
-            self.pool.shutdown(wait=False, cancel_futures=True)
-            self.pool = None
+        if self.proc is not None:
+            try:
+                self.proc.stdin.close()
+                self.proc.wait(timeout=10)
+            except Exception:  # stuck in a job: stop it
+                self.proc.kill()
+            self.proc = None
+        if self.waiter is not None:
+            self.waiter.shutdown(wait=False, cancel_futures=True)
+            self.waiter = None
+
+
+if __name__ == "__main__":
+    serve()

@@ -18,8 +18,9 @@ VIEW_DEFAULTS = {"profile": "preview", "eyes": 1}
 def configs(config=None, view=None, options: dict | None = None) -> tuple[RunConfig, ViewConfig]:
     """``(RunConfig, ViewConfig)`` from ``config`` / ``view`` (None: defaults) and keyword
     ``options`` naming fields of either; `run`'s options the viewer has no use for (``out``,
-    ``video``...) are refused, and the viewer's defaults (:data:`VIEW_DEFAULTS`) apply to the
-    fields nobody set."""
+    ``video``...) are refused. The viewer's defaults (:data:`VIEW_DEFAULTS`) apply to the
+    fields nobody set: with ``config=None``, or to a config from the command line (which
+    records what was typed); a RunConfig built in code is taken as it is."""
     options = dict(options or {})
     run_names = {f.name for f in dataclasses.fields(RunConfig)} - set(RUN_ONLY)
     view_names = {f.name for f in dataclasses.fields(ViewConfig)}
@@ -34,9 +35,8 @@ def configs(config=None, view=None, options: dict | None = None) -> tuple[RunCon
     if view is not None and not isinstance(view, ViewConfig):
         raise VrnError(f"View: view is a {type(view).__name__}, expected a ViewConfig")
     cfg = config if config is not None else mark_explicit(RunConfig())
-    if "_explicit" not in cfg.__dict__:  # built in code: what differs from the defaults
-        names = [f.name for f in dataclasses.fields(RunConfig) if is_explicit(cfg, f.name)]
-        cfg = mark_explicit(cfg, *names)
+    if "_explicit" not in cfg.__dict__:  # built in code: used as given, every field chosen
+        cfg = mark_explicit(cfg, *(f.name for f in dataclasses.fields(RunConfig)))
     run_opts = {k: v for k, v in options.items() if k in run_names}
     if run_opts:
         cfg = mark_explicit(replace_config(cfg, **run_opts), *run_opts)

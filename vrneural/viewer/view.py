@@ -39,8 +39,9 @@ class FrameInput:
 
 @dataclass
 class FrameRecord:
-    """One drawn frame: timings (perf_counter seconds, ms), the renderer's statistics and the
-    inputs handled just before it (``(action, time_stamp)``: a key's effect shows here)."""
+    """One drawn frame: timings (perf_counter seconds, ms), the renderer's statistics, the
+    settings it was rendered with, and the key actions handled just before it
+    (``(action, event time_stamp, handled at)``: each key's effect shows in this frame)."""
 
     frame: int
     start: float
@@ -48,7 +49,7 @@ class FrameRecord:
     render_ms: float
     present_ms: float
     stats: object
-    key: tuple
+    settings: dict
     inputs: list = field(default_factory=list)
 
 
@@ -122,7 +123,12 @@ class View(FrameWork):
         cell's output."""
         from vrneural.viewer.backends import jupyter_canvas
 
-        canvas, loop = jupyter_canvas(self.window_size(), self.title())
+        size = self.window_size()
+        canvas, loop = jupyter_canvas(size, self.title())
+        # the size until the browser reports its own (a notebook run without one, nbclient,
+        # draws at this size)
+        canvas.handle_event({"event_type": "resize", "width": size[0], "height": size[1],
+                             "pixel_ratio": 1.0})  # fmt: skip
         self._open(canvas, loop)
         return canvas
 
