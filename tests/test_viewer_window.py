@@ -36,12 +36,8 @@ def display():
         if CI:
             pytest.fail(f"CI=true: {msg}")
         pytest.skip(msg)
-    with virtual_display() as name:
+    with virtual_display() as name:  # (it closes glfw's connection before the server goes)
         yield name
-        import glfw
-
-        glfw.terminate()  # let go of the X connection before the server goes
-        glfw._rc_alive = False  # (rendercanvas's flag: it inits again for a new window)
 
 
 def key(k, kind="key_down"):

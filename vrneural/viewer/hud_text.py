@@ -45,15 +45,14 @@ def hud_lines(view, st, last) -> tuple[list[str], set[int]]:
     ]
     if live.split != "off":
         age = v.f - v.split_frame if v.split_frame is not None else 0
-        line = f"split  left {s.mode} | right {live.split}: reference every {v.split_every} f"
-        if live.split == "flip":
-            line += (
-                f", FLIP mean {v.flip_mean:.4f} (frame {v.flip_frame})"
-                if v.flip_mean is not None
-                else ", FLIP computing (reference shown meanwhile)"
-            )
+        every = f"every {v.split_every} frames"
+        if live.split == "reference":
+            line = f"split  {s.mode} | reference (per pixel, f32; {every}, {age} frames old)"
+        elif v.flip_mean is not None:
+            line = f"split  {s.mode} | FLIP vs reference: mean {v.flip_mean:.4f} (frame "
+            line += f"{v.flip_frame}; {every})"
         else:
-            line += f" ({age} f old)"
+            line = f"split  {s.mode} | FLIP vs reference: computing (the reference meanwhile)"
         lines.append(line)
     alert = set()
     if v.status and time.perf_counter() - v.status[1] < STATUS_S:

@@ -45,6 +45,7 @@ def virtual_display(width: int = 2200, height: int = 1400) -> Iterator[str]:
         try:
             yield f":{number}"
         finally:
+            _let_go_of_glfw()
             if old is None:
                 os.environ.pop("DISPLAY", None)
             else:
@@ -58,6 +59,17 @@ def virtual_display(width: int = 2200, height: int = 1400) -> Iterator[str]:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
+
+
+def _let_go_of_glfw() -> None:
+    """Close glfw's X connection before its server goes (else Xlib's fatal-error handler ends
+    the process at exit); rendercanvas initialises glfw again for its next window."""
+    import sys
+
+    glfw = sys.modules.get("glfw")
+    if glfw is not None:
+        glfw.terminate()
+        glfw._rc_alive = False  # rendercanvas's flag: no polling of a terminated glfw
 
 
 def _read_display(fd: int, proc, log, timeout: float = 30.0) -> int:
