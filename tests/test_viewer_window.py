@@ -141,15 +141,22 @@ def test_window_shows_the_offscreen_frame_bit_for_bit_after_keys_and_mouse(displ
         assert n == 12 and rd.get_meta_data()["size"] == (192, 80)
 
 
-def test_mode_keys_switch_renderers_and_an_impossible_one_goes_back(display, tmp_path):
+def test_mode_keys_head_path_and_fly(display, tmp_path):
     """M cycles texture -> screen -> reference; a pack without a teacher has no reference
-    mode: the key is refused with `run`'s message on the HUD, and the mode goes back."""
+    mode: the key is refused with `run`'s message on the HUD, and the mode goes back. H
+    follows the scene's pose log; W flies forward while held."""
+    from vrneural.runtime.camera import PoseLogPath
     from vrneural.runtime.scene import bundled_path
     from vrneural.viewer import View
     from vrneural.viewer.present import compose
 
+    (tmp_path / "poses.csv").write_text(
+        "t,x,y,z,qx,qy,qz,qw\n0,0,1.0,1.2,0,0,0,1\n1,0.3,1.1,1.0,0,0.0998,0,0.995\n"
+    )
     (tmp_path / "s.toml").write_text(
         f"""
+[head]
+path = "poses.csv"
 [[objects]]
 mesh = "sphere"
 position = [0.0, 1.0, -0.3]
@@ -160,11 +167,28 @@ position = [1, 2, 1]
 intensity = 3.0
 """
     )
-    v = View(str(tmp_path / "s.toml"), profile="tiny", eye_res="64x64", frames=6, hud=False)
-    recs = run_script(v, {0: [key("m")], 2: [key("m")]})
+    v = View(str(tmp_path / "s.toml"), profile="tiny", eye_res="64x64", frames=12, hud=False)
+    poses = {}
+
+    def pose_of(view, rec):
+        poses[rec.frame] = (view.pose(), view.t)
+
+    v.after_frame(pose_of)
+    script = {0: [key("m")], 2: [key("m")], 5: [key("h")], 7: [key("w")], 9: [key("w", "key_up")]}
+    recs = run_script(v, script)
     modes = [r.settings["mode"] for r in recs]
-    assert modes == ["texture", "screen", "screen", "screen", "screen", "screen"]
+    assert modes == ["texture"] + ["screen"] * 11
     assert "--mode reference needs a teacher" in v.status[0] and v.status[2]
+    cams = [r.settings["camera"] for r in recs]
+    assert cams[5] == "orbit" and cams[6] == "head path" and cams[8] == "orbit"
+    (pos6, rot6), t6 = poses[6]
+    want_pos, want_rot = PoseLogPath(tmp_path / "poses.csv").pose(t6)
+    np.testing.assert_allclose(pos6, want_pos)
+    np.testing.assert_allclose(rot6, want_rot)
+    (p8, r8), _ = poses[8]
+    (p10, _), _ = poses[10]
+    step = p10 - p8  # W held for frames 9 and 10: straight ahead
+    assert np.linalg.norm(step) > 1e-4 and np.dot(step, -r8[:, 2]) > 0.999 * np.linalg.norm(step)
     np.testing.assert_array_equal(v.shown, compose(v.replay_offscreen()))
 
 
@@ -230,6 +254,10 @@ def test_cli_runs_and_its_errors_are_one_line(display, tmp_path):
     r = _cli(["--frames", "1"], {"PYGLFW_LIBRARY": str(tmp_path / "libglfw.so")})
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
     assert "glfw's shared library not found" in r.stderr
+    # a display that is not there
+    r = _cli(["--frames", "1"], {"DISPLAY": ":987"})
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+    assert "cannot open the display ':987' (X11: Failed to open display :987)" in r.stderr
     # an unknown key binding
     (tmp_path / "k.toml").write_text('[keys]\nteleport = "t"\n')
     r = _cli(["--keys", str(tmp_path / "k.toml"), "--frames", "1"])

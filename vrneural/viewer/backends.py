@@ -10,6 +10,7 @@
 from __future__ import annotations
 
 import os
+import re
 import sys
 import warnings
 
@@ -53,10 +54,22 @@ def import_glfw():
         warnings.simplefilter("always")
         ok = glfw.init()
     if not ok:
-        why = "; ".join(_first_line(w.message) for w in caught) or "glfw.init() failed"
-        where = os.environ.get("WAYLAND_DISPLAY") or os.environ.get("DISPLAY") or "?"
+        # glfw's warnings read "(65550) b'X11: Failed to open display :5'": keep the words
+        msgs = [
+            re.sub(r"^\(\d+\) b?['\"](.*)['\"]$", r"\1", _first_line(w.message)) for w in caught
+        ]
+        why = "; ".join(msgs) or "glfw.init() failed"
+        where = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or "?"
+        wayland_only = not os.environ.get("DISPLAY") and os.environ.get("WAYLAND_DISPLAY")
+        hint = (
+            "; on Wayland without XWayland: PYGLFW_LIBRARY_VARIANT=wayland (and apt-get "
+            "install libglfw3-wayland)"
+            if wayland_only and os.environ.get("PYGLFW_LIBRARY_VARIANT", "") != "wayland"
+            else ""
+        )
         raise VrnError(
-            f"cannot open the display {where!r} ({why}); is its server running? Without one: {XVFB}"
+            f"cannot open the display {where!r} ({why}){hint}; is its server running? "
+            f"Without one: {XVFB}"
         )
     return glfw
 
