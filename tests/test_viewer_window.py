@@ -27,7 +27,7 @@ def display():
     if not have_xvfb():
         missing.append("Xvfb (apt-get install xvfb)")
     try:
-        import glfw
+        import glfw  # noqa: F401
         import rendercanvas  # noqa: F401
     except ImportError as e:
         missing.append(f"glfw / rendercanvas ({e}; pip install 'vrneural[view]')")
