@@ -267,7 +267,15 @@ def test_cli_runs_and_its_errors_are_one_line(display, tmp_path):
     (tmp_path / "bad.toml").write_text('[[objects]]\nmesh = "plane"\nscale = -1\n')
     r = _cli([str(tmp_path / "bad.toml"), "--frames", "1"])
     run = subprocess.run(
-        [sys.executable, "-m", "vrneural", "run", str(tmp_path / "bad.toml"), "--out", "x"],
+        [
+            sys.executable,
+            "-m",
+            "vrneural",
+            "run",
+            str(tmp_path / "bad.toml"),
+            "--out",
+            str(tmp_path / "o"),
+        ],
         capture_output=True,
         text=True,
         timeout=120,

@@ -18,7 +18,9 @@ def hud_lines(view, st, last) -> tuple[list[str], set[int]]:
     gpu = "  ".join(f"{k} {ms:.1f}" for k, ms in st.gpu_ms.items()) or "n/a (no timestamps)"
     shaded = st.blocks_shaded if texture else st.pixels_shaded
     unit = "blocks" if texture else "pixels"
-    timing = f"render {last.render_ms:.1f}  present {last.present_ms:.1f}" if last else "first"
+    timing = (
+        f"render {last.render_ms:.1f}, HUD + present {last.present_ms:.1f}" if last else "first"
+    )
     interval = 1e3 / v.fps() if v.fps() > 0 else 0.0
     knobs = f"mode {s.mode}  "
     if texture:

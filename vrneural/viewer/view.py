@@ -62,7 +62,6 @@ class View(FrameWork):
 
     def __init__(self, scene=None, config=None, view=None, **options):
         from vrneural.gpu.device import adapter_summary, get_device
-        from vrneural.runtime.camera import OrbitPath, PoseLogPath
         from vrneural.viewer.camera import ViewCamera
         from vrneural.viewer.config import check_view_config
         from vrneural.viewer.controls import Controls
@@ -82,7 +81,7 @@ class View(FrameWork):
         for w in self.r.warnings:
             print(f"warning: {w}", file=sys.stderr)
         s = self.r.s
-        self.head_path = OrbitPath() if self.scene.head == "orbit" else PoseLogPath(self.scene.head)
+        self.head_path = self.r.head  # the scene's (orbit or pose log), as run plays it
         self.lights = [dataclasses.replace(lt) for lt in self.r.lights]
         self.live.lights_on = [True] * len(self.lights)
         self.camera = ViewCamera((0, 0, 0), (0, 0, -1))
