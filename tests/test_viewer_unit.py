@@ -133,7 +133,7 @@ def test_fit_keeps_whole_scales_and_centres():
 
 def test_view_defaults_and_run_only_options_are_refused():
     from vrneural.runtime.config import RunConfig
-    from vrneural.viewer.setup import configs
+    from vrneural.viewer.startup import configs
 
     cfg, vc = configs(None, None, {"mode": "screen", "split": "flip", "frames": 5})
     assert (cfg.profile, cfg.eyes, cfg.mode) == ("preview", 1, "screen")

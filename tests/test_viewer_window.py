@@ -283,3 +283,30 @@ def test_cli_runs_and_its_errors_are_one_line(display, tmp_path):
     assert r.returncode == run.returncode == 2
     assert r.stderr.replace("vrneural view:", "vrneural run:") == run.stderr
     assert "bad.toml: objects[0].scale = -1 is out of range" in r.stderr
+
+
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_ctrl_c_and_sigterm_close_between_frames_and_keep_the_video(display, tmp_path, sig):
+    import signal
+    import time
+
+    out = tmp_path / "v.mp4"
+    p = subprocess.Popen(
+        [sys.executable, "-m", "vrneural", "view", "--profile", "tiny", "--record", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    tmp = tmp_path / ".v.tmp.mp4"  # the video being written: there once the window is
+    end = time.monotonic() + 120
+    while time.monotonic() < end and not tmp.exists():
+        time.sleep(0.1)
+    time.sleep(1.5)  # some frames
+    p.send_signal(getattr(signal, sig))
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130, err
+    assert err.strip().splitlines() == [f"vrneural view: kept {out}", "vrneural view: interrupted"]
+    import imageio.v2 as iio2
+
+    with iio2.get_reader(str(out)) as rd:
+        assert sum(1 for _ in rd) >= 2

@@ -45,7 +45,14 @@ def main(args) -> int:
     cfg = replace_config(cfg, frames=RunConfig().frames)  # --frames is the viewer's own
     vc = config_from_args(ViewConfig, args)
     view = View(args.scene, cfg, vc)
-    sm = view.run()
+    try:
+        sm = view.run()
+    except KeyboardInterrupt:  # closed by Ctrl-C / SIGTERM: say what was kept, then exit 130
+        kept = [str(view.recorded)] if view.recorded else []
+        kept += [p for p in map(str, view.shots) if p.endswith(".png")]
+        if kept:
+            print(f"vrneural view: kept {', '.join(kept)}", file=sys.stderr)
+        raise
     print(
         f"view      {sm['frames']} frames, median {sm['fps_median']:.1f} FPS "
         f"(render {sm['render_ms_median']:.1f} ms, present {sm['present_ms_median']:.1f} ms)"

@@ -3,8 +3,7 @@
 - ``window``: rendercanvas's glfw backend, presenting to the window's own swap chain (the
   surface texture is rendered into directly: no read-back per frame);
 - ``jupyter``: rendercanvas's Jupyter backend (a ``jupyter_rfb`` widget; its frames are read
-  back and sent to the browser, which is how a notebook shows anything);
-- ``offscreen``: rendercanvas's offscreen canvas (no display; tests and scripts).
+  back and sent to the browser, which is how a notebook shows anything).
 """
 
 from __future__ import annotations
@@ -97,14 +96,6 @@ def jupyter_canvas(size, title: str):
             f"the Jupyter viewer needs rendercanvas and jupyter_rfb: {INSTALL}"
         ) from None
     canvas = RenderCanvas(size=size, title=title, update_mode="continuous", max_fps=1000)
-    return canvas, loop
-
-
-def offscreen_canvas(size, title: str):
-    """rendercanvas's offscreen canvas (drawn by ``canvas.draw()``; no events from a user)."""
-    from rendercanvas.offscreen import RenderCanvas, loop
-
-    canvas = RenderCanvas(size=size, title=title, update_mode="manual")
     return canvas, loop
 
 

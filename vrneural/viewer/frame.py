@@ -33,6 +33,8 @@ class FrameWork:
         self.good = (self.live.mode, self.live.precision, self.live.texture_res,
                      self.live.texture_res_given)  # fmt: skip
         self._shot_target = None
+        self.stopper = None  # View.run: Ctrl-C / SIGTERM close the window between frames
+        self.interrupted = False
 
     # ----- opening and closing
 
@@ -63,12 +65,16 @@ class FrameWork:
             self.recorder = Recorder(self.vc.record, self.r.s.fps)
         canvas.request_draw(self._draw)
 
-    def _finish(self) -> None:
-        """After the loop: finish the video, stop the FLIP worker."""
+    def _finish(self, failed: bool = False) -> None:
+        """After the loop: finish the video (closed or stopped: kept, playable; failed: no
+        half-written video left behind, as `run` does), stop the FLIP worker."""
         try:
             if self.recorder is not None:
-                self.recorded = self.recorder.close()
-                self.recorder = None
+                rec, self.recorder = self.recorder, None
+                if failed:
+                    rec.writer.abort()
+                else:
+                    self.recorded = rec.close()
         finally:
             if self.flip is not None:
                 self.flip.close()
@@ -77,12 +83,28 @@ class FrameWork:
 
     def _draw(self) -> None:
         """rendercanvas's draw function: a failure closes the window and is raised by
-        :meth:`View.run` (rendercanvas would log it and go on drawing)."""
+        :meth:`View.run` (rendercanvas would log it and go on drawing). Ctrl-C and SIGTERM
+        are taken here, inside the loop (rendercanvas's own SIGINT handler would close the
+        window in the middle of a frame, with a swap-chain texture acquired and not presented):
+        the first closes the window after this frame, a second one stops the frame."""
+        from vrneural.interrupt import Stop
+
+        if self.stopper == "install":
+            self.stopper = Stop().__enter__()  # View.run puts the handlers back
+        stop = self.stopper if isinstance(self.stopper, Stop) else None
         try:
+            if stop is not None:
+                stop.second_raises = True
             self._frame()
-        except Exception as e:
+        except BaseException as e:  # returned, not raised: rendercanvas presents what it has
             self.failure = e
             self.close()
+        finally:
+            if stop is not None:
+                stop.second_raises = False
+                if stop.flag and not self.interrupted:
+                    self.interrupted = True
+                    self.close()
 
     def _frame(self) -> None:
         from vrneural.viewer.controls import effective_lights

@@ -66,7 +66,7 @@ class View(FrameWork):
         from vrneural.viewer.config import check_view_config
         from vrneural.viewer.controls import Controls
         from vrneural.viewer.keys import KeyMap, load_keys
-        from vrneural.viewer.setup import configs, load, start_live
+        from vrneural.viewer.startup import configs, load, start_live
         from vrneural.viewer.state import Renderers
 
         self.cfg, self.vc = configs(config, view, options)
@@ -104,15 +104,30 @@ class View(FrameWork):
 
     def run(self) -> dict:
         """Open a window (glfw) and run until it is closed (or ``frames`` are drawn); returns
-        :meth:`summary`."""
+        :meth:`summary`. Ctrl-C or SIGTERM close it after the frame being drawn (a second one
+        stops that frame) and raise :class:`KeyboardInterrupt`, as `run` does; the video of
+        ``record`` is kept. An error closes it too: then no video is left behind."""
+        import signal
+
         from vrneural.viewer.backends import window_canvas
 
         canvas, loop = window_canvas(self.window_size(), self.title(), self.vc.vsync)
         self._open(canvas, loop)
+        before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+        self.stopper = "install"  # taken over inside the loop, which takes SIGINT at its start
         try:
             loop.run()
+        except BaseException as e:
+            self.failure = e
         finally:
-            self._finish()
+            self.stopper = None
+            for sig, handler in before.items():
+                if handler is not None:
+                    signal.signal(sig, handler)
+        stopped = isinstance(self.failure, KeyboardInterrupt) or self.interrupted
+        self._finish(failed=self.failure is not None and not stopped)
+        if stopped:
+            raise KeyboardInterrupt
         if self.failure is not None:
             raise self.failure
         return self.summary()
