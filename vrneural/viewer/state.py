@@ -92,6 +92,10 @@ class Renderers:
             self.progress(f"building the {key[0]} renderer ({key[1]}, {key[2]}^2)")
         r = Renderer(self.scene, self.settings(live, mode))
         self.build_s[key] = time.perf_counter() - t0
+        if self.progress:
+            self.progress(
+                f"built the {key[0]} renderer ({key[1]}, {key[2]}^2) in {self.build_s[key]:.1f} s"
+            )
         self.cache[key] = r
         while len(self.cache) > CACHE:
             self.cache.popitem(last=False)
