@@ -11,6 +11,9 @@ import numpy as np
 
 from vrneural.errors import VrnError
 
+#: frames since a renderer was taken up that :meth:`View.replay_offscreen` can render again
+REPLAY_MAX = 5000
+
 
 class FrameWork:
     """The per-frame half of the viewer (state lives on the :class:`View`)."""
@@ -121,7 +124,12 @@ class FrameWork:
         r.lights[:] = lights
         t0 = time.perf_counter()
         st = r.frame(self.f, self.t, head)
-        self.replay_log.append(FrameInput(self.f, self.t, head, lights, r.s.reuse, r.s.schedule))
+        if self.replay_log is not None:  # bounded: a long session keeps no history
+            self.replay_log.append(
+                FrameInput(self.f, self.t, head, lights, r.s.reuse, r.s.schedule)
+            )
+            if len(self.replay_log) > REPLAY_MAX:
+                self.replay_log = None
         right, display = self._split(head, lights)
         t1 = time.perf_counter()
         lay = self._layout(r, right, display)

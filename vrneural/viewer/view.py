@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vrneural.errors import VrnError
 from vrneural.viewer.frame import FrameWork
 
 
@@ -93,7 +94,7 @@ class View(FrameWork):
         self.keep_shown = False  # read every frame back into .shown (tests, scripts)
         self.shown: np.ndarray | None = None  # [H, W, 3] uint8, the last frame read back
         self.records: deque = deque(maxlen=10_000)
-        self.replay_log: list[FrameInput] = []
+        self.replay_log: list[FrameInput] | None = []  # since the renderer was taken up
         self.status: tuple[str, float, bool] | None = None
         self.hooks: list = []
         self.failure: BaseException | None = None
@@ -208,7 +209,13 @@ class View(FrameWork):
         offscreen :class:`~vrneural.runtime.renderer.Renderer` with the same settings: its
         eyes' HDR ``[H, W, 4]`` float32, what the window's last frame must show."""
         from vrneural.runtime.renderer import Renderer
+        from vrneural.viewer.frame import REPLAY_MAX
 
+        if self.replay_log is None:
+            raise VrnError(
+                f"replay_offscreen: more than {REPLAY_MAX} frames since this renderer was "
+                "taken up; their inputs were not kept"
+            )
         r = Renderer(self.scene, dataclasses.replace(self.r.s))
         for fi in self.replay_log:
             r.s.reuse, r.s.schedule = fi.reuse, fi.schedule
