@@ -243,7 +243,11 @@ class Renderer:
             pos, rot = self.head.pose(frame / s.fps if t is None else t)
         else:
             pos, rot = (np.asarray(a, np.float64) for a in head)
-            if pos.shape != (3,) or rot.shape != (3, 3) or not np.isfinite(rot).all():
+            if (
+                pos.shape != (3,)
+                or rot.shape != (3, 3)
+                or not np.isfinite([*pos, *rot.ravel()]).all()
+            ):
                 raise VrnError(
                     f"head = (position {pos.shape}, rotation {rot.shape}): expected a finite "
                     "position [3] and rotation [3, 3]"
