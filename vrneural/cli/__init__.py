@@ -16,7 +16,7 @@ from vrneural import __version__
 from vrneural.errors import VrnError
 
 #: Subcommand modules, in `--help` order. Only commands that work are listed.
-COMMANDS = ["info", "btf", "teach", "distill", "export", "eval", "run", "bench", "atlas"]
+COMMANDS = ["info", "btf", "teach", "distill", "export", "eval", "run", "view", "bench", "atlas"]
 
 
 class _Parser(argparse.ArgumentParser):

@@ -108,7 +108,14 @@ def bounding_sphere(mesh) -> tuple[np.ndarray, float]:
 
 
 class Renderer:
-    """Everything on the device for one scene and settings; :meth:`frame` renders one frame."""
+    """Everything on the device for one scene and settings; :meth:`frame` renders one frame.
+
+    What a live caller (`vrneural view`) may use between frames, and nothing else: ``lights``
+    (the :class:`~vrneural.runtime.lights.PointLight` list shaded, of fixed length
+    ``s.n_lights``: replace entries to move, recolour or switch off a light), ``s.reuse`` and
+    ``s.schedule`` (read every frame), :meth:`frame` with a scene time and a head pose of its
+    own, :meth:`colour_textures` (to draw the eyes on the GPU without a read-back) and
+    :meth:`invalidate`."""
 
     def __init__(self, scene, s: Settings, progress=None):
         if not isinstance(s, Settings):
@@ -262,10 +269,25 @@ class Renderer:
         c, r = self.world_sphere(n)
         return any(sphere_in_frustum(c, r, e.view_proj) for e in eyes)
 
-    def eyes_at(self, frame: int):
-        """The eyes at display frame ``frame`` (whole view: visibility and shading)."""
+    def eyes_at(self, frame: int, t: float | None = None, head=None):
+        """The eyes at display frame ``frame`` (the whole view: visibility and shading): the
+        scene's head path at time ``t`` (s; default ``frame / fps``), or the head pose
+        ``head = (position [3], rotation [3, 3])`` (metres, camera-to-world) when given: a live
+        camera."""
         s = self.s
-        pos, rot = self.head.pose(frame / s.fps)
+        if head is None:
+            pos, rot = self.head.pose(frame / s.fps if t is None else t)
+        else:
+            pos, rot = (np.asarray(a, np.float64) for a in head)
+            if (
+                pos.shape != (3,)
+                or rot.shape != (3, 3)
+                or not np.isfinite([*pos, *rot.ravel()]).all()
+            ):
+                raise VrnError(
+                    f"head = (position {pos.shape}, rotation {rot.shape}): expected a finite "
+                    "position [3] and rotation [3, 3]"
+                )
         w, h = s.crop[2:] if s.crop else s.eye_res
         return eyes_from_pose(pos, rot, s.ipd, s.eyes, s.fov_y, w / h)
 
@@ -328,13 +350,15 @@ class Renderer:
         frac = np.pi * (np.tan(ang) / np.tan(half)) ** 2 / (4 * w / h)
         return float(min(frac, 1.0))
 
-    def frame(self, f: int) -> FrameStats:
-        """Render display frame ``f`` (waits for the GPU); returns its statistics."""
+    def frame(self, f: int, t: float | None = None, head=None) -> FrameStats:
+        """Render display frame ``f`` (waits for the GPU); returns its statistics. ``f`` drives
+        the reuse schedule; ``t`` (s, default ``f / fps``) the lights' motion and the head
+        path; ``head`` replaces the head path (see :meth:`eyes_at`)."""
         check_int("frame", f, 0)
         s = self.s
         t0 = time.perf_counter()
-        eyes = self.eyes_at(f)
-        lp, lc = light_arrays(self.lights, f / s.fps)
+        eyes = self.eyes_at(f, t, head)
+        lp, lc = light_arrays(self.lights, f / s.fps if t is None else t)
         self.counters.clear()
         enc = self.dev.create_command_encoder()
         updated = culled = 0
@@ -417,6 +441,19 @@ class Renderer:
             rp.set_vertex_buffer(0, d.vbuf)
             rp.draw(d.n_vertices)
         rp.end()
+
+    def colour_textures(self) -> list:
+        """The eyes' HDR colour textures (``rgba16float``, ``eye_res``, sampled-texture usage)
+        as the last :meth:`frame` left them, for drawing them on the GPU without a read-back
+        (`vrneural view`): commands submitted after that frame see its result."""
+        return [et.colour for et in self.eye_t]
+
+    def invalidate(self) -> None:
+        """Forget what the radiance textures hold: the next frame gives every visible neural
+        object one full update, as on first sight (a renderer taken up again after others ran,
+        or a camera that jumped)."""
+        for n in self.neural:
+            n.fresh = False
 
     def read_eyes(self) -> list[np.ndarray]:
         """The eyes' HDR colour ``[H, W, 4]`` float32 of the last frame."""

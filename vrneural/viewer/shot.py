@@ -1,0 +1,78 @@
+"""The exact settings of a screenshot, as JSON: enough to render the same frame again (the
+resolved settings, the knobs, frame index and scene time, the head pose, the lights as
+shaded), plus the adapter and the configs as given."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from vrneural.config import config_dict
+
+
+def quaternion(rot) -> list[float]:
+    """Unit quaternion ``[x, y, z, w]`` of a rotation ``[3, 3]`` (pose logs' convention;
+    Shepperd's method: from the largest of the four diagonal combinations, stable near
+    half turns)."""
+    m = np.asarray(rot, np.float64)
+    t = np.trace(m)
+    k = int(np.argmax([t, m[0, 0], m[1, 1], m[2, 2]]))
+    if k == 0:
+        s = 2 * np.sqrt(1 + t)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
+    elif k == 1:
+        s = 2 * np.sqrt(1 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = [s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
+    elif k == 2:
+        s = 2 * np.sqrt(1 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = [(m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
+    else:
+        s = 2 * np.sqrt(1 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4, (m[1, 0] - m[0, 1]) / s]
+    q = np.asarray(q)
+    return (q / np.linalg.norm(q)).tolist()
+
+
+def shot_settings(view) -> dict:
+    """What the screenshot of ``view``'s current frame was rendered from."""
+    from vrneural.viewer.controls import effective_lights
+
+    r = view.r
+    resolved = dataclasses.asdict(dataclasses.replace(r.s, reference=None))
+    resolved["reference"] = view.cfg.reference
+    pos, rot = view.pose()
+    last = view.records[-1] if view.records else None
+    return {
+        "written_by": "vrneural view",
+        "scene": view.scene.src,
+        "frame": view.f,
+        "t": view.t,
+        "resolved": resolved,
+        "knobs": view.live.settings_dict(),
+        "head": {
+            "position": np.asarray(pos).tolist(),
+            "rotation": np.asarray(rot).tolist(),
+            "quaternion_xyzw": quaternion(rot),
+            "pose_log_row": [0.0, *np.asarray(pos).tolist(), *quaternion(rot)],
+            "source": "head path" if view.live.follow_head else f"{view.camera.mode} camera",
+        },
+        "lights": [
+            {**dataclasses.asdict(lt), "position_now": lt.at(view.t).tolist()}
+            for lt in effective_lights(view.lights, view.live.lights_on)
+        ],
+        "split": {
+            "mode": view.live.split,
+            "reference_frame": view.split_frame,
+            "flip_mean": view.flip_mean,
+            "flip_frame": view.flip_frame,
+        },
+        "fps": view.fps(),
+        "last_frame_ms": {"render": last.render_ms, "present": last.present_ms} if last else None,
+        "adapter": view.adapter.to_dict(),
+        "config": config_dict(view.cfg),
+        "view": config_dict(view.vc),
+        "note": "frame f drives the reuse schedule, t (s) the lights and the head path; "
+        "Renderer.frame(frame, t, (position, rotation)) with these lights renders it again "
+        "(the radiance textures also depend on the frames before, unless N = 0)",
+    }
