@@ -141,6 +141,25 @@ def test_window_shows_the_offscreen_frame_bit_for_bit_after_keys_and_mouse(displ
         assert n == 12 and rd.get_meta_data()["size"] == (192, 80)
 
 
+def test_shared_radiance_and_adaptive_reuse_keys(display):
+    """G shares one radiance texture between the eyes (about half the blocks shaded), U turns
+    adaptive reuse on (nothing shaded while nothing moves); the window still shows the
+    offscreen renderer's frames bit for bit."""
+    from vrneural.viewer import View
+    from vrneural.viewer.present import compose
+
+    v = View(profile="tiny", eyes=2, eye_res="96x80", frames=8)
+    recs = run_script(v, {1: [key("F2"), key("g")], 4: [key("u"), key(" ")]})  # HUD off; pause
+    assert (recs[1].settings["radiance"], recs[2].settings["radiance"]) == ("per-eye", "shared")
+    assert not recs[4].settings["adaptive"] and recs[5].settings["adaptive"]
+    full = [r.stats.blocks_shaded for r in recs[:3]]  # frame 0 and the shared one: full updates
+    assert 0.45 < full[2] / full[0] < 0.6, full
+    # adaptive: one full refresh when switched on, then nothing while the scene stands still
+    assert recs[5].stats.blocks_shaded > 0
+    assert [r.stats.blocks_shaded for r in recs[6:]] == [0, 0]
+    np.testing.assert_array_equal(v.shown, compose(v.replay_offscreen()))
+
+
 def test_mode_keys_head_path_and_fly(display, tmp_path):
     """M cycles texture -> screen -> reference; a pack without a teacher has no reference
     mode: the key is refused with `run`'s message on the HUD, and the mode goes back. H

@@ -88,13 +88,16 @@ class AdaptiveState:
     ) -> Slice:
         """This frame's slice for an object seen with ``dirs`` (``scale``: :func:`near_scale`
         of the eye and lights), refreshing when it has turned by ``budget`` degrees."""
+        if self.ref is None:  # switched to adaptive reuse while running: refresh from here
+            self.restart(dirs)
+            return Slice(True, 0, 1)
         prev = self.last if self.last is not None else dirs
         self.last = dirs
         if self.phase > 0:  # a sweep in progress: its next rows
             s = Slice(True, self.phase, self.period)
             self.phase = (self.phase + 1) % self.period
             return s
-        if self.ref is None or turned(dirs, self.ref, scale) < budget:
+        if turned(dirs, self.ref, scale) < budget:
             return Slice(False)
         rate = turned(dirs, prev, scale)
         period = int(np.clip(np.floor(budget / max(rate, 1e-9)), 1, p_max)) if staggered else 1

@@ -85,6 +85,10 @@ class Controls:
             live.schedule = cycle(live.schedule, SCHEDULES)
         elif action == "precision":
             live.precision = "f16" if live.precision == "f32" else "f32"
+        elif action == "radiance":
+            live.radiance = "shared" if live.radiance == "per-eye" else "per-eye"
+        elif action == "adaptive":
+            live.adaptive = not live.adaptive
         elif action in ("texture_up", "texture_down"):
             step_texture(live, action == "texture_up", v.adapter)
         elif action == "lights":

@@ -34,7 +34,7 @@ class FrameWork:
         self.can_read = True
         self.view_format = None
         self.good = (self.live.mode, self.live.precision, self.live.texture_res,
-                     self.live.texture_res_given)  # fmt: skip
+                     self.live.texture_res_given, self.live.radiance)  # fmt: skip
         self._shot_target = None
         self.stopper = None  # View.run: Ctrl-C / SIGTERM close the window between frames
         self.interrupted = False
@@ -126,7 +126,7 @@ class FrameWork:
         st = r.frame(self.f, self.t, head)
         if self.replay_log is not None:  # bounded: a long session keeps no history
             self.replay_log.append(
-                FrameInput(self.f, self.t, head, lights, r.s.reuse, r.s.schedule)
+                FrameInput(self.f, self.t, head, lights, r.s.reuse, r.s.schedule, r.s.reuse_budget)
             )
             if len(self.replay_log) > REPLAY_MAX:
                 self.replay_log = None
@@ -154,6 +154,9 @@ class FrameWork:
             "texture_res": r.s.texture_res,
             "reuse": r.s.reuse,
             "schedule": r.s.schedule,
+            "radiance": r.s.radiance,
+            "adaptive": r.s.reuse_budget is not None,
+            "reuse_budget": r.s.reuse_budget,
             "lights_on": list(self.live.lights_on),
             "split": self.live.split,
             "camera": "head path" if self.live.follow_head else self.camera.mode,
@@ -180,9 +183,11 @@ class FrameWork:
             r, built = self.renderers.get(live)
         except VrnError as e:
             self.say(str(e), alert=True)
-            live.mode, live.precision, live.texture_res, live.texture_res_given = self.good
+            (live.mode, live.precision, live.texture_res, live.texture_res_given,
+             live.radiance) = self.good  # fmt: skip
             r, built = self.renderers.get(live)
-        self.good = (live.mode, live.precision, live.texture_res, live.texture_res_given)
+        self.good = (live.mode, live.precision, live.texture_res, live.texture_res_given,
+                     live.radiance)  # fmt: skip
         if r is not self.r:
             r.invalidate()  # taken up again: its radiance textures are another view's
             self.replay_log = []
@@ -191,10 +196,12 @@ class FrameWork:
             took = self.renderers.build_s.get(k)
             self.say(
                 f"{k[0]} mode, {k[1]}, {k[2]}^2"
+                + (", shared radiance" if k[4] == "shared" else "")
                 + (f" (built in {took:.1f} s)" if built else " (kept from before)")
                 + (f"; {r.warnings[0]}" if r.warnings else "")
             )
         r.s.reuse, r.s.schedule = live.reuse, live.schedule
+        r.s.reuse_budget = self.renderers.budget if live.adaptive else None
         return r
 
     def _split(self, head, lights):

@@ -24,7 +24,9 @@ def hud_lines(view, st, last) -> tuple[list[str], set[int]]:
     interval = 1e3 / v.fps() if v.fps() > 0 else 0.0
     knobs = f"mode {s.mode}  "
     if texture:
-        knobs += f"N {s.reuse}  {s.schedule}  {s.precision}  texture {s.texture_res}^2  "
+        reuse = f"auto {s.reuse_budget:g} deg" if s.reuse_budget is not None else s.reuse
+        shared = "shared radiance  " if s.radiance == "shared" else ""
+        knobs += f"N {reuse}  {s.schedule}  {s.precision}  texture {s.texture_res}^2  {shared}"
     else:
         knobs += f"{s.precision} per pixel  "
     knobs += f"eye {s.eye_res[0]}x{s.eye_res[1]} x{s.eyes}"

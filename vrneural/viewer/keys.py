@@ -30,6 +30,8 @@ ACTIONS: dict[str, tuple[str, str]] = {
     "reuse_down": ("[", "N - 1"),
     "schedule": ("b", "schedule: staggered <-> burst"),
     "precision": ("c", "precision: f32 <-> f16"),
+    "radiance": ("g", "radiance textures: per eye <-> shared by both eyes"),
+    "adaptive": ("u", "reuse: every N + 1 frames <-> adaptive (--reuse-budget)"),
     "texture_up": ("=", "radiance texture side x 2"),
     "texture_down": ("-", "radiance texture side / 2"),
     "lights": ("0", "all lights on / off"),

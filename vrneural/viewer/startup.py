@@ -106,6 +106,8 @@ def start_live(renderers, vc: ViewConfig):
         precision=precision,
         texture_res=s.texture_res,
         texture_res_given=s.texture_res_given,
+        radiance=s.radiance,
+        adaptive=s.reuse_budget is not None,
         split=vc.split,
         hud=vc.hud,
     )

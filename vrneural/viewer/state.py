@@ -35,6 +35,8 @@ class Live:
     precision: str  # resolved: f32 | f16
     texture_res: int
     texture_res_given: bool = False
+    radiance: str = "per-eye"  # per-eye | shared
+    adaptive: bool = False  # reuse auto (budget: the command line's --reuse-budget)
     lights_on: list = field(default_factory=list)
     selected: int = 0
     split: str = "off"
@@ -44,10 +46,11 @@ class Live:
     follow_head: bool = False
 
     def key(self, mode: str | None = None) -> tuple:
-        """What selects a renderer: (mode, precision, texture side, its origin)."""
+        """What selects a renderer: (mode, precision, texture side, its origin, radiance)."""
         mode = mode or self.mode
         precision = "f32" if mode == "reference" else self.precision
-        return (mode, precision, self.texture_res, self.texture_res_given)
+        radiance = self.radiance if mode == "texture" else "per-eye"
+        return (mode, precision, self.texture_res, self.texture_res_given, radiance)
 
     def settings_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -61,6 +64,8 @@ class Renderers:
         self.cache: OrderedDict = OrderedDict()
         self.build_s: dict = {}  # key -> seconds its construction took
         self.progress = progress
+        #: the adaptive-reuse budget (degrees) the `U` key switches on: --reuse-budget
+        self.budget = float(getattr(cfg, "reuse_budget", 2.0))
 
     def settings(self, live: Live, mode: str | None = None):
         """Resolved :class:`~vrneural.runtime.renderer.Settings` for ``live`` (in ``mode``)."""
@@ -75,6 +80,7 @@ class Renderers:
             precision="auto" if mode == "reference" else live.precision,
             texture_res=live.texture_res if live.texture_res_given else None,
             reference=self.cfg.reference if mode == "reference" else None,
+            radiance=live.radiance if mode == "texture" else "per-eye",
         )
         return resolve(cfg, self.scene, self.adapter)
 

@@ -36,6 +36,7 @@ class FrameInput:
     lights: list
     reuse: int
     schedule: str
+    reuse_budget: float | None = None  # adaptive reuse (`U`)
 
 
 @dataclass
@@ -218,7 +219,7 @@ class View(FrameWork):
             )
         r = Renderer(self.scene, dataclasses.replace(self.r.s))
         for fi in self.replay_log:
-            r.s.reuse, r.s.schedule = fi.reuse, fi.schedule
+            r.s.reuse, r.s.schedule, r.s.reuse_budget = fi.reuse, fi.schedule, fi.reuse_budget
             r.lights[:] = fi.lights
             r.frame(fi.f, fi.t, fi.head)
         return r.read_eyes()
