@@ -87,12 +87,15 @@ def _pack_options(tpu: float, padding: int):
 CHILD_TIMEOUT_S = 1800.0
 
 
-def unwrap(mesh: Mesh, resolution: int, padding: int) -> tuple[np.ndarray, np.ndarray, dict]:
+def unwrap(
+    mesh: Mesh, resolution: int, padding: int, chart_options: dict | None = None
+) -> tuple[np.ndarray, np.ndarray, dict]:
     """Unwrap ``mesh`` with xatlas. Returns ``(vmapping [V'] int64, uv [V', 2] float32 in
     [0, 1], info)``. Split vertex ``i`` copies input vertex ``vmapping[i]``; the faces keep
     their order, re-indexed onto the split vertices as ``info["faces"]`` [F, 3] int64.
     ``info`` also holds charts, texels_per_unit, packed size and pack count. Runs in a child
     process (module docstring); errors come back as the same one-line :class:`VrnError`.
+    ``chart_options``: xatlas ``ChartOptions`` fields to set (None: the defaults above).
     """
     import multiprocessing as mp
 
@@ -101,7 +104,9 @@ def unwrap(mesh: Mesh, resolution: int, padding: int) -> tuple[np.ndarray, np.nd
     # only numpy and xatlas, never the parent's GPU or torch threads.
     ctx = mp.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, mesh, resolution, padding), daemon=True)
+    proc = ctx.Process(
+        target=_child, args=(send, mesh, resolution, padding, chart_options), daemon=True
+    )
     proc.start()
     send.close()
     try:
@@ -161,7 +166,7 @@ def died_message(name: str, n_faces: int, exitcode: int | None) -> str:
     return f"{what}: the xatlas process was stopped by {sig_name} (signal {sig})"
 
 
-def _child(conn, mesh: Mesh, resolution: int, padding: int) -> None:
+def _child(conn, mesh: Mesh, resolution: int, padding: int, chart_options=None) -> None:
     """Child process: unwrap, send ``(kind, payload)``, exit without destroying xatlas objects."""
     import faulthandler
 
@@ -171,7 +176,7 @@ def _child(conn, mesh: Mesh, resolution: int, padding: int) -> None:
     faulthandler.disable()
     keep: list = []  # every xatlas.Atlas, alive until os._exit
     try:
-        msg = ("ok", _unwrap(mesh, resolution, padding, keep))
+        msg = ("ok", _unwrap(mesh, resolution, padding, keep, chart_options))
     except VrnError as e:
         msg = ("error", str(e))
     except BaseException as e:  # reported to the parent, which raises
@@ -201,7 +206,7 @@ def normalized_positions(positions) -> tuple[np.ndarray, float]:
     return pos / unit, unit
 
 
-def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list):
+def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list, chart_options=None):
     import xatlas
 
     # xatlas in units of the mesh's own size (module docstring: its absolute epsilons)
@@ -220,6 +225,8 @@ def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list):
     if len(faces) > FAST_FACES:
         co.max_chart_area = float(area3d * FACES_PER_CHART / len(faces))
         co.max_iterations = 0
+    for k, v in (chart_options or {}).items():
+        setattr(co, k, v)
     atlas.generate(co, _pack_options(tpu, padding))
     if int(atlas.atlas_count) == 0:  # atlas[0] would be an IndexError
         raise VrnError(
