@@ -133,6 +133,8 @@ def chart_faces(
         n0 = axis.shape[0]
         chart[bad] = n0 + np.arange(int(bad.sum()))
         axis = np.concatenate([axis, normals[bad]])
+        used, chart = np.unique(chart, return_inverse=True)  # charts left empty: gone
+        chart, axis = chart.reshape(-1), axis[used]
     return chart, axis
 
 

@@ -25,13 +25,13 @@ from vrneural.atlas import layout as lay
 from vrneural.atlas.charts import chart_faces, face_adjacency, project
 from vrneural.atlas.pack import pack_scale
 from vrneural.atlas.types import Mesh
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, count
 
 METHODS = ("charts", "xatlas")
 #: rounds of cutting self-overlapping charts in two
 OVERLAP_ROUNDS = 4
 #: chart options of the xatlas retry (other than xatlas's defaults)
-RETRY_OPTIONS = {"max_iterations": 0, "normal_seam_weight": 2.0, "max_cost": 4.0}
+RETRY_OPTIONS = {"max_iterations": 0, "normal_seam_weight": 2.0}
 #: the retry moves every vertex by up to this fraction of the mesh's extent
 RETRY_JITTER = 1e-6
 
@@ -74,7 +74,13 @@ def generated_layout(mesh: Mesh, R: int, padding: int, method: str, bar=None) ->
         px, side = strip_layout(weld.reshape(-1)[faces], fa, fb, R, padding)
         chart = np.arange(len(faces))
         scale, cut = float("nan"), 0
-    vmap, new_faces, uv = lay.chart_vertices(faces, lay.relabel(chart, fa, fb), px / R)
+    # a triangle without 3D area gets none in the atlas either (all corners on one point; a
+    # rotated line of three points would not stay exactly straight)
+    flat = ~np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]]).any(
+        1
+    )
+    px[flat] = px[flat][:, :1]
+    vmap, new_faces, uv = lay.chart_vertices(faces, chart, px / R)
     info = {
         "charts_before_cuts": int(chart.max()) + 1 - cut,
         "texels_per_unit": float(scale),
@@ -122,6 +128,7 @@ def _halve(cuv, chart, charts, fa, fb) -> np.ndarray:
 def _xatlas(mesh: Mesh, R: int, padding: int, path: list, bar):
     """xatlas's charts ``(cuv [F, 3, 2] mesh units, chart [F])``, retried once (module doc);
     None (with the reasons in ``path``) when both tries fail."""
+    from vrneural.atlas.raster import overlapping_faces
     from vrneural.atlas.unwrap import unwrap
     from vrneural.atlas.visualize import uv_charts
 
@@ -134,8 +141,12 @@ def _xatlas(mesh: Mesh, R: int, padding: int, path: list, bar):
         except VrnError as e:
             path.append(f"{label} failed: {_short(str(e), mesh.name)}")
             continue
-        path.append(label)
         faces = info["faces"]
+        bad = overlapping_faces(uv.astype(np.float64)[faces] * rx, rx)
+        if len(bad):  # xatlas gave folded or self-overlapping charts
+            path.append(f"{label} failed: {count(len(bad), 'triangle')} overlap in its charts")
+            continue
+        path.append(label)
         cuv = uv.astype(np.float64)[faces] * (rx / info["texels_per_unit"])
         return cuv, uv_charts(uv, faces)
     return None

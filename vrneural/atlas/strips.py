@@ -55,10 +55,15 @@ def strip_layout(welded: np.ndarray, fa: np.ndarray, fb: np.ndarray, R: int, pad
     ``welded`` [F, 3] (vertex ids welded by position) with adjacency ``(fa, fb)``."""
     n = len(welded)
     mate = pair_triangles(n, fa, fb)
+    # a pair is two triangles with exactly two (welded) vertices in common; others go single
+    p = np.flatnonzero(mate > np.arange(n))
+    common = (welded[p][:, :, None] == welded[mate[p]][:, None, :]).any(2).sum(1)
+    broken = p[common != 2]
+    mate[mate[broken]] = -1
+    mate[broken] = -1
     first = np.flatnonzero((mate < 0) | (np.arange(n) < mate))  # one cell per pair or single
     cells = len(first)
-    side, gap = _grid(cells, R, padding)
-    per_row = max(int(R // (side + gap)), 1)
+    side, gap, per_row = _grid(cells, R, padding)
     cx = (np.arange(cells) % per_row) * (side + gap) + gap / 2
     cy = (np.arange(cells) // per_row) * (side + gap) + gap / 2
     out = np.zeros((n, 3, 2))
@@ -82,12 +87,13 @@ def strip_layout(welded: np.ndarray, fa: np.ndarray, fb: np.ndarray, R: int, pad
     return out, side
 
 
-def _grid(cells: int, R: int, padding: int) -> tuple[float, float]:
-    """``(side, gap)`` of the largest square cells that fit ``cells`` cells into R x R."""
+def _grid(cells: int, R: int, padding: int) -> tuple[float, float, int]:
+    """``(side, gap, cells per row)`` of the largest square cells that fit ``cells`` cells
+    into R x R."""
     for gap in (max(padding + 1, 3), 1, 0):
         for side in range(R, 0, -1):
             per = R // (side + gap)
             if per and -(-cells // per) * (side + gap) <= R:
-                return float(side), float(gap)
+                return float(side), float(gap), per
     per = int(np.ceil(np.sqrt(cells)))
-    return R / per, 0.0
+    return R / per, 0.0, per
