@@ -29,8 +29,18 @@ def test_xatlas_segfault_on_an_icosphere_is_recovered_and_said(tmp_path):
     out = tmp_path / "ico.png"
     cli = [sys.executable, "-X", "faulthandler", "-m", "vrneural", "atlas"]
     r = subprocess.run(
-        [*cli, str(tmp_path / "ico6.ply"), "--res", "512", "-o", str(out), "--no-cache"]
-        + ["--atlas-uv", "xatlas", "--json"],
+        [
+            *cli,
+            str(tmp_path / "ico6.ply"),
+            "--res",
+            "512",
+            "-o",
+            str(out),
+            "--no-cache",
+            "--atlas-uv",
+            "xatlas",
+            "--json",
+        ],
         capture_output=True,
         timeout=300,
     )
@@ -45,8 +55,17 @@ def test_xatlas_segfault_on_an_icosphere_is_recovered_and_said(tmp_path):
     assert out.exists()
     # the default never runs xatlas: vrneural's charts directly
     r = subprocess.run(
-        [*cli, str(tmp_path / "ico6.ply"), "--res", "512", "-o", str(out), "--no-cache"]
-        + ["--json", "--force"],
+        [
+            *cli,
+            str(tmp_path / "ico6.ply"),
+            "--res",
+            "512",
+            "-o",
+            str(out),
+            "--no-cache",
+            "--json",
+            "--force",
+        ],
         capture_output=True,
         timeout=300,
     )

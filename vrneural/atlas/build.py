@@ -7,7 +7,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from tqdm import tqdm
 
 from vrneural.atlas.cache import cache_key, load_cached, split_mesh, store
 from vrneural.atlas.geometry import check_geometry, check_uv

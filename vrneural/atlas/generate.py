@@ -71,7 +71,7 @@ def generated_layout(mesh: Mesh, R: int, padding: int, method: str, bar=None) ->
         path.append(f"strips ({int(chart.max()) + 1} charts do not fit {R}x{R})")
         _stage(bar, "strips", 1)
         _, weld = np.unique(pos, axis=0, return_inverse=True)
-        px, side = strip_layout(weld.reshape(-1)[faces], fa, fb, R, padding)
+        px, _ = strip_layout(weld.reshape(-1)[faces], fa, fb, R, padding)
         chart = np.arange(len(faces))
         scale, cut = float("nan"), 0
     # a triangle without 3D area gets none in the atlas either (all corners on one point; a

@@ -37,7 +37,7 @@ MODES = ("auto", "mesh", "charts", "xatlas")
 #: largest texel density spread (95th / 5th percentile) that ``auto`` accepts
 MAX_DENSITY_SPREAD = 2.0
 #: the asset's own packing is kept when it covers at least this fraction of a re-packing's
-KEEP_PACKING = 0.9
+KEEP_PACKING = 0.85
 
 
 def candidate(mesh: Mesh) -> tuple[str, np.ndarray] | tuple[str, None]:
@@ -103,8 +103,8 @@ def inspect(mesh: Mesh, uv: np.ndarray, R: int) -> dict:
         "chart": chart,
         "zero_area": int(zero.sum()),
         "flipped": int(flipped.sum()),
-        "overlap_same_chart": int(len(np.unique(np.concatenate([a[same], b[same]])))),
-        "overlap_between_charts": int(len(np.unique(np.concatenate([a[~same], b[~same]])))),
+        "overlap_same_chart": len(np.unique(np.concatenate([a[same], b[same]]))),
+        "overlap_between_charts": len(np.unique(np.concatenate([a[~same], b[~same]]))),
         "inside_unit_square": bool(lo.min() >= 0.0 and hi.max() <= 1.0),
         "density_spread": density_spread(a_uv, a3),
     }
