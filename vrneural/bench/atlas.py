@@ -127,7 +127,10 @@ def run_atlas(cfg: AtlasBenchConfig) -> dict:
         old = os.environ.get("VRNEURAL_CACHE")
         os.environ["VRNEURAL_CACHE"] = str(Path(tmp) / "cache")  # the seam renders' atlases
         try:
+            # every atlas first, each in a process forked from this small one (before any
+            # render grows it: a child's peak includes what it inherits), then the renders
             bar = tqdm(names, desc="bench atlas", unit="mesh", disable=not c.progress)
+            paths = {}
             for name in bar:
                 bar.set_postfix_str(name)
                 res = _resolution(name, c.quick)
@@ -136,12 +139,14 @@ def run_atlas(cfg: AtlasBenchConfig) -> dict:
                     failures.append(f"{name}: {rec}")
                     records.append({"mesh": name, "resolution": res, "error": rec})
                     continue
-                if c.seams:
-                    from vrneural.bench.atlas_seams import seam_error
-
-                    rec["seams"] = seam_error(path, res, c.eye)
                 records.append(rec)
-                previews[name] = img
+                previews[name], paths[name] = img, path
+            if c.seams:
+                from vrneural.bench.atlas_seams import seam_error
+
+                for rec in tqdm(records, desc="bench atlas seams", disable=not c.progress):
+                    if rec["mesh"] in paths:
+                        rec["seams"] = seam_error(paths[rec["mesh"]], rec["resolution"], c.eye)
         finally:
             if old is None:
                 os.environ.pop("VRNEURAL_CACHE", None)
