@@ -57,13 +57,15 @@ def test_obj_vt_is_used_when_it_is_a_layout_not_when_it_tiles(tmp_path):
 
     n = 8
     s, t = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1), indexing="xy")
-    v = "".join(f"v {x - 0.5:.6f} 0 {y - 0.5:.6f}\n" for x, y in zip(s.ravel(), t.ravel()))
+    v = "".join(
+        f"v {x - 0.5:.6f} 0 {y - 0.5:.6f}\n" for x, y in zip(s.ravel(), t.ravel(), strict=True)
+    )
     f = grid_faces(n, n) + 1
     body = "".join(f"f {a}/{a} {b}/{b} {c}/{c}\n" for a, b, c in f)
     for scale, used in ((0.9, True), (3.0, False)):
         vt = "".join(
             f"vt {0.05 + scale * x:.6f} {0.05 + scale * y:.6f}\n"
-            for x, y in zip(s.ravel(), t.ravel())
+            for x, y in zip(s.ravel(), t.ravel(), strict=True)
         )
         (tmp_path / "p.obj").write_text(v + vt + body)
         (mesh,) = load_mesh(tmp_path / "p.obj")

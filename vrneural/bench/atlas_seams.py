@@ -9,9 +9,9 @@ are located in the image by projecting the 3D edges that are seams of the atlas 
 triangles in different charts) into the eye, with a 1-pixel margin; ``seam_error`` is the
 largest difference on those pixels, ``interior_error`` the largest elsewhere on the object
 (pixels within 2 of its silhouette are left out of both: grazing angles differ between the
-modes whatever the atlas), both relative to the 99th percentile of the screen-space image (so 0.05 = 5 % of a bright
-pixel). Border pixels include borders hidden behind the surface (no depth test), so the
-seam error is an upper bound that contains interior pixels too.
+modes whatever the atlas), both relative to the 99th percentile of the screen-space image
+(so 0.05 = 5 % of a bright pixel). Border pixels include borders hidden behind the surface
+(no depth test), so the seam error is an upper bound that contains interior pixels too.
 """
 
 from __future__ import annotations
