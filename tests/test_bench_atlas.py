@@ -24,7 +24,7 @@ def test_quick_run_writes_every_mesh_json_markdown_and_png(tmp_path, capsys):
         for k in ("total_s", "peak_rss_mb", "coverage_pct", "charts", "density_spread"):
             assert isinstance(r[k], (int, float)) and math.isfinite(r[k]), (r["mesh"], k)
         assert r["triangles_without_texels"] == 0 and r["overlap_texels"] == 0
-        assert 50 < r["peak_rss_mb"] < 2000 and r["unwrap_path"]
+        assert 20 < r["peak_rss_mb"] < 2000 and r["unwrap_path"]
     assert recs["lightmap"]["uv_source"] == "mesh lightmap UVs (TEXCOORD_1)"
     assert recs["field"]["charts"] == 1 and recs["field"]["coverage_pct"] > 90
     md = (out / "results.md").read_text()

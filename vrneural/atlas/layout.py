@@ -28,6 +28,8 @@ MIN_CUT_TEXELS = 48
 CUT_GAIN = 0.93
 #: rounds of cutting
 CUT_ROUNDS = 6
+#: most rotations :func:`min_area_angle` tries (memory: hull points x angles)
+MAX_ANGLES = 360
 #: expected fraction of the texture inside charts (first guess of the packing scale)
 EXPECTED_FILL = 0.65
 
@@ -59,6 +61,8 @@ def min_area_angle(pts: np.ndarray) -> float:
         return 0.0
     e = np.roll(hull, -1, axis=0) - hull
     ang = np.unique(np.mod(np.arctan2(e[:, 1], e[:, 0]), np.pi / 2))
+    if len(ang) > MAX_ANGLES:  # a round hull of thousands of edges: a fine fan of angles
+        ang = np.linspace(0.0, np.pi / 2, MAX_ANGLES, endpoint=False)
     c, s = np.cos(ang), np.sin(ang)
     x = hull[:, 0, None] * c + hull[:, 1, None] * s  # [H, A] coordinates along each angle
     y = -hull[:, 0, None] * s + hull[:, 1, None] * c

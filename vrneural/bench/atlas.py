@@ -3,9 +3,10 @@
 texel, texel density spread, which UVs were used, and the seam error of a rendered Lambertian
 image against ``--mode screen`` (:mod:`vrneural.bench.atlas_seams`).
 
-Each mesh is generated, written to a file (PLY, or GLB for the one with lightmap UVs), loaded
-and atlased (no cache) in a fresh forked process, so its peak resident memory (``ru_maxrss``,
-the whole process: interpreter, mesh and atlas) is its own. Writes ``results.json``,
+Each mesh is generated, written to a file (PLY, or GLB for the one with lightmap UVs) and
+loaded in one forked process, then atlased (no cache) in another that holds only the
+interpreter, the mesh's arrays and the build, so its peak resident memory (``ru_maxrss``) is
+the build's (the loading's peak is reported apart). Writes ``results.json``,
 ``results.md`` and ``atlases.png`` (every atlas, a colour per chart, gutter at half brightness).
 """
 
@@ -60,17 +61,42 @@ def _rss_mb() -> float:
     return float("nan")
 
 
-def _child(conn, name: str, folder: str, quick: bool, res: int) -> None:
-    """Generate, load and atlas one mesh; send back its stats and a preview of its atlas."""
+def _load_child(conn, name: str, folder: str, quick: bool) -> None:
+    """Generate and load one mesh (``load_mesh``: trimesh, normals, tangents); keep the
+    :class:`Mesh` arrays in ``folder/<name>.npz`` for the build process."""
     try:
-        from vrneural.atlas import build_atlas, load_mesh
-        from vrneural.atlas.visualize import atlas_image, gutter_mask
+        import dataclasses
+
+        from vrneural.atlas import load_mesh
         from vrneural.bench.atlas_meshes import write_mesh
 
         t = time.perf_counter()
         path = write_mesh(name, Path(folder), quick)
         (mesh,) = load_mesh(path)
         load_s = time.perf_counter() - t
+        arrays = {k: v for k, v in dataclasses.asdict(mesh).items() if isinstance(v, np.ndarray)}
+        np.savez(Path(folder) / f"{name}.npz", **arrays)
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        info = {"name": mesh.name, "uv_source": mesh.uv_source}
+        conn.send(("ok", {"load_s": load_s, "load_peak_rss_mb": peak, **info}, None, str(path)))
+    except BaseException as e:  # reported, never a hang
+        conn.send(("error", f"{type(e).__name__}: {e}", None, None))
+    finally:
+        conn.close()
+        os._exit(0)
+
+
+def _build_child(conn, name: str, folder: str, res: int, loaded: dict) -> None:
+    """Atlas the mesh of ``folder/<name>.npz`` (no cache); send its stats and a preview. The
+    process holds only the interpreter, the mesh arrays and the build: its peak resident
+    memory is the build's."""
+    try:
+        from vrneural.atlas import Mesh, build_atlas
+        from vrneural.atlas.visualize import atlas_image, gutter_mask
+
+        with np.load(Path(folder) / f"{name}.npz") as z:
+            arrays = {k: z[k] for k in z.files}
+        mesh = Mesh(name=loaded["name"], uv_source=loaded["uv_source"], **arrays)
         rss0 = _rss_mb()
         atlas = build_atlas(mesh, res, 2, cache=False, progress=False)
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -79,12 +105,10 @@ def _child(conn, name: str, folder: str, quick: bool, res: int) -> None:
         rec = {
             **{k: v for k, v in atlas.stats.items() if k not in ("cache", "cache_file")},
             "mesh": name,
-            "file": path.name,
-            "load_s": load_s,
             "rss_before_mb": rss0,
             "peak_rss_mb": peak,
         }
-        conn.send(("ok", rec, img[::step, ::step].copy(), str(path)))
+        conn.send(("ok", rec, img[::step, ::step].copy(), None))
     except BaseException as e:  # reported, never a hang
         conn.send(("error", f"{type(e).__name__}: {e}", None, None))
     finally:
@@ -92,12 +116,12 @@ def _child(conn, name: str, folder: str, quick: bool, res: int) -> None:
         os._exit(0)
 
 
-def _measure(name: str, folder: Path, quick: bool, res: int):
+def _in_child(target, *args):
     import multiprocessing as mp
 
     ctx = mp.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, name, str(folder), quick, res))
+    proc = ctx.Process(target=target, args=(send, *args))
     proc.start()
     send.close()
     try:
@@ -105,6 +129,18 @@ def _measure(name: str, folder: Path, quick: bool, res: int):
     except EOFError:
         kind, rec, img, path = "error", f"the process died (exit code {proc.exitcode})", None, None
     proc.join()
+    return kind, rec, img, path
+
+
+def _measure(name: str, folder: Path, quick: bool, res: int):
+    """``(kind, record, preview, mesh file)``: load in one process, build in another."""
+    kind, loaded, _, path = _in_child(_load_child, name, str(folder), quick)
+    if kind != "ok":
+        return kind, loaded, None, None
+    kind, rec, img, _ = _in_child(_build_child, name, str(folder), res, loaded)
+    if kind == "ok":
+        rec = {**rec, "file": Path(path).name, "load_s": loaded["load_s"]}
+        rec["load_peak_rss_mb"] = loaded["load_peak_rss_mb"]
     return kind, rec, img, path
 
 
