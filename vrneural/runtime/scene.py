@@ -462,7 +462,7 @@ def builtin_scene(n_lights: int = 3) -> Scene:
             "cloth",
             model_matrix((0.0, 0.34, -0.2), (0, 20, 0), 1.7),
             m("fabric"),
-            min_texture_res=256,  # xatlas cannot pack its 32768 triangles into 128^2 (tiny)
+            min_texture_res=256,  # its 32768 triangles need texels: at 128^2 most would own none
         ),
         ObjectDesc(
             "wood torus", "torus", model_matrix((0.55, 0.85, -0.1), (60, 0, 0), 0.8), m("wood")
