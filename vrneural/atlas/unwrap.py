@@ -1,4 +1,5 @@
-"""xatlas unwrap into exactly R x R texels, with vertices split at chart seams.
+"""xatlas unwrap into exactly R x R texels, with vertices split at chart seams (the charts of
+``build_atlas(atlas_uv="xatlas")``, which re-packs them; :mod:`vrneural.atlas.generate`).
 
 xatlas's own ``texels_per_unit`` estimate for a given ``resolution`` overshoots (a 0.3 m sphere
 asked for 1200^2 came back 1378 x 1384), and a fixed ``resolution`` with too high a
@@ -45,7 +46,7 @@ builds many atlases. So :func:`unwrap` runs the work in a forked child process, 
 the arrays back and ends with ``os._exit`` before any xatlas object is destroyed; every atlas
 object stays referenced until then. A child that dies instead (xatlas segfaults on some meshes,
 e.g. finely subdivided icospheres, jpcy/xatlas#146) is reported in one line naming the signal
-and what to do (:func:`died_message`).
+(:func:`died_message`); :mod:`vrneural.atlas.generate` catches it and carries on.
 """
 
 from __future__ import annotations
@@ -146,17 +147,14 @@ def died_message(name: str, n_faces: int, exitcode: int | None) -> str:
     except ValueError:
         sig_name = "unknown signal"
     if sig_name in CRASH_SIGNALS:
-        # The atlas is always unwrapped from the positions and faces (a file's own UVs are
-        # material UVs, never used for it), so no flag avoids the bug. Measured on the
-        # 81920-triangle icosphere of jpcy/xatlas#146: every --res from 64 to 4096 crashes,
-        # and so do other chart options and a rotated copy; the same sphere triangulated
-        # differently (an icosphere of 20480 faces split flat once) and a copy with vertices
-        # moved 1e-4 unwrap fine.
+        # Measured on the 81920-triangle icosphere of jpcy/xatlas#146: every --res from 64 to
+        # 4096 crashes, and so do other chart options and a rotated copy; a copy with
+        # vertices moved 1e-6 gives folded charts. build_atlas(atlas_uv="xatlas") recovers
+        # (vrneural.atlas.generate); the default never runs xatlas.
         return (
             f"{what}: xatlas crashed ({sig_name}, signal {sig}), a known xatlas bug for some "
-            "meshes such as finely subdivided icospheres (jpcy/xatlas#146); the atlas is "
-            "unwrapped from the triangles themselves (the file's UVs are not used), so "
-            "re-triangulate the mesh (remesh or decimate it) and try again"
+            "meshes such as finely subdivided icospheres (jpcy/xatlas#146); vrneural's own "
+            "charts (atlas_uv = auto or charts) do not use xatlas"
         )
     if sig_name == "SIGKILL":
         return (
