@@ -9,13 +9,14 @@ import pytest
 from vrneural.cli import main
 import itertools
 
-BENCHES = ("frames", "lights", "materials", "kernels", "tradeoff")
+BENCHES = ("frames", "lights", "materials", "kernels", "tradeoff", "atlas")
 PNGS = {
     "frames": ["frames.png"],
     "lights": ["lights.png"],
     "materials": ["materials.png"],
     "kernels": ["kernels.png"],
     "tradeoff": ["pareto.png", "speed.png"],
+    "atlas": ["atlases.png"],
 }
 
 

@@ -1,4 +1,5 @@
-"""Meshes, unique atlas UVs (xatlas) and triangle-ID textures with gutters.
+"""Meshes, unique atlas UVs (the mesh's own lightmap UVs, or generated charts) and triangle-ID
+textures with gutters.
 
 Public API (used by the runtime): :func:`load_mesh`, :func:`builtin_mesh`,
 :data:`BUILTIN_MESHES`, :func:`build_atlas`, :func:`texel_barycentrics`, and the contract types

@@ -1,4 +1,4 @@
-"""Atlas benchmark: wall time of xatlas, rasterization, sliver fixes and dilation.
+"""Atlas benchmark: wall time of the unwrap, rasterization, sliver fixes and dilation.
 
 ``python -m vrneural.atlas.benchmark [--mesh highpoly] [--res 1200] [--repeats 3]
 [-o atlas_bench.json]`` builds the atlas ``repeats`` times without the cache and writes JSON
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-STAGES = ("xatlas_s", "raster_s", "sliver_s", "dilate_s", "total_s")
+STAGES = ("unwrap_s", "raster_s", "sliver_s", "dilate_s", "total_s")
 
 
 def run_benchmark(mesh_name: str, resolution: int, padding: int, repeats: int) -> dict:
@@ -40,7 +40,7 @@ def run_benchmark(mesh_name: str, resolution: int, padding: int, repeats: int) -
         "texels_per_triangle_min",
         "texels_per_triangle_median",
         "triangles_without_texels",
-        "xatlas_packs",
+        "density_spread",
     )
     return {
         "mesh": mesh_name,
@@ -146,7 +146,7 @@ def main(argv: list[str] | None = None) -> int:
     plot(result, out.with_suffix(".png"))
     m = result["median"]
     print(
-        f"{a.mesh} ({result['triangles']} tris) {a.res}^2: xatlas {m['xatlas_s']:.2f} s, raster "
+        f"{a.mesh} ({result['triangles']} tris) {a.res}^2: unwrap {m['unwrap_s']:.2f} s, raster "
         f"{m['raster_s']:.2f} s, slivers {m['sliver_s']:.3f} s, dilate {m['dilate_s']:.2f} s, "
         f"total {m['total_s']:.2f} s (median of {len(result['runs'])}) -> {out}"
     )

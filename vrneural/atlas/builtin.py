@@ -39,7 +39,12 @@ def builtin_mesh(name: str, crease_deg: float | None = None) -> Mesh:
     check_choice("mesh", name, BUILTIN_MESHES)
     pos, faces, uv = _BUILDERS[name]()
     return make_mesh(
-        name, pos, faces, uv=uv, crease_deg=180.0 if crease_deg is None else crease_deg
+        name,
+        pos,
+        faces,
+        uv=uv,
+        crease_deg=180.0 if crease_deg is None else crease_deg,
+        uv_source="builtin",
     )
 
 

@@ -1,7 +1,8 @@
 """On-disk cache of built atlases, in the versioned container format (no pickle).
 
-Key: SHA-256 over the mesh content (positions, faces, normals, tangents, material UV: dtype,
-shape and bytes), the resolution, the padding and :data:`ATLAS_CODE_VERSION` (bump it whenever
+Key: SHA-256 over the mesh content (positions, faces, normals, tangents, material UV and its
+source, the lightmap UV set: dtype, shape and bytes), the resolution, the padding, the UV choice
+(``auto``, ``mesh``, ``charts``, ``xatlas``) and :data:`ATLAS_CODE_VERSION` (bump it whenever
 the unwrap or rasterization rules change, so stale entries are never reused). Any change to a
 vertex, a face or a shading attribute changes the key.
 
@@ -25,7 +26,7 @@ from vrneural.errors import VrnError
 from vrneural.formats.container import read_container, write_container
 from vrneural.warn import VrnWarning
 
-ATLAS_CODE_VERSION = 5
+ATLAS_CODE_VERSION = 6
 MAGIC = b"VRNATLAS"
 FORMAT_VERSION = 1
 
@@ -42,11 +43,15 @@ def cache_dir() -> Path:
     return base / "atlas"
 
 
-def cache_key(mesh: Mesh, resolution: int, padding: int) -> str:
-    """Hex SHA-256 of mesh content + resolution + padding + code version."""
+def cache_key(mesh: Mesh, resolution: int, padding: int, uv: str = "auto") -> str:
+    """Hex SHA-256 of mesh content + resolution + padding + UV choice + code version."""
     h = hashlib.sha256()
     h.update(f"vrneural-atlas v{ATLAS_CODE_VERSION} R={resolution} pad={padding}\n".encode())
-    for name in ("positions", "faces", "normals", "tangents", "uv"):
+    if uv != "auto" or mesh.lightmap_uv is not None or mesh.uv_source != "file":
+        h.update(f"atlas_uv={uv} uv_source={mesh.uv_source}\n".encode())
+    for name in ("positions", "faces", "normals", "tangents", "uv", "lightmap_uv"):
+        if getattr(mesh, name) is None:
+            continue
         a = np.ascontiguousarray(getattr(mesh, name))
         h.update(f"{name} {a.dtype.str} {a.shape}\n".encode())
         h.update(a.tobytes())
@@ -132,4 +137,6 @@ def split_mesh(mesh: Mesh, vmap: np.ndarray, faces: np.ndarray) -> Mesh:
         normals=mesh.normals[vmap],
         tangents=mesh.tangents[vmap],
         uv=mesh.uv[vmap],
+        lightmap_uv=None if mesh.lightmap_uv is None else mesh.lightmap_uv[vmap],
+        uv_source=mesh.uv_source,
     )

@@ -88,12 +88,17 @@ def make_mesh(
     normals: np.ndarray | None = None,
     drop_degenerate: bool = True,
     crease_deg: float = CREASE_DEG,
+    lightmap_uv: np.ndarray | None = None,
+    uv_source: str = "file",
 ) -> Mesh:
     """Validate arrays and build a :class:`Mesh` with normals and tangents.
 
     positions: [V, 3] metres; faces: [F, 3] int; uv: [V, 2] material UV or None (then
     :func:`box_uv` generates it, splitting vertices); normals: [V, 3] or None (then
-    :func:`creased_normals` computes them with ``crease_deg``, splitting vertices at creases).
+    :func:`creased_normals` computes them with ``crease_deg``, splitting vertices at creases);
+    lightmap_uv: [V, 2] the asset's lightmap UV set or None (NaN/Inf or a wrong shape ->
+    :class:`VrnError`); uv_source: where ``uv`` came from ("file", "builtin"; "box" when
+    generated here).
     """
     if not (isinstance(crease_deg, (int, float)) and 0.0 <= crease_deg <= 180.0):
         raise VrnError(f"{name}: crease angle {crease_deg!r} is out of range [0, 180] degrees")
@@ -105,6 +110,7 @@ def make_mesh(
         uv = np.asarray(uv, dtype=np.float64)
         if uv.shape != (len(pos), 2) or not np.isfinite(uv).all():
             uv = None  # unusable material UVs: regenerate (documented in load_mesh)
+    lm = None if lightmap_uv is None else check_uv(name, "lightmap UV", lightmap_uv, len(pos))
     if normals is not None:
         normals = np.asarray(normals, dtype=np.float64)
         if normals.shape != (len(pos), 3) or not np.isfinite(normals).all():
@@ -122,10 +128,14 @@ def make_mesh(
             every = "its only triangle is" if n == 1 else f"all {n} triangles are"
             raise VrnError(f"{name}: {every} degenerate")
     if uv is None:
-        pos, fac, uv, normals = box_uv(pos, fac, normals)
+        src, fac, uv = _box_uv_src(pos, fac)
+        pos, uv_source = pos[src], "box"
+        normals = None if normals is None else normals[src]
+        lm = None if lm is None else lm[src]
     if normals is None:
         src, fac, normals = creased_normals(pos, fac, crease_deg)
         pos, uv = pos[src], uv[src]
+        lm = None if lm is None else lm[src]
     else:
         normals = _normalize(normals, fallback=vertex_normals(pos, fac))
     tangents = vertex_tangents(pos, fac, uv, normals)
@@ -136,7 +146,27 @@ def make_mesh(
         normals=normals.astype(np.float32),
         tangents=tangents.astype(np.float32),
         uv=uv.astype(np.float32),
+        lightmap_uv=None if lm is None else lm.astype(np.float32),
+        uv_source=uv_source,
     )
+
+
+def check_uv(name: str, what: str, uv, n_vertices: int) -> np.ndarray:
+    """``uv`` as float64 [V, 2]; :class:`VrnError` (one line: the mesh, the UV set, the count)
+    for a wrong shape or NaN/Inf values."""
+    a = np.asarray(uv, dtype=np.float64)
+    if a.shape != (n_vertices, 2):
+        raise VrnError(
+            f"{name}: {what} has shape {list(a.shape)}, expected [{n_vertices}, 2] (one per vertex)"
+        )
+    bad = ~np.isfinite(a).all(axis=1)
+    if bad.any():
+        n = int(bad.sum())
+        raise VrnError(
+            f"{name}: {what} of {count(n, 'vertex', 'vertices')} {'is' if n == 1 else 'are'} "
+            f"NaN/Inf (the first is vertex index {int(np.argmax(bad))}, counted from 0)"
+        )
+    return a
 
 
 def degenerate_faces(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -298,6 +328,13 @@ def box_uv(
     scale`` with ``scale`` = the largest bounding-box extent by default, so the whole object
     spans about one BTF tile. Returns (positions, faces, uv, normals) with split vertices.
     """
+    src, new_faces, uv = _box_uv_src(pos, faces, scale)
+    return pos[src], new_faces, uv, None if normals is None else normals[src]
+
+
+def _box_uv_src(pos, faces, scale: float | None = None):
+    """:func:`box_uv` as ``(src [V'], faces [F, 3], uv [V', 2])``: new vertex ``i`` copies
+    ``src[i]``."""
     fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
     axis = np.argmax(np.abs(fn), axis=1)
     ext = np.ptp(pos, axis=0)
@@ -306,8 +343,6 @@ def box_uv(
     key = faces * 3 + axis[:, None]
     uniq, inv = np.unique(key.reshape(-1), return_inverse=True)
     src, ax = uniq // 3, uniq % 3
-    p = pos[src]
-    rel = (p - pos.min(axis=0)) / s
+    rel = (pos[src] - pos.min(axis=0)) / s
     pick = np.array([[2, 1], [0, 2], [0, 1]])[ax]
-    uv = np.take_along_axis(rel, pick, axis=1)
-    return p, inv.reshape(-1, 3), uv, None if normals is None else normals[src]
+    return src, inv.reshape(-1, 3), np.take_along_axis(rel, pick, axis=1)

@@ -41,22 +41,58 @@ def uv_area_px(px: np.ndarray) -> np.ndarray:
 
 
 def _pairs(px: np.ndarray, tris: np.ndarray, R: int, grow: float):
-    """Yield (tri [P], x [P], y [P]) candidate pairs: texel centres in each triangle's bbox
-    grown by ``grow`` texels, clipped to the texture, in chunks of about CHUNK_PAIRS."""
-    lo = np.floor(px[tris].min(axis=1) - 0.5 - grow).astype(np.int64)
-    hi = np.ceil(px[tris].max(axis=1) - 0.5 + grow).astype(np.int64)
-    lo = np.clip(lo, 0, R - 1)
-    hi = np.clip(hi, 0, R - 1)
-    w = np.maximum(hi[:, 0] - lo[:, 0] + 1, 0)
-    h = np.maximum(hi[:, 1] - lo[:, 1] + 1, 0)
-    count = w * h
-    ends = np.cumsum(count)
-    total = int(ends[-1]) if len(ends) else 0
-    for p0 in range(0, total, CHUNK_PAIRS):
-        p = np.arange(p0, min(p0 + CHUNK_PAIRS, total), dtype=np.int64)
-        k = np.searchsorted(ends, p, side="right")
-        local = p - (ends[k] - count[k])
-        yield tris[k], lo[k, 0] + local % w[k], lo[k, 1] + local // w[k]
+    """Yield (tri [P], x [P], y [P]) candidate pairs, in chunks of about CHUNK_PAIRS: per
+    triangle and texel row, the texel centres within L-inf distance ``grow`` of the triangle's
+    span in that row (the triangle clipped to the band ``row centre +- grow``), clipped to the
+    texture. Spans, not bounding boxes: a long diagonal needle costs its length, not its box."""
+    tris = np.asarray(tris, np.int64)
+    if not len(tris):
+        return
+    t_px = px[tris]
+    y_lo = np.clip(np.floor(t_px[:, :, 1].min(1) - 0.5 - grow), 0, R - 1).astype(np.int64)
+    y_hi = np.clip(np.ceil(t_px[:, :, 1].max(1) - 0.5 + grow), 0, R - 1).astype(np.int64)
+    n_rows = np.maximum(y_hi - y_lo + 1, 0)
+    r_end = np.cumsum(n_rows)
+    for r0 in range(0, int(r_end[-1]), CHUNK_ROWS):
+        r = np.arange(r0, min(r0 + CHUNK_ROWS, int(r_end[-1])), dtype=np.int64)
+        k = np.searchsorted(r_end, r, side="right")
+        y = y_lo[k] + r - (r_end[k] - n_rows[k])
+        xl, xr = _band_span(t_px[k], y + 0.5 - grow, y + 0.5 + grow)
+        x0 = np.clip(np.ceil(xl - 0.5 - grow - 1e-9), 0, R).astype(np.int64)
+        x1 = np.clip(np.floor(xr - 0.5 + grow + 1e-9), -1, R - 1).astype(np.int64)
+        count = np.maximum(x1 - x0 + 1, 0)
+        ends = np.cumsum(count)
+        total = int(ends[-1]) if len(ends) else 0
+        for p0 in range(0, total, CHUNK_PAIRS):
+            p = np.arange(p0, min(p0 + CHUNK_PAIRS, total), dtype=np.int64)
+            j = np.searchsorted(ends, p, side="right")
+            yield tris[k[j]], x0[j] + p - (ends[j] - count[j]), y[j]
+
+
+#: (triangle, row) spans per chunk of :func:`_pairs`
+CHUNK_ROWS = 1 << 18
+
+
+def _band_span(tri: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(x_min, x_max)`` [N] of triangles ``tri`` [N, 3, 2] clipped to the bands
+    ``y0 <= y <= y1`` [N] (inf, -inf where a band misses its triangle): the extremes are among
+    the vertices inside the band and the edges' crossings of its two lines."""
+    vx, vy = tri[:, :, 0], tri[:, :, 1]
+    inb = (vy >= y0[:, None]) & (vy <= y1[:, None])
+    lo = np.where(inb, vx, np.inf).min(1)
+    hi = np.where(inb, vx, -np.inf).max(1)
+    for e in range(3):
+        ax, ay = vx[:, e], vy[:, e]
+        bx, by = vx[:, (e + 1) % 3], vy[:, (e + 1) % 3]
+        dy = by - ay
+        safe = np.where(dy != 0, dy, 1.0)
+        for yl in (y0, y1):
+            t = (yl - ay) / safe
+            ok = (dy != 0) & (t >= 0) & (t <= 1)
+            x = ax + t * (bx - ax)
+            lo = np.minimum(lo, np.where(ok, x, np.inf))
+            hi = np.maximum(hi, np.where(ok, x, -np.inf))
+    return lo, hi
 
 
 def _edge_setup(px: np.ndarray) -> dict:
@@ -142,6 +178,63 @@ def raster_coverage(uv: np.ndarray, faces: np.ndarray, R: int) -> np.ndarray:
     """
     px, area, es = _setup(uv, faces, R)
     return _coverage(px, es, np.flatnonzero(area != 0), R)[0].reshape(R, R)
+
+
+#: resolution of the overlap check of :func:`overlap_pairs` (at most R)
+OVERLAP_CHECK_RES = 1024
+
+
+def overlap_pairs(px: np.ndarray, R: int) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs of triangles ``px`` [F, 3, 2] (texel coordinates in R x R) that claim the same
+    texel centre, checked at ``min(R, OVERLAP_CHECK_RES)`` texels (coordinates scaled):
+    ``(a [P], b [P])`` with ``a < b``, one pair (lowest and highest claimant) per texel."""
+    s = min(1.0, OVERLAP_CHECK_RES / R)
+    Rc = max(int(np.ceil(R * s)), 1)
+    q = px.astype(np.float64) * s
+    area = uv_area_px(q)
+    flip = area < 0
+    q[flip] = q[flip][:, [0, 2, 1]]
+    es = _edge_setup(q)
+    tris = np.flatnonzero(area != 0)
+    hits = np.zeros(Rc * Rc, np.int32)
+    lo = np.full(Rc * Rc, EMPTY, np.uint32)
+    hi = np.zeros(Rc * Rc, np.uint32)
+    for t, x, y in _pairs(q, tris, Rc, 0.0):
+        inside, _ = _edge_terms(es, t, x + 0.5, y + 0.5, need_dist=False)
+        tex, tt = (y * Rc + x)[inside], t[inside].astype(np.uint32)
+        hits += np.bincount(tex, minlength=Rc * Rc).astype(np.int32)
+        np.minimum.at(lo, tex, tt)
+        np.maximum.at(hi, tex, tt)
+    two = np.flatnonzero(hits >= 2)
+    return lo[two].astype(np.int64), hi[two].astype(np.int64)
+
+
+def overlapping_faces(px: np.ndarray, R: int) -> np.ndarray:
+    """Sorted indices of triangles ``px`` [F, 3, 2] that share a texel centre with another
+    (:func:`overlap_pairs`)."""
+    a, b = overlap_pairs(px, R)
+    return np.unique(np.concatenate([a, b]))
+
+
+def chart_conflicts(px: np.ndarray, faces: np.ndarray, chart: np.ndarray, R: int) -> int:
+    """Texels within L-inf distance 1 of two different charts: a bilinear tap there reads
+    another chart (``px`` [F, 3, 2] texel coordinates, ``faces`` [F, 3] for the chart borders,
+    ``chart`` [F]). Only chart-border triangles are tested (overlaps are found apart)."""
+    q = px.astype(np.float64)
+    area = uv_area_px(q)
+    flip = area < 0
+    q[flip] = q[flip][:, [0, 2, 1]]
+    es = _edge_setup(q)
+    border = np.intersect1d(boundary_faces(np.asarray(faces, np.int64)), np.flatnonzero(area != 0))
+    lo = np.full(R * R, np.iinfo(np.int64).max, np.int64)
+    hi = np.full(R * R, -1, np.int64)
+    for t, x, y in _pairs(q, border, R, 1.0):
+        _, d = _edge_terms(es, t, x + 0.5, y + 0.5)
+        near = d <= 1.0
+        tex, c = (y * R + x)[near], chart[t[near]]
+        np.minimum.at(lo, tex, c)
+        np.maximum.at(hi, tex, c)
+    return int(np.count_nonzero((hi >= 0) & (lo != hi)))
 
 
 def rasterize_ids(

@@ -6,6 +6,8 @@
 - Atlas UVs are in [0, 1]; radiance texel ``(x, y)`` (column x, row y, row 0 first in memory)
   has its centre at atlas UV ``((x + 0.5) / R, (y + 0.5) / R)``. No v flip anywhere: the forward
   pass samples the radiance texture at the interpolated atlas UV directly.
+- A mesh's own UVs become the atlas when they serve (``build_atlas(uv="auto")``, see
+  :mod:`vrneural.atlas.meshuv`): ``lightmap_uv``, else ``uv`` when ``uv_source == "file"``.
 - ``tri_ids[y, x]`` is the index of a row of ``mesh.faces`` (uint32), ``EMPTY`` where no
   triangle covers the texel or its gutter.
 """
@@ -29,6 +31,11 @@ class Mesh:
     normals: np.ndarray  # [V, 3] float32, unit
     tangents: np.ndarray  # [V, 4] float32: unit tangent (+u of material UV), bitangent sign
     uv: np.ndarray  # [V, 2] float32, material UV (one BTF tile per unit, before tiling scale)
+    #: [V, 2] float32: the asset's own lightmap UV set (glTF ``TEXCOORD_1``), or None
+    lightmap_uv: np.ndarray | None = None
+    #: where ``uv`` came from: "file" (the asset's, e.g. glTF ``TEXCOORD_0`` or OBJ ``vt``),
+    #: "builtin" (a built-in mesh's arc-length UVs) or "box" (box projection)
+    uv_source: str = "file"
 
 
 @dataclass

@@ -1,4 +1,5 @@
-"""xatlas unwrap into exactly R x R texels, with vertices split at chart seams.
+"""xatlas unwrap into exactly R x R texels, with vertices split at chart seams (the charts of
+``build_atlas(atlas_uv="xatlas")``, which re-packs them; :mod:`vrneural.atlas.generate`).
 
 xatlas's own ``texels_per_unit`` estimate for a given ``resolution`` overshoots (a 0.3 m sphere
 asked for 1200^2 came back 1378 x 1384), and a fixed ``resolution`` with too high a
@@ -45,7 +46,7 @@ builds many atlases. So :func:`unwrap` runs the work in a forked child process, 
 the arrays back and ends with ``os._exit`` before any xatlas object is destroyed; every atlas
 object stays referenced until then. A child that dies instead (xatlas segfaults on some meshes,
 e.g. finely subdivided icospheres, jpcy/xatlas#146) is reported in one line naming the signal
-and what to do (:func:`died_message`).
+(:func:`died_message`); :mod:`vrneural.atlas.generate` catches it and carries on.
 """
 
 from __future__ import annotations
@@ -87,12 +88,15 @@ def _pack_options(tpu: float, padding: int):
 CHILD_TIMEOUT_S = 1800.0
 
 
-def unwrap(mesh: Mesh, resolution: int, padding: int) -> tuple[np.ndarray, np.ndarray, dict]:
+def unwrap(
+    mesh: Mesh, resolution: int, padding: int, chart_options: dict | None = None
+) -> tuple[np.ndarray, np.ndarray, dict]:
     """Unwrap ``mesh`` with xatlas. Returns ``(vmapping [V'] int64, uv [V', 2] float32 in
     [0, 1], info)``. Split vertex ``i`` copies input vertex ``vmapping[i]``; the faces keep
     their order, re-indexed onto the split vertices as ``info["faces"]`` [F, 3] int64.
     ``info`` also holds charts, texels_per_unit, packed size and pack count. Runs in a child
     process (module docstring); errors come back as the same one-line :class:`VrnError`.
+    ``chart_options``: xatlas ``ChartOptions`` fields to set (None: the defaults above).
     """
     import multiprocessing as mp
 
@@ -101,7 +105,9 @@ def unwrap(mesh: Mesh, resolution: int, padding: int) -> tuple[np.ndarray, np.nd
     # only numpy and xatlas, never the parent's GPU or torch threads.
     ctx = mp.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, mesh, resolution, padding), daemon=True)
+    proc = ctx.Process(
+        target=_child, args=(send, mesh, resolution, padding, chart_options), daemon=True
+    )
     proc.start()
     send.close()
     try:
@@ -141,17 +147,14 @@ def died_message(name: str, n_faces: int, exitcode: int | None) -> str:
     except ValueError:
         sig_name = "unknown signal"
     if sig_name in CRASH_SIGNALS:
-        # The atlas is always unwrapped from the positions and faces (a file's own UVs are
-        # material UVs, never used for it), so no flag avoids the bug. Measured on the
-        # 81920-triangle icosphere of jpcy/xatlas#146: every --res from 64 to 4096 crashes,
-        # and so do other chart options and a rotated copy; the same sphere triangulated
-        # differently (an icosphere of 20480 faces split flat once) and a copy with vertices
-        # moved 1e-4 unwrap fine.
+        # Measured on the 81920-triangle icosphere of jpcy/xatlas#146: every --res from 64 to
+        # 4096 crashes, and so do other chart options and a rotated copy; a copy with
+        # vertices moved 1e-6 gives folded charts. build_atlas(atlas_uv="xatlas") recovers
+        # (vrneural.atlas.generate); the default never runs xatlas.
         return (
             f"{what}: xatlas crashed ({sig_name}, signal {sig}), a known xatlas bug for some "
-            "meshes such as finely subdivided icospheres (jpcy/xatlas#146); the atlas is "
-            "unwrapped from the triangles themselves (the file's UVs are not used), so "
-            "re-triangulate the mesh (remesh or decimate it) and try again"
+            "meshes such as finely subdivided icospheres (jpcy/xatlas#146); vrneural's own "
+            "charts (atlas_uv = auto or charts) do not use xatlas"
         )
     if sig_name == "SIGKILL":
         return (
@@ -161,7 +164,7 @@ def died_message(name: str, n_faces: int, exitcode: int | None) -> str:
     return f"{what}: the xatlas process was stopped by {sig_name} (signal {sig})"
 
 
-def _child(conn, mesh: Mesh, resolution: int, padding: int) -> None:
+def _child(conn, mesh: Mesh, resolution: int, padding: int, chart_options=None) -> None:
     """Child process: unwrap, send ``(kind, payload)``, exit without destroying xatlas objects."""
     import faulthandler
 
@@ -171,7 +174,7 @@ def _child(conn, mesh: Mesh, resolution: int, padding: int) -> None:
     faulthandler.disable()
     keep: list = []  # every xatlas.Atlas, alive until os._exit
     try:
-        msg = ("ok", _unwrap(mesh, resolution, padding, keep))
+        msg = ("ok", _unwrap(mesh, resolution, padding, keep, chart_options))
     except VrnError as e:
         msg = ("error", str(e))
     except BaseException as e:  # reported to the parent, which raises
@@ -201,7 +204,7 @@ def normalized_positions(positions) -> tuple[np.ndarray, float]:
     return pos / unit, unit
 
 
-def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list):
+def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list, chart_options=None):
     import xatlas
 
     # xatlas in units of the mesh's own size (module docstring: its absolute epsilons)
@@ -220,6 +223,8 @@ def _unwrap(mesh: Mesh, resolution: int, padding: int, keep: list):
     if len(faces) > FAST_FACES:
         co.max_chart_area = float(area3d * FACES_PER_CHART / len(faces))
         co.max_iterations = 0
+    for k, v in (chart_options or {}).items():
+        setattr(co, k, v)
     atlas.generate(co, _pack_options(tpu, padding))
     if int(atlas.atlas_count) == 0:  # atlas[0] would be an IndexError
         raise VrnError(

@@ -14,11 +14,17 @@ def chart_ids(atlas: Atlas) -> np.ndarray:
     material-UV seam) into one chart while keeping them as separate output vertices with
     identical atlas UVs. Different charts never share an atlas-UV point (they are padded apart).
     """
+    return uv_charts(atlas.uv_atlas, atlas.mesh.faces)
+
+
+def uv_charts(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """[F] int: :func:`chart_ids` of faces [F, 3] over UVs [V, 2] (components over shared UV
+    points), numbered by first face."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    _, weld = np.unique(atlas.uv_atlas, axis=0, return_inverse=True)
-    faces = weld.reshape(-1)[atlas.mesh.faces.astype(np.int64)]
+    _, weld = np.unique(uv, axis=0, return_inverse=True)
+    faces = weld.reshape(-1)[np.asarray(faces, dtype=np.int64)]
     F, V = len(faces), int(weld.max()) + 1
     rows = np.repeat(np.arange(F), 3)
     g = coo_matrix((np.ones(3 * F), (rows, F + faces.reshape(-1))), shape=(F + V, F + V))

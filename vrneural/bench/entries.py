@@ -44,6 +44,12 @@ SPECS = {
         "run_tradeoff",
         "speed/accuracy: each knob vs the per-pixel teacher (FLIP, PSNR, SSIM)",
     ),
+    "atlas": (
+        "atlas",
+        "AtlasBenchConfig",
+        "run_atlas",
+        "atlas stage: time, memory, coverage, charts and seam error over a fixed mesh set",
+    ),
 }
 
 
@@ -82,7 +88,7 @@ def _run(name: str, args) -> int:
 def _register_all(sub) -> None:
     p = sub.add_parser(
         "all",
-        help="run frames, lights, materials, kernels and tradeoff into OUT/<name>",
+        help="run frames, lights, materials, kernels, tradeoff and atlas into OUT/<name>",
         description="Every timing and trade-off benchmark (not `quality`, which trains its own "
         "baselines; run it separately). --quick: each at its CI size.",
     )

@@ -1,4 +1,5 @@
-"""`vrneural atlas MESH --res 1200 -o atlas.png`: unwrap, rasterize IDs, write a PNG, stats."""
+"""`vrneural atlas MESH --res 1200 -o atlas.png`: atlas UVs (the mesh's own or generated),
+rasterize IDs, write a PNG, stats."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ import warnings
 from pathlib import Path
 
 STAT_LINES = (
+    ("uv_source", "UVs", "{}"),
+    ("uv_reason", "because", "{}"),
     ("coverage_pct", "coverage", "{:.2f} % of texels inside triangles"),
     ("filled_pct", "with gutter", "{:.2f} % of texels have an ID"),
     ("charts", "charts", "{}"),
@@ -17,6 +20,7 @@ STAT_LINES = (
     ("triangles_without_texels", "tris w/o texels", "{}"),
     ("zero_area_triangles", "zero-area tris", "{}"),
     ("max_abs_barycentric", "max |barycentric|", "{:.2f} (gutter extrapolation)"),
+    ("density_spread", "density spread", "{:.2f}x (texels per area, 95th / 5th percentile)"),
     ("cache", "cache", "{}"),
     ("total_s", "time", "{:.2f} s"),
 )
@@ -28,9 +32,11 @@ def register(sub) -> None:
 
     p = sub.add_parser(
         "atlas",
-        help="unwrap a mesh (xatlas), rasterize its triangle-ID texture, write a PNG + stats",
+        help="atlas a mesh (its own UVs or an unwrap), rasterize its triangle-ID texture, write a "
+        "PNG + stats",
         description="Build the atlas of MESH (a file: OBJ/PLY/GLB/GLTF, or a built-in name: "
-        "sphere, torus, plane, cloth, highpoly) at R x R texels with a gutter, write a PNG of "
+        "sphere, torus, plane, cloth, highpoly) at R x R texels with a gutter, from the mesh's "
+        "own lightmap/UV set when it serves (--atlas-uv), else from an unwrap; write a PNG of "
         "the triangle-ID texture (a colour per triangle or chart, gutter at half brightness, "
         "black = empty; row 0 = atlas v 0 at the top) and print coverage, charts and "
         "texels-per-triangle stats. A file with several meshes gives OUT-<k>.png per mesh.",
@@ -109,7 +115,14 @@ def run(args) -> int:
             check_output(o, args.force)
         results = []
         for mesh, o in zip(meshes, outs, strict=True):
-            atlas = build_atlas(mesh, cfg.res, cfg.padding, cache=cfg.cache, progress=True)
+            atlas = build_atlas(
+                mesh,
+                cfg.res,
+                cfg.padding,
+                cache=cfg.cache,
+                progress=True,
+                atlas_uv=cfg.atlas_uv,
+            )
             _write_png(o, atlas, args.color)
             results.append({"output": str(o), **atlas.stats})
     notes = [" ".join(str(w.message).splitlines()) for w in caught]
@@ -133,8 +146,9 @@ def run(args) -> int:
             for key, label, fmt in STAT_LINES:
                 print(f"  {label:18s} {fmt.format(r[key])}")
             when = " (of the cached build)" if r["cache"] == "hit" else ""
+            print(f"  {'unwrap path':18s} {' -> '.join(r['unwrap_path'])}")
             print(
-                f"  {'stage times':18s} xatlas {r['xatlas_s']:.2f} s, "
+                f"  {'stage times':18s} unwrap {r['unwrap_s']:.2f} s, "
                 f"raster {r['raster_s']:.2f} s, slivers {r['sliver_s']:.3f} s, "
                 f"dilate {r['dilate_s']:.2f} s{when}"
             )

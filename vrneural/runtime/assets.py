@@ -120,10 +120,14 @@ def get_mesh(
     )
 
 
-def get_atlas(mesh: Mesh, resolution: int, padding: int = 2) -> Atlas:
+def get_atlas(
+    mesh: Mesh, resolution: int, padding: int = 2, atlas_uv: str = "auto", progress: bool = False
+) -> Atlas:
     a = _atlas_api()
     if a is not None:
-        return a.build_atlas(mesh, resolution, padding=padding)
+        return a.build_atlas(
+            mesh, resolution, padding=padding, atlas_uv=atlas_uv, progress=progress
+        )
     return fallback_atlas(mesh, resolution, padding)
 
 

@@ -170,7 +170,7 @@ class Renderer:
         """Load object ``i``'s mesh; a neural one also gets its atlas, pass and targets."""
         scene, s = self.scene, self.s
         if progress:
-            progress(f"object {o.name}")
+            progress(f"{o.name}: load mesh {o.mesh}")
         mesh = get_mesh(o.mesh, scene.base, f"{scene.src}: objects[{i}].mesh", o.crease_angle)
         if o.material.kind == "plain":
             m = o.material
@@ -187,8 +187,10 @@ class Renderer:
                 f"its texture_res = {o.texture_res}"
                 + (f" (min_texture_res {o.min_texture_res} kept)" if res != s.texture_res else "")
             )
+        if progress:
+            progress(f"{o.name}: atlas {res}^2, {len(mesh.faces)} triangles")
         try:
-            atlas = get_atlas(mesh, res)
+            atlas = get_atlas(mesh, res, atlas_uv=o.atlas_uv, progress=progress is not None)
         except VrnError as e:  # name the object and the knobs that set its resolution
             raise VrnError(
                 f"{scene.src}: objects[{i}] ({o.name}) at {res}^2 texels ({knob}): {e}"
@@ -226,6 +228,8 @@ class Renderer:
             mat = ref or mat  # a procedural material is its own ground truth
         key = id(mat)
         if key not in passes:
+            if progress:
+                progress(f"{o.name}: compile shaders ({s.mode} mode)")
             try:
                 passes[key] = self._make_pass(mat)
             except VrnError as e:  # name the object and its pack, not the BTF inside

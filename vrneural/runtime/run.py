@@ -245,7 +245,19 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         check_video()
     check_output_dir(out, cfg.force, "run")
     t_setup = time.perf_counter()
-    r = Renderer(scene, s)  # validates the packs: a failure here leaves --out untouched
+    # set-up stages (mesh load, atlas, shader compile per object) on one transient bar, on a
+    # terminal only (a log or a captured stderr keeps its lines: errors stay one line)
+    shown = progress and sys.stderr.isatty()
+    with tqdm(
+        total=None, desc="vrneural run set-up", unit="stage", disable=not shown, leave=False
+    ) as setup_bar:
+
+        def stage(text: str) -> None:
+            setup_bar.set_postfix_str(text, refresh=False)
+            setup_bar.update()
+
+        # validates the packs: a failure here leaves --out untouched
+        r = Renderer(scene, s, progress=stage if shown else None)
     setup_s = time.perf_counter() - t_setup
     if cfg.scene and cfg.lights is None and len(scene.lights) > s.n_lights:
         r.warnings.append(

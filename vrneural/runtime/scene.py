@@ -18,6 +18,8 @@ Format (all lengths in metres, angles in degrees)::
     crease_angle = 60             # optional, degrees: computed normals (a mesh without its own)
                                   # are smooth across gentler bends, hard at sharper ones;
                                   # default 60 for mesh files, 180 (smooth) for built-ins
+    atlas_uv = "auto"             # optional: auto (the mesh's own lightmap/UVs when they
+                                  # serve), mesh (insist on them), charts or xatlas (unwrap)
     [objects.material]            # neural: pack = "x.vrnm" | procedural = "random" | "lambertian"
     pack = "leather.vrnm"         # relative to the scene file, else a bundled pack of that name
     reference = "leather.teacher.vrnm"  # optional teacher pack for --mode reference (same rule)
@@ -73,6 +75,7 @@ class ObjectDesc:
     texture_res: int | None = None
     min_texture_res: int | None = None  # floor under the profile's (dense meshes need texels)
     crease_angle: float | None = None  # degrees, for computed normals (None: the mesh's default)
+    atlas_uv: str = "auto"  # the atlas's UVs: vrneural.atlas.meshuv.MODES
 
 
 @dataclass
@@ -271,9 +274,13 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
                 "texture_res",
                 "min_texture_res",
                 "crease_angle",
+                "atlas_uv",
             )
         )
         mesh = f.str("mesh")
+        from vrneural.atlas.meshuv import MODES
+
+        atlas_uv = f.str("atlas_uv", "auto", MODES)
         crease = f.num("crease_angle", 0.0, 0.0, 180.0) if "crease_angle" in o else None
         model = model_matrix(
             f.vec("position", (0, 0, 0), bound=MAX_COORD),
@@ -304,7 +311,9 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
                 k += 1
                 name = f"{stem} {k}"
         taken.add(name)
-        objects.append(ObjectDesc(name, mesh, model, mat, tres, floor, crease))
+        if atlas_uv != "auto" and mat.kind == "plain":
+            raise f.err("atlas_uv", "is set on a plain object; only neural ones have an atlas")
+        objects.append(ObjectDesc(name, mesh, model, mat, tres, floor, crease, atlas_uv))
     lights = []
     if not isinstance(data.get("lights", []), list):
         raise VrnError(f"{src}: lights must be an array of tables ([[lights]])")
@@ -453,7 +462,7 @@ def builtin_scene(n_lights: int = 3) -> Scene:
             "cloth",
             model_matrix((0.0, 0.34, -0.2), (0, 20, 0), 1.7),
             m("fabric"),
-            min_texture_res=256,  # xatlas cannot pack its 32768 triangles into 128^2 (tiny)
+            min_texture_res=256,  # its 32768 triangles need texels: at 128^2 most would own none
         ),
         ObjectDesc(
             "wood torus", "torus", model_matrix((0.55, 0.85, -0.1), (60, 0, 0), 0.8), m("wood")

@@ -1,0 +1,236 @@
+"""`vrneural bench atlas`: the atlas stage over a fixed, generated mesh set
+(:mod:`vrneural.bench.atlas_meshes`): time, peak memory, coverage, charts, triangles without a
+texel, texel density spread, which UVs were used, and the seam error of a rendered Lambertian
+image against ``--mode screen`` (:mod:`vrneural.bench.atlas_seams`).
+
+Each mesh is generated, written to a file (PLY, or GLB for the one with lightmap UVs) and
+loaded in one forked process, then atlased (no cache) in another that holds only the
+interpreter, the mesh's arrays and the build, so its peak resident memory (``ru_maxrss``) is
+the build's (the loading's peak is reported apart). Writes ``results.json``,
+``results.md`` and ``atlases.png`` (every atlas, a colour per chart, gutter at half brightness).
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from vrneural.bench import report as rp
+from vrneural.config import opt, quick_defaults
+
+
+@dataclass
+class AtlasBenchConfig:
+    """`vrneural bench atlas`."""
+
+    out: str = opt("bench-atlas", "output directory", cli=False)
+    meshes: str = opt(
+        "ico6,ico7,torus,knot,cloth,fan,field,lightmap", "meshes to run (comma-separated)"
+    )
+    seams: bool = opt(True, "render each atlas (Lambertian, texture vs screen) for the seam error")
+    eye: int = opt(384, "seam renders: image side in pixels")
+    quick: bool = opt(False, "CI-sized: each mesh a few thousand triangles, 128-256^2, 128 px")
+    progress: bool = opt(True, "show progress bars")
+    force: bool = opt(False, "overwrite an existing output directory")
+
+    def resolved(self) -> AtlasBenchConfig:
+        if not self.quick:
+            return self
+        return quick_defaults(self, eye=128)
+
+
+def _resolution(name: str, quick: bool) -> int:
+    from vrneural.bench.atlas_meshes import RESOLUTION
+
+    if quick:
+        return 256 if name in ("field", "knot") else 128
+    return RESOLUTION.get(name, 1200)
+
+
+def _rss_mb() -> float:
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+def _load_child(conn, name: str, folder: str, quick: bool) -> None:
+    """Generate and load one mesh (``load_mesh``: trimesh, normals, tangents); keep the
+    :class:`Mesh` arrays in ``folder/<name>.npz`` for the build process."""
+    try:
+        import dataclasses
+
+        from vrneural.atlas import load_mesh
+        from vrneural.bench.atlas_meshes import write_mesh
+
+        t = time.perf_counter()
+        path = write_mesh(name, Path(folder), quick)
+        (mesh,) = load_mesh(path)
+        load_s = time.perf_counter() - t
+        arrays = {k: v for k, v in dataclasses.asdict(mesh).items() if isinstance(v, np.ndarray)}
+        np.savez(Path(folder) / f"{name}.npz", **arrays)
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        info = {"name": mesh.name, "uv_source": mesh.uv_source}
+        conn.send(("ok", {"load_s": load_s, "load_peak_rss_mb": peak, **info}, None, str(path)))
+    except BaseException as e:  # reported, never a hang
+        conn.send(("error", f"{type(e).__name__}: {e}", None, None))
+    finally:
+        conn.close()
+        os._exit(0)
+
+
+def _build_child(conn, name: str, folder: str, res: int, loaded: dict) -> None:
+    """Atlas the mesh of ``folder/<name>.npz`` (no cache); send its stats and a preview. The
+    process holds only the interpreter, the mesh arrays and the build: its peak resident
+    memory is the build's."""
+    try:
+        from vrneural.atlas import Mesh, build_atlas
+        from vrneural.atlas.visualize import atlas_image, gutter_mask
+
+        with np.load(Path(folder) / f"{name}.npz") as z:
+            arrays = {k: z[k] for k in z.files}
+        mesh = Mesh(name=loaded["name"], uv_source=loaded["uv_source"], **arrays)
+        rss0 = _rss_mb()
+        atlas = build_atlas(mesh, res, 2, cache=False, progress=False)
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        img = atlas_image(atlas, by="chart", gutter=gutter_mask(atlas))
+        step = max(1, res // 320)
+        rec = {
+            **{k: v for k, v in atlas.stats.items() if k not in ("cache", "cache_file")},
+            "mesh": name,
+            "rss_before_mb": rss0,
+            "peak_rss_mb": peak,
+        }
+        conn.send(("ok", rec, img[::step, ::step].copy(), None))
+    except BaseException as e:  # reported, never a hang
+        conn.send(("error", f"{type(e).__name__}: {e}", None, None))
+    finally:
+        conn.close()
+        os._exit(0)
+
+
+def _in_child(target, *args):
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=target, args=(send, *args))
+    proc.start()
+    send.close()
+    try:
+        kind, rec, img, path = recv.recv()
+    except EOFError:
+        kind, rec, img, path = "error", f"the process died (exit code {proc.exitcode})", None, None
+    proc.join()
+    return kind, rec, img, path
+
+
+def _measure(name: str, folder: Path, quick: bool, res: int):
+    """``(kind, record, preview, mesh file)``: load in one process, build in another."""
+    kind, loaded, _, path = _in_child(_load_child, name, str(folder), quick)
+    if kind != "ok":
+        return kind, loaded, None, None
+    kind, rec, img, _ = _in_child(_build_child, name, str(folder), res, loaded)
+    if kind == "ok":
+        rec = {**rec, "file": Path(path).name, "load_s": loaded["load_s"]}
+        rec["load_peak_rss_mb"] = loaded["load_peak_rss_mb"]
+    return kind, rec, img, path
+
+
+def run_atlas(cfg: AtlasBenchConfig) -> dict:
+    from vrneural.bench.atlas_meshes import NAMES
+    from vrneural.errors import VrnError, check_range
+
+    c = cfg.resolved()
+    names = [n.strip() for n in c.meshes.split(",") if n.strip()]
+    bad = [n for n in names if n not in NAMES]
+    if bad or not names:
+        raise VrnError(f"--meshes: {', '.join(bad) or '(none)'} not in {', '.join(NAMES)}")
+    check_range("--eye", c.eye, 16, 4096)
+    root = rp.prepare_out(cfg.out, cfg.force, "atlas")
+    t0 = time.perf_counter()
+    records, previews, failures = [], {}, []
+    from tqdm import tqdm
+
+    with tempfile.TemporaryDirectory(prefix="vrneural-bench-atlas-") as tmp:
+        old = os.environ.get("VRNEURAL_CACHE")
+        os.environ["VRNEURAL_CACHE"] = str(Path(tmp) / "cache")  # the seam renders' atlases
+        try:
+            # every atlas first, each in a process forked from this small one (before any
+            # render grows it: a child's peak includes what it inherits), then the renders
+            bar = tqdm(names, desc="bench atlas", unit="mesh", disable=not c.progress)
+            paths = {}
+            for name in bar:
+                bar.set_postfix_str(name)
+                res = _resolution(name, c.quick)
+                kind, rec, img, path = _measure(name, Path(tmp), c.quick, res)
+                if kind != "ok":
+                    failures.append(f"{name}: {rec}")
+                    records.append({"mesh": name, "resolution": res, "error": rec})
+                    continue
+                records.append(rec)
+                previews[name], paths[name] = img, path
+            if c.seams:
+                from vrneural.bench.atlas_seams import seam_error
+
+                for rec in tqdm(records, desc="bench atlas seams", disable=not c.progress):
+                    if rec["mesh"] in paths:
+                        rec["seams"] = seam_error(paths[rec["mesh"]], rec["resolution"], c.eye)
+        finally:
+            if old is None:
+                os.environ.pop("VRNEURAL_CACHE", None)
+            else:
+                os.environ["VRNEURAL_CACHE"] = old
+    doc = rp.header("atlas", c)
+    doc["records"] = records
+    doc["failures"] = failures
+    doc["total_seconds"] = time.perf_counter() - t0
+    doc["load_avg_1m"] = os.getloadavg()[0]
+    doc["cpu_count"] = os.cpu_count()
+    _plot(previews, records, root / "atlases.png")
+    from vrneural.bench.atlas_report import write_reports
+
+    write_reports(root, doc, c)
+    return doc
+
+
+def _plot(previews: dict, records: list, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from vrneural.formats.atomic import atomic_path
+
+    n = max(len(previews), 1)
+    cols = min(4, n)
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 3.5 * rows), squeeze=False)
+    by_name = {r["mesh"]: r for r in records}
+    for ax in axes.ravel():
+        ax.axis("off")
+    for ax, (name, img) in zip(axes.ravel(), previews.items(), strict=False):
+        r = by_name[name]
+        ax.imshow(img, interpolation="nearest")
+        ax.set_title(
+            f"{name}: {r['triangles']} tris, {r['resolution']}^2\n"
+            f"{r['coverage_pct']:.0f}% covered, {r['charts']} charts, {r['uv_source'][:18]}",
+            fontsize=8,
+        )
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+    plt.close(fig)
+
+
+def summary_numbers(records: list) -> np.ndarray:
+    """[N, 3] (total seconds, peak MB, coverage %) of the successful records (for tests)."""
+    ok = [r for r in records if "error" not in r]
+    return np.array([[r["total_s"], r["peak_rss_mb"], r["coverage_pct"]] for r in ok])
