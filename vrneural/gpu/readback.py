@@ -65,14 +65,15 @@ def upload_texture(data: np.ndarray, fmt: str, usage, label: str = ""):
     return tex
 
 
-def read_texture(tex) -> np.ndarray:
-    """Copy a 2D texture (needs ``COPY_SRC``) to numpy ``[H, W, C]`` (``[H, W]`` if 1 channel)."""
+def read_texture(tex, mip_level: int = 0) -> np.ndarray:
+    """Copy a 2D texture's level ``mip_level`` (needs ``COPY_SRC``) to numpy ``[H, W, C]``
+    (``[H, W]`` if 1 channel)."""
     fmt = str(tex.format)
     dtype, ch = _FORMATS[fmt]
-    w, h = tex.size[0], tex.size[1]
+    w, h = max(1, tex.size[0] >> mip_level), max(1, tex.size[1] >> mip_level)
     bpr = w * ch * np.dtype(dtype).itemsize
     mem = get_device().queue.read_texture(
-        {"texture": tex, "origin": (0, 0, 0), "mip_level": 0},
+        {"texture": tex, "origin": (0, 0, 0), "mip_level": mip_level},
         {"offset": 0, "bytes_per_row": bpr, "rows_per_image": h},
         (w, h, 1),
     )

@@ -28,6 +28,17 @@ class RunConfig:
     reuse_budget: float = opt(
         2.0, "--reuse auto: degrees a view or light direction may turn before a refresh"
     )
+    mips: bool = opt(
+        False,
+        "radiance textures with mip chains (coverage-weighted, rebuilt after each update), "
+        "sampled trilinearly and anisotropically: far or grazing surfaces average instead of "
+        "aliasing",
+    )
+    screen_res: bool = opt(
+        False,
+        "each object's radiance-texture side from its size on screen (about one texel per "
+        "pixel; a power of two up to its own side)",
+    )
     radiance: str = opt(
         "per-eye",
         "radiance textures per object: per-eye, or shared by both eyes (shaded from their "
@@ -213,6 +224,8 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         reference=ref,
         radiance=cfg.radiance,
         reuse_budget=budget,
+        mips=bool(cfg.mips),
+        screen_res=bool(cfg.screen_res),
     )
 
 

@@ -55,9 +55,9 @@ def pack_frame(view_proj, eye, n_lights: int) -> bytes:
 
 
 @functools.cache
-def _module(n_lights: int):
+def _module(n_lights: int, mips: bool = False):
     return get_device().create_shader_module(
-        code=render_wgsl("forward", n_lights=n_lights), label="forward"
+        code=render_wgsl("forward", n_lights=n_lights, mips=mips), label="forward"
     )
 
 
@@ -89,11 +89,12 @@ def _layouts():
 
 
 @functools.cache
-def render_pipeline(n_lights: int, fragment: str, vis: bool):
-    """Cached render pipeline for entry point ``fragment`` (``vis``: colour + visibility)."""
+def render_pipeline(n_lights: int, fragment: str, vis: bool, mips: bool = False):
+    """Cached render pipeline for entry point ``fragment`` (``vis``: colour + visibility;
+    ``mips``: neural objects sample their radiance textures' mip chains)."""
     import wgpu
 
-    mod = _module(n_lights)
+    mod = _module(n_lights, mips and fragment == "fs_neural")
     frame_l, neural_l, plain_l = _layouts()
     obj_l = neural_l if fragment == "fs_neural" else plain_l
     layout = get_device().create_pipeline_layout(bind_group_layouts=[frame_l, obj_l])
@@ -182,8 +183,9 @@ class DrawObject:
         )
         self.binds: dict = {}
 
-    def bind_group(self, radiance_view=None, key=None):
-        """Group 1 (object uniform, radiance texture + sampler when given), cached per ``key``."""
+    def bind_group(self, radiance_view=None, key=None, mips: bool = False):
+        """Group 1 (object uniform, radiance texture + sampler when given: ``mips``, the
+        trilinear and anisotropic one), cached per ``key``."""
         if key in self.binds:
             return self.binds[key]
         layout = _layouts()[1 if radiance_view is not None else 2]
@@ -191,7 +193,7 @@ class DrawObject:
         if radiance_view is not None:
             entries += [
                 {"binding": 1, "resource": radiance_view},
-                {"binding": 2, "resource": _sampler()},
+                {"binding": 2, "resource": _mip_sampler() if mips else _sampler()},
             ]
         bg = get_device().create_bind_group(layout=layout, entries=entries)
         self.binds[key] = bg
@@ -205,6 +207,22 @@ def _sampler():
         min_filter="linear",
         address_mode_u="clamp-to-edge",
         address_mode_v="clamp-to-edge",
+    )
+
+
+#: the anisotropy the mip sampler asks for (WebGPU clamps it to the adapter's)
+MAX_ANISOTROPY = 8
+
+
+@functools.cache
+def _mip_sampler():
+    return get_device().create_sampler(
+        mag_filter="linear",
+        min_filter="linear",
+        mipmap_filter="linear",
+        address_mode_u="clamp-to-edge",
+        address_mode_v="clamp-to-edge",
+        max_anisotropy=MAX_ANISOTROPY,
     )
 
 

@@ -180,14 +180,17 @@ class GpuAtlas:
         return self._lists[period]
 
 
-def new_radiance_texture(resolution: int, label: str = "radiance", fmt: str = "rgba16float"):
+def new_radiance_texture(
+    resolution: int, label: str = "radiance", fmt: str = "rgba16float", mips: int = 1
+):
     """A radiance texture (storage-written, sampled, copyable), zeroed: ``rgba16float`` (the
     runtime's) or ``rgba32float`` (the wider option: no f16 clamp, twice the memory; sampling it
-    bilinearly needs the float32-filterable feature)."""
+    bilinearly needs the float32-filterable feature); ``mips`` levels (runtime/radiance_mips.py)."""
     import wgpu
 
     return get_device().create_texture(
         size=(resolution, resolution, 1),
+        mip_level_count=mips,
         format=fmt,
         usage=wgpu.TextureUsage.STORAGE_BINDING
         | wgpu.TextureUsage.TEXTURE_BINDING

@@ -31,6 +31,7 @@ from vrneural.runtime.codegen import reference_weights
 from vrneural.runtime.gpu_material import GpuAtlas
 from vrneural.runtime.lights import light_arrays
 from vrneural.runtime.schedule import frame_slice
+from vrneural.runtime.screen_res import choose, level_sides, mesh_area, wanted_side
 from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget, screen_rect
 from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
 from vrneural.warn import VrnWarning
@@ -68,6 +69,12 @@ class Settings:
     #: render the window ``(x0, y0)`` of a ``full_w x full_h`` eye image, ``eye_res`` in size
     #: (``(x0, y0, full_w, full_h)``; the bench's crops at the headset's pixel density)
     crop: tuple | None = None
+    #: radiance textures with mip chains, rebuilt after each update and sampled trilinearly
+    #: (anisotropically where the adapter allows) by the forward pass (runtime/radiance_mips.py)
+    mips: bool = False
+    #: each object's radiance texture side chosen at each update from its size on screen
+    #: (about one texel per pixel; a power of two up to its side above; runtime/screen_res.py)
+    screen_res: bool = False
 
 
 @dataclass
@@ -86,6 +93,11 @@ class FrameStats:
     mlp_coarse: int  #: coarse-network evaluations (per block; per pixel in screen modes)
     mlp_fine: int  #: fine-network evaluations (per texel; per pixel in screen modes)
     pixels_shaded: int = 0  #: pixels shaded per pixel (screen and reference modes)
+    #: per neural object (scene order of neural objects): its radiance texture side, the texels
+    #: allocated for it (all eyes) and the 2x2 blocks shaded for it this frame (texture mode)
+    object_res: list = field(default_factory=list)
+    object_texels: list = field(default_factory=list)
+    object_blocks: list = field(default_factory=list)
 
 
 @dataclass
@@ -99,6 +111,12 @@ class _Neural:
     targets: list = field(default_factory=list)  # per eye: TextureTarget | ScreenTarget
     fresh: bool = False  # its radiance textures hold a complete update since it was last culled
     adapt: AdaptiveState = field(default_factory=AdaptiveState)  # --reuse auto
+    draw: object = None  # fw.DrawObject of the atlas in use
+    #: resolution levels (screen_res): side -> (atlas, GpuAtlas, DrawObject, targets), built
+    #: lazily; the one in use is also in atlas, gatlas, draw and targets
+    levels: dict = field(default_factory=dict)
+    level_sides: tuple = ()  # the sides it may use, largest first (its own side first)
+    area: float = 0.0  # mesh surface, object space, m^2
 
 
 def bounding_sphere(mesh) -> tuple[np.ndarray, float]:
@@ -205,6 +223,19 @@ class Renderer:
             self.warnings.append(f"{scene.src}: objects[{i}] ({o.name}): {flat}")
         c, r = bounding_sphere(atlas.mesh)
         n = _Neural(i, o, atlas, GpuAtlas(atlas), c, r)
+        n.side, n.mesh = res, mesh
+        if s.screen_res and s.mode == "texture":
+            n.area = mesh_area(atlas.mesh) * abs(np.linalg.det(o.model[:3, :3])) ** (2 / 3)
+            sides = []
+            for side in level_sides(res):  # every level's atlas now (cached on disk after)
+                try:
+                    if progress:
+                        progress(f"object {o.name}: atlas {side}^2")
+                    n.levels[side] = (get_atlas(mesh, side), None, None, None)
+                    sides.append(side)
+                except VrnError:  # too small for the mesh's charts: the larger ones only
+                    break
+            n.level_sides = tuple(sides)
         mat = o.material.neural
         if s.mode == "reference":
             ref = s.reference or o.material.reference
@@ -235,12 +266,38 @@ class Renderer:
             except VrnError as e:  # name the object and its pack, not the BTF inside
                 src = o.material.source or "procedural"
                 raise VrnError(f"{scene.src}: objects[{i}] ({o.name}, {src}): {e}") from None
+        n.tpass = passes[key]
         shared = s.mode == "texture" and s.radiance == "shared"
         for e in range(1 if shared else s.eyes):
             n.targets.append(self._make_target(passes[key], n, e))
         self.neural.append(n)
-        draw = fw.DrawObject(atlas.mesh, atlas.uv_atlas, self.rebase(o.model), i)
-        self.draws.append((draw, n))
+        n.draw = fw.DrawObject(atlas.mesh, atlas.uv_atlas, self.rebase(o.model), i)
+        n.levels[res] = (atlas, n.gatlas, n.draw, n.targets)
+        self.draws.append((None, n))
+
+    def _use_level(self, n: _Neural, side: int) -> None:
+        """Shade and draw neural object ``n`` at radiance-texture side ``side`` (screen_res):
+        its GPU atlas, draw and targets are made on first use; the level gets a full update
+        before it is shown."""
+        atlas, gatlas, draw, targets = n.levels[side]
+        if gatlas is None:
+            gatlas = GpuAtlas(atlas)
+            draw = fw.DrawObject(atlas.mesh, atlas.uv_atlas, self.rebase(n.desc.model), n.idx)
+            n.atlas, n.gatlas = atlas, gatlas
+            targets = [self._make_target(n.tpass, n, e) for e in range(len(n.targets))]
+            n.levels[side] = (atlas, gatlas, draw, targets)
+        n.atlas, n.gatlas, n.draw, n.targets, n.side = atlas, gatlas, draw, targets, side
+        n.fresh = False
+
+    def _level_for(self, n: _Neural, eyes) -> int:
+        """The side :mod:`~vrneural.runtime.screen_res` picks for ``n`` seen by ``eyes``."""
+        s = self.s
+        c, r = self.world_sphere(n)
+        d = min(float(np.linalg.norm(c - e.position)) for e in eyes) - r
+        cover = float(np.mean(n.levels[n.level_sides[0]][0].tri_ids != 0xFFFFFFFF))
+        h = s.crop[3] if s.crop else s.eye_res[1]
+        want = wanted_side(n.area, cover, max(d, 0.01), s.fov_y, h)
+        return choose(n.level_sides, n.side, want)
 
     def rebase(self, model: np.ndarray) -> np.ndarray:
         """``model [4, 4]`` with the floating origin subtracted (float64)."""
@@ -260,7 +317,7 @@ class Renderer:
 
     def _make_target(self, p, n: _Neural, eye: int):
         if self.s.mode == "texture":
-            return TextureTarget(p, n.gatlas, self.counters)
+            return TextureTarget(p, n.gatlas, self.counters, mips=self.s.mips)
         return ScreenTarget(p, n.gatlas, self.eye_t[eye], self.counters)
 
     @staticmethod
@@ -322,6 +379,10 @@ class Renderer:
                 culled += 1
                 n.fresh = False
                 continue
+            if n.level_sides:  # resolution from the screen
+                side = self._level_for(n, eyes)
+                if side != n.side:
+                    self._use_level(n, side)
             if not n.fresh:  # first sight (or back in view): one full update
                 n.fresh = True
                 todo.append((k, n, 0, 1))
@@ -408,13 +469,20 @@ class Renderer:
         self.timer.resolve(enc)
         self.dev.queue.submit([enc.finish()])
         gpu = self.timer.read()  # waits for the GPU
-        c = self.counters.read().sum(0)
+        slots = self.counters.read()
+        c = slots.sum(0)
         wall = (time.perf_counter() - t0) * 1e3
         if s.mode != "texture":
             return FrameStats(
                 f, wall, gpu, 0, culled, 0, int(c[1]), int(c[2]), int(c[3]), int(c[0])
             )
-        return FrameStats(f, wall, gpu, updated, culled, int(c[0]), int(c[1]), int(c[2]), int(c[3]))
+        per_obj = slots[: len(self.neural) * s.eyes, 0].reshape(-1, s.eyes).sum(1)
+        return FrameStats(
+            f, wall, gpu, updated, culled, int(c[0]), int(c[1]), int(c[2]), int(c[3]), 0,
+            [n.side for n in self.neural],
+            [n.side**2 * len(n.targets) for n in self.neural],
+            [int(b) for b in per_obj],
+        )  # fmt: skip
 
     def _shading_eyes(self, eyes) -> list[tuple[np.ndarray, float]]:
         """Where each radiance texture is shaded from: ``(eye position, facing margin)`` per
@@ -429,6 +497,7 @@ class Renderer:
         rp = fw.begin_pass(enc, et, self.timer.writes("forward"))
         nl = et.n_lights
         for d, n in self.draws:
+            d = d if n is None else n.draw
             if n is None:
                 pipe = fw.render_pipeline(nl, "fs_plain_vis" if vis else "fs_plain", vis)
                 bg = d.bind_group(None, "plain")
@@ -436,9 +505,9 @@ class Renderer:
                 pipe = fw.render_pipeline(nl, "fs_neural_vis", True)
                 bg = d.bind_group(None, "plain")
             else:
-                pipe = fw.render_pipeline(nl, "fs_neural", False)
+                pipe = fw.render_pipeline(nl, "fs_neural", False, self.s.mips)
                 tgt = n.targets[e if len(n.targets) > 1 else 0]  # shared: one for both
-                bg = d.bind_group(tgt.view, ("eye", e))
+                bg = d.bind_group(tgt.sample_view, ("eye", e, self.s.mips), self.s.mips)
             rp.set_pipeline(pipe)
             rp.set_bind_group(0, fw.frame_bind_group(et))
             rp.set_bind_group(1, bg)

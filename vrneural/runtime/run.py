@@ -279,7 +279,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
             f"{count(s.n_lights - n_builtin, 'generated light')} added (a SCENE "
             "file has only the lights it defines)"
         )
-    knobs = ("reuse", "schedule", "radiance", "reuse_budget")
+    knobs = ("reuse", "schedule", "radiance", "reuse_budget", "mips", "screen_res")
     unused = [f"--{k.replace('_', '-')}" for k in knobs if is_explicit(cfg, k)]
     if s.mode != "texture" and unused:  # texture space's knobs: say they do nothing here
         r.warnings.append(
@@ -388,6 +388,10 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
         "mlp_fine": [st.mlp_fine for st in stats],
         "gpu_ms": {k: [round(st.gpu_ms.get(k, 0.0), 4) for st in stats] for k in gpu_names},
     }
+    if s.mode == "texture":  # per neural object: its side, texels allocated and shaded
+        per_frame["object_res"] = [st.object_res for st in stats]
+        per_frame["object_texels_allocated"] = [st.object_texels for st in stats]
+        per_frame["object_texels_shaded"] = [[4 * b for b in st.object_blocks] for st in stats]
     evals = [a + b for a, b in zip(per_frame["mlp_coarse"], per_frame["mlp_fine"], strict=True)]
     return {
         "adapter": adapter.to_dict(),
@@ -463,6 +467,8 @@ def human_summary(sm: dict) -> str:
     unit = "blocks" if texture else "pixels"
     reuse = r["reuse"] if r.get("reuse_budget") is None else f"auto({r['reuse_budget']:g} deg)"
     shared = " radiance=shared" if r.get("radiance") == "shared" else ""
+    shared += " mips" if r.get("mips") else ""
+    shared += " screen-res" if r.get("screen_res") else ""
     space = (
         f"reuse={reuse} schedule={r['schedule']}{shared} "
         if texture

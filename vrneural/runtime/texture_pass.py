@@ -89,10 +89,10 @@ class TextureSpacePass:
         )
         self.gmat = gmat or GpuMaterial(mat, weights)
 
-    def pipeline(self, resolution: int, entry: str = "main"):
-        return compute_pipeline(
-            self.code, entry, constants={"R": resolution}, label=f"texture_space/{entry}"
-        )
+    def pipeline(self, resolution: int | None = None, entry: str = "main"):
+        """The compiled entry point (one for every texture side: the kernel takes its texels
+        from the geometry atlas, so no side is compiled in)."""
+        return compute_pipeline(self.code, entry, label=f"texture_space/{entry}")
 
 
 def grid(n: int, size: int = WORKGROUP_SIZE) -> tuple[int, int]:
@@ -147,8 +147,12 @@ class TextureTarget:
     the candidate list, ``args`` turns their count into indirect workgroup counts, ``main``
     shades only those blocks."""
 
-    def __init__(self, tpass: TextureSpacePass, gatlas: GpuAtlas, counters: CounterBuffer):
+    def __init__(
+        self, tpass: TextureSpacePass, gatlas: GpuAtlas, counters: CounterBuffer, mips: bool = False
+    ):
         import wgpu
+
+        from vrneural.runtime.radiance_mips import MipChain, mip_count
 
         dev = get_device()
         self.tpass = tpass
@@ -159,8 +163,12 @@ class TextureTarget:
         u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
         self.params = dev.create_buffer(size=PARAMS_BYTES, usage=u)
         self.lights = dev.create_buffer(size=32 * tpass.n_lights, usage=u)
-        self.texture = new_radiance_texture(self.R, fmt=tpass.radiance_format)
-        self.view = self.texture.create_view()
+        levels = mip_count(self.R) if mips else 1
+        self.texture = new_radiance_texture(self.R, fmt=tpass.radiance_format, mips=levels)
+        self.view = self.texture.create_view(base_mip_level=0, mip_level_count=1)  # written
+        self.sample_view = self.texture.create_view()  # every level: the forward pass's
+        #: rebuilds levels 1.. after an update (None: a single level)
+        self.mips = MipChain(self.texture, levels) if levels > 1 else None
         self.compact = CompactionBuffers(gatlas.non_empty_blocks)
         self.counters = counters
         self.binds: dict = {}
@@ -218,6 +226,8 @@ class TextureTarget:
         if n:
             binds = {e: self._bind(e, period) for e in self.pipes}
             dispatch_compacted(cp, self.pipes, binds, grid(n), self.compact.ind)
+            if self.mips is not None:  # after the texels it averages (dispatches are ordered)
+                self.mips.dispatch(cp)
 
 
 def shade_texture_space(

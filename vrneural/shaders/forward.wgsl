@@ -76,8 +76,15 @@ fn plain_colour(world: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_neural(v: VOut) -> @location(0) vec4<f32> {
+{% if mips %}
+    // trilinear (anisotropic where the sampler allows) over the coverage-premultiplied mip
+    // chain (runtime/radiance_mips.py): the colour over the filtered coverage
+    let c = textureSample(radiance, samp, v.uv);
+    return vec4<f32>(select(vec3<f32>(0.0), c.rgb / c.a, c.a > 1e-4), 1.0);
+{% else %}
     let c = textureSampleLevel(radiance, samp, v.uv, 0.0);
     return vec4<f32>(c.rgb, 1.0);
+{% endif %}
 }
 
 @fragment

@@ -44,8 +44,6 @@ struct Light {
 @group(0) @binding(12) var<storage, read> cand: array<u32>;
 {{ cmp.bindings() }}
 
-override R: u32;  // radiance texture side (even)
-
 const EMPTY: u32 = 0xFFFFFFFFu;  // padding of the compacted list
 // Largest stored radiance: the f16 maximum for rgba16float, 1e30 for the wide rgba32float option
 // (finite, far above any scene: colour * intensity <= 1e6 W/sr, d^2 >= 1e-12 m^2).
