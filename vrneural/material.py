@@ -20,6 +20,9 @@ Shared definitions:
   texel ``(x, y)`` centred at UV ``((x + 0.5) / W, (y + 0.5) / H)`` (:func:`sample_bilinear_wrap`);
 - ``output`` transform of the last layer's raw value ``r``: ``"linear"``: ``max(r, 0)``;
   ``"log1p"``: ``expm1(max(r, 0))`` (the network predicts ``log(1 + y)``);
+- neural textures may carry prefiltered pyramid levels (``levels[name]``: level 1, 2, ... each
+  half the previous side): a lookup at a level of detail ``lod`` blends the bilinear lookups of
+  levels ``floor(lod)`` and ``floor(lod) + 1`` (:func:`sample_lod`);
 - directions beyond the training data's range ``dir_range`` (the largest light and view polar
   angles of its BTF) are extended as :mod:`vrneural.grazing` defines: the network is evaluated
   at the range's boundary, a light's value tapering to 0 at the horizon.
@@ -55,9 +58,26 @@ class NeuralMaterial:
     meta: dict = field(default_factory=dict)  # name, provenance, metrics, ranges
     #: (theta_i_max, theta_o_max) degrees: the largest light and view polar angles of the data
     dir_range: tuple[float, float] = (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
+    #: texture name -> its pyramid levels 1.. (``[H >> k, W >> k, C]`` float16 each)
+    levels: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self.dir_range = check_dir_range(self.dir_range)
+        self.levels = {k: [np.asarray(a, np.float16) for a in v] for k, v in self.levels.items()}
+        for name, lv in self.levels.items():
+            if name not in self.textures:
+                raise ValueError(f"pyramid levels for texture {name!r}, which it does not have")
+            prev = self.textures[name].shape
+            for k, a in enumerate(lv, 1):
+                want = (prev[0] // 2, prev[1] // 2, prev[2])
+                if a.shape != want or min(want[:2]) < 1:
+                    raise ValueError(
+                        f"texture {name!r} level {k} has shape {list(a.shape)}; expected "
+                        f"{list(want)} (half of level {k - 1}, same channels)"
+                    )
+                prev = a.shape
+        if len({len(v) for v in self.levels.values()}) > 1:
+            raise ValueError("every neural texture needs the same number of pyramid levels")
         if self.arch not in ARCHS:
             raise ValueError(f"arch {self.arch!r} not in {sorted(ARCHS)}")
         if self.output not in OUTPUTS:
@@ -81,6 +101,11 @@ class NeuralMaterial:
                 raise ValueError("fine network input != latent size + fine texture channels")
         if self.networks[nets[-1]][-1].n_out != 3:
             raise ValueError("the last network must output 3 values (RGB)")
+
+    @property
+    def lod_levels(self) -> int:
+        """Pyramid levels of its neural textures (1: level 0 alone)."""
+        return 1 + max((len(v) for v in self.levels.values()), default=0)
 
     @property
     def macs_per_texel(self) -> float:
@@ -130,13 +155,50 @@ def sample_bilinear_wrap(tex: np.ndarray, uv: np.ndarray) -> np.ndarray:
     return top * (1 - fy) + bot * fy
 
 
+def pool_level(tex: np.ndarray, level: int) -> np.ndarray:
+    """``tex: [H, W, C]`` averaged over ``2^level`` squares (float32 sum, float16 result): the
+    ``"filter"`` pyramid of :class:`vrneural.distill.models.NeuralModel`."""
+    s = 1 << level
+    H, W, C = tex.shape
+    t = np.asarray(tex, np.float32)[: H // s * s, : W // s * s]
+    return t.reshape(H // s, s, W // s, s, C).mean((1, 3)).astype(np.float16)
+
+
+def sample_lod(mat: NeuralMaterial, name: str, uv: np.ndarray, lod) -> np.ndarray:
+    """Lookup of neural texture ``name`` at ``uv: [..., 2]`` and level of detail ``lod``
+    (broadcast to ``uv.shape[:-1]``; None: level 0): the bilinear lookups of levels
+    ``floor(lod)`` and the next blended by ``lod - floor(lod)``, ``lod`` clamped to the
+    pyramid. Twin of ``sample_*_lod`` in neural_material.wgsl."""
+    base = mat.textures[name]
+    if lod is None:
+        return sample_bilinear_wrap(base, uv)
+    pyr = [base, *mat.levels.get(name, [])]
+    top = np.float32(len(pyr) - 1)
+    lod = np.broadcast_to(np.clip(np.asarray(lod, np.float32), 0, top), uv.shape[:-1])
+    lo = np.floor(lod)
+    t = (lod - lo).astype(np.float32)[..., None]
+    lo = lo.astype(np.int64)
+    out = np.zeros((*uv.shape[:-1], base.shape[2]), np.float32)
+    for k in np.unique(lo):
+        m = lo == k
+        a = sample_bilinear_wrap(pyr[k], uv[m])
+        b = sample_bilinear_wrap(pyr[min(k + 1, len(pyr) - 1)], uv[m])
+        out[m] = a * (1 - t[m]) + b * t[m]
+    return out
+
+
 def apply_output(raw: np.ndarray, output: str) -> np.ndarray:
     r = np.maximum(raw, 0)
     return np.expm1(r) if output == "log1p" else r
 
 
 def material_forward(
-    mat: NeuralMaterial, wi: np.ndarray, wo: np.ndarray, uv: np.ndarray, precision: str = "f32"
+    mat: NeuralMaterial,
+    wi: np.ndarray,
+    wo: np.ndarray,
+    uv: np.ndarray,
+    precision: str = "f32",
+    lod: np.ndarray | None = None,
 ) -> np.ndarray:
     """BTF values of a material, evaluated the way the shader does.
 
@@ -144,7 +206,8 @@ def material_forward(
     material UVs of the block's 4 texels. Returns ``[N, 4, 3]`` float32. For ``"single"`` each
     texel is independent (the 4 share only the directions). Directions beyond
     ``mat.dir_range`` are extended (:func:`vrneural.grazing.extend`): 0 for a light at or
-    below the horizon.
+    below the horizon. ``lod: [N]``: each block's level of detail in the neural textures'
+    pyramids (None: level 0; see :func:`sample_lod`).
     """
     wi = np.asarray(wi, np.float32)
     wo = np.asarray(wo, np.float32)
@@ -167,13 +230,15 @@ def material_forward(
     dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)  # [N, 9]
     if mat.arch == "coarse_fine":
         uc = uv.mean(axis=1)
-        fc = sample_bilinear_wrap(mat.textures["coarse"], uc)
+        fc = sample_lod(mat, "coarse", uc, lod)
         z = mlp_forward(np.concatenate([dirs, fc], -1), mat.networks["coarse"], precision)
-        ff = sample_bilinear_wrap(mat.textures["fine"], uv.reshape(-1, 2))  # [N*4, Cf]
+        lod4 = None if lod is None else np.repeat(np.asarray(lod, np.float32), 4)
+        ff = sample_lod(mat, "fine", uv.reshape(-1, 2), lod4)  # [N*4, Cf]
         zk = np.repeat(z, 4, axis=0)
         raw = mlp_forward(np.concatenate([zk, ff], -1), mat.networks["fine"], precision)
     else:
-        f = sample_bilinear_wrap(mat.textures["features"], uv.reshape(-1, 2))
+        lod4 = None if lod is None else np.repeat(np.asarray(lod, np.float32), 4)
+        f = sample_lod(mat, "features", uv.reshape(-1, 2), lod4)
         raw = mlp_forward(
             np.concatenate([np.repeat(dirs, 4, axis=0), f], -1), mat.networks["mlp"], precision
         )

@@ -12,6 +12,7 @@ from vrneural.config import opt
 
 SPACES = ("linear", "log")
 METHODS = ("student", "single8", "neumip")
+LOD_KINDS = ("filter", "levels")
 COMPILE_MODES = ("off", "default", "reduce-overhead")
 NEUMIP_DIRS = ("xy", "full")
 # What a checkpoint written before a field existed used for it, where that differs from the
@@ -119,6 +120,19 @@ class DistillConfig(TrainConfig):
     # whole run was started with, so that --resume of either half continues that run
     wide_start_epochs: int = opt(0, "with --wide-start: the epochs of both halves", cli=False)
     wide_start_width: int = opt(0, "with --wide-start: the width it is pruned to", cli=False)
+    lod_levels: int = opt(
+        1,
+        "prefiltered neural textures: pyramid levels (1 = level 0 alone), each trained against "
+        "the BTF averaged over its texels' footprint (see README: Filtering and level of "
+        "detail)",
+    )
+    lod_kind: str = opt(
+        "filter",
+        "filter: the levels are box averages of level 0 (linear latent downsampling, no "
+        "parameters added); levels: each level a texture of its own (NeuMIP's)",
+        choices=LOD_KINDS,
+    )
+    lod_weight: float = opt(1.0, "weight of the prefiltered levels' L1, shared by the levels")
     coarse_channels: int = opt(8, "student U_c channels (one texel per 2x2 block)")
     fine_channels: int = opt(8, "student U_f channels (full BTF resolution)")
     export: bool = opt(True, "also write the runtime pack beside the checkpoint (s.pt -> s.vrnm)")

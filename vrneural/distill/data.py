@@ -77,6 +77,26 @@ class SliceData:
         y = to_blocks(v)
         return y[self.shard] if shard else y
 
+    def target_level(self, pair: int, level: int) -> torch.Tensor:
+        """The slice averaged over ``2^level`` texel squares, in blocks ``[N_level, 4, 3]``
+        float32 (every rank: the levels are small and not sharded): the ground truth of a
+        prefiltered pyramid level."""
+        from vrneural.distill.models import avg_pool_levels
+
+        v = self._on[0][pair // self.n_view, pair % self.n_view].float()
+        return to_blocks(avg_pool_levels(v, level))
+
+    def uv_level(self, level: int, gen: torch.Generator | None) -> torch.Tensor:
+        """Block UVs ``[N_level, 4, 2]`` of the level-``level`` texel grid, jittered within the
+        level's texel when ``gen`` is set."""
+        H, W = self.res[0] >> level, self.res[1] >> level
+        ys, xs = torch.meshgrid(torch.arange(H), torch.arange(W), indexing="ij")
+        uv = to_blocks(torch.stack([(xs + 0.5) / W, (ys + 0.5) / H], -1).float())
+        if gen is not None:
+            j = torch.rand(uv.shape, generator=gen) - 0.5
+            uv = uv + j * torch.tensor([1.0 / W, 1.0 / H])
+        return uv.to(self.device)
+
     def uv(self, gen: torch.Generator | None, shard: bool = True) -> torch.Tensor:
         """Block UVs ``[N, 4, 2]``: texel centres, jittered within the texel when ``gen`` is set.
 

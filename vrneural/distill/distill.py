@@ -76,6 +76,21 @@ def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
     return model
 
 
+def check_lod_levels(cfg, res: tuple[int, int], btf_path) -> None:
+    """``--lod-levels`` fits the BTF: the last level still has whole 2x2 blocks (and the
+    student's half-resolution coarse texture a texel per block)."""
+    top = cfg.lod_levels - 1
+    ok = all(r % (1 << (top + 1)) == 0 for r in res)
+    if not ok:
+        most = 1
+        while all(r % (1 << (most + 1)) == 0 for r in res) and most < 12:
+            most += 1
+        raise VrnError(
+            f"--lod-levels = {cfg.lod_levels} does not fit {btf_path} ({res[0]}x{res[1]} "
+            f"texels): level {top} needs whole 2x2 blocks; allowed [1, {most}]"
+        )
+
+
 def recorded_dir_range(ck: dict) -> tuple[float, float]:
     """The direction range of a checkpoint's BTF (its record; checkpoints from before it was
     recorded: the default, which is what ``btf synth`` and UBO2014 hold)."""
@@ -99,11 +114,28 @@ class DistillNet(nn.Module):
             self.T1 = nn.Linear(dt[0], ds[0], bias=False)
             self.T2 = nn.Linear(dt[1], ds[1], bias=False)
 
+    def lod_loss(self, wi, wo, pair):
+        """The prefiltered levels' L1 (each level's output at its texel centres against the
+        slice averaged over its texels), weighted by ``lod_weight`` shared by the levels; None
+        with one level. No jitter: the level's lookups are the exact box averages of level 0's
+        texels, and nothing random is drawn, so a resumed run stays bit for bit."""
+        levels = self.model.lod_levels
+        if levels <= 1:
+            return None
+        total = 0.0
+        for k in range(1, levels):
+            uv = self.data.uv_level(k, None)
+            raw, _ = self.model(wi, wo, uv, k)
+            total = total + space_l1(raw, self.data.target_level(pair, k), self.space)
+        return self.cfg.lod_weight * total / (levels - 1)
+
     def forward(self, wi, wo, uv, pair):
         raw, zs = self.model(wi, wo, uv)
         gt = space_l1(raw, self.data.target(pair), self.space)
+        lod = self.lod_loss(wi, wo, pair)
+        gt_total = gt if lod is None else gt + lod
         if not self.cfg.distill:
-            return gt, {"gt": gt.detach()}
+            return gt_total, {"gt": gt.detach()}
         teacher = self.teacher[0]
         with torch.no_grad():
             raw_t, zt = teacher(wi, wo, uv)
@@ -112,7 +144,7 @@ class DistillNet(nn.Module):
         l1 = ((zs[0] - self.T1(zt[0])) ** 2).mean()
         l2 = ((zs[1] - self.T2(zt[1])) ** 2).mean()
         c = self.cfg
-        loss = gt + c.sigma * out + c.lambda1 * l1 + c.lambda2 * l2
+        loss = gt_total + c.sigma * out + c.lambda1 * l1 + c.lambda2 * l2
         return loss, {"gt": gt.detach(), "teacher": out.detach()}
 
 
@@ -466,8 +498,9 @@ def _run_distill(cfg: DistillConfig, on_step=None) -> dict:
 def _train(cfg: DistillConfig, on_step=None) -> dict:
     """One training run (a whole ``distill`` run, or one half of a ``--wide-start`` run)."""
     check_train_config(cfg)
-    for k in ("sigma", "lambda1", "lambda2"):
-        check_range(f"--{k}", getattr(cfg, k), 0.0, 100.0)
+    for k in ("sigma", "lambda1", "lambda2", "lod_weight"):
+        check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 0.0, 100.0)
+    check_range("--lod-levels", cfg.lod_levels, 1, 12)
     check_range("--coarse-channels", cfg.coarse_channels, 1, 64)
     check_range("--fine-channels", cfg.fine_channels, 1, 64)
     check_range("--width", cfg.width, 1, 64)
@@ -531,6 +564,9 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
         neumip_dirs=cfg.neumip_dirs,
         width=cfg.width,
     )
+    if cfg.lod_levels > 1:
+        check_lod_levels(cfg, (H, W), btf_path)
+        spec["lod"] = {"levels": cfg.lod_levels, "kind": cfg.lod_kind}
     model = NeuralModel(spec, cfg.seed)
     init = None
     if cfg.init_from and resume is None:  # a resumed run has its weights already

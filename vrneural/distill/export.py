@@ -106,6 +106,16 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None):
         )
         got = model.predict(wi, wo, uv).numpy()
         diff = max(diff, float(np.abs(ref - got).max()))
+        for k in range(1, mat.lod_levels):  # each pyramid level at its own texel centres
+            uvk = data.uv_level(k, None)
+            nk = uvk.shape[0]
+            lod = np.full(nk, k, np.float32)
+            ref = material_forward(
+                mat, np.repeat(wi.numpy()[None], nk, 0), np.repeat(wo.numpy()[None], nk, 0),
+                uvk.numpy(), lod=lod,
+            )  # fmt: skip
+            got = model.predict(wi, wo, uvk, k).numpy()
+            diff = max(diff, float(np.abs(ref - got).max()))
     hist = ck["history"]
     cfg = ck["config"]
     mat.meta = {

@@ -68,6 +68,15 @@ def sample_bilinear_wrap(tex: torch.Tensor, uv: torch.Tensor) -> torch.Tensor:
     return top * (1 - fy) + bot * fy
 
 
+def avg_pool_levels(t: torch.Tensor, level: int) -> torch.Tensor:
+    """``t: [H, W, C]`` averaged over ``2^level x 2^level`` texel squares -> ``[H >> level,
+    W >> level, C]`` (the box prefilter of a tileable texture; twin of
+    :func:`vrneural.material.pool_level`)."""
+    s = 1 << level
+    H, W, C = t.shape
+    return t.reshape(H // s, s, W // s, s, C).mean((1, 3))
+
+
 def f16_round(t: torch.Tensor) -> torch.Tensor:
     """Round to float16 in the forward pass, identity gradient (straight-through)."""
     return t + (t.detach().half().float() - t.detach())
@@ -143,6 +152,16 @@ class NeuralModel(nn.Module):
             )
         else:
             raise ValueError(f"unknown arch {self.arch!r}")
+        #: prefiltered neural textures (issue #39): ``levels`` pyramid levels, either the box
+        #: averages of level 0 (``"filter"``: the filter-aware MIP maps paper's linear latent
+        #: downsampling, no parameters added) or trained per level (``"levels"``: NeuMIP's)
+        lod = spec.get("lod") or {"levels": 1, "kind": "filter"}
+        self.lod_levels, self.lod_kind = int(lod["levels"]), lod["kind"]
+        if self.lod_kind == "levels":
+            for name in list(self.tex):
+                t = self.tex[name]
+                for k in range(1, self.lod_levels):
+                    self.tex[f"{name}@{k}"] = tex((t.shape[0] >> k, t.shape[1] >> k), t.shape[2])
         self.latent_layers = spec["latent_layers"]
         self.register_buffer("dir_mask", dir_mask(spec), persistent=False)
         #: (theta_i_max, theta_o_max) degrees of the training data, set for evaluation
@@ -159,8 +178,16 @@ class NeuralModel(nn.Module):
         weight = torch.clamp(wi[..., 2] / ci, 0.0, 1.0)
         return to_range(wi, ci, si), to_range(wo, co, so), weight
 
-    def forward(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor):
-        raw, acts = self.activations(wi, wo, uv)
+    def texture(self, name: str, level: int = 0) -> torch.Tensor:
+        """Neural texture ``name`` at pyramid level ``level`` (float16-rounded: the pack)."""
+        if level == 0:
+            return f16_round(self.tex[name])
+        if self.lod_kind == "filter":
+            return f16_round(avg_pool_levels(f16_round(self.tex[name]), level))
+        return f16_round(self.tex[f"{name}@{level}"])
+
+    def forward(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor, level: int = 0):
+        raw, acts = self.activations(wi, wo, uv, level)
         if self.arch == "single":
             hs = acts["mlp"]
         else:
@@ -168,40 +195,48 @@ class NeuralModel(nn.Module):
             hs = [h[:, None].expand(n, 4, h.shape[-1]) for h in acts["coarse"]] + acts["fine"]
         return raw, [hs[i] for i in self.latent_layers]
 
-    def activations(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor):
+    def activations(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor, level: int = 0):
         """``raw [N, 4, 3]`` and every layer's output per network: ``{"mlp": [...]}``
-        (``[N, 4, D]`` each) or ``{"coarse": [...] ([N, D], once per block), "fine": [...]}``."""
+        (``[N, 4, D]`` each) or ``{"coarse": [...] ([N, D], once per block), "fine": [...]}``;
+        the neural textures at pyramid level ``level``."""
         n = uv.shape[0]
         wi, wo, _ = self._extended(wi, wo)
         dirs = torch.cat([wi, wo, half_vector(wi, wo)]) * self.dir_mask  # [9]
         if self.arch == "single":
-            f = sample_bilinear_wrap(f16_round(self.tex["features"]), uv)  # [N, 4, C]
+            f = sample_bilinear_wrap(self.texture("features", level), uv)  # [N, 4, C]
             x = torch.cat([dirs.expand(n, 4, DIR_INPUTS), f], -1)
             raw, hs = self.mlp(x)
             return raw, {"mlp": hs}
-        fc = sample_bilinear_wrap(f16_round(self.tex["coarse"]), uv.mean(1))  # [N, Cc]
+        fc = sample_bilinear_wrap(self.texture("coarse", level), uv.mean(1))  # [N, Cc]
         z, hc = self.coarse(torch.cat([dirs.expand(n, DIR_INPUTS), fc], -1))  # [N, Z]
-        ff = sample_bilinear_wrap(f16_round(self.tex["fine"]), uv)  # [N, 4, Cf]
+        ff = sample_bilinear_wrap(self.texture("fine", level), uv)  # [N, 4, Cf]
         zk = z[:, None].expand(n, 4, z.shape[-1])
         raw, hf = self.fine(torch.cat([zk, ff], -1))
         return raw, {"coarse": hc, "fine": hf}
 
-    def predict(self, wi, wo, uv) -> torch.Tensor:
+    def predict(self, wi, wo, uv, level: int = 0) -> torch.Tensor:
         """BTF values ``[N, 4, 3]`` (output transform applied; beyond ``dir_range`` extended as
-        :func:`vrneural.grazing.extend` does)."""
-        y = apply_output(self(wi, wo, uv)[0], self.output)
+        :func:`vrneural.grazing.extend` does), neural textures at pyramid level ``level``."""
+        y = apply_output(self(wi, wo, uv, level)[0], self.output)
         weight = self._extended(wi, wo)[2]
         return y if weight is None else y * weight
 
     def to_material(self, meta: dict | None = None) -> NeuralMaterial:
-        """The runtime form (weights float32, textures float16)."""
-        texs = {k: v.detach().half().numpy() for k, v in self.tex.items()}
+        """The runtime form (weights float32, textures float16, with their pyramid levels)."""
+        names = [k for k in self.tex if "@" not in k]
+        texs = {k: self.tex[k].detach().half().numpy() for k in names}
+        levels = {
+            k: [self.texture(k, lv).detach().half().numpy() for lv in range(1, self.lod_levels)]
+            for k in names
+        }
         if self.arch == "single":
             nets = {"mlp": self.mlp.to_layers()}
             nets["mlp"][0].weight[:, :DIR_INPUTS] *= self.dir_mask.cpu().numpy()  # unread: 0
         else:
             nets = {"coarse": self.coarse.to_layers(), "fine": self.fine.to_layers()}
         rng = {} if self.dir_range is None else {"dir_range": self.dir_range}
+        if self.lod_levels > 1:
+            rng["levels"] = levels
         return NeuralMaterial(self.arch, nets, texs, self.output, meta or {}, **rng)
 
 

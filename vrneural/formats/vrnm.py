@@ -1,17 +1,19 @@
 """The runtime pack (``.vrnm``): one neural material, readable with numpy alone. No pickle.
 
-Container (:mod:`vrneural.formats.container`), magic ``b"VRNM"``, version 2. Header::
+Container (:mod:`vrneural.formats.container`), magic ``b"VRNM"``, version 3. Header::
 
     {"arch": "coarse_fine" | "single", "output": "linear" | "log1p",
      "networks": {name: [{"n_in": int, "n_out": int, "act": str}, ...]},
      "textures": {name: [H, W, C]},
      "dir_range": [theta_i_max, theta_o_max],   # degrees, each in (0, 90); since version 2
+     "levels": {name: n},   # pyramid levels 1..n-1 of each neural texture; since version 3
      "meta": {"name": ..., "provenance": {...}, "metrics": {...}, "ranges": {...}}}
 
 Version 1 packs (no ``dir_range``) load with the default 75 degrees, said once per file.
 
 Arrays: ``net.<name>.<i>.weight`` ``[out, in]`` float32, ``net.<name>.<i>.bias`` ``[out]``
-float32, ``tex.<name>`` ``[H, W, C]`` float16, each with a CRC32. Writing refuses NaN/Inf.
+float32, ``tex.<name>`` ``[H, W, C]`` float16 and its levels ``tex.<name>.<k>`` ``[H >> k,
+W >> k, C]``, each with a CRC32. Writing refuses NaN/Inf.
 """
 
 from __future__ import annotations
@@ -28,9 +30,9 @@ from vrneural.material import NeuralMaterial
 from vrneural.mlp import Layer
 
 VRNM_MAGIC = b"VRNM"
-VRNM_VERSION = 2
-#: versions this reader takes (1: before the recorded direction range)
-VRNM_READS = (1, 2)
+VRNM_VERSION = 3
+#: versions this reader takes (1: before the recorded direction range; 2: before pyramids)
+VRNM_READS = (1, 2, 3)
 _said_default_range: set[str] = set()
 
 
@@ -47,6 +49,8 @@ def write_vrnm(path, mat: NeuralMaterial) -> Path:
         if not np.isfinite(np.asarray(t, np.float32)).all():
             raise VrnError(f"{path}: neural texture '{name}' contains NaN/Inf (f16 overflow?)")
         arrays[f"tex.{name}"] = np.asarray(t, np.float16)
+        for k, lv in enumerate(mat.levels.get(name, []), 1):
+            arrays[f"tex.{name}.{k}"] = np.asarray(lv, np.float16)
     for k, a in arrays.items():
         if not np.isfinite(a).all():
             raise VrnError(f"{path}: refusing to write non-finite values in '{k}'")
@@ -56,6 +60,7 @@ def write_vrnm(path, mat: NeuralMaterial) -> Path:
         "networks": nets,
         "textures": {k: list(t.shape) for k, t in mat.textures.items()},
         "dir_range": [float(x) for x in mat.dir_range],
+        "levels": {k: 1 + len(mat.levels.get(k, [])) for k in mat.textures},
         "meta": mat.meta,
     }
     return write_container(path, VRNM_MAGIC, VRNM_VERSION, header, arrays)
@@ -80,8 +85,14 @@ def read_vrnm(path) -> NeuralMaterial:
             nets[name] = layers
         texs = {name: np.array(arrays[f"tex.{name}"], np.float16) for name in header["textures"]}
         dir_range = header["dir_range"] if version >= 2 else _default_range(path)
+        counts = header["levels"] if version >= 3 else {}
+        levels = {
+            name: [np.array(arrays[f"tex.{name}.{k}"], np.float16) for k in range(1, int(n))]
+            for name, n in counts.items()
+            if int(n) > 1
+        }
         mat = NeuralMaterial(
-            header["arch"], nets, texs, header["output"], header.get("meta", {}), dir_range
+            header["arch"], nets, texs, header["output"], header.get("meta", {}), dir_range, levels
         )
     except KeyError as e:
         raise VrnError(f"{path}: runtime pack lacks {e}") from None

@@ -69,6 +69,9 @@ class MaterialSpec:
     #: WGSL literals of (cos, sin) of theta_i_max, then of theta_o_max (the data's direction
     #: range, vrneural.grazing); exact float32 values, as the numpy twin uses
     dir_consts: tuple = ()
+    #: pyramid levels of the neural textures (1: level 0 alone; more: LOD lookups in the
+    #: texture-space pass)
+    lod_levels: int = 1
 
     @property
     def buffer_weights(self) -> bool:
@@ -176,6 +179,7 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
         buf_bias_offsets=boffs,
         uniform_binding=UNIFORM_WEIGHTS_BINDING,
         dir_consts=tuple(repr(float(c)) for t in mat.dir_range for c in boundary_consts(t)),
+        lod_levels=mat.lod_levels,
     )
 
 

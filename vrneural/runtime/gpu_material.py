@@ -28,31 +28,41 @@ from vrneural.runtime.codegen import UNIFORM_WEIGHTS_BINDING, packed_weights, un
 from vrneural.runtime.reference import block_geometry
 
 
-def upload_feature_texture(tex: np.ndarray, label: str = ""):
-    """``tex: [H, W, C]`` float16 -> a ``texture_2d_array`` (rgba32uint, 8 float16 channels
-    per texel and layer, ceil(C/8) layers)."""
-    import wgpu
-
+def _words(tex: np.ndarray) -> np.ndarray:
+    """``[H, W, C]`` float16 -> ``[layers, H, W, 4]`` u32: 8 channels per texel and layer."""
     h, w, c = tex.shape
     layers = (c + 7) // 8
     data = np.zeros((layers, h, w, 8), np.float16)
     for i in range(layers):
         part = np.asarray(tex[:, :, 8 * i : 8 * i + 8], np.float16)
         data[i, :, :, : part.shape[2]] = part
-    words = np.ascontiguousarray(data).view("<u4")  # [layers, h, w, 4]: (lo, hi) half pairs
+    return np.ascontiguousarray(np.ascontiguousarray(data).view("<u4"))  # (lo, hi) half pairs
+
+
+def upload_feature_texture(tex: np.ndarray, label: str = "", levels=()):
+    """``tex: [H, W, C]`` float16 -> a ``texture_2d_array`` (rgba32uint, 8 float16 channels
+    per texel and layer, ceil(C/8) layers), with ``levels`` (the pyramid's levels 1.., each
+    ``[H >> k, W >> k, C]``) as its mip levels."""
+    import wgpu
+
+    h, w, c = tex.shape
+    layers = (c + 7) // 8
     dev = get_device()
     t = dev.create_texture(
         size=(w, h, layers),
+        mip_level_count=1 + len(levels),
         format="rgba32uint",
         usage=wgpu.TextureUsage.TEXTURE_BINDING | wgpu.TextureUsage.COPY_DST,
         label=label,
     )
-    dev.queue.write_texture(
-        {"texture": t},
-        np.ascontiguousarray(words),
-        {"bytes_per_row": w * 16, "rows_per_image": h},
-        (w, h, layers),
-    )
+    for k, a in enumerate([tex, *levels]):
+        lh, lw = a.shape[:2]
+        dev.queue.write_texture(
+            {"texture": t, "mip_level": k},
+            _words(a),
+            {"bytes_per_row": lw * 16, "rows_per_image": lh},
+            (lw, lh, layers),
+        )
     return t
 
 
@@ -64,7 +74,10 @@ class GpuMaterial:
 
         self.mat = mat
         names = ARCHS[mat.arch][1]
-        self.textures = [upload_feature_texture(mat.textures[n], f"neural.{n}") for n in names]
+        self.textures = [
+            upload_feature_texture(mat.textures[n], f"neural.{n}", mat.levels.get(n, ()))
+            for n in names
+        ]
         self.views = [t.create_view(dimension="2d-array") for t in self.textures]
         self.weights = (
             upload_buffer(packed_weights(mat), wgpu.BufferUsage.STORAGE, "weights")

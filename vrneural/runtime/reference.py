@@ -106,13 +106,34 @@ def count_non_empty_blocks(tri_ids: np.ndarray) -> int:
     return len(non_empty_blocks(tri_ids)[0])
 
 
-def shade_points(mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f32", margin=0.0):
+def block_lod(mat: NeuralMaterial, uvs: np.ndarray) -> np.ndarray | None:
+    """Each block's level of detail in ``mat``'s prefiltered neural textures (None without
+    pyramids): its footprint, one atlas texel in the full-resolution texture's texels
+    (``uvs: [N, 4, 2]`` tiled, texels (0,0), (1,0), (0,1), (1,1)), as ``log2`` of at least 1.
+    Twin of the texture-space kernel's ``lod``."""
+    if mat.lod_levels <= 1:
+        return None
+    name = "fine" if mat.arch == "coarse_fine" else "features"
+    h, w = mat.textures[name].shape[:2]
+    dims = np.float32([w, h])
+    u = np.asarray(uvs, np.float32)
+    foot = np.maximum(
+        np.linalg.norm((u[:, 1] - u[:, 0]) * dims, axis=-1),
+        np.linalg.norm((u[:, 2] - u[:, 0]) * dims, axis=-1),
+    )
+    return np.log2(np.maximum(foot, np.float32(1))).astype(np.float32)
+
+
+def shade_points(
+    mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f32", margin=0.0, lod=None
+):
     """Radiance ``[N, 4, 3]`` of ``N`` points (frames ``[N, 3]``) whose 4 texels have material
     UVs ``uvs: [N, 4, 2]``, lit by point lights ``light_pos, light_rgb: [L, 3]`` (W/sr), seen
     from ``eye: [3]``. Returns (radiance, front ``[N]`` bool, coarse evals, fine evals).
     ``margin`` (m): a point also counts as front when it faces any point within ``margin`` of
     the eye (the shared radiance texture of both eyes); its view beyond the horizon is then
-    evaluated at the range's edge (:mod:`vrneural.grazing`)."""
+    evaluated at the range's edge (:mod:`vrneural.grazing`). ``lod: [N]``: the blocks'
+    levels of detail in the prefiltered neural textures (None: level 0)."""
     f32 = np.float32
     v = np.asarray(eye, f32) - pos
     wo_w = safe_normalize(v, n)
@@ -127,7 +148,9 @@ def shade_points(mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f
         wi = np.stack([(wiw * t).sum(-1), (wiw * b).sum(-1), (wiw * n).sum(-1)], -1)
         lit = front & (wi[:, 2] > 0)
         if lit.any():
-            y = material_forward(mat, wi[lit], wo[lit], uvs[lit], precision)
+            y = material_forward(
+                mat, wi[lit], wo[lit], uvs[lit], precision, None if lod is None else lod[lit]
+            )
             acc[lit] += y * (lc / d2[lit])[:, None, :]
         n_coarse += int(lit.sum())
     acc = np.nan_to_num(np.clip(acc, 0, F16_MAX), nan=0.0)
@@ -200,7 +223,7 @@ def shade_texture_space(
     g = texture_blocks(atlas, model, tiling, phase, period)
     tx, ty, pos, n, t, b, uvs = (g[k] for k in ("tx", "ty", "pos", "n", "t", "b", "uvs"))
     rad, front, nc, nf = shade_points(
-        mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision, margin
+        mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision, margin, block_lod(mat, uvs)
     )
     w = front
     out[ty[w], tx[w], :3] = rad[w]

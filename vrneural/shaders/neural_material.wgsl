@@ -38,10 +38,11 @@ fn wrap_index(i: f32, n: i32) -> i32 {
 }
 {% endmacro %}
 
-{% macro sampler_fn(name, tex, channels) %}
-// Bilinear wrap lookup of {{ channels }} channels at material uv (texel centres at (i + 0.5) / W).
-fn {{ name }}(uv: vec2<f32>) -> array<f32, {{ channels }}> {
-    let dims = vec2<i32>(textureDimensions({{ tex }}));
+{% macro sampler_fn(name, tex, channels, level=none) %}
+// Bilinear wrap lookup of {{ channels }} channels at material uv (texel centres at (i + 0.5) / W){{ ', at pyramid level `level`' if level is not none else '' }}.
+fn {{ name }}(uv: vec2<f32>{{ ', level: i32' if level is not none else '' }}) -> array<f32, {{ channels }}> {
+{% set lv = 'level' if level is not none else '0' %}
+    let dims = vec2<i32>(textureDimensions({{ tex }}{{ ', level' if level is not none else '' }}));
     let x = uv.x * f32(dims.x) - 0.5;
     let y = uv.y * f32(dims.y) - 0.5;
     let x0 = floor(x);
@@ -55,10 +56,10 @@ fn {{ name }}(uv: vec2<f32>) -> array<f32, {{ channels }}> {
     var out: array<f32, {{ channels }}>;
 {% for layer in range((channels + 7) // 8) %}
     {
-        let t00 = textureLoad({{ tex }}, vec2<i32>(xi0, yi0), {{ layer }}, 0);
-        let t10 = textureLoad({{ tex }}, vec2<i32>(xi1, yi0), {{ layer }}, 0);
-        let t01 = textureLoad({{ tex }}, vec2<i32>(xi0, yi1), {{ layer }}, 0);
-        let t11 = textureLoad({{ tex }}, vec2<i32>(xi1, yi1), {{ layer }}, 0);
+        let t00 = textureLoad({{ tex }}, vec2<i32>(xi0, yi0), {{ layer }}, {{ lv }});
+        let t10 = textureLoad({{ tex }}, vec2<i32>(xi1, yi0), {{ layer }}, {{ lv }});
+        let t01 = textureLoad({{ tex }}, vec2<i32>(xi0, yi1), {{ layer }}, {{ lv }});
+        let t11 = textureLoad({{ tex }}, vec2<i32>(xi1, yi1), {{ layer }}, {{ lv }});
 {% for q in range(4) %}
 {% if layer * 8 + 2 * q < channels %}
         {
@@ -73,6 +74,24 @@ fn {{ name }}(uv: vec2<f32>) -> array<f32, {{ channels }}> {
 {% endif %}
 {% endfor %}
     }
+{% endfor %}
+    return out;
+}
+{% endmacro %}
+
+{% macro lod_fn(name, channels, top) %}
+// Trilinear lookup in the prefiltered pyramid (levels 0..{{ top }}): levels floor(lod) and the
+// next blended by the fraction. Twin: vrneural/material.py:sample_lod.
+fn {{ name }}_lod(uv: vec2<f32>, lod_in: f32) -> array<f32, {{ channels }}> {
+    let lod = clamp(lod_in, 0.0, {{ top }}.0);
+    let l0 = floor(lod);
+    let t = lod - l0;
+    let a = {{ name }}_at(uv, i32(l0));
+    if (t == 0.0) { return a; }
+    let b = {{ name }}_at(uv, min(i32(l0) + 1, {{ top }}));
+    var out: array<f32, {{ channels }}>;
+{% for c in range(channels) %}
+    out[{{ c }}] = a[{{ c }}] * (1.0 - t) + b[{{ c }}] * t;
 {% endfor %}
     return out;
 }
@@ -299,6 +318,14 @@ fn view_ext(wo: vec3<f32>) -> vec3<f32> { return to_range(wo, COS_O_MAX, SIN_O_M
 {{ sampler_fn('sample_a', 'tex_a', mat.ca) }}
 {% if mat.arch == 'coarse_fine' %}
 {{ sampler_fn('sample_b', 'tex_b', mat.cb) }}
+{% endif %}
+{% if mat.lod_levels > 1 %}
+{{ sampler_fn('sample_a_at', 'tex_a', mat.ca, 'level') }}
+{{ lod_fn('sample_a', mat.ca, mat.lod_levels - 1) }}
+{% if mat.arch == 'coarse_fine' %}
+{{ sampler_fn('sample_b_at', 'tex_b', mat.cb, 'level') }}
+{{ lod_fn('sample_b', mat.cb, mat.lod_levels - 1) }}
+{% endif %}
 {% endif %}
 {{ output_fn(mat.output) }}
 // Evaluation API (both variants). The first layer of every network is split into the part that

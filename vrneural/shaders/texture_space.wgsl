@@ -76,18 +76,30 @@ fn shade_block(k: u32) -> vec4<u32> {
     let uv2 = tiled(q23.xy);
     let uv3 = tiled(q23.zw);
     let uc = (uv0 + uv1 + uv2 + uv3) * 0.25;
+{% if mat.lod_levels > 1 %}
+    // prefiltered neural textures: the level of detail of the block's footprint, one atlas
+    // texel in the full-resolution texture's texels (twin: reference.block_lod)
+    let dims = vec2<f32>(textureDimensions({{ 'tex_b' if mat.arch == 'coarse_fine' else 'tex_a' }}, 0));
+    let foot = max(length((uv1 - uv0) * dims), length((uv2 - uv0) * dims));
+    let lod = log2(max(foot, 1.0));
+{% set L = '_lod' %}
+{% set LA = ', lod' %}
+{% else %}
+{% set L = '' %}
+{% set LA = '' %}
+{% endif %}
 {% for k in range(4) %}
     var acc{{ k }} = vec3<f32>(0.0);
 {% endfor %}
     // the light-independent part of every first layer, once per block / texel (neural_material)
 {% if mat.arch == 'coarse_fine' %}
-    let pa = pre_a(sample_a(uc));
+    let pa = pre_a(sample_a{{ L }}(uc{{ LA }}));
 {% for k in range(4) %}
-    let pb{{ k }} = pre_b(sample_b(uv{{ k }}));
+    let pb{{ k }} = pre_b(sample_b{{ L }}(uv{{ k }}{{ LA }}));
 {% endfor %}
 {% else %}
 {% for k in range(4) %}
-    let pa{{ k }} = pre_a(sample_a(uv{{ k }}));
+    let pa{{ k }} = pre_a(sample_a{{ L }}(uv{{ k }}{{ LA }}));
 {% endfor %}
 {% endif %}
     // directions beyond the data's range: evaluated at its boundary (neural_material.to_range)

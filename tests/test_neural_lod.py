@@ -1,0 +1,139 @@
+"""Prefiltered neural textures: pyramids in the models, the pack and every evaluator (numpy spec,
+torch, the WGSL texture-space pass), trained against the BTF averaged over each level's texels."""
+
+import numpy as np
+import pytest
+
+from vrneural.errors import VrnError
+from vrneural.formats.vrnm import read_vrnm, write_vrnm
+from vrneural.material import NeuralMaterial, material_forward, pool_level, random_material
+
+
+def pyramid_material(levels: int = 3, seed: int = 2) -> NeuralMaterial:
+    m = random_material(seed, tex_res=16)
+    return NeuralMaterial(
+        m.arch,
+        m.networks,
+        m.textures,
+        m.output,
+        m.meta,
+        m.dir_range,
+        {k: [pool_level(t, j) for j in range(1, levels)] for k, t in m.textures.items()},
+    )
+
+
+def test_lod_lookups_blend_levels_and_level_0_is_unchanged():
+    m = pyramid_material(3)
+    rng = np.random.default_rng(0)
+    n = 32
+    wi = np.tile(np.float32([[0.3, 0.1, 0.95]]), (n, 1))
+    wo = np.tile(np.float32([[-0.2, 0.3, 0.93]]), (n, 1))
+    uv = rng.uniform(0, 1, (n, 4, 2)).astype(np.float32)
+    base = material_forward(m, wi, wo, uv)
+    np.testing.assert_array_equal(material_forward(m, wi, wo, uv, lod=np.zeros(n)), base)
+    y1 = material_forward(m, wi, wo, uv, lod=np.ones(n))
+    y2 = material_forward(m, wi, wo, uv, lod=np.full(n, 2.0))
+    half = material_forward(m, wi, wo, uv, lod=np.full(n, 1.5))
+    assert not np.allclose(y1, y2)
+    # lod 1.5 blends the textures of levels 1 and 2 half and half before the networks
+    from vrneural.material import sample_lod
+
+    f = sample_lod(m, "fine", uv.reshape(-1, 2), np.full(4 * n, 1.5, np.float32))
+    f1 = sample_lod(m, "fine", uv.reshape(-1, 2), np.full(4 * n, 1.0, np.float32))
+    f2 = sample_lod(m, "fine", uv.reshape(-1, 2), np.full(4 * n, 2.0, np.float32))
+    np.testing.assert_allclose(f, 0.5 * f1 + 0.5 * f2, rtol=1e-6, atol=1e-7)
+    assert np.isfinite(half).all()
+    # past the top level: clamped to it
+    np.testing.assert_array_equal(material_forward(m, wi, wo, uv, lod=np.full(n, 9.0)), y2)
+
+
+def test_pack_keeps_its_pyramid_and_refuses_a_bad_one(tmp_path):
+    m = pyramid_material(3)
+    write_vrnm(tmp_path / "p.vrnm", m)
+    back = read_vrnm(tmp_path / "p.vrnm")
+    assert back.lod_levels == 3
+    for k in m.textures:
+        for a, b in zip(m.levels[k], back.levels[k], strict=True):
+            np.testing.assert_array_equal(a, b)
+    from vrneural.formats.container import read_container, write_container
+
+    header, arrays, _ = read_container(tmp_path / "p.vrnm", b"VRNM", (3,))
+    arrays = {k: np.array(v) for k, v in arrays.items()}
+    arrays["tex.fine.1"] = arrays["tex.fine.1"][:5]  # a level of the wrong size
+    write_container(tmp_path / "bad.vrnm", b"VRNM", 3, header, arrays)
+    with pytest.raises(VrnError, match=r"bad.vrnm: invalid runtime pack: texture 'fine' level 1"):
+        read_vrnm(tmp_path / "bad.vrnm")
+    header["levels"]["fine"] = 9  # more levels than the file holds (above log2 of the size)
+    arrays = {
+        k: np.array(v) for k, v in read_container(tmp_path / "p.vrnm", b"VRNM", (3,))[1].items()
+    }
+    write_container(tmp_path / "bad2.vrnm", b"VRNM", 3, header, arrays)
+    with pytest.raises(VrnError, match=r"bad2.vrnm: runtime pack lacks 'tex.fine.3'"):
+        read_vrnm(tmp_path / "bad2.vrnm")
+
+
+def test_torch_pyramid_equals_the_pack(tmp_path):
+    torch = pytest.importorskip("torch")
+    from vrneural.distill.models import NeuralModel, make_spec
+
+    for kind in ("filter", "levels"):
+        spec = make_spec("student", (16, 16)) | {"lod": {"levels": 3, "kind": kind}}
+        model = NeuralModel(spec, seed=3)
+        mat = model.to_material()
+        assert mat.lod_levels == 3
+        if kind == "filter":  # the levels are box averages of level 0
+            np.testing.assert_array_equal(
+                mat.levels["fine"][0],
+                model.texture("fine", 1).detach().numpy().astype(np.float16),
+            )
+        wi, wo = torch.tensor([0.3, 0.1, 0.95]), torch.tensor([-0.2, 0.3, 0.93])
+        rng = np.random.default_rng(1)
+        uv = rng.uniform(0, 1, (8, 4, 2)).astype(np.float32)
+        for level in range(3):
+            with torch.no_grad():
+                got = model.predict(wi, wo, torch.from_numpy(uv), level).numpy()
+            want = material_forward(
+                mat, np.tile(wi.numpy(), (8, 1)), np.tile(wo.numpy(), (8, 1)), uv,
+                lod=np.full(8, level, np.float32),
+            )  # fmt: skip
+            np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
+
+
+def test_distill_trains_a_pyramid_and_names_levels_that_do_not_fit(tmp_path):
+    from distill_helpers import FAST, analytic_btf, expect_one_line_error, run_cli
+
+    btf = analytic_btf(tmp_path / "b.btf", res=16)
+    assert run_cli("teach", btf, "-o", tmp_path / "t.pt", "--epochs", "1", *FAST)[0] == 0
+    argv = ["distill", tmp_path / "t.pt", "-o", tmp_path / "s.pt", "--epochs", "1", *FAST]
+    assert run_cli(*argv, "--lod-levels", "3")[0] == 0
+    mat = read_vrnm(tmp_path / "s.vrnm")
+    assert mat.lod_levels == 3 and mat.meta["metrics"]["pack_vs_torch_max_abs"] <= 1e-5
+    assert [a.shape for a in mat.levels["fine"]] == [(8, 8, 8), (4, 4, 8)]
+    expect_one_line_error(
+        [*argv, "--force", "--lod-levels", "5"],
+        "--lod-levels = 5 does not fit",
+        "16x16 texels",
+        "allowed [1, 4]",
+    )
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("tiling", [1.0, 3.0, 11.0, 40.0])
+def test_gpu_lod_lookups_follow_the_twin(tiling):
+    """The texture-space kernel computes each block's footprint and looks the pyramid up as
+    the numpy twin does (lod from 0.4 to 5.7 over these tilings)."""
+    from runtime_helpers import quad_atlas
+
+    from vrneural.runtime import reference as ref
+    from vrneural.runtime.texture_pass import shade_texture_space
+
+    m = pyramid_material(4)
+    at = quad_atlas(32)
+    eye, lp, lc = np.float32([0.2, 0.1, 1.5]), np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
+    tl = (tiling, tiling, 0, 0)
+    want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
+    got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
+    np.testing.assert_array_equal(gc, wc)
+    w16 = want.astype(np.float16).astype(np.float32)
+    # f32 math in another order, f16 storage on both sides: 2 f16 ulps (see test_runtime_texture)
+    assert (np.abs(got - w16) / (np.abs(w16) + 1e-2 * max(w16.max(), 1e-12))).max() <= 2 * 2.0**-10
