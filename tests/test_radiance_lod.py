@@ -99,7 +99,7 @@ def _plane_scene(mat, distance: float, tiling: float):
     c = poses.HEAD + np.array([0.0, 0.0, -distance])
     obj = ObjectDesc("plane", "plane", model_matrix(tuple(c), (90, 0, 0), scale),
                      MaterialDesc("neural", mat, "m", tiling))  # fmt: skip
-    light = PointLight(tuple(c + [0.3, 0.4, 1.0]), (1, 1, 1), 2.0)
+    light = PointLight(tuple(c + np.array([0.3, 0.4, 1.0])), (1, 1, 1), 2.0)
     return Scene("plane", [obj], [light], None, None, "orbit", Path.cwd())
 
 
