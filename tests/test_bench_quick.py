@@ -9,7 +9,7 @@ import pytest
 from vrneural.cli import main
 import itertools
 
-BENCHES = ("frames", "lights", "materials", "kernels", "tradeoff", "atlas")
+BENCHES = ("frames", "lights", "materials", "kernels", "tradeoff", "atlas", "distance")
 PNGS = {
     "frames": ["frames.png"],
     "lights": ["lights.png"],
@@ -17,6 +17,7 @@ PNGS = {
     "kernels": ["kernels.png"],
     "tradeoff": ["pareto.png", "speed.png"],
     "atlas": ["atlases.png"],
+    "distance": ["distance.png"],
 }
 
 
@@ -159,6 +160,23 @@ def test_tradeoff_metrics_are_sane(results):
     assert abs(a["matched_candidates_per_frame"] / a["base_candidates_per_frame"] - 1) < 0.05
     assert {r["setting"] for r in doc["ranking"]} >= {"radiance=shared", "reuse=auto"}
     assert (results[0] / "tradeoff" / "packs" / "student.vrnm").is_file()
+
+
+@pytest.mark.gpu
+def test_distance_records_each_feature(results):
+    """Every condition has the five variants; the prefiltered student has its pyramid; the
+    frame-to-frame change is measured against the reference's own (the head sways)."""
+    doc = results[1]["distance"]
+    assert {r["family"] for r in doc["records"]} == {"distance", "tiling"}
+    for rec in doc["records"]:
+        names = [v["variant"] for v in rec["variants"]]
+        assert names == ["all off", "mips", "screen res", "neural LOD", "all on"]
+        for v in rec["variants"]:
+            assert 0 <= v["flip"]["mean"] <= 1 and v["change_ref"] > 0 and v["flicker"] > 0
+            assert v["texels_shaded"] > 0 and v["texture_side"] <= 256
+    from vrneural.formats.vrnm import read_vrnm
+
+    assert read_vrnm(results[0] / "distance" / "packs" / "student_lod.vrnm").lod_levels == 4
 
 
 def _err(capsys, argv):

@@ -50,6 +50,13 @@ SPECS = {
         "run_atlas",
         "atlas stage: time, memory, coverage, charts and seam error over a fixed mesh set",
     ),
+    "distance": (
+        "distance",
+        "DistanceConfig",
+        "run_distance",
+        "level of detail: a neural sphere from 0.3 to 20 m and tiled 1-16x, with and without "
+        "radiance mips, resolution from the screen and prefiltered neural textures",
+    ),
 }
 
 
@@ -88,7 +95,7 @@ def _run(name: str, args) -> int:
 def _register_all(sub) -> None:
     p = sub.add_parser(
         "all",
-        help="run frames, lights, materials, kernels, tradeoff and atlas into OUT/<name>",
+        help="run frames, lights, materials, kernels, tradeoff, atlas and distance into OUT/<name>",
         description="Every timing and trade-off benchmark (not `quality`, which trains its own "
         "baselines; run it separately). --quick: each at its CI size.",
     )

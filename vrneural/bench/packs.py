@@ -22,6 +22,9 @@ RUNS = {
     "single8": dict(method="single8"),
     "neumip": dict(method="neumip", distill=False),
 }
+#: trained only when asked for (``train_packs(only=...)``): the distilled student with
+#: prefiltered neural textures (bench distance)
+EXTRA_RUNS = {"student_lod": dict(method="student", lod_levels=4)}
 PACKS = ("teacher", *RUNS)
 
 
@@ -36,7 +39,9 @@ def train_packs(
     from vrneural.distill.distill import run_distill
     from vrneural.distill.teach import run_teach
 
-    runs = {k: v for k, v in RUNS.items() if only is None or k in only}
+    runs = {
+        k: v for k, v in (RUNS | EXTRA_RUNS).items() if (k in RUNS if only is None else k in only)
+    }
     paths = {k: d / f"{k}.vrnm" for k in ("teacher", *runs)}
     stamp = d / "budget.json"
     want = json.dumps(budget, sort_keys=True)

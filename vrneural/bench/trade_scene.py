@@ -8,9 +8,9 @@ adapter scores the true density without rendering 4.5 M pixels per eye.
 
 Conditions (``family``, ``value``): ``rest`` (0 deg/s), ``turn`` (a saccade-like yaw turn at
 ``value`` deg/s about the neck, :mod:`vrneural.bench.poses`), ``log`` (a user's pose log),
-``smooth`` (the built-in slow orbit), ``light`` (the key light circling the sphere at ``value``
-deg/s, head still), ``distance`` (the sphere ``value`` m away) and ``tiling`` (the material
-tiled ``value`` times).
+``smooth`` (a slow sway: 5 cm on a 4 s ellipse, looking at the sphere), ``light`` (the key
+light circling the sphere at ``value`` deg/s, head still), ``distance`` (the sphere ``value`` m
+away) and ``tiling`` (the material tiled ``value`` times), both under the slow sway.
 """
 
 from __future__ import annotations
@@ -40,13 +40,14 @@ class Condition:
     distance: float = DIST_M
     tiling: float = TILING
     light_speed: float = 0.0  # deg/s of the key light about the sphere
+    size: float = SPHERE_M  # sphere diameter, metres
     log: Path | None = None  # pose log (rest, turn, log)
     meta: dict = field(default_factory=dict)
 
     def head(self) -> HeadPath:
         if self.log is not None:
             return PoseLogPath(self.log)
-        if self.family == "smooth":
+        if self.family in ("smooth", "distance", "tiling"):  # a slow sway
             return OrbitPath(
                 centre=tuple(poses.HEAD), target=tuple(self.centre()), sway=0.05, period=4.0
             )
@@ -77,7 +78,7 @@ def scene_for(c: Condition, mat, reference=None, n_lights: int = 2):
     from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 
     p = get_mesh("sphere").positions
-    scale = SPHERE_M / float((p.max(0) - p.min(0)).max())
+    scale = c.size / float((p.max(0) - p.min(0)).max())
     centre = c.centre()
     name = mat.meta.get("name", "student")
     desc = MaterialDesc("neural", mat, name, c.tiling, reference=reference)
@@ -90,7 +91,7 @@ def scene_for(c: Condition, mat, reference=None, n_lights: int = 2):
     ]
     # key light up-left-front of the sphere (as seen from the head), fill light right; both at
     # a distance that scales with the sphere (the same lighting at every distance)
-    r = 10 * SPHERE_M
+    r = 10 * c.size
     to_head = poses.HEAD - centre
     fwd = to_head / np.linalg.norm(to_head)
     right = np.cross(np.array([0.0, 1.0, 0.0]), fwd)

@@ -1,0 +1,239 @@
+"""`vrneural bench distance`: a neural material seen from afar or tiled densely, with and
+without each level-of-detail feature.
+
+One neural sphere (``--size`` m across) from 0.3 to 20 m away, and at 1 m with its material tiled
+1 to 16 times, seen at the quest3 pixel density (crops of the full eye image that follow it, as
+in `bench tradeoff`) under a slow head sway. Against the teacher per pixel supersampled (with its
+noise floor: a second reference with other sample positions): FLIP per frame (mean and worst),
+the temporal change (mean |frame - previous| of the displayed image against the reference's own:
+above 1 is flicker the ground truth does not have), the shading work (texels shaded for the
+object per frame, texture side, shading ms) and the frame time. Variants: all three features
+off, each alone, and all three on (``--mips``: radiance mip chains; ``--screen-res``: texture
+side from the screen; ``lod``: the student with prefiltered neural textures, trained with
+``--lod-levels 4``).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from vrneural.bench import metrics
+from vrneural.bench import report as rp
+from vrneural.bench import trade_scene as ts
+from vrneural.bench import tradeoff as tr
+from vrneural.config import opt, quick_defaults
+
+#: name -> (mips, screen_res, prefiltered neural textures)
+VARIANTS = {
+    "all off": (False, False, False),
+    "mips": (True, False, False),
+    "screen res": (False, True, False),
+    "neural LOD": (False, False, True),
+    "all on": (True, True, True),
+}
+
+
+@dataclass
+class DistanceConfig:
+    """`vrneural bench distance`."""
+
+    out: str = opt("bench-distance", "output directory", cli=False)
+    distances: str = opt("0.3,1,3,10,20", "sphere distances (m)")
+    tilings: str = opt("1,4,8,16", "material tilings, at 1 m")
+    size: float = opt(0.5, "sphere diameter (m)")
+    texture_res: int = opt(1200, "radiance texture side (the cap screen-res chooses under)")
+    reuse: int = opt(4, "N (staggered)")
+    crop: int = opt(128, "side (pixels) of the scored window of each quest3 eye image")
+    spp: int = opt(16, "reference samples per pixel")
+    scored: int = opt(6, "consecutive frames scored per condition")
+    preset: str = opt("leather", "synthetic BTF preset of the trained packs")
+    btf_res: int = opt(32, "BTF texels per side (training budget)")
+    btf_dirs: int = opt(10, "BTF light and view directions")
+    teacher_width: int = opt(128, "teacher hidden width")
+    teacher_epochs: int = opt(4, "teacher epochs")
+    epochs: int = opt(4, "epochs of each student")
+    seed: int = opt(0, "training seed")
+    quick: bool = opt(
+        False,
+        "CI-sized: distances 1,10, tiling 8, 48-pixel crops, 2 spp, 3 frames, texture 256, tiny "
+        "training",
+    )
+    progress: bool = opt(True, "show progress bars")
+    force: bool = opt(False, "overwrite an existing output directory")
+
+    def resolved(self) -> DistanceConfig:
+        if not self.quick:
+            return self
+        return quick_defaults(
+            self, distances="1,10", tilings="8", crop=48, spp=2, scored=3, texture_res=256,
+            btf_res=16, btf_dirs=6, teacher_width=32, teacher_epochs=1, epochs=1,
+        )  # fmt: skip
+
+
+def conditions(c: DistanceConfig) -> list[ts.Condition]:
+    first = 8
+    window = list(range(first, first + c.scored))
+    out = []
+    for d in tr._floats("--distances", c.distances, 0.2, 100.0):
+        out.append(ts.Condition(f"{d:g} m", "distance", d, window[-1] + 1, window, d,
+                                tiling=1.0, size=c.size))  # fmt: skip
+    for t in tr._floats("--tilings", c.tilings, 0.01, 1000.0):
+        out.append(ts.Condition(f"tiling {t:g}", "tiling", t, window[-1] + 1, window, 1.0,
+                                tiling=t, size=c.size))  # fmt: skip
+    return out
+
+
+def check(c: DistanceConfig) -> None:
+    from vrneural.bench.supersample import SPP_MAX
+    from vrneural.btf.synth import BtfConfig
+    from vrneural.errors import VrnError, check_range
+    from vrneural.runtime.config import REUSE_MAX
+
+    check_range("--size", c.size, 0.001, 10.0)
+    rp.check_texture_res(c.texture_res, "--texture-res")
+    check_range("--reuse", c.reuse, 0, REUSE_MAX)
+    check_range("--crop", c.crop, 16, 2064)
+    check_range("--spp", c.spp, 1, SPP_MAX)
+    check_range("--scored", c.scored, 2, 1000)
+    if not (c.distances.strip() or c.tilings.strip()):
+        raise VrnError("--distances and --tilings are both empty; give at least one condition")
+    tr._floats("--distances", c.distances, 0.2, 100.0)
+    tr._floats("--tilings", c.tilings, 0.01, 1000.0)
+    BtfConfig(preset=c.preset, res=c.btf_res, dirs=c.btf_dirs, seed=c.seed).validate(
+        flags={"res": "--btf-res", "dirs": "--btf-dirs"}
+    )
+    check_range("--teacher-width", c.teacher_width, 4, 512)
+    for k in ("teacher_epochs", "epochs"):
+        check_range(f"--{k.replace('_', '-')}", getattr(c, k), 1, 10_000)
+
+
+def settings(c: DistanceConfig, cond, prof, mips: bool, screen: bool, mode="texture", ref=None):
+    from vrneural.runtime.renderer import Settings
+
+    return Settings(
+        eyes=2, reuse=c.reuse, texture_res=c.texture_res, eye_res=(c.crop, c.crop),
+        frames=cond.frames, fps=prof.fps, fov_y=prof.fov_y, ipd=prof.ipd, n_lights=2,
+        mode=mode, precision="f32", reference=ref, crop=(0, 0, *prof.eye_res), mips=mips,
+        screen_res=screen,
+    )  # fmt: skip
+
+
+def run_distance(cfg: DistanceConfig) -> dict:
+    from tqdm import tqdm
+
+    from vrneural.bench.packs import load_packs, train_packs
+    from vrneural.runtime.profiles import get_profile
+
+    c = cfg.resolved()
+    check(c)
+    root = rp.prepare_out(cfg.out, cfg.force, "distance")
+    t0 = time.perf_counter()
+    doc = rp.header("distance", c)
+    budget = dict(preset=c.preset, res=c.btf_res, dirs=c.btf_dirs, teacher_width=c.teacher_width,
+                  teacher_epochs=c.teacher_epochs, epochs=c.epochs, seed=c.seed)  # fmt: skip
+    tt = time.perf_counter()
+    paths = train_packs(root / "packs", budget, c.progress, lambda m: None,
+                        only=("student", "student_lod"))  # fmt: skip
+    mats = load_packs(paths)
+    doc["packs"] = {"budget": budget, "seconds": time.perf_counter() - tt}
+    prof = get_profile("quest3")
+    full, ppd = prof.eye_res, metrics.pixels_per_degree(prof.eye_res[1], prof.fov_y)
+    doc["ppd"] = ppd
+    conds = conditions(c)
+    bar = tqdm(total=len(conds) * (len(VARIANTS) + 1), desc="bench distance", unit="render",
+               disable=not c.progress)  # fmt: skip
+    for cond in conds:
+        teacher = mats["teacher"]
+        rs = settings(c, cond, prof, False, False, "reference", teacher)
+        rscene = ts.scene_for(cond, mats["student"], teacher)
+        bar.set_postfix_str(f"{cond.name}: reference")
+        ref = tr.reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
+        nf = cond.scored[:2]
+        ref2 = tr.reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
+        bar.update()
+        rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
+               "noise_floor": float(np.mean([metrics.flip_hdr_eyes(ref[f], ref2[f], ppd)
+                                             for f in nf])),
+               "variants": []}  # fmt: skip
+        cache: dict = {}
+        for name, (mips, screen, lod) in VARIANTS.items():
+            bar.set_postfix_str(f"{cond.name}: {name}")
+            mat = mats["student_lod" if lod else "student"]
+            s = settings(c, cond, prof, mips, screen)
+            imgs, st = tr.render(ts.scene_for(cond, mat), s, cond, c.crop, full, set(cond.scored))
+            sc = tr.scores(ref, imgs, None, ppd, cond.scored, cache)
+            w = st[1:]
+            rec["variants"].append({
+                "variant": name, "mips": mips, "screen_res": screen, "neural_lod": lod,
+                **{k: sc[k] for k in ("flip", "psnr", "ssim", "change", "change_ref")},
+                "flicker": sc["change"] / max(sc["change_ref"], 1e-12),
+                "texels_shaded": float(np.mean([4 * x.object_blocks[0] for x in w])),
+                "texture_side": int(np.median([x.object_res[0] for x in w])),
+                **tr.work(st),
+            })  # fmt: skip
+            bar.update()
+        doc["records"].append(rec)
+    bar.close()
+    return finish(root, doc, t0)
+
+
+def finish(root, doc: dict, t0: float) -> dict:
+    md = [
+        "# Distance: level of detail at distance and under tiling",
+        "",
+        rp.adapter_line(doc),
+        f"A {doc['config']['size']:g} m neural sphere, crops of the quest3 eye image at "
+        f"{doc['ppd']:.1f} ppd following it, slow head sway; reference: the teacher per pixel "
+        f"with {doc['config']['spp']} stratified samples. flicker: the mean frame-to-frame "
+        "change of the displayed image over the reference's own (1 = as steady as the truth). "
+        "texels: texels shaded for the sphere per frame; side: its radiance texture's median "
+        "side." + (" **Quick run: reduced settings.**" if doc["config"]["quick"] else ""),
+        "",
+    ]
+    rows = []
+    for rec in doc["records"]:
+        for v in rec["variants"]:
+            rows.append([rec["condition"], v["variant"],
+                         f"{v['flip']['mean']:.4f} ({v['flip']['worst']:.4f})",
+                         f"{rec['noise_floor']:.4f}", v["flicker"], v["texels_shaded"],
+                         v["texture_side"], v["frame_ms"]["mean"]])  # fmt: skip
+    md += rp.table(["condition", "variant", "FLIP (worst)", "floor", "flicker", "texels",
+                    "side", "frame ms"], rows)  # fmt: skip
+    png(doc, root / "distance.png")
+    md += ["", "![distance](distance.png)"]
+    return rp.finish(root, doc, md, t0)
+
+
+def png(doc: dict, path) -> None:
+    fig, axes = rp.figure(13, 4.0, 3)
+    for fam, ax in (("distance", axes[0]), ("tiling", axes[1])):
+        recs = sorted((r for r in doc["records"] if r["family"] == fam), key=lambda r: r["value"])
+        if not recs:
+            continue
+        x = [r["value"] for r in recs]
+        for i, v in enumerate(recs[0]["variants"]):
+            ax.plot(x, [r["variants"][i]["flip"]["mean"] for r in recs], "o-", lw=1,
+                    label=v["variant"])  # fmt: skip
+        ax.plot(x, [r["noise_floor"] for r in recs], "k--", lw=0.8, label="noise floor")
+        ax.set_xscale("log")
+        ax.set_xlabel("distance, m" if fam == "distance" else "tiling")
+        ax.set_ylabel("FLIP vs supersampled teacher")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=6)
+    recs = sorted(
+        (r for r in doc["records"] if r["family"] == "distance"), key=lambda r: r["value"]
+    )
+    for i, v in enumerate(recs[0]["variants"] if recs else []):
+        axes[2].plot([r["value"] for r in recs], [r["variants"][i]["flicker"] for r in recs],
+                     "o-", lw=1, label=v["variant"])  # fmt: skip
+    axes[2].axhline(1.2, color="k", ls="--", lw=0.8, label="1.2x the reference")
+    axes[2].set_xscale("log")
+    axes[2].set_xlabel("distance, m")
+    axes[2].set_ylabel("flicker (change / reference's)")
+    axes[2].grid(alpha=0.3)
+    axes[2].legend(fontsize=6)
+    fig.suptitle(f"bench distance on {doc['adapter']['name']}", fontsize=9)
+    rp.save_png(fig, path)
