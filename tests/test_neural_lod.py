@@ -109,6 +109,17 @@ def test_distill_trains_a_pyramid_and_names_levels_that_do_not_fit(tmp_path):
     mat = read_vrnm(tmp_path / "s.vrnm")
     assert mat.lod_levels == 3 and mat.meta["metrics"]["pack_vs_torch_max_abs"] <= 1e-5
     assert [a.shape for a in mat.levels["fine"]] == [(8, 8, 8), (4, 4, 8)]
+    # a run without a pyramid: export gives it the box averages of level 0 (untrained)
+    assert run_cli(*argv, "--force", "-o", tmp_path / "p.pt")[0] == 0
+    out = tmp_path / "p3.vrnm"
+    assert run_cli("export", tmp_path / "p.pt", "-o", out, "--lod-levels", "3")[0] == 0
+    flat = read_vrnm(out)
+    assert flat.lod_levels == 3 and flat.meta["metrics"]["pack_vs_torch_max_abs"] <= 1e-5
+    np.testing.assert_array_equal(flat.levels["fine"][0], pool_level(flat.textures["fine"], 1))
+    expect_one_line_error(
+        ["export", tmp_path / "s.pt", "-o", tmp_path / "x.vrnm", "--lod-levels", "2"],
+        "was trained with a 3-level pyramid",
+    )
     expect_one_line_error(
         [*argv, "--force", "--lod-levels", "5"],
         "--lod-levels = 5 does not fit",

@@ -147,9 +147,12 @@ def track(renderer, c: Condition, crop: int, full) -> None:
     renderer.frame = framed
 
 
-def turn_condition(speed: float, amplitude: float, fps: float, scored: int, d: Path) -> Condition:
-    """A built-in saccade log (written to ``d``); the scored window starts halfway through the
-    turn (the stalest part) and runs into the rest after it (rest: the same frames)."""
+def turn_condition(
+    speed: float, amplitude: float, fps: float, scored: int, d: Path, distance: float = DIST_M
+) -> Condition:
+    """A built-in saccade log (written to ``d``), the sphere ``distance`` m away; the scored
+    window starts halfway through the turn (the stalest part) and runs into the rest after it
+    (rest: the same frames)."""
     rows = poses.turn_poses(speed, amplitude, fps=fps)
     path = poses.write_pose_log(d / f"turn-{speed:g}.csv", rows)
     start, n = poses.turn_frames(speed, amplitude, 0.1, fps)
@@ -157,10 +160,11 @@ def turn_condition(speed: float, amplitude: float, fps: float, scored: int, d: P
     fam = "turn" if speed > 0 else "rest"
     name = f"turn {speed:g} deg/s" if speed > 0 else "rest"
     sc = list(range(first, first + scored))
-    return Condition(name, fam, speed, sc[-1] + 1, sc, log=path, meta={"turn_frames": [start, n]})
+    meta = {"turn_frames": [start, n]}
+    return Condition(name, fam, speed, sc[-1] + 1, sc, distance, log=path, meta=meta)
 
 
-def log_condition(path: Path, fps: float, scored: int) -> Condition:
+def log_condition(path: Path, fps: float, scored: int, distance: float = DIST_M) -> Condition:
     """A user's pose log: scored around its fastest moment."""
     log = PoseLogPath(path)
     speed = poses.peak_speed(log)
@@ -169,4 +173,6 @@ def log_condition(path: Path, fps: float, scored: int) -> Condition:
     k = int(np.argmin(rate)) if len(rate) else 0  # the fastest interval
     first = max(1, int(log.t[k] * fps))
     sc = list(range(first, first + scored))
-    return Condition(f"log {Path(path).name}", "log", speed, sc[-1] + 1, sc, log=Path(path))
+    return Condition(
+        f"log {Path(path).name}", "log", speed, sc[-1] + 1, sc, distance, log=Path(path)
+    )

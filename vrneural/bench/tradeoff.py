@@ -49,6 +49,7 @@ class TradeoffConfig:
     scored: int = opt(6, "consecutive frames scored per condition")
     speeds: str = opt("0,100,200,300,400", "head-turn speeds (deg/s) of the built-in logs")
     turn: float = opt(30.0, "yaw of each built-in head turn, degrees")
+    near: float = opt(0.5, "distance (m) of the sphere in the head-turn conditions (arm's length)")
     poses: str = opt("", "more pose logs (CSV: t,x,y,z,qx,qy,qz,qw) scored as conditions")
     light_speed: float = opt(120.0, "the moving light's speed about the sphere, deg/s (0: none)")
     distances: str = opt("0.3,1,3,10,20", "sphere distances (m) of the distance sweep")
@@ -184,11 +185,11 @@ def conditions(c, fps: float, d: Path) -> list[ts.Condition]:
     out = []
     speeds = _floats("--speeds", c.speeds, 0.0, 2000.0)
     for v in speeds:
-        out.append(ts.turn_condition(v, c.turn, fps, c.scored, d))
+        out.append(ts.turn_condition(v, c.turn, fps, c.scored, d, c.near))
     for p in [x.strip() for x in c.poses.split(",")] if c.poses.strip() else []:
         if not p:
             raise VrnError(f"--poses = {c.poses!r} has an empty item")
-        out.append(ts.log_condition(Path(p), fps, c.scored))
+        out.append(ts.log_condition(Path(p), fps, c.scored, c.near))
     first = 8  # frames before scoring: every staggered phase of N <= 7 has run once
     window = list(range(first, first + c.scored))
     frames = window[-1] + 1
@@ -304,10 +305,14 @@ def match_budget(scene, c, cond, prof, target_blocks: float) -> tuple[float, flo
     return hi, work(hi)
 
 
-def scores(ref: dict, imgs: dict, n0: dict | None, ppd: float, frames: list, cache: dict) -> dict:
+def scores(
+    ref: dict, imgs: dict, n0: dict | None, ppd: float, frames: list, cache: dict, ref2=None
+) -> dict:
     """The metrics of one variant over the scored ``frames`` (see the module docstring);
     ``cache`` keeps what depends on the reference alone (its display images, its own
-    frame-to-frame change) across the variants of a condition."""
+    frame-to-frame change) across the variants of a condition; ``ref2``: the second
+    reference (on its frames), against which FLIP is scored too, for the paired floor of
+    differences (:func:`difference_floor`)."""
     flips, psnrs, ssims, reuse_err = [], [], [], []
     disp = {f: [metrics.display(e) for e in imgs[f]] for f in frames}
     if "disp" not in cache:
@@ -346,7 +351,29 @@ def scores(ref: dict, imgs: dict, n0: dict | None, ppd: float, frames: list, cac
         "flip_consecutive_ref": float(np.mean(rtf)) if rtf else None,
     }
     out["reuse_error"] = _dist(reuse_err) if reuse_err else None
+    if ref2:  # the same variant against both references, on the second one's frames
+        out["paired"] = {
+            "frames": sorted(ref2),
+            "vs_ref": [flips[frames.index(f)] for f in sorted(ref2)],
+            "vs_ref2": [flip(ref2[f], imgs[f]) for f in sorted(ref2)],
+        }
     return out
+
+
+def difference_floor(variants: list[dict]) -> float:
+    """The noise floor of a FLIP *difference* between two variants: each variant's difference
+    from the first (N = 0) is measured against both references on the same frames; the most
+    the two measurements disagree, over the variants, is what sampling noise in the reference
+    can do to a difference (a paired comparison: far below the floor of a single score, since
+    both variants see the same reference noise)."""
+    b = variants[0]["paired"]
+    worst = 0.0
+    for v in variants[1:]:
+        p = v["paired"]
+        d1 = np.mean(np.subtract(p["vs_ref"], b["vs_ref"]))
+        d2 = np.mean(np.subtract(p["vs_ref2"], b["vs_ref2"]))
+        worst = max(worst, abs(float(d1 - d2)))
+    return worst
 
 
 def _dist(x) -> dict:
@@ -380,6 +407,7 @@ def check(c) -> None:
     check_range("--spp", c.spp, 1, SPP_MAX)
     check_range("--scored", c.scored, 2, 1000)
     check_range("--turn", c.turn, 1.0, 180.0)
+    check_range("--near", c.near, 0.2, 100.0)
     check_range("--lights", c.lights, 1, LIGHTS_MAX)
     check_range("--light-speed", c.light_speed, 0.0, 3600.0)
     rp.check_texture_res(c.base_res, "--base-res")
@@ -504,9 +532,10 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
             if v["knob"] == "reuse" and v["value"] == 0:
                 n0 = imgs
             n0_ = n0 if v is not vs[0] else None
-            r = {**v, **work(st), **scores(ref, imgs, n0_, ppd, cond.scored, cache)}
+            r = {**v, **work(st), **scores(ref, imgs, n0_, ppd, cond.scored, cache, ref2)}
             rec["variants"].append(r)
             bar.update()
+        rec["difference_floor"] = difference_floor(rec["variants"])
         doc["records"].append(rec)
     bar.close()
     return finish_report(root, doc, t0)

@@ -19,7 +19,7 @@ def ranking(doc: dict) -> list[dict]:
     out = []
     for rec in doc["records"]:
         b = base_of(rec)
-        floor = rec["noise_floor"]["flip"]
+        floor = rec.get("difference_floor", rec["noise_floor"]["flip"])
         for v in rec["variants"]:
             if v is b:
                 continue
@@ -52,8 +52,13 @@ def markdown(doc: dict) -> list[str]:
         f"frames scored per condition, both eyes. Base: texture {c['base_res']}^2, "
         f"N = {c['base_reuse']} staggered, per-eye radiance, f32, distilled student. FLIP: HDR at "
         f"{doc['ppd']:.1f} ppd (mean over frames; worst frame in brackets). **floor**: FLIP "
-        "between two references with different sample positions; a difference below it is "
-        "noise." + (" **Quick run: reduced settings.**" if c["quick"] else ""),
+        "between two references with different sample positions (the noise of one score). "
+        "**floor of a difference**: the most any setting's FLIP difference from N = 0 changes "
+        "when it is measured against the second reference instead of the first (both settings "
+        "see the same reference noise, so a difference is known far better than one score); a "
+        "difference below it is noise. **reuse error**: FLIP against the N = 0 render of the "
+        "same frame (deterministic: the staleness itself)."
+        + (" **Quick run: reduced settings.**" if c["quick"] else ""),
         "",
     ]
     packs = doc["packs"]
@@ -70,8 +75,10 @@ def markdown(doc: dict) -> list[str]:
         ]
     for rec in doc["records"]:
         floor = rec["noise_floor"]["flip"]
+        dfloor = rec["difference_floor"]
         md += [f"## {rec['condition']} ({rec['preset']})", "",
-               f"floor {floor:.4f} (FLIP, reference vs reference)", ""]  # fmt: skip
+               f"floor {floor:.4f} (FLIP, reference vs reference); floor of a difference "
+               f"between settings {dfloor:.5f} (paired, see above)", ""]  # fmt: skip
         rows = []
         for v in rec["variants"]:
             ch = v["change"]
@@ -89,8 +96,8 @@ def markdown(doc: dict) -> list[str]:
         )  # fmt: skip
         md.append("")
     md += ["## Ranking: what each knob buys (FLIP change) for the frame time it saves", "",
-           "Against each condition's base; negative FLIP change is better; *: within the noise "
-           "floor (not measurable).", ""]  # fmt: skip
+           "Against each condition's base; negative FLIP change is better; *: within the "
+           "condition's floor of a difference (not measurable).", ""]  # fmt: skip
     rank = ranking(doc)
     rows = [[r["condition"], r["preset"], r["setting"] + (" *" if r["below_floor"] else ""),
              f"{r['dflip']:+.4f}", f"{r['ms_saved']:+.1f}", f"{r['blocks_saved']:+.0f}",

@@ -15,6 +15,13 @@ def register(sub) -> None:
     p.add_argument("checkpoint", help="checkpoint (.pt) from `vrneural teach` or `distill`")
     p.add_argument("-o", "--output", required=True, help="output pack (.vrnm)")
     p.add_argument("--btf", default="", help="BTF for the activation ranges (default: recorded)")
+    p.add_argument(
+        "--lod-levels",
+        type=int,
+        default=0,
+        help="give a checkpoint trained without a pyramid one of N levels, box averages of "
+        "level 0 (untrained; `distill --lod-levels N` trains them; default: as trained)",
+    )
     p.add_argument("--force", action="store_true", help="overwrite an existing output")
     p.add_argument("--json", action="store_true", help="print the ranges as JSON")
     p.set_defaults(func=run)
@@ -36,8 +43,16 @@ def run(args) -> int:
     ck = load_checkpoint(args.checkpoint)
     if not ck.get("finished", True):
         _warn_unfinished(args.checkpoint, ck, args.output)
+    from vrneural.errors import check_range
+
+    check_range("--lod-levels", args.lod_levels, 0, 12)
     out, meta = export_checkpoint(
-        ck, args.output, force=args.force, source=args.checkpoint, btf=args.btf or None
+        ck,
+        args.output,
+        force=args.force,
+        source=args.checkpoint,
+        btf=args.btf or None,
+        lod_levels=args.lod_levels,
     )
     write_json(
         sidecar,

@@ -9,6 +9,7 @@ maximum 65504, and the fraction of non-zero values below the float16 normal mini
 from __future__ import annotations
 
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import torch
@@ -76,13 +77,25 @@ def material_ranges(mat: NeuralMaterial, data: SliceData, pairs: list[int]) -> d
     return r
 
 
-def pack_material(ck: dict, data: SliceData, source: str | None = None):
+def pack_material(ck: dict, data: SliceData, source: str | None = None, lod_levels: int = 0):
     """Build the :class:`NeuralMaterial` of a checkpoint with meta (ranges, provenance,
-    metrics) and check the numpy forward against torch. Returns ``(mat, max_abs_diff)``."""
+    metrics) and check the numpy forward against torch. Returns ``(mat, max_abs_diff)``.
+    ``lod_levels`` > 1 for a checkpoint trained without a pyramid: give the pack one of box
+    averages of level 0 (the ``filter`` pyramid, untrained)."""
     from vrneural import __version__
     from vrneural.distill.distill import model_from_checkpoint
 
     model = model_from_checkpoint(ck, source)
+    if lod_levels > 1 and model.lod_levels == 1:
+        from vrneural.distill.distill import check_lod_levels
+
+        check_lod_levels(SimpleNamespace(lod_levels=lod_levels), data.res, source or "the BTF")
+        model.lod_levels, model.lod_kind = lod_levels, "filter"
+    elif lod_levels > 1 and lod_levels != model.lod_levels:
+        raise VrnError(
+            f"--lod-levels = {lod_levels}: {source or 'the checkpoint'} was trained with a "
+            f"{model.lod_levels}-level pyramid; drop --lod-levels to export it as trained"
+        )
     if "dir_range" not in ck["btf"]:  # a checkpoint from before it was recorded: the BTF's
         model.dir_range = directions_range(data.btf.light_dirs, data.btf.view_dirs)
     for k, v in model.state_dict().items():
@@ -158,6 +171,7 @@ def export_checkpoint(
     force: bool = False,
     source: str | None = None,
     btf: str | None = None,
+    lod_levels: int = 0,
 ) -> tuple[Path, dict]:
     """Write the ``.vrnm`` of a loaded checkpoint. Returns ``(path, meta)``."""
     from vrneural.btf.format import read_btf
@@ -174,7 +188,7 @@ def export_checkpoint(
         mismatch = f"does not match the one {source} was trained on"
         check_btf_record(b.path, btf_fingerprint(b), ck["btf"], mismatch, "the checkpoint has")
         data = SliceData(b, ck["split"]["test"])
-    mat, _ = pack_material(ck, data, source)
+    mat, _ = pack_material(ck, data, source, lod_levels)
     write_vrnm(out, mat)
     return out, mat.meta
 
