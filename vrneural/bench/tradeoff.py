@@ -270,39 +270,43 @@ def reference(scene, s, cond, crop, full, frames, spp, seed) -> dict:
     return {f: ref.frame(f) for f in frames}
 
 
-def match_budget(scene, c, cond, prof, target_blocks: float) -> tuple[float, float]:
-    """The adaptive budget (degrees) whose candidate-block work over ``cond``'s frames equals
-    ``target_blocks`` (fixed N's), by bisection on the CPU-side schedule alone (no shading);
-    returns (budget, its work)."""
+def scheduled_candidates(r, cond, budget: float | None) -> float:
+    """Candidate blocks per displayed frame (frame 0, the first full update, left out) that
+    renderer ``r``'s schedule hands the texture-space pass over ``cond``'s frames, with adaptive
+    reuse at ``budget`` degrees (None: the fixed N): the schedule alone, nothing shaded."""
     from vrneural.runtime.adaptive import AdaptiveState
     from vrneural.runtime.lights import light_arrays
+
+    r.s.reuse_budget = budget
+    for n in r.neural:
+        n.fresh, n.adapt = False, AdaptiveState()
+    total = 0
+    for f in range(cond.frames):
+        todo, _, _ = r._slices(f, r.eyes_at(f), light_arrays(r.lights, f / r.s.fps)[0])
+        if f:
+            total += sum(n.gatlas.block_list(per)[1][ph][1] for _, n, ph, per in todo)
+    return total * r.s.eyes / max(cond.frames - 1, 1)
+
+
+def match_budget(scene, c, cond, prof) -> tuple[float, float, float]:
+    """The adaptive budget (degrees) whose candidate-block work over ``cond``'s frames matches
+    the fixed base N's, by log-space bisection on the schedule alone (the smallest budget that
+    does not exceed it: work falls in steps); returns (budget, its work, the fixed N's)."""
     from vrneural.runtime.renderer import Renderer
 
-    s = settings_for(c, variant(budget=1.0), cond, prof)
-    r = Renderer(scene, s)
+    r = Renderer(scene, settings_for(c, variant(), cond, prof))
     r.head = cond.head()
-
-    def work(budget: float) -> float:
-        r.s.reuse_budget = budget
-        for n in r.neural:
-            n.fresh, n.adapt = False, AdaptiveState()
-        total = 0
-        for f in range(cond.frames):
-            todo, _, _ = r._slices(f, r.eyes_at(f), light_arrays(r.lights, f / s.fps)[0])
-            if f:
-                total += sum(n.gatlas.block_list(per)[1][ph][1] for _, n, ph, per in todo)
-        return total * s.eyes / max(cond.frames - 1, 1)
-
+    target = scheduled_candidates(r, cond, None)
     lo, hi = 1e-3, 90.0
-    for _ in range(30):  # log-space bisection: more budget, less work
+    for _ in range(30):  # more budget, less work
         mid = float(np.sqrt(lo * hi))
-        if work(mid) > target_blocks:
+        if scheduled_candidates(r, cond, mid) > target:
             lo = mid
         else:
             hi = mid
         if hi / lo < 1.02:
             break
-    return hi, work(hi)
+    return hi, scheduled_candidates(r, cond, hi), target
 
 
 def scores(
@@ -495,8 +499,7 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     budget = None
     if fastest is not None:
         scene = ts.scene_for(fastest, mats[first]["student"], n_lights=c.lights)
-        target = _candidates(scene, c, fastest, prof)
-        budget, matched = match_budget(scene, c, fastest, prof, target)
+        budget, matched, target = match_budget(scene, c, fastest, prof)
         doc["adaptive"] = {"condition": fastest.name, "budget_deg": budget,
                            "base_candidates_per_frame": target,
                            "matched_candidates_per_frame": matched}  # fmt: skip
@@ -539,20 +542,3 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
         doc["records"].append(rec)
     bar.close()
     return finish_report(root, doc, t0)
-
-
-def _candidates(scene, c, cond, prof) -> float:
-    """Candidate blocks per frame of the fixed base N over ``cond`` (CPU-side, as
-    :func:`match_budget` counts them)."""
-    from vrneural.runtime.lights import light_arrays
-    from vrneural.runtime.renderer import Renderer
-
-    s = settings_for(c, variant(), cond, prof)
-    r = Renderer(scene, s)
-    r.head = cond.head()
-    total = 0
-    for f in range(cond.frames):
-        todo, _, _ = r._slices(f, r.eyes_at(f), light_arrays(r.lights, f / s.fps)[0])
-        if f:
-            total += sum(n.gatlas.block_list(per)[1][ph][1] for _, n, ph, per in todo)
-    return total * s.eyes / max(cond.frames - 1, 1)
