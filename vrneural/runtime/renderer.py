@@ -1,6 +1,9 @@
 """The frame loop: per frame, the scheduled texture-space updates of visible neural objects
 (per eye), then the forward pass per eye (or, in the screen-space modes, the visibility pass and
-the per-pixel compute pass). Records counters, per-pass GPU ms (timestamps) and frame wall ms.
+the per-pixel compute pass), all in one command buffer and one submit. ``frame()`` returns
+without waiting for the GPU (up to ``Settings.frames_in_flight`` frames queued); the frame's
+counters and per-pass GPU ms (timestamps) come back in its own submit and arrive in its
+:class:`~vrneural.runtime.stats.FrameStats` later (runtime/stats.py).
 """
 
 from __future__ import annotations
@@ -13,9 +16,11 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.errors import VrnError, check_int, count
+from vrneural.gpu.coverage import timestamp_coverage
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
+from vrneural.gpu.uniforms import UniformArena
 from vrneural.runtime import forward as fw
 from vrneural.runtime.adaptive import AdaptiveState, coverage_slack, near_scale, object_directions
 from vrneural.runtime.assets import collapsed_triangles, get_atlas, get_mesh, lost_triangles
@@ -24,7 +29,6 @@ from vrneural.runtime.camera import (
     OrbitPath,
     PoseLogPath,
     eyes_from_pose,
-    sphere_in_frustum,
     window_matrix,
 )
 from vrneural.runtime.codegen import reference_weights
@@ -32,11 +36,15 @@ from vrneural.runtime.gpu_material import GpuAtlas
 from vrneural.runtime.lights import light_arrays
 from vrneural.runtime.schedule import frame_slice
 from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget, screen_rect
+from vrneural.runtime.stats import FrameResults, FrameStats
 from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
 from vrneural.warn import VrnWarning
 
 MODES = ("texture", "screen", "reference")
 RADIANCE = ("per-eye", "shared")
+TARGETS = tuple(fw.TARGETS)
+#: the most frames a renderer lets the GPU queue (Settings.frames_in_flight)
+FRAMES_IN_FLIGHT_MAX = 3
 #: the longest refresh sweep of adaptive reuse, in frames
 ADAPTIVE_PERIOD_MAX = 16
 
@@ -68,24 +76,14 @@ class Settings:
     #: render the window ``(x0, y0)`` of a ``full_w x full_h`` eye image, ``eye_res`` in size
     #: (``(x0, y0, full_w, full_h)``; the bench's crops at the headset's pixel density)
     crop: tuple | None = None
+    #: frames the GPU may have queued while the host encodes the next (1 = none ahead)
+    frames_in_flight: int = 2
+    #: eye colour targets: "hdr" (rgba16float radiance: EXR, FLIP) or "display" (8-bit
+    #: Reinhard-tonemapped sRGB, texture mode only: where HDR output is not needed)
+    target: str = "hdr"
 
 
-@dataclass
-class FrameStats:
-    """What one :meth:`Renderer.frame` did. Frame 0 includes shader compilation: leave it out
-    of timings."""
-
-    frame: int  #: the frame index
-    wall_ms: float  #: host wall time of the frame, GPU wait included
-    #: GPU ms per pass name (texture, forward; screen in the screen modes), both eyes summed
-    gpu_ms: dict
-    updated_objects: int  #: neural objects whose radiance textures were updated (texture mode)
-    culled_objects: int  #: neural objects outside every eye's view, not updated
-    blocks_shaded: int  #: 2x2 texel blocks shaded (texture mode)
-    blocks_backfacing: int  #: blocks skipped as facing away from the eye (texture mode)
-    mlp_coarse: int  #: coarse-network evaluations (per block; per pixel in screen modes)
-    mlp_fine: int  #: fine-network evaluations (per texel; per pixel in screen modes)
-    pixels_shaded: int = 0  #: pixels shaded per pixel (screen and reference modes)
+__all__ = ["FrameStats", "Renderer", "Settings"]
 
 
 @dataclass
@@ -99,6 +97,7 @@ class _Neural:
     targets: list = field(default_factory=list)  # per eye: TextureTarget | ScreenTarget
     fresh: bool = False  # its radiance textures hold a complete update since it was last culled
     adapt: AdaptiveState = field(default_factory=AdaptiveState)  # --reuse auto
+    sphere: tuple = (None, None, 0.0, None)  # (model bytes, world centre, radius, [c, 1]): cache
 
 
 def bounding_sphere(mesh) -> tuple[np.ndarray, float]:
@@ -131,6 +130,14 @@ class Renderer:
             raise VrnError(
                 f"--radiance shared needs two eyes (a texture shared by both); --eyes is {s.eyes}"
             )
+        check_int("frames_in_flight", s.frames_in_flight, 1, FRAMES_IN_FLIGHT_MAX)
+        if s.target not in TARGETS:
+            raise VrnError(f"target = {s.target!r} is not allowed; choose {', '.join(TARGETS)}")
+        if s.target == "display" and s.mode != "texture":
+            raise VrnError(
+                f"target = 'display' needs mode 'texture' (mode {s.mode!r} writes HDR pixels "
+                "from a compute pass)"
+            )
         self.scene, self.s = scene, s
         #: sub-pixel offset (x, y) of the rendered image in pixels (supersampled references)
         self.jitter = (0.0, 0.0)
@@ -142,7 +149,12 @@ class Renderer:
         screen = s.mode != "texture"
         self.lights = scene.lights[: s.n_lights]
         nl = max(1, len(self.lights))
-        self.eye_t = [fw.EyeTargets(w, h, nl, vis=screen) for _ in range(s.eyes)]
+        #: every per-frame uniform, written with one write_buffer per frame
+        self.arena = UniformArena("frame uniforms")
+        self.eye_t = [
+            fw.EyeTargets(w, h, nl, vis=screen, arena=self.arena, target=s.target)
+            for _ in range(s.eyes)
+        ]
         self.head = OrbitPath() if scene.head == "orbit" else PoseLogPath(scene.head)
         # Floating origin: everything uploaded to the GPU is relative to the first eye position
         # (subtracted in float64), so scenes far from the world origin keep f32 precision.
@@ -165,6 +177,15 @@ class Renderer:
                     self.warnings.append(line)
             else:  # not ours: shown as it would have been
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        self.results = FrameResults(self.timer, self.counters, s.frames_in_flight, screen)
+        cover = timestamp_coverage()
+        #: passes whose timestamps this adapter does not cover (gpu/coverage.py)
+        self.untimed = tuple(
+            name
+            for name, kind in (("texture", "compute"), ("screen", "compute"), ("forward", "render"))
+            if self.timer.enabled and not cover[kind]
+        )
+        self._bundles: list | None = None  # per eye, the forward pass's draws (first frame)
 
     def _add_object(self, i: int, o, passes: dict, progress) -> None:
         """Load object ``i``'s mesh; a neural one also gets its atlas, pass and targets."""
@@ -256,18 +277,25 @@ class Renderer:
 
     def _make_target(self, p, n: _Neural, eye: int):
         if self.s.mode == "texture":
-            return TextureTarget(p, n.gatlas, self.counters)
-        return ScreenTarget(p, n.gatlas, self.eye_t[eye], self.counters)
+            return TextureTarget(p, n.gatlas, self.counters, self.arena)
+        return ScreenTarget(p, n.gatlas, self.eye_t[eye], self.counters, self.arena)
 
     @staticmethod
     def world_sphere(n: _Neural) -> tuple[np.ndarray, float]:
+        """Object ``n``'s bounding sphere in the world (centre [3], radius m)."""
         model = n.desc.model
-        c = model[:3, :3] @ n.centre + model[:3, 3]
-        return c, n.radius * float(np.linalg.norm(model[:3, :3], axis=0).max())
+        key = model.tobytes()
+        if n.sphere[0] != key:  # computed again only when the model matrix changed
+            c = model[:3, :3] @ n.centre + model[:3, 3]
+            r = n.radius * float(np.linalg.norm(model[:3, :3], axis=0).max())
+            n.sphere = (key, c, r, np.append(c, 1.0))
+        return n.sphere[1], n.sphere[2]
 
     def _visible(self, n: _Neural, eyes) -> bool:
-        c, r = self.world_sphere(n)
-        return any(sphere_in_frustum(c, r, e.view_proj) for e in eyes)
+        """Whether ``n``'s bounding sphere touches any eye's frustum (``sphere_in_frustum``)."""
+        self.world_sphere(n)
+        _, _, r, ch = n.sphere
+        return any(bool((e.planes @ ch >= -r).all()) for e in eyes)
 
     def eyes_at(self, frame: int, t: float | None = None, head=None):
         """The eyes at display frame ``frame`` (the whole view: visibility and shading): the
@@ -311,7 +339,8 @@ class Renderer:
         counts of objects updated and culled."""
         s = self.s
         sl = frame_slice(f, s.reuse, s.schedule)
-        centre = np.mean([e.position for e in eyes], axis=0)
+        adaptive = s.reuse_budget is not None
+        centre = np.mean([e.position for e in eyes], axis=0) if adaptive else None
         todo, updated, culled = [], 0, 0
         for k, n in enumerate(self.neural):
             if not self._visible(n, eyes):
@@ -351,66 +380,132 @@ class Renderer:
         return float(min(frac, 1.0))
 
     def frame(self, f: int, t: float | None = None, head=None) -> FrameStats:
-        """Render display frame ``f`` (waits for the GPU); returns its statistics. ``f`` drives
+        """Render display frame ``f``: encode and submit it, and return without waiting for the
+        GPU (its statistics fill in when it has finished: :class:`FrameStats`). ``f`` drives
         the reuse schedule; ``t`` (s, default ``f / fps``) the lights' motion and the head
-        path; ``head`` replaces the head path (see :meth:`eyes_at`)."""
+        path; ``head`` replaces the head path (see :meth:`eyes_at`). Waits only when
+        ``Settings.frames_in_flight`` frames are still queued."""
         check_int("frame", f, 0)
         s = self.s
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
+        slot = self.results.begin()
         eyes = self.eyes_at(f, t, head)
         lp, lc = light_arrays(self.lights, f / s.fps if t is None else t)
-        self.counters.clear()
         enc = self.dev.create_command_encoder()
+        self.counters.clear(enc)
         updated = culled = 0
         if s.mode == "texture":
             todo, updated, culled = self._slices(f, eyes, lp)
             if todo:
-                # all of a frame's texture-space dispatches in one compute pass: one timestamp
-                # pair around them (lavapipe's per-pass timestamps are unreliable when several
-                # independent compute passes follow each other)
-                cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("texture"))
-                shading = self._shading_eyes(eyes)
-                for k, n, phase, period in todo:
-                    tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
-                    for e, ((pos, margin), tgt) in enumerate(zip(shading, n.targets, strict=True)):
-                        slot = k * s.eyes + e
-                        tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, slot, margin)
-                        tgt.dispatch(cp, phase, period)
-                cp.end()
-        eyes = self.raster_eyes(eyes)
+                self._encode_texture(enc, todo, eyes, lp, lc)
+        culled += self._encode_eyes(enc, self.raster_eyes(eyes), lp, lc)
+        names = self.results.copy_into(enc, slot)
+        self.arena.flush()
+        self.dev.queue.submit([enc.finish()])
+        st = FrameStats(f, 0 if s.mode != "texture" else updated, culled, self.untimed)
+        st._start, st.in_flight = t0, self.results.in_flight()
+        self.results.submitted(slot, st, names)
+        st.host_ms = (time.perf_counter() - t0) * 1e3
+        st.cpu_ms = (time.thread_time() - c0) * 1e3
+        return st
+
+    def _encode_texture(self, enc, todo, eyes, lp, lc) -> None:
+        """All of a frame's texture-space dispatches, in one compute pass."""
+        cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("texture"))
+        shading = self._shading_eyes(eyes)
+        bound = None
+        for k, n, phase, period in todo:
+            tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
+            for e, ((pos, margin), tgt) in enumerate(zip(shading, n.targets, strict=True)):
+                slot = k * self.s.eyes + e
+                tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, slot, margin)
+                bound = tgt.dispatch(cp, phase, period, bound=bound)
+        cp.end()
+
+    def _encode_eyes(self, enc, eyes, lp, lc) -> int:
+        """Per eye, the forward pass (replaying its bundle) and, in the screen modes, the
+        per-pixel pass; returns the (object, eye) pairs culled there."""
+        s = self.s
         shift = np.eye(4)
         shift[:3, 3] = self.origin
         lp_r = lp - self.origin
+        culled = 0
         for e, (eye, et) in enumerate(zip(eyes, self.eye_t, strict=True)):
             vp_r = eye.view_proj @ shift  # origin-relative position -> clip
             et.update(vp_r, eye.position - self.origin, lp_r, lc)
-            self._draw(enc, e, et)
+            self.encode_forward(enc, e)
             if s.mode != "texture":
-                inv = np.linalg.inv(vp_r)
-                cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("screen"))
-                for k, n in enumerate(self.neural):
-                    if not self._visible(n, [eye]):
-                        culled += 1
-                        continue
-                    tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
-                    tgt = n.targets[e]
-                    c, r = self.world_sphere(n)
-                    rect = screen_rect(c, r, eye.view_proj, *s.eye_res)
-                    slot = k * s.eyes + e
-                    model_r, eye_r = self.rebase(n.desc.model), eye.position - self.origin
-                    tgt.update(model_r, eye_r, tiling, inv, lp_r, lc, slot, n.idx, rect)
-                    tgt.dispatch(cp)
-                cp.end()
-        self.timer.resolve(enc)
-        self.dev.queue.submit([enc.finish()])
-        gpu = self.timer.read()  # waits for the GPU
-        c = self.counters.read().sum(0)
-        wall = (time.perf_counter() - t0) * 1e3
-        if s.mode != "texture":
-            return FrameStats(
-                f, wall, gpu, 0, culled, 0, int(c[1]), int(c[2]), int(c[3]), int(c[0])
-            )
-        return FrameStats(f, wall, gpu, updated, culled, int(c[0]), int(c[1]), int(c[2]), int(c[3]))
+                culled += self._encode_screen(enc, e, eye, vp_r, lp_r, lc)
+        return culled
+
+    def encode_forward(self, enc, e: int, bundles: list | None = None, name="forward") -> None:
+        """Eye ``e``'s forward pass into ``enc``: its bundle (or ``bundles[e]``: the bench's
+        floors over the same draws), timed as ``name``."""
+        if self._bundles is None:
+            self._bundles = [
+                fw.record_bundle(et, self.draw_list(e, et)) for e, et in enumerate(self.eye_t)
+            ]
+        rp = fw.begin_pass(enc, self.eye_t[e], self.timer.writes(name))
+        rp.execute_bundles([(bundles or self._bundles)[e]])
+        rp.end()
+
+    def draw_list(self, e: int, et, fragment: str | None = None) -> list:
+        """Eye ``e``'s draws ``[(pipeline, object bind group, DrawObject)]``; ``fragment``
+        replaces every draw's fragment entry point (``fs_floor_*``: the bench's floors; plain
+        objects then sample the first radiance texture)."""
+        s = self.s
+        vis = s.mode != "texture"
+        nl, na = et.n_lights, len(self.lights)
+        out = []
+        for d, n in self.draws:
+            if fragment is not None:
+                tgt = (n or self.neural[0]).targets
+                tgt = tgt[e if len(tgt) > 1 else 0]
+                pipe = fw.render_pipeline(nl, fragment, False, na, s.target)
+                bg = d.bind_group(tgt.view, ("eye", e) if n is not None else ("floor", e))
+            elif n is None:
+                pipe = fw.render_pipeline(
+                    nl, "fs_plain_vis" if vis else "fs_plain", vis, na, s.target
+                )
+                bg = d.bind_group(None, "plain")
+            elif vis:
+                pipe = fw.render_pipeline(nl, "fs_neural_vis", True, na)
+                bg = d.bind_group(None, "plain")
+            else:
+                pipe = fw.render_pipeline(nl, "fs_neural", False, na, s.target)
+                tgt = n.targets[e if len(n.targets) > 1 else 0]  # shared: one for both
+                bg = d.bind_group(tgt.view, ("eye", e))
+            out.append((pipe, bg, d))
+        return out
+
+    def _encode_screen(self, enc, e: int, eye, vp_r, lp_r, lc) -> int:
+        s = self.s
+        inv = np.linalg.inv(vp_r)
+        cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("screen"))
+        culled = 0
+        for k, n in enumerate(self.neural):
+            if not self._visible(n, [eye]):
+                culled += 1
+                continue
+            tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
+            tgt = n.targets[e]
+            c, r = self.world_sphere(n)
+            rect = screen_rect(c, r, eye.view_proj, *s.eye_res)
+            slot = k * s.eyes + e
+            model_r, eye_r = self.rebase(n.desc.model), eye.position - self.origin
+            tgt.update(model_r, eye_r, tiling, inv, lp_r, lc, slot, n.idx, rect)
+            tgt.dispatch(cp)
+        cp.end()
+        return culled
+
+    def wait(self) -> None:
+        """Wait until the GPU has finished every submitted frame; their statistics are in."""
+        self.results.wait()
+
+    def latest_stats(self) -> FrameStats | None:
+        """The newest frame whose statistics are in, without waiting (the viewer's HUD)."""
+        self.results.poll()
+        return self.results.latest
 
     def _shading_eyes(self, eyes) -> list[tuple[np.ndarray, float]]:
         """Where each radiance texture is shaded from: ``(eye position, facing margin)`` per
@@ -419,28 +514,6 @@ class Renderer:
             a, b = eyes[0].position, eyes[1].position
             return [((a + b) / 2, float(np.linalg.norm(a - b)) / 2)]
         return [(e.position, 0.0) for e in eyes]
-
-    def _draw(self, enc, e: int, et) -> None:
-        vis = self.s.mode != "texture"
-        rp = fw.begin_pass(enc, et, self.timer.writes("forward"))
-        nl = et.n_lights
-        for d, n in self.draws:
-            if n is None:
-                pipe = fw.render_pipeline(nl, "fs_plain_vis" if vis else "fs_plain", vis)
-                bg = d.bind_group(None, "plain")
-            elif vis:
-                pipe = fw.render_pipeline(nl, "fs_neural_vis", True)
-                bg = d.bind_group(None, "plain")
-            else:
-                pipe = fw.render_pipeline(nl, "fs_neural", False)
-                tgt = n.targets[e if len(n.targets) > 1 else 0]  # shared: one for both
-                bg = d.bind_group(tgt.view, ("eye", e))
-            rp.set_pipeline(pipe)
-            rp.set_bind_group(0, fw.frame_bind_group(et))
-            rp.set_bind_group(1, bg)
-            rp.set_vertex_buffer(0, d.vbuf)
-            rp.draw(d.n_vertices)
-        rp.end()
 
     def colour_textures(self) -> list:
         """The eyes' HDR colour textures (``rgba16float``, ``eye_res``, sampled-texture usage)
@@ -456,8 +529,24 @@ class Renderer:
             n.fresh = False
 
     def read_eyes(self) -> list[np.ndarray]:
-        """The eyes' HDR colour ``[H, W, 4]`` float32 of the last frame."""
+        """The eyes' HDR colour ``[H, W, 4]`` float32 of the last frame (waits for it)."""
+        if self.s.target != "hdr":
+            raise VrnError(
+                f"read_eyes: this renderer's eye targets are {self.s.target!r} (tonemapped, 8 "
+                "bits); HDR needs target 'hdr' (read_display gives the display colours)"
+            )
+        self.wait()
         return [read_texture(et.colour).astype(np.float32) for et in self.eye_t]
+
+    def read_display(self) -> list[np.ndarray]:
+        """The eyes' display colours ``[H, W, 3]`` uint8 (sRGB) of the last frame (waits for
+        it): the display target as it is, or the HDR target through ``output.tonemap``."""
+        from vrneural.runtime.output import tonemap
+
+        self.wait()
+        if self.s.target == "display":
+            return [read_texture(et.colour)[..., :3] for et in self.eye_t]
+        return [tonemap(read_texture(et.colour).astype(np.float32)) for et in self.eye_t]
 
     def radiance(self, obj: int = 0, eye: int = 0) -> np.ndarray:
         """Radiance texture ``[R, R, 4]`` float32 of neural object ``obj`` (counting neural
