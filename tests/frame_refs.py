@@ -50,7 +50,9 @@ def render(name: str, wait=None) -> tuple[np.ndarray, np.ndarray]:
     from vrneural.runtime.renderer import Renderer, Settings
 
     kind, kw, frames, jitter = configs()[name]
-    s = Settings(**{k: v for k, v in kw.items() if k in {f.name for f in dataclasses.fields(Settings)}})
+    s = Settings(
+        **{k: v for k, v in kw.items() if k in {f.name for f in dataclasses.fields(Settings)}}
+    )
     r = Renderer(scene(kind, s.n_lights), s)
     if jitter is not None:
         r.jitter = jitter

@@ -40,7 +40,7 @@ class UniformArena:
     def _create(self) -> None:
         import wgpu
 
-        u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
+        u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST | wgpu.BufferUsage.COPY_SRC
         self.buf = get_device().create_buffer(size=max(self.size, 16), usage=u, label=self.label)
         self.host = np.zeros(max(self.size, 16), np.uint8)
 

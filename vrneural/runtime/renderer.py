@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.errors import VrnError, check_int, count
-from vrneural.gpu.coverage import timestamp_coverage
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
@@ -24,6 +23,7 @@ from vrneural.gpu.uniforms import UniformArena
 from vrneural.runtime import forward as fw
 from vrneural.runtime.adaptive import AdaptiveState, coverage_slack, near_scale, object_directions
 from vrneural.runtime.assets import collapsed_triangles, get_atlas, get_mesh, lost_triangles
+from vrneural.runtime.encode import FrameEncoding
 from vrneural.runtime.camera import (
     Eye,
     OrbitPath,
@@ -35,7 +35,7 @@ from vrneural.runtime.codegen import reference_weights
 from vrneural.runtime.gpu_material import GpuAtlas
 from vrneural.runtime.lights import light_arrays
 from vrneural.runtime.schedule import frame_slice
-from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget, screen_rect
+from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget
 from vrneural.runtime.stats import FrameResults, FrameStats
 from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
 from vrneural.warn import VrnWarning
@@ -106,7 +106,7 @@ def bounding_sphere(mesh) -> tuple[np.ndarray, float]:
     return c.astype(np.float64), float(np.linalg.norm(mesh.positions - c, axis=1).max())
 
 
-class Renderer:
+class Renderer(FrameEncoding):
     """Everything on the device for one scene and settings; :meth:`frame` renders one frame.
 
     What a live caller (`vrneural view`) may use between frames, and nothing else: ``lights``
@@ -178,13 +178,11 @@ class Renderer:
             else:  # not ours: shown as it would have been
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         self.results = FrameResults(self.timer, self.counters, s.frames_in_flight, screen)
-        cover = timestamp_coverage()
-        #: passes whose timestamps this adapter does not cover (gpu/coverage.py)
-        self.untimed = tuple(
-            name
-            for name, kind in (("texture", "compute"), ("screen", "compute"), ("forward", "render"))
-            if self.timer.enabled and not cover[kind]
-        )
+        #: passes whose timestamps this adapter does not cover (runtime/timecheck.py: checked
+        #: right after the first frame; until then none)
+        self.untimed: tuple = ()
+        #: the check's measurements per pass (timestamps vs wall clock); None before it ran
+        self.timestamp_check: dict | None = None
         self._bundles: list | None = None  # per eye, the forward pass's draws (first frame)
 
     def _add_object(self, i: int, o, passes: dict, progress) -> None:
@@ -384,119 +382,53 @@ class Renderer:
         GPU (its statistics fill in when it has finished: :class:`FrameStats`). ``f`` drives
         the reuse schedule; ``t`` (s, default ``f / fps``) the lights' motion and the head
         path; ``head`` replaces the head path (see :meth:`eyes_at`). Waits only when
-        ``Settings.frames_in_flight`` frames are still queued."""
+        ``Settings.frames_in_flight`` frames are still queued (or, with :attr:`pass_clock`
+        ``"wall"``, after every pass)."""
         check_int("frame", f, 0)
         s = self.s
         t0, c0 = time.perf_counter(), time.thread_time()
         slot = self.results.begin()
+        if self.pass_clock == "wall":
+            self.results.wait()
+        self._wall: dict = {}
         eyes = self.eyes_at(f, t, head)
         lp, lc = light_arrays(self.lights, f / s.fps if t is None else t)
+        self._last = (eyes, lp, lc)
         enc = self.dev.create_command_encoder()
         self.counters.clear(enc)
         updated = culled = 0
         if s.mode == "texture":
             todo, updated, culled = self._slices(f, eyes, lp)
             if todo:
-                self._encode_texture(enc, todo, eyes, lp, lc)
-        culled += self._encode_eyes(enc, self.raster_eyes(eyes), lp, lc)
+                enc = self._encode_texture(enc, todo, eyes, lp, lc)
+        c, enc = self._encode_eyes(enc, self.raster_eyes(eyes), lp, lc)
+        culled += c
         names = self.results.copy_into(enc, slot)
         self.arena.flush()
         self.dev.queue.submit([enc.finish()])
-        st = FrameStats(f, 0 if s.mode != "texture" else updated, culled, self.untimed)
+        wall = {k: v for k, v in self._wall.items() if not k.startswith("_")}
+        untimed = self.untimed if self.pass_clock != "wall" else ()
+        st = FrameStats(f, 0 if s.mode != "texture" else updated, culled, untimed)
+        st.clock = self.pass_clock
         st._start, st.in_flight = t0, self.results.in_flight()
-        self.results.submitted(slot, st, names)
+        self.results.submitted(slot, st, names, wall or None)
         st.host_ms = (time.perf_counter() - t0) * 1e3
         st.cpu_ms = (time.thread_time() - c0) * 1e3
+        if self.timestamp_check is None:  # after the first frame: are the timestamps true?
+            from vrneural.runtime.timecheck import check_timestamps
+
+            self.timestamp_check = check_timestamps(self)
+            self.untimed = tuple(k for k, v in self.timestamp_check.items() if not v["covered"])
+            st.untimed = self.untimed
         return st
 
-    def _encode_texture(self, enc, todo, eyes, lp, lc) -> None:
-        """All of a frame's texture-space dispatches, in one compute pass."""
-        cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("texture"))
-        shading = self._shading_eyes(eyes)
-        bound = None
-        for k, n, phase, period in todo:
-            tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
-            for e, ((pos, margin), tgt) in enumerate(zip(shading, n.targets, strict=True)):
-                slot = k * self.s.eyes + e
-                tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, slot, margin)
-                bound = tgt.dispatch(cp, phase, period, bound=bound)
-        cp.end()
-
-    def _encode_eyes(self, enc, eyes, lp, lc) -> int:
-        """Per eye, the forward pass (replaying its bundle) and, in the screen modes, the
-        per-pixel pass; returns the (object, eye) pairs culled there."""
-        s = self.s
-        shift = np.eye(4)
-        shift[:3, 3] = self.origin
-        lp_r = lp - self.origin
-        culled = 0
-        for e, (eye, et) in enumerate(zip(eyes, self.eye_t, strict=True)):
-            vp_r = eye.view_proj @ shift  # origin-relative position -> clip
-            et.update(vp_r, eye.position - self.origin, lp_r, lc)
-            self.encode_forward(enc, e)
-            if s.mode != "texture":
-                culled += self._encode_screen(enc, e, eye, vp_r, lp_r, lc)
-        return culled
-
-    def encode_forward(self, enc, e: int, bundles: list | None = None, name="forward") -> None:
-        """Eye ``e``'s forward pass into ``enc``: its bundle (or ``bundles[e]``: the bench's
-        floors over the same draws), timed as ``name``."""
-        if self._bundles is None:
-            self._bundles = [
-                fw.record_bundle(et, self.draw_list(e, et)) for e, et in enumerate(self.eye_t)
-            ]
-        rp = fw.begin_pass(enc, self.eye_t[e], self.timer.writes(name))
-        rp.execute_bundles([(bundles or self._bundles)[e]])
-        rp.end()
-
-    def draw_list(self, e: int, et, fragment: str | None = None) -> list:
-        """Eye ``e``'s draws ``[(pipeline, object bind group, DrawObject)]``; ``fragment``
-        replaces every draw's fragment entry point (``fs_floor_*``: the bench's floors; plain
-        objects then sample the first radiance texture)."""
-        s = self.s
-        vis = s.mode != "texture"
-        nl, na = et.n_lights, len(self.lights)
-        out = []
-        for d, n in self.draws:
-            if fragment is not None:
-                tgt = (n or self.neural[0]).targets
-                tgt = tgt[e if len(tgt) > 1 else 0]
-                pipe = fw.render_pipeline(nl, fragment, False, na, s.target)
-                bg = d.bind_group(tgt.view, ("eye", e) if n is not None else ("floor", e))
-            elif n is None:
-                pipe = fw.render_pipeline(
-                    nl, "fs_plain_vis" if vis else "fs_plain", vis, na, s.target
-                )
-                bg = d.bind_group(None, "plain")
-            elif vis:
-                pipe = fw.render_pipeline(nl, "fs_neural_vis", True, na)
-                bg = d.bind_group(None, "plain")
-            else:
-                pipe = fw.render_pipeline(nl, "fs_neural", False, na, s.target)
-                tgt = n.targets[e if len(n.targets) > 1 else 0]  # shared: one for both
-                bg = d.bind_group(tgt.view, ("eye", e))
-            out.append((pipe, bg, d))
-        return out
-
-    def _encode_screen(self, enc, e: int, eye, vp_r, lp_r, lc) -> int:
-        s = self.s
-        inv = np.linalg.inv(vp_r)
-        cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("screen"))
-        culled = 0
-        for k, n in enumerate(self.neural):
-            if not self._visible(n, [eye]):
-                culled += 1
-                continue
-            tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
-            tgt = n.targets[e]
-            c, r = self.world_sphere(n)
-            rect = screen_rect(c, r, eye.view_proj, *s.eye_res)
-            slot = k * s.eyes + e
-            model_r, eye_r = self.rebase(n.desc.model), eye.position - self.origin
-            tgt.update(model_r, eye_r, tiling, inv, lp_r, lc, slot, n.idx, rect)
-            tgt.dispatch(cp)
-        cp.end()
-        return culled
+    def set_frames_in_flight(self, depth: int) -> None:
+        """Let the GPU queue ``depth`` frames from the next one on (1..3; waits for those in
+        flight now)."""
+        check_int("frames_in_flight", depth, 1, FRAMES_IN_FLIGHT_MAX)
+        self.wait()
+        self.s.frames_in_flight = depth
+        self.results = FrameResults(self.timer, self.counters, depth, self.s.mode != "texture")
 
     def wait(self) -> None:
         """Wait until the GPU has finished every submitted frame; their statistics are in."""

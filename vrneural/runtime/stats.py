@@ -56,8 +56,11 @@ class FrameStats:
     cpu_ms: float  #: main-thread CPU time inside ``frame()``
     in_flight: int  #: frames submitted before this one and not yet finished on the GPU
     #: passes run but left out of ``gpu_ms``: this adapter's timestamps do not cover them
-    #: (gpu/coverage.py); their time is in ``wall_ms``
+    #: (runtime/timecheck.py); their time is in ``wall_ms``
     untimed: tuple
+    #: what ``gpu_ms`` was measured with: "timestamps", or "wall" (``Renderer.pass_clock``:
+    #: each pass submitted alone and waited for, from submit to completion)
+    clock: str
 
     def __init__(self, frame: int, updated: int, culled: int, untimed: tuple, waiter=None):
         self.frame = frame
@@ -66,6 +69,7 @@ class FrameStats:
         self.untimed = untimed
         self.host_ms = self.cpu_ms = 0.0
         self.in_flight = 0
+        self.clock = "timestamps"
         self._waiter = waiter
         self._start = 0.0
         self._end: float | None = None
@@ -87,16 +91,16 @@ class FrameStats:
         """Whether the GPU fields are in (reading them does not wait)."""
         return self.__dict__.get("_waiter") is None
 
-    def _arrived(self, raw: bytes, names: list, ts_bytes: int, screen: bool) -> None:
+    def _arrived(self, raw: bytes, names, ts_bytes: int, screen: bool, wall=None) -> None:
         """The frame's read-back bytes (timestamps, then ``slots x 4`` u32 counters), decoded
-        when a field is first read."""
-        self._raw = (raw, names, ts_bytes, screen)
+        when a field is first read; ``wall``: per-pass wall ms (``pass_clock`` "wall")."""
+        self._raw = (raw, names, ts_bytes, screen, wall)
         self._waiter = None
 
     def _decode(self) -> None:
-        raw, names, ts_bytes, screen = self._raw
+        raw, names, ts_bytes, screen, wall = self._raw
         c = np.frombuffer(raw, np.uint32, offset=ts_bytes).reshape(-1, 4).sum(0, dtype=np.int64)
-        gpu = GpuTimer.decode(raw[:ts_bytes], names)
+        gpu = dict(wall) if wall is not None else GpuTimer.decode(raw[:ts_bytes], names)
         for k in self.untimed:
             gpu.pop(k, None)
         d = self.__dict__
@@ -172,9 +176,9 @@ class FrameResults:
         )
         return names
 
-    def submitted(self, slot: int, st: FrameStats, names: list[str]) -> None:
+    def submitted(self, slot: int, st: FrameStats, names: list[str], wall=None) -> None:
         st._waiter = self._wait_for
-        self.ring.submitted(slot, (st, names))
+        self.ring.submitted(slot, (st, names, wall))
         self.last = st
         self.next_slot = (slot + 1) % self.depth
 
@@ -195,8 +199,8 @@ class FrameResults:
                 self._take(s)
 
     def _take(self, slot: int) -> None:
-        (st, names), raw = self.ring.take(slot)
+        (st, names, wall), raw = self.ring.take(slot)
         if st._end is None:
             st._end = time.perf_counter()
-        st._arrived(raw, names, self.ts_bytes, self.screen)
+        st._arrived(raw, names, self.ts_bytes, self.screen, wall)
         self.latest = st  # frames are taken in the order they were submitted
