@@ -21,8 +21,9 @@ import numpy as np
 from vrneural.gpu.timing import GpuTimer
 
 LOW, HIGH = 1 / 3, 3.0  # agreement band of timestamps / wall time
-#: a pass shorter than this (ms, wall minus an empty submit) cannot be judged: taken as covered
-MIN_MS = 0.5
+#: a pass shorter than this (ms, wall minus an empty submit) cannot be judged on a busy machine:
+#: taken as covered
+MIN_MS = 2.0
 
 
 def _wall(r, encode) -> float:
@@ -46,6 +47,8 @@ def _passes(r) -> dict:
             cp = enc.begin_compute_pass(timestamp_writes=timer and timer.writes("texture"))
             bound = None
             for k, n in enumerate(r.neural):
+                if not n.fresh:  # not updated by the frame (out of view): left as it is
+                    continue
                 tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
                 for e, ((pos, margin), tgt) in enumerate(
                     zip(r._shading_eyes(eyes), n.targets, strict=True)
@@ -79,9 +82,12 @@ class _NoTimer:
         return None
 
 
-def check_timestamps(r, repeats: int = 2) -> dict:
+def check_timestamps(r, repeats: int = 3) -> dict:
     """Per pass of renderer ``r`` (after its first frame): ``{timestamp_ms, wall_ms,
-    overhead_ms, covered}``, medians over ``repeats``; ``{}`` without timestamps."""
+    overhead_ms, covered}`` (medians over ``repeats``); ``{}`` without timestamps. Judged in
+    favour of the timestamps (the largest against the smallest wall time and the other way
+    round): timestamps that miss a pass are off by 10-100x, the noise of a busy machine by
+    less."""
     if not r.timer.enabled:
         return {}
     r.wait()
@@ -105,7 +111,9 @@ def check_timestamps(r, repeats: int = 2) -> dict:
     out = {}
     for k in passes:
         ts, wall = float(np.median(stamps[k])), float(np.median(walls[k]))
-        work = max(wall - empty, 0.0)
-        covered = work < MIN_MS or (LOW * work <= ts <= HIGH * wall)
+        work = max(min(walls[k]) - empty, 0.0)
+        covered = work < MIN_MS or (
+            LOW * work <= max(stamps[k]) and min(stamps[k]) <= HIGH * max(walls[k])
+        )
         out[k] = {"timestamp_ms": ts, "wall_ms": wall, "overhead_ms": empty, "covered": covered}
     return out
