@@ -9,9 +9,10 @@ import pytest
 from vrneural.cli import main
 import itertools
 
-BENCHES = ("frames", "lights", "materials", "kernels", "tradeoff", "atlas", "distance")
+BENCHES = ("frames", "lights", "materials", "frame", "kernels", "tradeoff", "atlas", "distance")
 PNGS = {
     "frames": ["frames.png"],
+    "frame": ["frame.png"],
     "lights": ["lights.png"],
     "materials": ["materials.png"],
     "kernels": ["kernels.png"],
@@ -76,6 +77,23 @@ def test_frames_records_and_amortisation(results):
             assert by_n[0]["mlp_evals_per_frame"] > by_n[4]["mlp_evals_per_frame"]
             evals = [by_n[n]["mlp_evals_per_frame"] for n in (0, 2, 4)]
             assert evals == sorted(evals, reverse=True)
+
+
+@pytest.mark.gpu
+def test_frame_breakdown_has_every_pass_floor_and_depth(results):
+    d = results[1]["frame"]
+    sm = d["summary"]
+    want = {"texture_full", "texture_bare", "texture_slice", "texture_slice_bare", "forward",
+            "forward_floor_sample", "forward_floor_constant", "forward_display"}  # fmt: skip
+    assert set(sm["passes"]) == want
+    assert all(_finite(v["wall_ms"]) and v["wall_ms"] > 0 for v in sm["passes"].values())
+    assert set(sm["loops"]) == {"1", "2", "3"}
+    for depth, v in sm["loops"].items():
+        assert _finite(v["wall_ms"], v["host_cpu_ms"], v["gpu_ms"], v["wall_vs_bound"])
+        assert 0 <= v["in_flight"] <= int(depth) - 1  # never more queued than allowed
+    for v in sm["ratios"].values():
+        assert _finite(v["median"]) and v["median"] > 0 and v["clock"] in ("wall", "timestamp")
+    assert all(r["loop"][k]["blocks_per_frame"] > 0 for r in d["records"] for k in r["loop"])
 
 
 @pytest.mark.gpu

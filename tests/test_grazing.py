@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from vrneural.bench.extremes_fixtures import direction
 from vrneural.errors import VrnError
-from vrneural.formats.vrnm import read_vrnm, write_vrnm
+from vrneural.formats.vrnm import VRNM_VERSION, read_vrnm, write_vrnm
 from vrneural.grazing import (
     boundary_consts,
     check_dir_range,
@@ -126,10 +126,10 @@ def test_pack_records_its_range_and_refuses_one_outside_0_90(tmp_path):
     # a pack whose header says 95 degrees: one line naming the file, the field and the range
     from vrneural.formats.container import read_container, write_container
 
-    header, arrays, _ = read_container(tmp_path / "m.vrnm", b"VRNM", (2,))
+    header, arrays, _ = read_container(tmp_path / "m.vrnm", b"VRNM", (VRNM_VERSION,))
     header["dir_range"] = [95.0, 70.0]
     arrays = {k: np.array(v) for k, v in arrays.items()}
-    write_container(tmp_path / "bad.vrnm", b"VRNM", 2, header, arrays)
+    write_container(tmp_path / "bad.vrnm", b"VRNM", VRNM_VERSION, header, arrays)
     with pytest.raises(VrnError) as e:
         read_vrnm(tmp_path / "bad.vrnm")
     msg = str(e.value)
@@ -141,7 +141,7 @@ def test_a_version_1_pack_loads_with_the_default_and_says_so_once(tmp_path, caps
     from vrneural.formats.container import read_container, write_container
 
     write_vrnm(tmp_path / "m.vrnm", random_material(2))
-    header, arrays, _ = read_container(tmp_path / "m.vrnm", b"VRNM", (2,))
+    header, arrays, _ = read_container(tmp_path / "m.vrnm", b"VRNM", (VRNM_VERSION,))
     del header["dir_range"]
     old = tmp_path / "old.vrnm"
     write_container(old, b"VRNM", 1, header, {k: np.array(v) for k, v in arrays.items()})
@@ -157,10 +157,10 @@ def test_cli_names_a_pack_with_a_bad_range(tmp_path):
     from vrneural.formats.container import read_container, write_container
 
     write_vrnm(tmp_path / "m.vrnm", random_material(2))
-    header, arrays, _ = read_container(tmp_path / "m.vrnm", b"VRNM", (2,))
+    header, arrays, _ = read_container(tmp_path / "m.vrnm", b"VRNM", (VRNM_VERSION,))
     header["dir_range"] = [75.0, 90.0]
     bad = tmp_path / "bad.vrnm"
-    write_container(bad, b"VRNM", 2, header, {k: np.array(v) for k, v in arrays.items()})
+    write_container(bad, b"VRNM", VRNM_VERSION, header, {k: np.array(v) for k, v in arrays.items()})
     expect_one_line_error(["eval", bad], "bad.vrnm", "theta_o_max = 90.0", "(0, 90)")
 
 

@@ -89,7 +89,11 @@ def test_tiny_run_writes_summary_and_frames(capsys, tmp_path):
     assert sm["frames"] == 6 and sm["resolved"]["reuse"] == 4
     assert len(sm["per_frame"]["blocks_shaded"]) == 6
     assert sm["frame_wall_ms"]["p99"] >= sm["frame_wall_ms"]["median"] > 0
-    assert {"texture", "forward"} <= set(sm["gpu_ms"])
+    # every pass is timed by timestamps or named as not covered by this adapter's (lavapipe:
+    # the compute passes), never both
+    assert {"texture", "forward"} == set(sm["gpu_ms"]) | set(sm["gpu_untimed"])
+    assert not set(sm["gpu_ms"]) & set(sm["gpu_untimed"])
+    assert sm["frames_in_flight"] == 2 and sm["host_cpu_ms"]["median"] > 0
     assert (out / "frame0000_eye1.png").is_file() and (out / "frame0005_eye0.exr").is_file()
     assert "frame ms" in capsys.readouterr().out
 

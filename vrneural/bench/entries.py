@@ -32,6 +32,12 @@ SPECS = {
         "run_materials",
         "paper Table 3: 1 to 4 materials, 3 lights, 1024^2, N = 7",
     ),
+    "frame": (
+        "frame",
+        "FrameConfig",
+        "run_frame",
+        "one frame's time: host, GPU per pass, frames in flight, against the adapter's floors",
+    ),
     "kernels": (
         "kernels",
         "KernelsConfig",
@@ -95,7 +101,8 @@ def _run(name: str, args) -> int:
 def _register_all(sub) -> None:
     p = sub.add_parser(
         "all",
-        help="run frames, lights, materials, kernels, tradeoff, atlas and distance into OUT/<name>",
+        help="run frames, lights, materials, frame, kernels, tradeoff, atlas and distance into "
+        "OUT/<name>",
         description="Every timing and trade-off benchmark (not `quality`, which trains its own "
         "baselines; run it separately). --quick: each at its CI size.",
     )

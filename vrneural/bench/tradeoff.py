@@ -393,7 +393,10 @@ def work(stats) -> dict:
     shade = [x.gpu_ms.get("texture", 0.0) + x.gpu_ms.get("screen", 0.0) for x in s]
     return {
         "frame_ms": rp.stats(w),
-        "shading_ms_per_frame": float(np.mean(shade)),
+        # None where this adapter's timestamps do not cover the pass (FrameStats.untimed)
+        "shading_ms_per_frame": None
+        if set(s[0].untimed) & {"texture", "screen"}
+        else float(np.mean(shade)),
         "blocks_per_frame": float(np.mean([x.blocks_shaded for x in s])),
         "mlp_per_frame": float(np.mean([x.mlp_coarse + x.mlp_fine for x in s])),
         "updated_frames": int(sum(x.blocks_shaded > 0 for x in s)),

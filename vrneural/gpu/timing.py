@@ -72,16 +72,40 @@ class GpuTimer:
         if self.enabled and self.names:
             encoder.resolve_query_set(self.qs, 0, 2 * len(self.names), self.resolve_buf, 0)
 
+    @property
+    def nbytes(self) -> int:
+        """Bytes of resolved timestamps :meth:`resolve_into` copies at most."""
+        return 16 * self.max if self.enabled else 0
+
+    def resolve_into(self, encoder, dst, offset: int = 0) -> list[str]:
+        """Resolve this encoding's timestamps and copy them to ``dst`` at ``offset`` (a
+        persistent read-back buffer, inside the frame's own submit); returns the pass names
+        in order (for :meth:`decode`) and resets for the next encoding."""
+        names, self.names = self.names, []
+        if self.enabled and names:
+            n = 2 * len(names)
+            encoder.resolve_query_set(self.qs, 0, n, self.resolve_buf, 0)
+            encoder.copy_buffer_to_buffer(self.resolve_buf, 0, dst, offset, 8 * n)
+        return names
+
+    @staticmethod
+    def decode(raw, names: list[str]) -> dict[str, float]:
+        """Milliseconds per pass name (summed over repeats) from resolved ticks ``raw`` (bytes
+        or uint8 array, at least ``16 * len(names)`` long)."""
+        if not names:
+            return {}
+        ticks = np.frombuffer(raw, np.uint64, 2 * len(names)).astype(np.int64)
+        dt = (ticks[1::2] - ticks[0::2]).clip(min=0) * timestamp_period_ns() * 1e-6
+        out: dict[str, float] = {}
+        for n, t in zip(names, dt, strict=True):
+            out[n] = out.get(n, 0.0) + float(t)
+        return out
+
     def read(self) -> dict[str, float]:
         """Milliseconds per pass name (summed over repeats); resets for the next use."""
         if not self.enabled or not self.names:
             self.names = []
             return {}
-        raw = np.frombuffer(self.dev.queue.read_buffer(self.resolve_buf), dtype=np.uint64)
-        ticks = raw[: 2 * len(self.names)].astype(np.int64)
-        dt = (ticks[1::2] - ticks[0::2]).clip(min=0) * timestamp_period_ns() * 1e-6
-        out: dict[str, float] = {}
-        for n, t in zip(self.names, dt, strict=True):
-            out[n] = out.get(n, 0.0) + float(t)
+        out = self.decode(self.dev.queue.read_buffer(self.resolve_buf), self.names)
         self.names = []
         return out

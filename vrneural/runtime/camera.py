@@ -9,6 +9,7 @@ at ``-ipd/2`` and ``+ipd/2`` along the head's x axis.
 from __future__ import annotations
 
 import csv
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,18 +30,31 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     )
 
 
+def cross3(a, b) -> np.ndarray:
+    """``np.cross`` of two 3-vectors (float64), the same products and differences without its
+    per-call overhead (called every frame)."""
+    a0, a1, a2 = (float(x) for x in a)
+    b0, b1, b2 = (float(x) for x in b)
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
 def look_rotation(forward: np.ndarray, up=(0.0, 1.0, 0.0)) -> np.ndarray:
     """Camera-to-world rotation ``[3, 3]`` whose -z axis is ``forward``."""
     f = np.asarray(forward, np.float64)
     f = f / np.linalg.norm(f)
-    r = np.cross(f, up)
+    r = cross3(f, up)
     r = r / np.linalg.norm(r)
-    u = np.cross(r, f)
+    u = cross3(r, f)
     return np.stack([r, u, -f], 1)
 
 
 def perspective(fov_y_deg: float, aspect: float, near: float = 0.05, far: float = 100.0):
     """WebGPU perspective projection ``[4, 4]`` (depth 0 at near, 1 at far)."""
+    return _perspective(float(fov_y_deg), float(aspect), float(near), float(far)).copy()
+
+
+@functools.lru_cache(maxsize=64)
+def _perspective(fov_y_deg: float, aspect: float, near: float, far: float) -> np.ndarray:
     f = 1.0 / np.tan(np.radians(fov_y_deg) / 2)
     p = np.zeros((4, 4))
     p[0, 0] = f / aspect
@@ -48,20 +62,27 @@ def perspective(fov_y_deg: float, aspect: float, near: float = 0.05, far: float 
     p[2, 2] = far / (near - far)
     p[2, 3] = near * far / (near - far)
     p[3, 2] = -1.0
+    p.setflags(write=False)  # cached and shared by every Eye
     return p
 
 
 @dataclass
 class Eye:
-    """One eye at one frame: world position, view and projection matrices."""
+    """One eye at one frame: world position, view and projection matrices (not changed after
+    creation: the products below are computed once)."""
 
     position: np.ndarray  # [3] metres
     view: np.ndarray  # [4, 4] world -> camera
     proj: np.ndarray  # [4, 4] camera -> clip
 
-    @property
+    @functools.cached_property
     def view_proj(self) -> np.ndarray:
         return self.proj @ self.view
+
+    @functools.cached_property
+    def planes(self) -> np.ndarray:
+        """:func:`frustum_planes` of :attr:`view_proj`."""
+        return frustum_planes(self.view_proj)
 
 
 def window_matrix(size, crop=None, jitter=(0.0, 0.0)) -> np.ndarray:
@@ -86,12 +107,14 @@ def eyes_from_pose(pos, rot, ipd: float, n_eyes: int, fov_y: float, aspect: floa
     """Eye(s) of a head at ``pos [3]`` with rotation ``rot [3, 3]`` (one eye: the head centre)."""
     offsets = [-ipd / 2, ipd / 2] if n_eyes == 2 else [0.0]
     out = []
+    proj = _perspective(float(fov_y), float(aspect), 0.05, 100.0)  # shared, never written
+    pos = np.asarray(pos, np.float64)
     for o in offsets:
-        p = np.asarray(pos, np.float64) + rot[:, 0] * o
+        p = pos + rot[:, 0] * o
         view = np.eye(4)
         view[:3, :3] = rot.T
         view[:3, 3] = -rot.T @ p
-        out.append(Eye(p, view, perspective(fov_y, aspect)))
+        out.append(Eye(p, view, proj))
     return out
 
 
@@ -186,7 +209,9 @@ def frustum_planes(view_proj: np.ndarray) -> np.ndarray:
     return planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
 
 
-def sphere_in_frustum(centre, radius: float, view_proj: np.ndarray) -> bool:
-    """Whether a bounding sphere touches the view frustum (conservative)."""
-    d = frustum_planes(view_proj) @ np.append(np.asarray(centre, np.float64), 1.0)
+def sphere_in_frustum(centre, radius: float, view_proj: np.ndarray, planes=None) -> bool:
+    """Whether a bounding sphere touches the view frustum (conservative); ``planes``: the
+    frustum's :func:`frustum_planes` when the caller has them."""
+    planes = frustum_planes(view_proj) if planes is None else planes
+    d = planes @ np.append(np.asarray(centre, np.float64), 1.0)
     return bool((d >= -radius).all())

@@ -11,7 +11,7 @@ from vrneural.config import opt
 from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.runtime.lights import LIGHTS_MAX
 from vrneural.runtime.profiles import PROFILES, get_profile
-from vrneural.runtime.renderer import MODES, RADIANCE, Settings
+from vrneural.runtime.renderer import FRAMES_IN_FLIGHT_MAX, MODES, RADIANCE, Settings
 from vrneural.runtime.schedule import SCHEDULES
 
 
@@ -44,6 +44,11 @@ class RunConfig:
         "radiance textures per object: per-eye, or shared by both eyes (shaded from their "
         "centre: half the texture-space work)",
         choices=RADIANCE,
+    )
+    frames_in_flight: int = opt(
+        2,
+        f"frames the GPU may queue while the next is encoded (1-{FRAMES_IN_FLIGHT_MAX}; 1: the "
+        "host waits for each frame before encoding the next)",
     )
     profile: str | None = opt(None, "device profile: quest3 (default), quest2, preview, tiny")
     texture_res: int | None = opt(
@@ -207,6 +212,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         if not Path(cfg.reference).is_file():
             raise VrnError(f"--reference = {cfg.reference!r}: file not found")
         ref = read_vrnm(cfg.reference)
+    check_int("--frames-in-flight", cfg.frames_in_flight, 1, FRAMES_IN_FLIGHT_MAX)
     return Settings(
         eyes=cfg.eyes,
         reuse=int(reuse),
@@ -226,6 +232,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         reuse_budget=budget,
         mips=bool(cfg.mips),
         screen_res=bool(cfg.screen_res),
+        frames_in_flight=cfg.frames_in_flight,
     )
 
 

@@ -1,7 +1,9 @@
 """Forward (raster) pass per eye, ``shaders/forward.wgsl``: meshes with a depth test, neural
 objects bilinearly sampling their eye's radiance texture, plain objects shaded by
-Lambert + Blinn-Phong under the same point lights. Also the visibility pass of the screen-space
-modes (plain colour + an rg32uint ``(object id + 1, triangle)`` target).
+Lambert + Blinn-Phong under the same point lights (a loop over the light count, fixed per
+pipeline). Also the visibility pass of the screen-space modes (plain colour + an rg32uint
+``(object id + 1, triangle)`` target). Each eye's draws never change during a renderer's life:
+they are recorded once into a render bundle (:func:`record_bundle`) that every frame replays.
 
 Vertex buffers hold triangles expanded to 3 vertices each: ``position.xyz, normal.xyz,
 atlas_uv.xy, triangle (u32)`` (36 bytes).
@@ -19,6 +21,9 @@ from vrneural.gpu.shaders import render_wgsl
 from vrneural.runtime.reference import normal_matrix
 
 COLOUR_FORMAT = "rgba16float"
+#: eye colour targets: ``hdr`` (linear radiance, for EXR and FLIP) or ``display`` (Reinhard
+#: tonemapped, sRGB-encoded 8 bits: half the bytes where HDR output is not needed)
+TARGETS = {"hdr": "rgba16float", "display": "rgba8unorm-srgb"}
 DEPTH_FORMAT = "depth32float"
 VIS_FORMAT = "rg32uint"
 OBJECT_BYTES = 160
@@ -47,18 +52,24 @@ def pack_object(model, albedo=(0, 0, 0), specular=0.0, shininess=1.0, obj_id=0) 
     return a.tobytes()
 
 
-def pack_frame(view_proj, eye, n_lights: int) -> bytes:
-    a = np.zeros(20, np.float32)
-    a[0:16] = np.asarray(view_proj, np.float32).T.ravel()
+def pack_frame_into(a: np.ndarray, view_proj, eye, n_lights: int) -> None:
+    """The ``Frame`` uniform into ``a: [24]`` float32 (the last 4 words u32)."""
+    a[0:16] = np.asarray(view_proj, np.float64).T.ravel()
     a[16:19] = eye
-    return a.tobytes() + np.array([n_lights, 0, 0, 0], np.uint32).tobytes()
+    a[19] = 0.0
+    a[20:24].view(np.uint32)[:] = (n_lights, 0, 0, 0)
+
+
+def pack_frame(view_proj, eye, n_lights: int) -> bytes:
+    a = np.zeros(24, np.float32)
+    pack_frame_into(a, view_proj, eye, n_lights)
+    return a.tobytes()
 
 
 @functools.cache
-def _module(n_lights: int, mips: bool = False):
-    return get_device().create_shader_module(
-        code=render_wgsl("forward", n_lights=n_lights, mips=mips), label="forward"
-    )
+def _module(n_lights: int, n_active: int, display: bool, mips: bool = False):
+    code = render_wgsl("forward", n_lights=n_lights, n_active=n_active, display=display, mips=mips)
+    return get_device().create_shader_module(code=code, label="forward")
 
 
 @functools.cache
@@ -88,17 +99,31 @@ def _layouts():
     return frame, neural, plain
 
 
+#: fragment entry points whose object group holds a radiance texture
+SAMPLING = ("fs_neural", "fs_floor_sample", "fs_floor_constant")
+
+
 @functools.cache
-def render_pipeline(n_lights: int, fragment: str, vis: bool, mips: bool = False):
-    """Cached render pipeline for entry point ``fragment`` (``vis``: colour + visibility;
-    ``mips``: neural objects sample their radiance textures' mip chains)."""
+def render_pipeline(
+    n_lights: int,
+    fragment: str,
+    vis: bool,
+    n_active: int | None = None,
+    target: str = "hdr",
+    mips: bool = False,
+):
+    """Cached render pipeline for entry point ``fragment`` (``vis``: colour + visibility):
+    a lights array of ``n_lights``, ``n_active`` of them shaded (default all), colour target
+    ``target`` (:data:`TARGETS`); ``mips``: neural objects sample their radiance textures' mip
+    chains."""
     import wgpu
 
-    mod = _module(n_lights, mips and fragment == "fs_neural")
+    mips = mips and fragment in ("fs_neural", "fs_floor_sample")
+    mod = _module(n_lights, n_lights if n_active is None else n_active, target == "display", mips)
     frame_l, neural_l, plain_l = _layouts()
-    obj_l = neural_l if fragment == "fs_neural" else plain_l
+    obj_l = neural_l if fragment in SAMPLING else plain_l
     layout = get_device().create_pipeline_layout(bind_group_layouts=[frame_l, obj_l])
-    targets = [{"format": COLOUR_FORMAT}]
+    targets = [{"format": TARGETS[target]}]
     if vis:
         targets.append({"format": VIS_FORMAT})
     return get_device().create_render_pipeline(
@@ -130,18 +155,27 @@ def render_pipeline(n_lights: int, fragment: str, vis: bool, mips: bool = False)
 
 
 class EyeTargets:
-    """Per-eye colour (HDR), depth and (screen modes) visibility textures and frame uniforms."""
+    """Per-eye colour (``target``: :data:`TARGETS`), depth and (screen modes) visibility
+    textures, their views, and the frame uniforms (regions of ``arena``, the renderer's
+    :class:`~vrneural.gpu.uniforms.UniformArena`; by default one of its own)."""
 
-    def __init__(self, width: int, height: int, n_lights: int, vis: bool = False):
+    def __init__(
+        self, width: int, height: int, n_lights: int, vis: bool = False, arena=None,
+        target: str = "hdr",
+    ):  # fmt: skip
         import wgpu
+
+        from vrneural.gpu.uniforms import UniformArena
 
         dev = get_device()
         tu = wgpu.TextureUsage
         self.size = (width, height)
+        self.target = target
+        storage = tu.STORAGE_BINDING if target == "hdr" else 0  # the screen pass writes HDR
         self.colour = dev.create_texture(
             size=(width, height, 1),
-            format=COLOUR_FORMAT,
-            usage=tu.RENDER_ATTACHMENT | tu.COPY_SRC | tu.STORAGE_BINDING | tu.TEXTURE_BINDING,
+            format=TARGETS[target],
+            usage=tu.RENDER_ATTACHMENT | tu.COPY_SRC | storage | tu.TEXTURE_BINDING,
         )
         self.depth = dev.create_texture(
             size=(width, height, 1), format=DEPTH_FORMAT, usage=tu.RENDER_ATTACHMENT
@@ -155,17 +189,29 @@ class EyeTargets:
             if vis
             else None
         )
-        u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
-        self.frame = dev.create_buffer(size=FRAME_BYTES, usage=u)
-        self.lights = dev.create_buffer(size=32 * max(1, n_lights), usage=u)
+        self.colour_view = self.colour.create_view()
+        self.depth_view = self.depth.create_view()
+        self.vis_view = self.vis.create_view() if vis else None
         self.n_lights = max(1, n_lights)
+        self.arena = arena or UniformArena("eye", auto_flush=True)
+        self.f_off = self.arena.alloc(FRAME_BYTES)
+        self.l_off = self.arena.alloc(32 * self.n_lights)
+        self._bind = None
 
     def update(self, view_proj, eye_pos, light_pos, light_rgb) -> None:
-        from vrneural.runtime.texture_pass import pack_lights
+        """Frame uniforms: ``view_proj [4, 4]``, ``eye_pos [3]``, lights (positions as given,
+        in the same frame as ``view_proj``)."""
+        from vrneural.runtime.texture_pass import pack_lights_into
 
-        q = get_device().queue
-        q.write_buffer(self.frame, 0, pack_frame(view_proj, eye_pos, len(light_pos)))
-        q.write_buffer(self.lights, 0, pack_lights(light_pos, light_rgb, self.n_lights))
+        ar = self.arena
+        pack_frame_into(ar.view(self.f_off, FRAME_BYTES), view_proj, eye_pos, len(light_pos))
+        pack_lights_into(ar.view(self.l_off, 32 * self.n_lights).reshape(-1, 2, 4), light_pos,
+                         light_rgb)  # fmt: skip
+        ar.written()
+
+    def formats(self) -> list[str]:
+        """Colour attachment formats of its render passes (bundles must match them)."""
+        return [TARGETS[self.target]] + ([VIS_FORMAT] if self.vis is not None else [])
 
 
 class DrawObject:
@@ -228,23 +274,39 @@ def _mip_sampler():
 
 def frame_bind_group(eye: EyeTargets):
     """Group 0 (frame uniforms + lights) of ``eye``, shared by every forward pipeline."""
-    if getattr(eye, "_bind", None) is not None:
+    if eye._bind is not None:
         return eye._bind
+    ar = eye.arena
     eye._bind = get_device().create_bind_group(
         layout=_layouts()[0],
         entries=[
-            {"binding": 0, "resource": {"buffer": eye.frame}},
-            {"binding": 1, "resource": {"buffer": eye.lights}},
+            {"binding": 0, "resource": ar.binding(eye.f_off, FRAME_BYTES)},
+            {"binding": 1, "resource": ar.binding(eye.l_off, 32 * eye.n_lights)},
         ],
     )
     return eye._bind
+
+
+def record_bundle(eye: EyeTargets, draws: list):
+    """A render bundle of ``eye``'s draws, ``[(pipeline, object bind group, DrawObject)]``
+    in order: replayed by every frame's forward pass (one call instead of four per draw)."""
+    enc = get_device().create_render_bundle_encoder(
+        color_formats=eye.formats(), depth_stencil_format=DEPTH_FORMAT
+    )
+    enc.set_bind_group(0, frame_bind_group(eye))
+    for pipe, bg, d in draws:
+        enc.set_pipeline(pipe)
+        enc.set_bind_group(1, bg)
+        enc.set_vertex_buffer(0, d.vbuf)
+        enc.draw(d.n_vertices)
+    return enc.finish()
 
 
 def begin_pass(encoder, eye: EyeTargets, timestamp_writes=None):
     """A render pass clearing colour to black, depth to 1 (and visibility to 0)."""
     att = [
         {
-            "view": eye.colour.create_view(),
+            "view": eye.colour_view,
             "load_op": "clear",
             "store_op": "store",
             "clear_value": (0, 0, 0, 0),
@@ -253,7 +315,7 @@ def begin_pass(encoder, eye: EyeTargets, timestamp_writes=None):
     if eye.vis is not None:
         att.append(
             {
-                "view": eye.vis.create_view(),
+                "view": eye.vis_view,
                 "load_op": "clear",
                 "store_op": "store",
                 "clear_value": (0, 0, 0, 0),
@@ -262,7 +324,7 @@ def begin_pass(encoder, eye: EyeTargets, timestamp_writes=None):
     return encoder.begin_render_pass(
         color_attachments=att,
         depth_stencil_attachment={
-            "view": eye.depth.create_view(),
+            "view": eye.depth_view,
             "depth_load_op": "clear",
             "depth_store_op": "store",
             "depth_clear_value": 1.0,

@@ -1,6 +1,9 @@
 """The frame loop: per frame, the scheduled texture-space updates of visible neural objects
 (per eye), then the forward pass per eye (or, in the screen-space modes, the visibility pass and
-the per-pixel compute pass). Records counters, per-pass GPU ms (timestamps) and frame wall ms.
+the per-pixel compute pass), all in one command buffer and one submit. ``frame()`` returns
+without waiting for the GPU (up to ``Settings.frames_in_flight`` frames queued); the frame's
+counters and per-pass GPU ms (timestamps) come back in its own submit and arrive in its
+:class:`~vrneural.runtime.stats.FrameStats` later (runtime/stats.py).
 """
 
 from __future__ import annotations
@@ -16,28 +19,33 @@ from vrneural.errors import VrnError, check_int, count
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
+from vrneural.gpu.uniforms import UniformArena
 from vrneural.runtime import forward as fw
 from vrneural.runtime.adaptive import AdaptiveState, coverage_slack, near_scale, object_directions
 from vrneural.runtime.assets import collapsed_triangles, get_atlas, get_mesh, lost_triangles
+from vrneural.runtime.encode import FrameEncoding
 from vrneural.runtime.camera import (
     Eye,
     OrbitPath,
     PoseLogPath,
     eyes_from_pose,
-    sphere_in_frustum,
     window_matrix,
 )
 from vrneural.runtime.codegen import reference_weights
 from vrneural.runtime.gpu_material import GpuAtlas
 from vrneural.runtime.lights import light_arrays
 from vrneural.runtime.schedule import frame_slice
+from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget
 from vrneural.runtime.screen_res import choose, level_sides, mesh_area, wanted_side
-from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget, screen_rect
+from vrneural.runtime.stats import FrameResults, FrameStats
 from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
 from vrneural.warn import VrnWarning
 
 MODES = ("texture", "screen", "reference")
 RADIANCE = ("per-eye", "shared")
+TARGETS = tuple(fw.TARGETS)
+#: the most frames a renderer lets the GPU queue (Settings.frames_in_flight)
+FRAMES_IN_FLIGHT_MAX = 3
 #: the longest refresh sweep of adaptive reuse, in frames
 ADAPTIVE_PERIOD_MAX = 16
 
@@ -75,29 +83,14 @@ class Settings:
     #: each object's radiance texture side chosen at each update from its size on screen
     #: (about one texel per pixel; a power of two up to its side above; runtime/screen_res.py)
     screen_res: bool = False
+    #: frames the GPU may have queued while the host encodes the next (1 = none ahead)
+    frames_in_flight: int = 2
+    #: eye colour targets: "hdr" (rgba16float radiance: EXR, FLIP) or "display" (8-bit
+    #: Reinhard-tonemapped sRGB, texture mode only: where HDR output is not needed)
+    target: str = "hdr"
 
 
-@dataclass
-class FrameStats:
-    """What one :meth:`Renderer.frame` did. Frame 0 includes shader compilation: leave it out
-    of timings."""
-
-    frame: int  #: the frame index
-    wall_ms: float  #: host wall time of the frame, GPU wait included
-    #: GPU ms per pass name (texture, forward; screen in the screen modes), both eyes summed
-    gpu_ms: dict
-    updated_objects: int  #: neural objects whose radiance textures were updated (texture mode)
-    culled_objects: int  #: neural objects outside every eye's view, not updated
-    blocks_shaded: int  #: 2x2 texel blocks shaded (texture mode)
-    blocks_backfacing: int  #: blocks skipped as facing away from the eye (texture mode)
-    mlp_coarse: int  #: coarse-network evaluations (per block; per pixel in screen modes)
-    mlp_fine: int  #: fine-network evaluations (per texel; per pixel in screen modes)
-    pixels_shaded: int = 0  #: pixels shaded per pixel (screen and reference modes)
-    #: per neural object (scene order of neural objects): its radiance texture side, the texels
-    #: allocated for it (all eyes) and the 2x2 blocks shaded for it this frame (texture mode)
-    object_res: list = field(default_factory=list)
-    object_texels: list = field(default_factory=list)
-    object_blocks: list = field(default_factory=list)
+__all__ = ["FrameStats", "Renderer", "Settings"]
 
 
 @dataclass
@@ -117,6 +110,7 @@ class _Neural:
     levels: dict = field(default_factory=dict)
     level_sides: tuple = ()  # the sides it may use, largest first (its own side first)
     area: float = 0.0  # mesh surface, object space, m^2
+    sphere: tuple = (None, None, 0.0, None)  # (model bytes, world centre, radius, [c, 1]): cache
 
 
 def bounding_sphere(mesh) -> tuple[np.ndarray, float]:
@@ -125,7 +119,7 @@ def bounding_sphere(mesh) -> tuple[np.ndarray, float]:
     return c.astype(np.float64), float(np.linalg.norm(mesh.positions - c, axis=1).max())
 
 
-class Renderer:
+class Renderer(FrameEncoding):
     """Everything on the device for one scene and settings; :meth:`frame` renders one frame.
 
     What a live caller (`vrneural view`) may use between frames, and nothing else: ``lights``
@@ -149,6 +143,14 @@ class Renderer:
             raise VrnError(
                 f"--radiance shared needs two eyes (a texture shared by both); --eyes is {s.eyes}"
             )
+        check_int("frames_in_flight", s.frames_in_flight, 1, FRAMES_IN_FLIGHT_MAX)
+        if s.target not in TARGETS:
+            raise VrnError(f"target = {s.target!r} is not allowed; choose {', '.join(TARGETS)}")
+        if s.target == "display" and s.mode != "texture":
+            raise VrnError(
+                f"target = 'display' needs mode 'texture' (mode {s.mode!r} writes HDR pixels "
+                "from a compute pass)"
+            )
         self.scene, self.s = scene, s
         #: sub-pixel offset (x, y) of the rendered image in pixels (supersampled references)
         self.jitter = (0.0, 0.0)
@@ -160,7 +162,12 @@ class Renderer:
         screen = s.mode != "texture"
         self.lights = scene.lights[: s.n_lights]
         nl = max(1, len(self.lights))
-        self.eye_t = [fw.EyeTargets(w, h, nl, vis=screen) for _ in range(s.eyes)]
+        #: every per-frame uniform, written with one write_buffer per frame
+        self.arena = UniformArena("frame uniforms")
+        self.eye_t = [
+            fw.EyeTargets(w, h, nl, vis=screen, arena=self.arena, target=s.target)
+            for _ in range(s.eyes)
+        ]
         self.head = OrbitPath() if scene.head == "orbit" else PoseLogPath(scene.head)
         # Floating origin: everything uploaded to the GPU is relative to the first eye position
         # (subtracted in float64), so scenes far from the world origin keep f32 precision.
@@ -183,6 +190,13 @@ class Renderer:
                     self.warnings.append(line)
             else:  # not ours: shown as it would have been
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        self.results = FrameResults(self.timer, self.counters, s.frames_in_flight, screen)
+        #: passes whose timestamps this adapter does not cover (runtime/timecheck.py: checked
+        #: right after the first frame; until then none)
+        self.untimed: tuple = ()
+        #: the check's measurements per pass (timestamps vs wall clock); None before it ran
+        self.timestamp_check: dict | None = None
+        self._bundles: list | None = None  # per eye, the forward pass's draws (first frame)
 
     def _add_object(self, i: int, o, passes: dict, progress) -> None:
         """Load object ``i``'s mesh; a neural one also gets its atlas, pass and targets."""
@@ -288,6 +302,7 @@ class Renderer:
             n.levels[side] = (atlas, gatlas, draw, targets)
         n.atlas, n.gatlas, n.draw, n.targets, n.side = atlas, gatlas, draw, targets, side
         n.fresh = False
+        self._bundles = None  # the eyes' draws name the level's vertices and texture
 
     def _level_for(self, n: _Neural, eyes) -> int:
         """The side :mod:`~vrneural.runtime.screen_res` picks for ``n`` seen by ``eyes``."""
@@ -317,18 +332,25 @@ class Renderer:
 
     def _make_target(self, p, n: _Neural, eye: int):
         if self.s.mode == "texture":
-            return TextureTarget(p, n.gatlas, self.counters, mips=self.s.mips)
-        return ScreenTarget(p, n.gatlas, self.eye_t[eye], self.counters)
+            return TextureTarget(p, n.gatlas, self.counters, self.arena, mips=self.s.mips)
+        return ScreenTarget(p, n.gatlas, self.eye_t[eye], self.counters, self.arena)
 
     @staticmethod
     def world_sphere(n: _Neural) -> tuple[np.ndarray, float]:
+        """Object ``n``'s bounding sphere in the world (centre [3], radius m)."""
         model = n.desc.model
-        c = model[:3, :3] @ n.centre + model[:3, 3]
-        return c, n.radius * float(np.linalg.norm(model[:3, :3], axis=0).max())
+        key = model.tobytes()
+        if n.sphere[0] != key:  # computed again only when the model matrix changed
+            c = model[:3, :3] @ n.centre + model[:3, 3]
+            r = n.radius * float(np.linalg.norm(model[:3, :3], axis=0).max())
+            n.sphere = (key, c, r, np.append(c, 1.0))
+        return n.sphere[1], n.sphere[2]
 
     def _visible(self, n: _Neural, eyes) -> bool:
-        c, r = self.world_sphere(n)
-        return any(sphere_in_frustum(c, r, e.view_proj) for e in eyes)
+        """Whether ``n``'s bounding sphere touches any eye's frustum (``sphere_in_frustum``)."""
+        self.world_sphere(n)
+        _, _, r, ch = n.sphere
+        return any(bool((e.planes @ ch >= -r).all()) for e in eyes)
 
     def eyes_at(self, frame: int, t: float | None = None, head=None):
         """The eyes at display frame ``frame`` (the whole view: visibility and shading): the
@@ -372,7 +394,8 @@ class Renderer:
         counts of objects updated and culled."""
         s = self.s
         sl = frame_slice(f, s.reuse, s.schedule)
-        centre = np.mean([e.position for e in eyes], axis=0)
+        adaptive = s.reuse_budget is not None
+        centre = np.mean([e.position for e in eyes], axis=0) if adaptive else None
         todo, updated, culled = [], 0, 0
         for k, n in enumerate(self.neural):
             if not self._visible(n, eyes):
@@ -416,73 +439,70 @@ class Renderer:
         return float(min(frac, 1.0))
 
     def frame(self, f: int, t: float | None = None, head=None) -> FrameStats:
-        """Render display frame ``f`` (waits for the GPU); returns its statistics. ``f`` drives
+        """Render display frame ``f``: encode and submit it, and return without waiting for the
+        GPU (its statistics fill in when it has finished: :class:`FrameStats`). ``f`` drives
         the reuse schedule; ``t`` (s, default ``f / fps``) the lights' motion and the head
-        path; ``head`` replaces the head path (see :meth:`eyes_at`)."""
+        path; ``head`` replaces the head path (see :meth:`eyes_at`). Waits only when
+        ``Settings.frames_in_flight`` frames are still queued (or, with :attr:`pass_clock`
+        ``"wall"``, after every pass)."""
         check_int("frame", f, 0)
         s = self.s
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
+        slot = self.results.begin()
+        if self.pass_clock == "wall":
+            self.results.wait()
+        self._wall: dict = {}
         eyes = self.eyes_at(f, t, head)
         lp, lc = light_arrays(self.lights, f / s.fps if t is None else t)
-        self.counters.clear()
+        self._last = (eyes, lp, lc)
         enc = self.dev.create_command_encoder()
+        self.counters.clear(enc)
         updated = culled = 0
         if s.mode == "texture":
             todo, updated, culled = self._slices(f, eyes, lp)
             if todo:
-                # all of a frame's texture-space dispatches in one compute pass: one timestamp
-                # pair around them (lavapipe's per-pass timestamps are unreliable when several
-                # independent compute passes follow each other)
-                cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("texture"))
-                shading = self._shading_eyes(eyes)
-                for k, n, phase, period in todo:
-                    tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
-                    for e, ((pos, margin), tgt) in enumerate(zip(shading, n.targets, strict=True)):
-                        slot = k * s.eyes + e
-                        tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, slot, margin)
-                        tgt.dispatch(cp, phase, period)
-                cp.end()
-        eyes = self.raster_eyes(eyes)
-        shift = np.eye(4)
-        shift[:3, 3] = self.origin
-        lp_r = lp - self.origin
-        for e, (eye, et) in enumerate(zip(eyes, self.eye_t, strict=True)):
-            vp_r = eye.view_proj @ shift  # origin-relative position -> clip
-            et.update(vp_r, eye.position - self.origin, lp_r, lc)
-            self._draw(enc, e, et)
-            if s.mode != "texture":
-                inv = np.linalg.inv(vp_r)
-                cp = enc.begin_compute_pass(timestamp_writes=self.timer.writes("screen"))
-                for k, n in enumerate(self.neural):
-                    if not self._visible(n, [eye]):
-                        culled += 1
-                        continue
-                    tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
-                    tgt = n.targets[e]
-                    c, r = self.world_sphere(n)
-                    rect = screen_rect(c, r, eye.view_proj, *s.eye_res)
-                    slot = k * s.eyes + e
-                    model_r, eye_r = self.rebase(n.desc.model), eye.position - self.origin
-                    tgt.update(model_r, eye_r, tiling, inv, lp_r, lc, slot, n.idx, rect)
-                    tgt.dispatch(cp)
-                cp.end()
-        self.timer.resolve(enc)
+                enc = self._encode_texture(enc, todo, eyes, lp, lc)
+        c, enc = self._encode_eyes(enc, self.raster_eyes(eyes), lp, lc)
+        culled += c
+        names = self.results.copy_into(enc, slot)
+        self.arena.flush()
         self.dev.queue.submit([enc.finish()])
-        gpu = self.timer.read()  # waits for the GPU
-        slots = self.counters.read()
-        c = slots.sum(0)
-        wall = (time.perf_counter() - t0) * 1e3
-        if s.mode != "texture":
-            return FrameStats(
-                f, wall, gpu, 0, culled, 0, int(c[1]), int(c[2]), int(c[3]), int(c[0])
-            )
-        per_obj = slots[: len(self.neural) * s.eyes, 0].reshape(-1, s.eyes).sum(1)
-        return FrameStats(
-            f, wall, gpu, updated, culled, int(c[0]), int(c[1]), int(c[2]), int(c[3]), 0,
-            [n.side for n in self.neural],
-            [n.side**2 * len(n.targets) for n in self.neural],
-            [int(b) for b in per_obj],
-        )  # fmt: skip
+        wall = {k: v for k, v in self._wall.items() if not k.startswith("_")}
+        untimed = self.untimed if self.pass_clock != "wall" else ()
+        st = FrameStats(f, 0 if s.mode != "texture" else updated, culled, untimed)
+        st.clock = self.pass_clock
+        if s.mode == "texture":  # per neural object: side, texels allocated; blocks shaded later
+            st.object_res = [n.side for n in self.neural]
+            st.object_texels = [n.side**2 * len(n.targets) for n in self.neural]
+            st._objects = (len(self.neural), s.eyes)
+        st._start, st.in_flight = t0, self.results.in_flight()
+        self.results.submitted(slot, st, names, wall or None)
+        st.host_ms = (time.perf_counter() - t0) * 1e3
+        st.cpu_ms = (time.thread_time() - c0) * 1e3
+        if self.timestamp_check is None:  # after the first frame: are the timestamps true?
+            from vrneural.runtime.timecheck import check_timestamps
+
+            self.timestamp_check = check_timestamps(self)
+            self.untimed = tuple(k for k, v in self.timestamp_check.items() if not v["covered"])
+            st.untimed = self.untimed
+        return st
+
+    def set_frames_in_flight(self, depth: int) -> None:
+        """Let the GPU queue ``depth`` frames from the next one on (1..3; waits for those in
+        flight now)."""
+        check_int("frames_in_flight", depth, 1, FRAMES_IN_FLIGHT_MAX)
+        self.wait()
+        self.s.frames_in_flight = depth
+        self.results = FrameResults(self.timer, self.counters, depth, self.s.mode != "texture")
+
+    def wait(self) -> None:
+        """Wait until the GPU has finished every submitted frame; their statistics are in."""
+        self.results.wait()
+
+    def latest_stats(self) -> FrameStats | None:
+        """The newest frame whose statistics are in, without waiting (the viewer's HUD)."""
+        self.results.poll()
+        return self.results.latest
 
     def _shading_eyes(self, eyes) -> list[tuple[np.ndarray, float]]:
         """Where each radiance texture is shaded from: ``(eye position, facing margin)`` per
@@ -491,29 +511,6 @@ class Renderer:
             a, b = eyes[0].position, eyes[1].position
             return [((a + b) / 2, float(np.linalg.norm(a - b)) / 2)]
         return [(e.position, 0.0) for e in eyes]
-
-    def _draw(self, enc, e: int, et) -> None:
-        vis = self.s.mode != "texture"
-        rp = fw.begin_pass(enc, et, self.timer.writes("forward"))
-        nl = et.n_lights
-        for d, n in self.draws:
-            d = d if n is None else n.draw
-            if n is None:
-                pipe = fw.render_pipeline(nl, "fs_plain_vis" if vis else "fs_plain", vis)
-                bg = d.bind_group(None, "plain")
-            elif vis:
-                pipe = fw.render_pipeline(nl, "fs_neural_vis", True)
-                bg = d.bind_group(None, "plain")
-            else:
-                pipe = fw.render_pipeline(nl, "fs_neural", False, self.s.mips)
-                tgt = n.targets[e if len(n.targets) > 1 else 0]  # shared: one for both
-                bg = d.bind_group(tgt.sample_view, ("eye", e, self.s.mips), self.s.mips)
-            rp.set_pipeline(pipe)
-            rp.set_bind_group(0, fw.frame_bind_group(et))
-            rp.set_bind_group(1, bg)
-            rp.set_vertex_buffer(0, d.vbuf)
-            rp.draw(d.n_vertices)
-        rp.end()
 
     def colour_textures(self) -> list:
         """The eyes' HDR colour textures (``rgba16float``, ``eye_res``, sampled-texture usage)
@@ -529,8 +526,24 @@ class Renderer:
             n.fresh = False
 
     def read_eyes(self) -> list[np.ndarray]:
-        """The eyes' HDR colour ``[H, W, 4]`` float32 of the last frame."""
+        """The eyes' HDR colour ``[H, W, 4]`` float32 of the last frame (waits for it)."""
+        if self.s.target != "hdr":
+            raise VrnError(
+                f"read_eyes: this renderer's eye targets are {self.s.target!r} (tonemapped, 8 "
+                "bits); HDR needs target 'hdr' (read_display gives the display colours)"
+            )
+        self.wait()
         return [read_texture(et.colour).astype(np.float32) for et in self.eye_t]
+
+    def read_display(self) -> list[np.ndarray]:
+        """The eyes' display colours ``[H, W, 3]`` uint8 (sRGB) of the last frame (waits for
+        it): the display target as it is, or the HDR target through ``output.tonemap``."""
+        from vrneural.runtime.output import tonemap
+
+        self.wait()
+        if self.s.target == "display":
+            return [read_texture(et.colour)[..., :3] for et in self.eye_t]
+        return [tonemap(read_texture(et.colour).astype(np.float32)) for et in self.eye_t]
 
     def radiance(self, obj: int = 0, eye: int = 0) -> np.ndarray:
         """Radiance texture ``[R, R, 4]`` float32 of neural object ``obj`` (counting neural

@@ -12,8 +12,10 @@ import math
 
 import numpy as np
 
+
 from vrneural.gpu.device import get_device, has_feature
 from vrneural.gpu.pipelines import compute_pipeline
+from vrneural.gpu.uniforms import UniformArena
 from vrneural.material import NeuralMaterial
 from vrneural.runtime.codegen import screen_space_wgsl
 from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial
@@ -23,7 +25,7 @@ from vrneural.runtime.texture_pass import (
     CompactionBuffers,
     CounterBuffer,
     dispatch_compacted,
-    pack_lights,
+    pack_lights_into,
 )
 
 PARAMS_BYTES = 272
@@ -90,21 +92,18 @@ def _scratch(width: int, height: int) -> CompactionBuffers:
 
 
 class ScreenTarget:
-    """One (object, eye) per-pixel shading dispatch."""
+    """One (object, eye) per-pixel shading dispatch; its uniforms live in ``arena`` (the
+    renderer's, written once per frame; by default one of its own, written at every
+    :meth:`update`)."""
 
-    def __init__(self, spass: ScreenSpacePass, gatlas: GpuAtlas, eye_targets, counters):
-        import wgpu
-
-        dev = get_device()
+    def __init__(self, spass: ScreenSpacePass, gatlas: GpuAtlas, eye_targets, counters, arena=None):
         self.spass = spass
         self.size = eye_targets.size
-        u = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
-        self.params = dev.create_buffer(size=PARAMS_BYTES, usage=u)
-        self.lights = dev.create_buffer(size=32 * spass.n_lights, usage=u)
+        self.arena = arena or UniformArena("screen target", auto_flush=True)
+        self.p_off = self.arena.alloc(PARAMS_BYTES)
+        self.l_off = self.arena.alloc(32 * spass.n_lights)
         self.compact = _scratch(*self.size)
-        res = {
-            0: {"buffer": self.params},
-            1: {"buffer": self.lights},
+        self._res = {
             2: {"buffer": gatlas.verts},
             3: {"buffer": gatlas.faces},
             4: eye_targets.vis.create_view(),
@@ -112,32 +111,41 @@ class ScreenTarget:
             6: {"buffer": counters.buf},
             **self.compact.resources(),
         }
-        res.update({e["binding"]: e["resource"] for e in spass.gmat.entries(7)})
-        used = {
-            "cull": (0, 4, 13, 14),
-            "args": ARGS_BINDINGS,
-            "main": tuple(k for k in res if k not in (14, 15)),
-        }
-        self.binds = {
-            e: dev.create_bind_group(
-                layout=spass.pipes[e].get_bind_group_layout(0),
-                entries=[{"binding": k, "resource": res[k]} for k in keys],
-            )
-            for e, keys in used.items()
-        }
+        self._res.update({e["binding"]: e["resource"] for e in spass.gmat.entries(7)})
+        self._binds: dict | None = None
         self.rect = (0, 0, 0, 0)
+
+    @property
+    def binds(self) -> dict:
+        """The entry points' bind groups, made on first use (after the arena's last alloc)."""
+        if self._binds is None:
+            res = dict(self._res)
+            res[0] = self.arena.binding(self.p_off, PARAMS_BYTES)
+            res[1] = self.arena.binding(self.l_off, 32 * self.spass.n_lights)
+            used = {
+                "cull": (0, 4, 13, 14),
+                "args": ARGS_BINDINGS,
+                "main": tuple(k for k in res if k not in (14, 15)),
+            }
+            self._binds = {
+                e: get_device().create_bind_group(
+                    layout=self.spass.pipes[e].get_bind_group_layout(0),
+                    entries=[{"binding": k, "resource": res[k]} for k in keys],
+                )
+                for e, keys in used.items()
+            }
+        return self._binds
 
     def update(self, model, eye, tiling, inv_view_proj, light_pos, light_rgb, slot, obj_id, rect):
         """Uniforms of this dispatch; ``rect`` = (x0, y0, w, h) pixels to cover."""
-        q = get_device().queue
         w, h = self.size
         self.rect = rect
-        q.write_buffer(
-            self.params,
-            0,
-            pack_screen_params(model, eye, tiling, inv_view_proj, w, h, slot, obj_id, rect),
-        )
-        q.write_buffer(self.lights, 0, pack_lights(light_pos, light_rgb, self.spass.n_lights))
+        ar = self.arena
+        packed = pack_screen_params(model, eye, tiling, inv_view_proj, w, h, slot, obj_id, rect)
+        ar.view(self.p_off, len(packed), np.uint8)[:] = np.frombuffer(packed, np.uint8)
+        lights = ar.view(self.l_off, 32 * self.spass.n_lights).reshape(-1, 2, 4)
+        pack_lights_into(lights, light_pos, light_rgb)
+        ar.written()
 
     def encode(self, encoder, timestamp_writes=None) -> None:
         cp = encoder.begin_compute_pass(timestamp_writes=timestamp_writes)

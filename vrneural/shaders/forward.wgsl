@@ -1,8 +1,13 @@
 // Forward pass per eye (and the visibility pass of the screen-space modes).
 // Vertex buffer: triangles expanded (3 vertices per face), per vertex position.xyz, normal.xyz,
-// atlas uv, triangle index (u32). Colour target rgba16float (HDR), depth32float, less-test.
+// atlas uv, triangle index (u32). Colour target rgba16float (HDR), or with `display` an
+// rgba8unorm-srgb target holding Reinhard x / (1 + x) (the sRGB encoding is the target's);
+// depth32float, less-test.
+// Template parameters: n_lights (uniform array size, >= 1), n_active (lights shaded, a
+// compile-time loop count, 0 allowed), display (bool), mips (bool: neural objects sample
+// their radiance textures' mip chains).
 //   fs_neural: bilinear sample of this eye's radiance texture at the atlas uv (clamp-to-edge;
-//              the atlas gutter guarantees valid taps).
+//              the atlas gutter guarantees valid taps); with mips, trilinear over the chain.
 //   fs_plain:  ordinary material: Lambert + Blinn-Phong under the same point lights
 //              (twin: runtime/reference_plain.py:shade_plain).
 //   *_vis:     screen-space modes: plain objects write colour, neural objects write (id + 1, tri)
@@ -11,7 +16,7 @@
 struct Frame {
     view_proj: mat4x4<f32>,
     eye: vec4<f32>,        // world eye position
-    info: vec4<u32>,       // (light count, unused...)
+    info: vec4<u32>,       // (light count, unused...): the loops use n_active, fixed per pipeline
 }
 struct Light {
     pos: vec4<f32>,
@@ -61,7 +66,7 @@ fn plain_colour(world: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
     let wo = normalize(F.eye.xyz - world);
     if (dot(n, wo) < 0.0) { n = -n; }  // two-sided
     var c = vec3<f32>(0.0);
-    for (var i = 0u; i < F.info.x; i++) {
+    for (var i = 0u; i < {{ n_active }}u; i++) {
         let lv = lights[i].pos.xyz - world;
         let d2 = max(dot(lv, lv), 1e-12);
         let wi = lv * inverseSqrt(d2);
@@ -74,22 +79,49 @@ fn plain_colour(world: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
     return min(c, vec3<f32>(65504.0));
 }
 
+// what the colour target stores: HDR radiance, or (display) its Reinhard tonemap
+fn out_colour(c: vec3<f32>) -> vec4<f32> {
+{% if display %}
+    return vec4<f32>(c / (vec3<f32>(1.0) + c), 1.0);
+{% else %}
+    return vec4<f32>(c, 1.0);
+{% endif %}
+}
+
 @fragment
 fn fs_neural(v: VOut) -> @location(0) vec4<f32> {
 {% if mips %}
     // trilinear (anisotropic where the sampler allows) over the coverage-premultiplied mip
     // chain (runtime/radiance_mips.py): the colour over the filtered coverage
     let c = textureSample(radiance, samp, v.uv);
-    return vec4<f32>(select(vec3<f32>(0.0), c.rgb / c.a, c.a > 1e-4), 1.0);
+    return out_colour(select(vec3<f32>(0.0), c.rgb / c.a, c.a > 1e-4));
 {% else %}
     let c = textureSampleLevel(radiance, samp, v.uv, 0.0);
-    return vec4<f32>(c.rgb, 1.0);
+    return out_colour(c.rgb);
 {% endif %}
 }
 
 @fragment
 fn fs_plain(v: VOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(plain_colour(v.world, v.normal), 1.0);
+    return out_colour(plain_colour(v.world, v.normal));
+}
+
+// The floors of this pass (`vrneural bench frame`), over the same geometry and targets: a
+// constant colour, and one bilinear sample per fragment at its atlas uv (plain objects too:
+// their uv is 0) with nothing else.
+@fragment
+fn fs_floor_constant(v: VOut) -> @location(0) vec4<f32> {
+    return out_colour(vec3<f32>(0.5));
+}
+
+@fragment
+fn fs_floor_sample(v: VOut) -> @location(0) vec4<f32> {
+{% if mips %}
+    let c = textureSample(radiance, samp, v.uv);  // the same sampling as fs_neural
+    return out_colour(select(vec3<f32>(0.0), c.rgb / c.a, c.a > 1e-4));
+{% else %}
+    return out_colour(textureSampleLevel(radiance, samp, v.uv, 0.0).rgb);
+{% endif %}
 }
 
 struct VisOut {

@@ -39,12 +39,14 @@ struct Light {
 @group(0) @binding(5) var out_tex: texture_storage_2d<{{ fmt | default('rgba16float') }}, write>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;  // 4 per slot
 {{ nm.bindings(mat, 7) }}
-// Compaction (compact.wgsl): candidate blocks (indices into the geometry atlas of the non-empty
-// blocks in this dispatch's block rows, built once per atlas), the blocks to shade this time.
+// Candidate blocks: indices into the geometry atlas of the non-empty blocks, grouped by block
+// row phase (gpu_material.GpuAtlas.block_list, built once per atlas and row period).
 @group(0) @binding(12) var<storage, read> cand: array<u32>;
+// Compaction (compact.wgsl; the large spans' path): the front-facing blocks to shade.
 {{ cmp.bindings() }}
 
 const EMPTY: u32 = 0xFFFFFFFFu;  // padding of the compacted list
+
 // Largest stored radiance: the f16 maximum for rgba16float, 1e30 for the wide rgba32float option
 // (finite, far above any scene: colour * intensity <= 1e6 W/sr, d^2 >= 1e-12 m^2).
 const OUT_MAX: f32 = {{ '1e30' if fmt == 'rgba32float' else '65504.0' }};
@@ -56,8 +58,8 @@ const OUT_MAX: f32 = {{ '1e30' if fmt == 'rgba32float' else '65504.0' }};
 fn tiled(uv: vec2<f32>) -> vec2<f32> { return uv * P.tiling.xy + P.tiling.zw; }
 
 // Shade block k of the geometry atlas; returns the counter increments (shaded, back-facing,
-// coarse, fine evals). Blocks reach it through the cull pass, so the back-facing return is a
-// safety net. Loops over the 4 texels are unrolled by the template (no private arrays).
+// coarse, fine evals). `main` calls it for the blocks block_front keeps, so the back-facing
+// return is a safety net. Loops over the 4 texels are unrolled by the template (no private arrays).
 fn shade_block(k: u32) -> vec4<u32> {
     let g0 = geo_pos[k];
     let g1 = geo_nrm[k];
@@ -146,15 +148,65 @@ fn block_front(k: u32) -> bool {
     return dot(safe_normalize(v, pn[1]), pn[1]) > 0.0 || dot(v, pn[1]) > -P.eye.w;
 }
 
-// Three dispatches per (object, eye) update, in one compute pass:
-//   cull  over the candidate list: keep the front-facing blocks (workgroup-compacted append);
-//   args  one thread: indirect workgroup counts for the kept blocks, padding with EMPTY,
-//         and the count back to zero;
-//   main  over the kept blocks only (dispatch_workgroups_indirect).
-// A CPU adapter (lavapipe) runs every lane of a SIMD group through both sides of a branch, so
-// an early out saves nothing there; dispatching only the work is what makes cost follow the
-// scene (it also keeps GPU warps full).
+// An update of a span of candidates (P.sched.x, P.sched.y), in one of two ways (texture_pass.py
+// picks by the span's length, COMPACT_MIN):
+//   main       one dispatch, a thread per candidate: the facing test, then the shading of the
+//              front-facing block. Neighbouring candidates lie in one atlas chart and mostly
+//              agree on the branch (llvmpipe runs a branch when any lane of its SIMD group
+//              takes it; a GPU warp likewise).
+//   cull, args, main_compacted
+//              three dispatches: cull appends the front-facing blocks to a list
+//              (compact.wgsl), args turns its length into indirect workgroup counts,
+//              main_compacted shades the list: every lane busy, worth its two extra dispatches
+//              and barriers on long spans only (on lavapipe: 2.3x slower than main on a staggered
+//              update at 128^2, 7-16% faster on full and staggered updates at 512-800^2).
 {{ cmp.fns(subgroups) }}
+
+{% if subgroups %}
+// counters: summed over the subgroup, one atomic per counter and subgroup (device feature
+// "subgroup"; no workgroup barrier). Call from uniform control flow.
+fn count4(c: vec4<u32>, lid: u32) {
+    let t = subgroupAdd(c);
+    if (subgroupBroadcastFirst(lid) == lid) {  // the first active invocation
+        for (var k = 0u; k < 4u; k++) {
+            if (t[k] != 0u) { atomicAdd(&counters[P.sched.z * 4u + k], t[k]); }
+        }
+    }
+}
+{% else %}
+var<workgroup> wg_count: array<atomic<u32>, 4>;
+
+// counters: summed with workgroup atomics, one global atomic per counter and workgroup. Call
+// from uniform control flow (barriers; the sums are reset explicitly, as in compact.wgsl).
+fn count4(c: vec4<u32>, lid: u32) {
+    if (lid < 4u) { atomicStore(&wg_count[lid], 0u); }
+    workgroupBarrier();
+    for (var k = 0u; k < 4u; k++) {
+        if (c[k] != 0u) { atomicAdd(&wg_count[k], c[k]); }
+    }
+    workgroupBarrier();
+    if (lid < 4u) {
+        let t = atomicLoad(&wg_count[lid]);
+        if (t != 0u) { atomicAdd(&counters[P.sched.z * 4u + lid], t); }
+    }
+}
+{% endif %}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let i = todo_index(wid, nwg, lid);
+    var c = vec4<u32>(0u);
+    if (i < P.sched.y) {
+        let k = cand[P.sched.x + i];
+        if (block_front(k)) {
+            c = shade_block(k);
+        } else {
+            c.y = 1u;
+        }
+    }
+    count4(c, lid);
+}
 
 @compute @workgroup_size(64)
 fn cull(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
@@ -170,22 +222,36 @@ fn cull(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     count_add(P.sched.z * 4u + 1u, select(0u, 1u, i < P.sched.y && !front), lid);
 }
 
-var<workgroup> wg_count: array<vec4<u32>, 64>;
-
 @compute @workgroup_size(64)
-fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
-        @builtin(local_invocation_index) lid: u32) {
+fn main_compacted(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+                  @builtin(local_invocation_index) lid: u32) {
     let k = todo[todo_index(wid, nwg, lid)];
     var c = vec4<u32>(0u);
     if (k != EMPTY) { c = shade_block(k); }
-    // counters: one slot per thread, summed by thread 0, one global atomic per counter
-    wg_count[lid] = c;
-    workgroupBarrier();
-    if (lid == 0u) {
-        var t = vec4<u32>(0u);
-        for (var k = 0u; k < 64u; k++) { t += wg_count[k]; }
-        for (var k = 0u; k < 4u; k++) {
-            if (t[k] != 0u) { atomicAdd(&counters[P.sched.z * 4u + k], t[k]); }
+    count4(c, lid);
+}
+
+// The floor of this pass (`vrneural bench frame`): the same candidates, the same facing test,
+// the same geometry records read and the same texels stored as `main`, and nothing else (no
+// frame, sampling, network or counters).
+@compute @workgroup_size(64)
+fn bare(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let i = todo_index(wid, nwg, lid);
+    if (i < P.sched.y) {
+        let k = cand[P.sched.x + i];
+        if (block_front(k)) {
+            let g0 = geo_pos[k];
+            let packed = bitcast<u32>(g0.w);
+            let x0 = (packed & 0xFFFFu) * 2u;
+            let y0 = (packed >> 16u) * 2u;
+            let v = g0.xyz + geo_nrm[k].xyz + geo_tan[k].xyz;
+            let q01 = geo_uv01[k];
+            let q23 = geo_uv23[k];
+            textureStore(out_tex, vec2<u32>(x0, y0), vec4<f32>(v + q01.x, 1.0));
+            textureStore(out_tex, vec2<u32>(x0 + 1u, y0), vec4<f32>(v + q01.z, 1.0));
+            textureStore(out_tex, vec2<u32>(x0, y0 + 1u), vec4<f32>(v + q23.x, 1.0));
+            textureStore(out_tex, vec2<u32>(x0 + 1u, y0 + 1u), vec4<f32>(v + q23.z, 1.0));
         }
     }
 }

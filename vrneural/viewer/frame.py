@@ -135,7 +135,8 @@ class FrameWork:
         lay = self._layout(r, right, display)
         last = self.records[-1] if self.records else None
         show_hud = self.live.hud or self.live.help
-        self.presenter.set_hud(self._hud_panel(st, last) if show_hud else None)
+        # the newest statistics that have come back (reading this frame's would wait for it)
+        self.presenter.set_hud(self._hud_panel(r.latest_stats(), last) if show_hud else None)
         tex = self.context.get_current_texture()
         enc = self.dev.create_command_encoder()
         self.presenter.encode(enc, tex, tuple(tex.size[:2]), lay, self.view_format)

@@ -11,13 +11,26 @@ STATUS_S = 8.0  # seconds a status line stays
 
 
 def hud_lines(view, st, last) -> tuple[list[str], set[int]]:
-    """``(lines, alert line indices)`` for the frame with statistics ``st``; ``last``: the
-    previous :class:`~vrneural.viewer.view.FrameRecord` (its render / present ms), or None."""
+    """``(lines, alert line indices)``; ``st``: the newest frame statistics that have come back
+    (frames in flight: a frame or two behind the one drawn), or None before the first;
+    ``last``: the previous :class:`~vrneural.viewer.view.FrameRecord` (its render / present
+    ms), or None."""
     v, live, s = view, view.live, view.r.s
     texture = s.mode == "texture"
-    gpu = "  ".join(f"{k} {ms:.1f}" for k, ms in st.gpu_ms.items()) or "n/a (no timestamps)"
-    shaded = st.blocks_shaded if texture else st.pixels_shaded
     unit = "blocks" if texture else "pixels"
+    if st is None:  # the first frames: still in flight, nothing has come back yet
+        gpu, work = "(in flight)", f"{unit} shaded -  MLP evals -"
+    else:
+        gpu = "  ".join(f"{k} {ms:.1f}" for k, ms in st.gpu_ms.items())
+        gpu += "".join(f"  {k} n/a" for k in st.untimed)
+        gpu = gpu.strip() or "n/a (no timestamps)"
+        shaded = st.blocks_shaded if texture else st.pixels_shaded
+        work = (
+            f"{unit} shaded {thousands(shaded)}  MLP evals {thousands(st.mlp_coarse + st.mlp_fine)}"
+        )
+        if texture:
+            work += f"  objects updated {st.updated_objects}, culled {st.culled_objects}"
+        work += f"  (frame {st.frame})"
     timing = (
         f"render {last.render_ms:.1f}, HUD + present {last.present_ms:.1f}" if last else "first"
     )
@@ -39,10 +52,7 @@ def hud_lines(view, st, last) -> tuple[list[str], set[int]]:
         f"vrneural view  {v.adapter.name} ({v.adapter.backend})",
         f"FPS {v.fps():5.1f}  frame {interval:6.1f} ms  ({timing} ms)",
         f"GPU ms  {gpu}",
-        f"{unit} shaded {thousands(shaded)}  MLP evals {thousands(st.mlp_coarse + st.mlp_fine)}"
-        + (
-            f"  objects updated {st.updated_objects}, culled {st.culled_objects}" if texture else ""
-        ),
+        work,
         knobs,
         f"lights {lights or 'none'}  (* dragged by the right button)",
         f"camera {camera}  t {v.t:.2f} s{' paused' if live.paused else ''}  frame {v.f}",

@@ -43,6 +43,7 @@ def offscreen_fps(profile: str, frames: int) -> dict:
     t0 = time.perf_counter()
     for f in range(1, frames + 1):
         r.frame(f, f / r.s.fps, head)
+    r.wait()  # frames in flight: until the last one is done
     dt = time.perf_counter() - t0
     return {"fps": frames / dt, "frame_ms": dt / frames * 1e3}
 

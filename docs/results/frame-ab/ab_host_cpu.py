@@ -1,0 +1,29 @@
+import sys, time, os
+sys.path.insert(0, "/tmp/ab41/old")
+import numpy as np
+import vrneural_e90c611.runtime.renderer as old
+import vrneural.runtime.renderer as new
+from vrneural.runtime.scene import builtin_scene
+from vrneural_e90c611.runtime.scene import builtin_scene as old_scene
+eye = tuple(int(x) for x in (sys.argv[1] if len(sys.argv) > 1 else "96x96").split("x"))
+tex = int(sys.argv[2]) if len(sys.argv) > 2 else 128
+kw = dict(eyes=2, reuse=4, texture_res=tex, eye_res=eye, n_lights=2, fov_y=90.0)
+ro = old.Renderer(old_scene(2), old.Settings(**kw)); ro.frame(0)
+rn = {d: new.Renderer(builtin_scene(2), new.Settings(**kw, frames_in_flight=d)) for d in (1, 2, 3)}
+for r in rn.values(): r.frame(0); r.wait()
+n = 30
+res = {}
+for rep in range(3):
+    for name, r in [("old", ro), *[(f"new{d}", r) for d, r in rn.items()]]:
+        c0, t0 = time.thread_time(), time.perf_counter()
+        f0 = 1 + rep * n
+        sts = [r.frame(f) for f in range(f0, f0 + n)]
+        if name != "old": r.wait()
+        for st in sts: st.blocks_shaded, st.gpu_ms  # decoded inside the timed loop, as old does
+        w = (time.perf_counter() - t0) / n * 1e3; c = (time.thread_time() - c0) / n * 1e3
+        res.setdefault(name, []).append((w, c))
+        print(f"{name}: wall {w:.2f} ms/frame, main-thread cpu {c:.2f} ms/frame")
+for k, v in res.items():
+    v = np.array(v); print(k, "median wall %.2f cpu %.2f" % tuple(np.median(v, 0)))
+print("cpu ratio old/new2:", np.median(np.array(res["old"])[:, 1]) / np.median(np.array(res["new2"])[:, 1]))
+print("load", os.getloadavg())

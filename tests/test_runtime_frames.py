@@ -1,0 +1,147 @@
+"""The frame loop of #41: frames in flight, one submit, the fused texture-space dispatch, the
+uniform arena, the display target, and the images: bit for bit those of the loop before it."""
+
+import numpy as np
+import pytest
+from frame_refs import COUNTERS, DATA, configs, render
+
+from vrneural.runtime.scene import builtin_scene
+
+
+@pytest.fixture(scope="module")
+def refs():
+    return np.load(DATA)
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("name", list(configs()))
+def test_frames_are_bit_for_bit_those_of_the_loop_before_41(refs, name):
+    """Every configuration (texture, f16, shared radiance with adaptive reuse, crop + jitter,
+    screen, reference, a plain floor under one light, no lights): the same arithmetic as
+    before, so the same bits in every frame's eyes, and the same counters."""
+    eyes, cnt = render(name, wait=lambda r: r.wait())
+    np.testing.assert_array_equal(cnt, refs[f"{name}/counters"], err_msg=str(COUNTERS))
+    np.testing.assert_array_equal(eyes.view(np.uint16), refs[f"{name}/eyes"].view(np.uint16))
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("compact_min", [0, 1 << 30], ids=["compacted", "one-dispatch"])
+def test_both_texture_update_paths_give_the_same_frames(refs, monkeypatch, compact_min):
+    """cull + args + main_compacted (long spans) and the single fused dispatch (short ones)
+    shade the same blocks: identical bits and counters, forced either way."""
+    from vrneural.runtime import texture_pass
+
+    monkeypatch.setattr(texture_pass, "COMPACT_MIN", compact_min)
+    eyes, cnt = render("texture", wait=lambda r: r.wait())
+    np.testing.assert_array_equal(cnt, refs["texture/counters"])
+    np.testing.assert_array_equal(eyes.view(np.uint16), refs["texture/eyes"].view(np.uint16))
+
+
+def _renderer(**kw):
+    from vrneural.runtime.renderer import Renderer, Settings
+
+    s = Settings(**{"eyes": 2, "reuse": 2, "texture_res": 128, "eye_res": (48, 40),
+                    "n_lights": 2, **kw})  # fmt: skip
+    return Renderer(builtin_scene(2), s)
+
+
+def _counts(st) -> tuple:
+    return (st.blocks_shaded, st.blocks_backfacing, st.mlp_coarse, st.mlp_fine)
+
+
+@pytest.mark.gpu
+def test_stats_arrive_later_and_equal_those_of_a_waiting_loop():
+    """With 3 frames in flight frame() returns before the GPU is done; the statistics come
+    back in order, never more than 2 frames queued behind the one submitted, and equal frame
+    for frame those of a renderer that waits for every frame (1 in flight)."""
+    a, b = _renderer(frames_in_flight=3), _renderer(frames_in_flight=1)
+    sa, sb = [], []
+    for f in range(8):
+        sa.append(a.frame(f))
+        assert sa[-1].in_flight <= 2
+        late = a.latest_stats()
+        assert late is None or (late.ready and late.frame < f + 1)
+        sb.append(b.frame(f))
+        _counts(sb[-1])  # read at once: waits for that frame
+    a.wait()
+    assert all(st.ready for st in sa)
+    assert [_counts(x) for x in sa] == [_counts(x) for x in sb]
+    assert any(st.blocks_shaded for st in sa)
+    for st in sa:
+        assert st.wall_ms > 0 and st.host_ms > 0 and st.cpu_ms >= 0
+        assert set(st.gpu_ms).isdisjoint(st.untimed)
+    assert a.latest_stats() is sa[-1]
+    # reading a field of a frame in flight waits for it, and gives its value
+    st = a.frame(8)
+    twin = b.frame(8)
+    assert _counts(st) == _counts(twin) and st.ready
+    np.testing.assert_array_equal(a.read_eyes()[0], b.read_eyes()[0])
+
+
+@pytest.mark.gpu
+def test_wall_clock_passes_render_the_same_frames():
+    """``pass_clock = "wall"`` (a submit per pass, each timed by the wall clock) changes the
+    timing, not the frame: same bits and counters; every pass run has a time."""
+    a, b = _renderer(), _renderer()
+    b.pass_clock = "wall"
+    for f in range(3):
+        sa, sb = a.frame(f), b.frame(f)
+        assert _counts(sa) == _counts(sb)
+        assert sb.clock == "wall" and not sb.untimed
+        assert set(sb.gpu_ms) == ({"texture", "forward"} if sb.updated_objects else {"forward"})
+    np.testing.assert_array_equal(a.read_eyes()[1], b.read_eyes()[1])
+
+
+@pytest.mark.gpu
+def test_display_target_is_the_tonemap_of_the_hdr_frame_within_one_level():
+    """The 8-bit display target (Reinhard in the fragment shader, sRGB by the target) against
+    output.tonemap of the HDR frame: at most 1 level apart (the HDR path rounds to f16 first;
+    the sRGB encoders round differently), nearly always equal."""
+    from vrneural.errors import VrnError
+
+    hdr, disp = _renderer(), _renderer(target="display")
+    for f in range(2):
+        hdr.frame(f)
+        disp.frame(f)
+    want, got = hdr.read_display(), disp.read_display()
+    for w, g in zip(want, got, strict=True):
+        d = np.abs(w.astype(int) - g.astype(int))
+        assert d.max() <= 1 and (d == 0).mean() > 0.9
+        assert g.shape == w.shape and g.dtype == np.uint8 and g.max() > 50
+    with pytest.raises(VrnError, match="read_display gives the display colours"):
+        disp.read_eyes()
+    with pytest.raises(VrnError, match="needs mode 'texture'"):
+        _renderer(target="display", mode="screen")
+
+
+@pytest.mark.gpu
+def test_settings_errors_are_one_line():
+    from vrneural.errors import VrnError
+
+    with pytest.raises(VrnError, match="frames_in_flight = 4 is out of range"):
+        _renderer(frames_in_flight=4)
+    with pytest.raises(VrnError, match="target = 'ldr' is not allowed"):
+        _renderer(target="ldr")
+
+
+@pytest.mark.gpu
+def test_uniform_arena_sends_the_written_span_once():
+    """Regions aligned for uniform bindings; one write_buffer per flush carries everything
+    written since the last one (read back from the GPU buffer)."""
+    from vrneural.gpu.readback import read_buffer
+    from vrneural.gpu.uniforms import UniformArena
+
+    ar = UniformArena("test")
+    offs = [ar.alloc(n) for n in (176, 96, 32)]
+    assert offs[0] == 0 and all(o % ar.align == 0 for o in offs) and offs == sorted(offs)
+    ar.binding(offs[0], 176)  # creates the buffer
+    ar.view(offs[1], 96)[:] = np.arange(24, dtype=np.float32)
+    ar.view(offs[2], 32)[:] = 7.0
+    assert (ar.lo, ar.hi) == (offs[1], offs[2] + 32)
+    ar.flush()
+    assert ar.lo is None
+    got = read_buffer(ar.buf, np.float32)
+    np.testing.assert_array_equal(got[offs[1] // 4 : offs[1] // 4 + 24], np.arange(24))
+    np.testing.assert_array_equal(got[offs[2] // 4 : offs[2] // 4 + 8], 7.0)
+    with pytest.raises(RuntimeError, match="alloc after the buffer was created"):
+        ar.alloc(16)

@@ -1,0 +1,229 @@
+"""`vrneural bench frame`: where a frame's time goes, against the adapter's floors, in one run.
+
+The benchmark scene (:func:`vrneural.bench.timing.bench_scene`: two neural objects and a plain
+floor) rendered by one renderer per colour target. Measured in interleaved rounds, so a slow
+spell of a shared machine hits every condition:
+
+- the frame loop with 1, 2 and 3 frames in flight: wall time per frame (frames back to back),
+  host CPU per frame (main thread: ``frame()`` and reading its statistics) and frames queued;
+- each pass on its own (submitted alone, wall clock from submit to completion; GPU timestamps
+  beside it where this adapter's cover the pass, runtime/timecheck.py): a full texture-space update,
+  a staggered frame's update, the forward pass of both eyes (HDR and the 8-bit display target);
+- the floors over the same geometry, targets and candidates: a constant-colour forward pass, a
+  forward pass doing one bilinear sample per fragment and nothing else, and the bare
+  texture-space kernel (the same facing test, geometry records read and texels stored; no
+  shading).
+
+Ratios: forward / one-sample floor (target <= 1.15), full update / bare kernel (<= 1.5),
+wall per frame / max(host CPU, GPU) with frames in flight (<= 1.1; GPU = the passes' times
+summed, amortised as the frame loop runs them).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from vrneural.bench import report as rp
+from vrneural.bench import timing
+from vrneural.config import opt, quick_defaults
+
+TARGETS = {"forward_vs_sample_floor": 1.15, "texture_vs_bare": 1.5, "wall_vs_bound": 1.1}
+
+
+@dataclass
+class FrameConfig:
+    """`vrneural bench frame`."""
+
+    out: str = opt("bench-frame", "output directory", cli=False)
+    texture_res: int = opt(1200, "radiance texture side")
+    reuse: int = opt(4, "update interval N (staggered)")
+    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
+    lights: int = opt(1, "point lights")
+    frames: int = opt(20, "frames per loop measurement (after one cycle of warm-up)")
+    repeats: int = opt(3, "passes timed alone per round (the median is kept)")
+    rounds: int = opt(3, "interleaved rounds (the median over rounds is reported)")
+    quick: bool = opt(False, "CI-sized: texture 128, eyes 96x96, 6 frames, 2 rounds")
+    progress: bool = opt(True, "show progress bars")
+    force: bool = opt(False, "overwrite an existing output directory")
+
+    def resolved(self) -> FrameConfig:
+        if not self.quick:
+            return self
+        return quick_defaults(self, texture_res=128, eye_res="96x96", frames=6, repeats=2, rounds=2)
+
+
+def _wait(r) -> None:
+    r.dev.queue.read_buffer(r.counters.buf, 0, 16)  # a copy after everything: waits for it
+
+
+def time_passes(r, encode, repeats: int) -> dict:
+    """``encode(enc, timer)`` records one pass (or a set of passes timed together) into a
+    fresh encoder; submitted alone ``repeats`` times: ``{"wall_ms", "timestamp_ms"}``
+    (medians; the timestamps summed over the passes it timed, None without them)."""
+    from vrneural.gpu.timing import GpuTimer
+
+    walls, stamps = [], []
+    timer = GpuTimer(8)
+    for i in range(repeats + 1):  # the first: warm-up (pipelines compiled at first use)
+        enc = r.dev.create_command_encoder()
+        encode(enc, timer)
+        timer.resolve(enc)
+        r.arena.flush()
+        t0 = time.perf_counter()
+        r.dev.queue.submit([enc.finish()])
+        _wait(r)
+        ts = timer.read()
+        if i:
+            walls.append((time.perf_counter() - t0) * 1e3)
+            stamps.append(sum(ts.values()) if ts else None)
+    ok = [t for t in stamps if t is not None]
+    return {
+        "wall_ms": float(np.median(walls)),
+        "timestamp_ms": float(np.median(ok)) if ok else None,
+    }
+
+
+def texture_update(r, entry: str, phase: int, period: int, f: int):
+    """An encoder callback: every neural object's update of rows ``phase::period`` for every
+    radiance texture, at frame ``f``'s eyes and lights, in one compute pass (``entry``:
+    ``main``, the pass; ``bare``, its floor)."""
+    from vrneural.runtime.lights import light_arrays
+
+    eyes = r.eyes_at(f)
+    lp, lc = light_arrays(r.lights, f / r.s.fps)
+
+    def encode(enc, timer) -> None:
+        cp = enc.begin_compute_pass(timestamp_writes=timer.writes("texture"))
+        bound = None
+        for k, n in enumerate(r.neural):
+            tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
+            for e, ((pos, margin), tgt) in enumerate(
+                zip(r._shading_eyes(eyes), n.targets, strict=True)
+            ):
+                tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, k * r.s.eyes + e,
+                           margin)  # fmt: skip
+                bound = tgt.dispatch(cp, phase, period, entry, bound)
+        cp.end()
+
+    return encode
+
+
+def forward(r, bundles=None):
+    """An encoder callback: both eyes' forward passes (``bundles``: a floor's draws)."""
+
+    def encode(enc, timer) -> None:
+        for e in range(r.s.eyes):
+            r.encode_forward(enc, e, bundles, "forward", timer)
+
+    return encode
+
+
+def floor_bundles(r, fragment: str) -> list:
+    """Per eye, a render bundle of the renderer's draws with every fragment entry point
+    replaced by ``fragment`` (``fs_floor_constant``, ``fs_floor_sample``)."""
+    from vrneural.runtime import forward as fw
+
+    return [fw.record_bundle(et, r.draw_list(e, et, fragment)) for e, et in enumerate(r.eye_t)]
+
+
+def loop(r, frames: int, f0: int) -> dict:
+    """``frames`` frames back to back from ``f0`` (reading each one's statistics as they come
+    back, as `run` does); per frame: wall, host CPU (main thread), frames queued."""
+    sts = []
+    c0, t0 = time.thread_time(), time.perf_counter()
+    for f in range(f0, f0 + frames):
+        sts.append(r.frame(f))
+        latest = r.latest_stats()
+        if latest is not None:
+            latest.blocks_shaded  # noqa: B018 (decoded here: its cost counts as host work)
+    r.wait()
+    for st in sts:
+        st.mlp_fine  # noqa: B018
+    wall = (time.perf_counter() - t0) * 1e3 / frames
+    cpu = (time.thread_time() - c0) * 1e3 / frames
+    return {
+        "wall_ms": wall,
+        "host_cpu_ms": cpu,
+        "host_ms": float(np.mean([st.host_ms for st in sts])),
+        "in_flight": float(np.mean([st.in_flight for st in sts])),
+        "blocks_per_frame": float(np.mean([st.blocks_shaded for st in sts])),
+    }
+
+
+def _renderer(scene, c, eye_res, target: str, depth: int = 2):
+    from vrneural.runtime.profiles import get_profile
+    from vrneural.runtime.renderer import Renderer, Settings
+
+    prof = get_profile("quest3")
+    s = Settings(eyes=2, reuse=c.reuse, texture_res=c.texture_res, eye_res=eye_res,
+                 frames=1, fps=prof.fps, fov_y=prof.fov_y, n_lights=c.lights,
+                 schedule="staggered", frames_in_flight=depth, target=target)  # fmt: skip
+    r = Renderer(scene, s)
+    r.frame(0)
+    r.wait()
+    return r
+
+
+def run_frame(cfg: FrameConfig) -> dict:
+    from vrneural.bench.frame_report import markdown, plot, summarise
+    from vrneural.errors import check_range
+    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
+
+    c = cfg.resolved()
+    rp.check_texture_res(c.texture_res)
+    check_range("--reuse", c.reuse, 0, REUSE_MAX)
+    check_range("--lights", c.lights, 1, LIGHTS_MAX)
+    check_range("--frames", c.frames, 2, 10000)
+    check_range("--repeats", c.repeats, 1, 100)
+    check_range("--rounds", c.rounds, 1, 100)
+    eye_res = parse_res(c.eye_res)
+    root = rp.prepare_out(cfg.out, cfg.force, "frame")
+    t0 = time.perf_counter()
+    doc = rp.header("frame", c)
+    scene = timing.bench_scene(c.lights)
+    hdr = _renderer(scene, c, eye_res, "hdr")
+    disp = _renderer(scene, c, eye_res, "display")
+    doc["timestamp_check"] = hdr.timestamp_check
+    floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_constant", "fs_floor_sample")}
+    n1 = c.reuse + 1
+    bar = timing.progress(c.rounds, "bench frame (rounds)", c.progress)
+    f = n1 * 2  # after a cycle of warm-up
+    for rnd in range(c.rounds):
+        rec = {"round": rnd, "loop": {}, "passes": {}}
+        for depth in (1, 2, 3):
+            hdr.set_frames_in_flight(depth)
+            hdr.frame(f)  # warm the new ring
+            hdr.wait()
+            f += 1
+            f += (-f) % n1
+            rec["loop"][depth] = loop(hdr, c.frames, f)
+            f += c.frames
+        p, rep = rec["passes"], c.repeats
+        rec["empty_submit_ms"] = time_passes(hdr, lambda enc, timer: None, rep)["wall_ms"]
+        p["texture_full"] = time_passes(hdr, texture_update(hdr, "main", 0, 1, f), rep)
+        p["texture_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, 1, f), rep)
+        p["texture_slice"] = time_passes(hdr, texture_update(hdr, "main", 0, n1, f), rep)
+        p["texture_slice_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, n1, f), rep)
+        hdr.frame(f)  # the eyes' uniforms and radiance textures of a real frame
+        hdr.wait()
+        f += 1
+        p["forward"] = time_passes(hdr, forward(hdr), rep)
+        p["forward_floor_sample"] = time_passes(hdr, forward(hdr, floors["fs_floor_sample"]), rep)
+        p["forward_floor_constant"] = time_passes(
+            hdr, forward(hdr, floors["fs_floor_constant"]), rep
+        )
+        disp.frame(f)
+        disp.wait()
+        p["forward_display"] = time_passes(disp, forward(disp), rep)
+        doc["records"].append(rec)
+        bar.update()
+    bar.close()
+    doc["summary"] = summarise(doc, c.reuse)
+    doc["targets"] = TARGETS
+    md = markdown(doc)
+    plot(doc, root / "frame.png")
+    md += ["", "![frame breakdown](frame.png)"]
+    return rp.finish(root, doc, md, t0)

@@ -1,0 +1,178 @@
+"""`vrneural bench frame`'s summary (ratios per round, medians over rounds), Markdown and PNG."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vrneural.bench import report as rp
+
+#: (ratio name, numerator pass, denominator pass): passes timed alone, wall clock
+PASS_RATIOS = (
+    ("forward_vs_sample_floor", "forward", "forward_floor_sample"),
+    ("forward_vs_constant_floor", "forward", "forward_floor_constant"),
+    ("sample_floor_vs_constant_floor", "forward_floor_sample", "forward_floor_constant"),
+    ("display_vs_hdr_forward", "forward_display", "forward"),
+    ("texture_vs_bare", "texture_full", "texture_bare"),
+    ("texture_slice_vs_bare", "texture_slice", "texture_slice_bare"),
+)
+
+
+def _med(x) -> float:
+    return float(np.median(np.asarray(x, np.float64)))
+
+
+def _covered(p: dict, empty_ms: float) -> bool:
+    """Whether a pass's own timestamps agree with its wall time (runtime/timecheck.py's rule;
+    checked per pass: on lavapipe a kernel that reads no texture is not timed by them)."""
+    from vrneural.runtime.timecheck import HIGH, LOW, MIN_MS
+
+    if p["timestamp_ms"] is None:
+        return False
+    work = max(p["wall_ms"] - empty_ms, 0.0)
+    return work >= MIN_MS and LOW * work <= p["timestamp_ms"] <= HIGH * p["wall_ms"]
+
+
+def summarise(doc: dict, reuse: int) -> dict:
+    """Medians over rounds: per pass its wall (and timestamp) ms, the ratios of
+    :data:`PASS_RATIOS` (each taken within a round, by timestamps where this adapter's cover
+    both passes, else by the wall clock), and per frames-in-flight depth the loop's wall, host
+    CPU and GPU per frame and wall / max(host CPU, GPU)."""
+    recs = doc["records"]
+
+    def clock(name: str) -> str:  # timestamps where they agree with the wall in every round
+        ok = all(_covered(r["passes"][name], r["empty_submit_ms"]) for r in recs)
+        return "timestamp_ms" if ok else "wall_ms"
+
+    passes = {}
+    for name in recs[0]["passes"]:
+        ts = [r["passes"][name]["timestamp_ms"] for r in recs]
+        passes[name] = {
+            "wall_ms": _med([r["passes"][name]["wall_ms"] for r in recs]),
+            "timestamp_ms": _med(ts) if None not in ts else None,
+            "timestamps_agree": clock(name) == "timestamp_ms",
+        }
+    ratios = {}
+    for key, a, b in PASS_RATIOS:
+        ck = clock(a) if clock(a) == clock(b) else "wall_ms"
+        per = [r["passes"][a][ck] / r["passes"][b][ck] for r in recs]
+        ratios[key] = {"median": _med(per), "range": [float(min(per)), float(max(per))],
+                       "clock": ck[:-3]}  # fmt: skip
+    loops = {}
+    for d in recs[0]["loop"]:
+        gpu, rows = [], []
+        for r in recs:
+            p = r["passes"]
+            g = p["texture_slice"]["wall_ms"] + p["forward"]["wall_ms"]  # a staggered frame
+            lp = r["loop"][d]
+            gpu.append(g)
+            rows.append((lp["wall_ms"], lp["host_cpu_ms"], lp["in_flight"],
+                         lp["wall_ms"] / max(lp["host_cpu_ms"], g)))  # fmt: skip
+        a = np.asarray(rows)
+        loops[str(d)] = {
+            "wall_ms": _med(a[:, 0]),
+            "host_cpu_ms": _med(a[:, 1]),
+            "in_flight": _med(a[:, 2]),
+            "gpu_ms": _med(gpu),
+            "wall_vs_bound": _med(a[:, 3]),
+            "wall_vs_sum": _med(a[:, 0] / (a[:, 1] + np.asarray(gpu))),
+        }
+    return {"passes": passes, "ratios": ratios, "loops": loops, "reuse": reuse}
+
+
+def markdown(doc: dict) -> list[str]:
+    c, sm, tg = doc["config"], doc["summary"], doc["targets"]
+    cov = doc.get("timestamp_check") or {}
+    covered = ", ".join(f"{k}: {'yes' if v['covered'] else 'no'}" for k, v in cov.items())
+    md = [
+        "# Frame: where a frame's time goes, against the adapter's floors",
+        "",
+        rp.adapter_line(doc),
+        f"Benchmark scene (2 neural objects, plain floor), {c['lights']} light(s), 2 eyes at "
+        f"{c['eye_res']}, {c['texture_res']}^2 radiance textures, N = {c['reuse']} staggered; "
+        f"{c['rounds']} interleaved rounds (medians), {c['frames']} frames per loop, "
+        f"{c['repeats']} repeats per pass." + (" **Quick run.**" if c["quick"] else ""),
+        f"Timestamps cover the renderer's passes (checked against the wall clock, "
+        f"runtime/timecheck.py): {covered or 'no timestamps'}. "
+        "Each pass is submitted alone; two passes are compared by their timestamps where these "
+        "agree with each one's wall time (less an empty submit) in every round, else by the wall "
+        "clock (submit to completion).",
+        "",
+        "## Passes (each alone)",
+        "",
+    ]
+
+    def stamp(name: str, v: dict):
+        if v["timestamp_ms"] is None:
+            return "-"
+        return v["timestamp_ms"] if v["timestamps_agree"] else f"{v['timestamp_ms']:.3g} (wrong)"
+
+    rows = [[k, v["wall_ms"], stamp(k, v)] for k, v in sm["passes"].items()]
+    md += rp.table(["pass", "wall ms", "timestamp ms"], rows)
+    md += ["", "## Ratios (per round, median [range])", ""]
+    rows = []
+    for k, v in sm["ratios"].items():
+        target = tg.get(k)
+        ok = "" if target is None else ("met" if v["median"] <= target else "missed")
+        rows.append([k, v["median"], f"[{v['range'][0]:.3g}, {v['range'][1]:.3g}]", v["clock"],
+                     target if target is not None else "-", ok])  # fmt: skip
+    md += rp.table(["ratio", "median", "range", "clock", "target", ""], rows)
+    md += ["", "## Frame loop (frames back to back)", ""]
+    rows = [
+        [d, v["in_flight"], v["wall_ms"], v["host_cpu_ms"], v["gpu_ms"], v["wall_vs_bound"],
+         v["wall_vs_sum"]]
+        for d, v in sm["loops"].items()
+    ]  # fmt: skip
+    md += rp.table(
+        ["frames in flight", "queued (mean)", "wall ms/frame", "host CPU ms/frame",
+         "GPU ms/frame", "wall / max(host, GPU)", "wall / (host + GPU)"],
+        rows,
+    )  # fmt: skip
+    md += [
+        "",
+        "GPU ms/frame: a staggered update of every radiance texture plus both eyes' forward "
+        "passes, each timed alone. Host CPU: the main thread's CPU time in `frame()` and in "
+        f"reading the statistics. Target for wall / max(host, GPU): <= {tg['wall_vs_bound']}. "
+        "On a CPU adapter the GPU's work runs on the same cores as the host, so the two cannot "
+        "fully overlap there.",
+    ]
+    return md
+
+
+def plot(doc: dict, path) -> None:
+    sm = doc["summary"]
+    fig, (a1, a2) = rp.figure(11.0, 3.8, 2)
+    groups = [
+        ("forward", ["forward_floor_constant", "forward_floor_sample", "forward",
+                     "forward_display"]),
+        ("texture (full)", ["texture_bare", "texture_full"]),
+        ("texture (frame)", ["texture_slice_bare", "texture_slice"]),
+    ]  # fmt: skip
+    x, labels = 0, []
+    for _, names in groups:
+        for n in names:
+            v = sm["passes"][n]["wall_ms"]
+            floor = "floor" in n or "bare" in n
+            a1.bar(x, v, color="0.7" if floor else "C0")
+            labels.append(n.replace("forward_", "").replace("texture_", "tex "))
+            x += 1
+        x += 0.5
+    ticks = [i for i, _ in enumerate(labels)]
+    pos, i = [], 0.0
+    for _, names in groups:
+        for _ in names:
+            pos.append(i)
+            i += 1
+        i += 0.5
+    a1.set_xticks(pos[: len(ticks)], labels, rotation=40, ha="right", fontsize=7)
+    a1.set_ylabel("ms, each pass alone (wall)")
+    a1.set_title("passes (grey: floors)", fontsize=9)
+    d = list(sm["loops"])
+    for key, lab in (("wall_ms", "wall / frame"), ("host_cpu_ms", "host CPU / frame"),
+                     ("gpu_ms", "GPU / frame")):  # fmt: skip
+        a2.plot(d, [sm["loops"][k][key] for k in d], "o-", label=lab)
+    a2.set_xlabel("frames in flight")
+    a2.set_ylabel("ms")
+    a2.set_title("frame loop", fontsize=9)
+    a2.legend(fontsize=7)
+    fig.suptitle(f"bench frame on {doc['adapter']['name']}", fontsize=9)
+    rp.save_png(fig, path)

@@ -1,0 +1,145 @@
+"""The commands of one frame (mixed into :class:`~vrneural.runtime.renderer.Renderer`): the
+texture-space updates in one compute pass, then per eye the forward pass (its render bundle)
+and, in the screen modes, the per-pixel pass. Everything goes into the frame's one encoder;
+uniforms into the renderer's arena (sent once, before the submit).
+
+With ``Renderer.pass_clock = "wall"`` each pass is instead submitted alone and waited for, and
+timed by the wall clock (``_cut``): per-pass times on an adapter whose timestamps do not cover
+a pass (runtime/timecheck.py), at the price of frames in flight and of the submits.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from vrneural.runtime import forward as fw
+from vrneural.runtime.screen_pass import screen_rect
+
+
+class FrameEncoding:
+    """Encoding half of the renderer (its state lives on the Renderer)."""
+
+    #: "timestamps" (one submit per frame, GPU timestamps) or "wall" (a submit per pass, each
+    #: waited for and timed by the wall clock; no frames in flight)
+    pass_clock = "timestamps"
+
+    def _writes(self, name: str):
+        return self.timer.writes(name) if self.pass_clock != "wall" else None
+
+    def _cut(self, enc, name: str):
+        """``pass_clock == "wall"``: submit what ``enc`` holds (the pass ``name`` after any
+        commands before it), wait for it, add its wall ms to the frame's ``_wall`` and return
+        a new encoder; otherwise ``enc``."""
+        if self.pass_clock != "wall":
+            return enc
+        self.arena.flush()
+        q = self.dev.queue
+        t0 = time.perf_counter()
+        q.submit([enc.finish()])
+        q.read_buffer(self.counters.buf, 0, 16)  # a copy after the pass: waits for it
+        self._wall[name] = self._wall.get(name, 0.0) + (time.perf_counter() - t0) * 1e3
+        return self.dev.create_command_encoder()
+
+    def _encode_texture(self, enc, todo, eyes, lp, lc):
+        """All of a frame's texture-space dispatches, in one compute pass; returns the
+        encoder to go on with."""
+        if self.pass_clock == "wall":  # everything before the pass, first
+            enc = self._cut(enc, "_before")
+        cp = enc.begin_compute_pass(timestamp_writes=self._writes("texture"))
+        shading = self._shading_eyes(eyes)
+        bound = None
+        for k, n, phase, period in todo:
+            tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
+            for e, ((pos, margin), tgt) in enumerate(zip(shading, n.targets, strict=True)):
+                slot = k * self.s.eyes + e
+                tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, slot, margin)
+                bound = tgt.dispatch(cp, phase, period, bound=bound)
+        cp.end()
+        return self._cut(enc, "texture")
+
+    def _encode_eyes(self, enc, eyes, lp, lc) -> tuple:
+        """Per eye, the forward pass (replaying its bundle) and, in the screen modes, the
+        per-pixel pass; returns the (object, eye) pairs culled there and the encoder."""
+        s = self.s
+        shift = np.eye(4)
+        shift[:3, 3] = self.origin
+        lp_r = lp - self.origin
+        culled = 0
+        for e, (eye, et) in enumerate(zip(eyes, self.eye_t, strict=True)):
+            vp_r = eye.view_proj @ shift  # origin-relative position -> clip
+            et.update(vp_r, eye.position - self.origin, lp_r, lc)
+            if self.pass_clock == "wall":
+                enc = self._cut(enc, "_before")
+            self.encode_forward(enc, e)
+            enc = self._cut(enc, "forward")
+            if s.mode != "texture":
+                culled += self._encode_screen(enc, e, eye, vp_r, lp_r, lc)
+                enc = self._cut(enc, "screen")
+        return culled, enc
+
+    def encode_forward(
+        self, enc, e: int, bundles: list | None = None, name="forward", timer=None
+    ) -> None:
+        """Eye ``e``'s forward pass into ``enc``: its bundle (or ``bundles[e]``: the bench's
+        floors over the same draws), timed as ``name`` (by ``timer``, default the frame's)."""
+        if self._bundles is None:
+            self._bundles = [
+                fw.record_bundle(et, self.draw_list(e, et)) for e, et in enumerate(self.eye_t)
+            ]
+        ts = timer.writes(name) if timer is not None else self._writes(name)
+        rp = fw.begin_pass(enc, self.eye_t[e], ts)
+        rp.execute_bundles([(bundles or self._bundles)[e]])
+        rp.end()
+
+    def draw_list(self, e: int, et, fragment: str | None = None) -> list:
+        """Eye ``e``'s draws ``[(pipeline, object bind group, DrawObject)]``; ``fragment``
+        replaces every draw's fragment entry point (``fs_floor_*``: the bench's floors; plain
+        objects then sample the first radiance texture)."""
+        s = self.s
+        vis = s.mode != "texture"
+        nl, na, mips = et.n_lights, len(self.lights), s.mips
+        out = []
+        for d, n in self.draws:
+            d = d if n is None else n.draw  # a neural object: the atlas level in use
+            if fragment is not None:
+                tgt = (n or self.neural[0]).targets
+                tgt = tgt[e if len(tgt) > 1 else 0]
+                pipe = fw.render_pipeline(nl, fragment, False, na, s.target, mips)
+                key = ("eye", e, tgt.R) if n is not None else ("floor", e, tgt.R)
+                bg = d.bind_group(tgt.sample_view, key, mips)
+            elif n is None:
+                pipe = fw.render_pipeline(
+                    nl, "fs_plain_vis" if vis else "fs_plain", vis, na, s.target
+                )
+                bg = d.bind_group(None, "plain")
+            elif vis:
+                pipe = fw.render_pipeline(nl, "fs_neural_vis", True, na)
+                bg = d.bind_group(None, "plain")
+            else:
+                pipe = fw.render_pipeline(nl, "fs_neural", False, na, s.target, mips)
+                tgt = n.targets[e if len(n.targets) > 1 else 0]  # shared: one for both
+                bg = d.bind_group(tgt.sample_view, ("eye", e), mips)
+            out.append((pipe, bg, d))
+        return out
+
+    def _encode_screen(self, enc, e: int, eye, vp_r, lp_r, lc) -> int:
+        s = self.s
+        inv = np.linalg.inv(vp_r)
+        cp = enc.begin_compute_pass(timestamp_writes=self._writes("screen"))
+        culled = 0
+        for k, n in enumerate(self.neural):
+            if not self._visible(n, [eye]):
+                culled += 1
+                continue
+            tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
+            tgt = n.targets[e]
+            c, r = self.world_sphere(n)
+            rect = screen_rect(c, r, eye.view_proj, *s.eye_res)
+            slot = k * s.eyes + e
+            model_r, eye_r = self.rebase(n.desc.model), eye.position - self.origin
+            tgt.update(model_r, eye_r, tiling, inv, lp_r, lc, slot, n.idx, rect)
+            tgt.dispatch(cp)
+        cp.end()
+        return culled
