@@ -132,7 +132,7 @@ def test_distill_trains_a_pyramid_and_names_levels_that_do_not_fit(tmp_path):
 @pytest.mark.parametrize("tiling", [1.0, 3.0, 11.0, 40.0])
 def test_gpu_lod_lookups_follow_the_twin(tiling):
     """The texture-space kernel computes each block's footprint and looks the pyramid up as
-    the numpy twin does (lod from 0.4 to 5.7 over these tilings)."""
+    the numpy twin does (lod 0, 1, 2.9 and 4.7, clamped to the top level 3)."""
     from runtime_helpers import quad_atlas
 
     from vrneural.runtime import reference as ref

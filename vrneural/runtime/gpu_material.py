@@ -141,7 +141,8 @@ class GpuAtlas:
         """The geometry atlas, built on first use and kept: ``by, bx`` of the non-empty blocks
         (numpy) and its storage buffers, each ``[N]`` ``vec4<f32>``: ``pos`` (object position,
         ``bitcast<f32>(by << 16 | bx)``), ``nrm`` (object normal, tangent handedness),
-        ``tan`` (object tangent, 0), ``uv01`` and ``uv23`` (untiled material UVs of texels
+        ``tan`` (object tangent; w: one atlas texel's untiled material-UV length, the LOD
+        footprint), ``uv01`` and ``uv23`` (untiled material UVs of texels
         0, 1 and 2, 3). The texture-space kernels read these instead of the mesh: no triangle
         fetch or barycentrics per update (README, Runtime)."""
         if self._geometry is None:
@@ -161,6 +162,7 @@ class GpuAtlas:
             arr[1, :n, :3] = g["nrm"]
             arr[1, :n, 3] = np.where(g["tan"][:, 3] >= 0, 1.0, -1.0)
             arr[2, :n, :3] = g["tan"][:, :3]
+            arr[2, :n, 3] = g["foot"]  # one atlas texel's material-uv length (LOD)
             arr[3, :n] = g["uv"][:, :2].reshape(n, 4)
             arr[4, :n] = g["uv"][:, 2:].reshape(n, 4)
             s = wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC

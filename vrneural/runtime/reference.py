@@ -106,22 +106,17 @@ def count_non_empty_blocks(tri_ids: np.ndarray) -> int:
     return len(non_empty_blocks(tri_ids)[0])
 
 
-def block_lod(mat: NeuralMaterial, uvs: np.ndarray) -> np.ndarray | None:
+def block_lod(mat: NeuralMaterial, foot: np.ndarray) -> np.ndarray | None:
     """Each block's level of detail in ``mat``'s prefiltered neural textures (None without
-    pyramids): its footprint, one atlas texel in the full-resolution texture's texels
-    (``uvs: [N, 4, 2]`` tiled, texels (0,0), (1,0), (0,1), (1,1)), as ``log2`` of at least 1.
-    Twin of the texture-space kernel's ``lod``."""
+    pyramids): ``log2`` of its footprint in the full-resolution texture's texels (at least 1):
+    ``foot: [N]``, one atlas texel's tiled material-UV length (:func:`texel_foot` x tiling),
+    times the texture's larger side. Twin of the texture-space kernel's ``lod``."""
     if mat.lod_levels <= 1:
         return None
     name = "fine" if mat.arch == "coarse_fine" else "features"
-    h, w = mat.textures[name].shape[:2]
-    dims = np.float32([w, h])
-    u = np.asarray(uvs, np.float32)
-    foot = np.maximum(
-        np.linalg.norm((u[:, 1] - u[:, 0]) * dims, axis=-1),
-        np.linalg.norm((u[:, 2] - u[:, 0]) * dims, axis=-1),
-    )
-    return np.log2(np.maximum(foot, np.float32(1))).astype(np.float32)
+    side = np.float32(max(mat.textures[name].shape[:2]))
+    texels = np.asarray(foot, np.float32) * side
+    return np.log2(np.maximum(texels, np.float32(1))).astype(np.float32)
 
 
 def shade_points(
@@ -163,7 +158,9 @@ def block_geometry(atlas: Atlas) -> dict:
     order, ``by, bx: [N]``, the object-space attributes at the block centre ``pos, nrm: [N, 3]``,
     ``tan: [N, 4]`` through the first non-empty texel's triangle, and the untiled material UVs
     of its 4 texels ``uv: [N, 4, 2]`` (texel order (0,0), (1,0), (0,1), (1,1); each texel through
-    its own triangle, empty texels through the centre's, extrapolated)."""
+    its own triangle, empty texels through the centre's, extrapolated) and ``foot: [N]``, the
+    untiled material-UV length of one atlas texel on the centre's triangle (:func:`texel_foot`).
+    """
     R = atlas.resolution
     nb = R // 2
     ids = atlas.tri_ids.reshape(nb, 2, nb, 2).transpose(0, 2, 1, 3).reshape(nb, nb, 4)
@@ -178,7 +175,29 @@ def block_geometry(atlas: Atlas) -> dict:
     ty = 2 * by[:, None] + np.array([0, 0, 1, 1])
     p = (np.stack([tx, ty], -1).astype(np.float32) + np.float32(0.5)) / np.float32(R)
     (uv,) = _interpolate(atlas, tri.ravel(), p.reshape(-1, 2), atlas.mesh.uv)
-    return {"by": by, "bx": bx, "pos": pos, "nrm": nrm, "tan": tan, "uv": uv.reshape(-1, 4, 2)}
+    foot = texel_foot(atlas, tc)
+    return {
+        "by": by, "bx": bx, "pos": pos, "nrm": nrm, "tan": tan, "uv": uv.reshape(-1, 4, 2),
+        "foot": foot,
+    }  # fmt: skip
+
+
+def texel_foot(atlas: Atlas, tri: np.ndarray) -> np.ndarray:
+    """``[N]`` float32: how long one atlas texel is in (untiled) material UV on triangles
+    ``tri``: the longer column of the triangle's Jacobian d(material uv) / d(atlas uv), over the
+    atlas side. Taken from the triangle (not from the texels' uv differences, which jump across
+    UV seams and chart borders); 0 for a triangle degenerate in the atlas."""
+    f = atlas.mesh.faces[tri].astype(np.int64)
+    a = atlas.uv_atlas.astype(np.float64)
+    m = atlas.mesh.uv.astype(np.float64)
+    P = np.stack([a[f[:, 1]] - a[f[:, 0]], a[f[:, 2]] - a[f[:, 0]]], -1)  # [N, 2, 2]
+    T = np.stack([m[f[:, 1]] - m[f[:, 0]], m[f[:, 2]] - m[f[:, 0]]], -1)
+    det = P[:, 0, 0] * P[:, 1, 1] - P[:, 0, 1] * P[:, 1, 0]
+    ok = np.abs(det) > 1e-20
+    inv = np.stack([[P[:, 1, 1], -P[:, 0, 1]], [-P[:, 1, 0], P[:, 0, 0]]], 0).transpose(2, 0, 1)
+    J = T @ (inv / np.where(ok, det, 1.0)[:, None, None])  # d(material uv) / d(atlas uv)
+    cols = np.linalg.norm(J, axis=1)  # [N, 2]: per atlas axis
+    return np.where(ok, cols.max(1) / atlas.resolution, 0.0).astype(np.float32)
 
 
 def texture_blocks(atlas: Atlas, model: np.ndarray, tiling=(1.0, 1.0, 0.0, 0.0), phase=0, period=1):
@@ -193,7 +212,8 @@ def texture_blocks(atlas: Atlas, model: np.ndarray, tiling=(1.0, 1.0, 0.0, 0.0),
     uvs = g["uv"][sel] * tl[:2] + tl[2:]
     tx = 2 * bx[:, None] + np.array([0, 1, 0, 1])
     ty = 2 * by[:, None] + np.array([0, 0, 1, 1])
-    return {"tx": tx, "ty": ty, "pos": pos, "n": n, "t": t, "b": b, "uvs": uvs}
+    foot = g["foot"][sel] * np.float32(max(tl[0], tl[1]))  # tiled
+    return {"tx": tx, "ty": ty, "pos": pos, "n": n, "t": t, "b": b, "uvs": uvs, "foot": foot}
 
 
 def shade_texture_space(
@@ -223,8 +243,9 @@ def shade_texture_space(
     g = texture_blocks(atlas, model, tiling, phase, period)
     tx, ty, pos, n, t, b, uvs = (g[k] for k in ("tx", "ty", "pos", "n", "t", "b", "uvs"))
     rad, front, nc, nf = shade_points(
-        mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision, margin, block_lod(mat, uvs)
-    )
+        mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision, margin,
+        block_lod(mat, g["foot"]),
+    )  # fmt: skip
     w = front
     out[ty[w], tx[w], :3] = rad[w]
     out[ty[w], tx[w], 3] = 1.0

@@ -33,7 +33,7 @@ struct Light {
 // The geometry atlas (one vec4 per non-empty block in each array, see gpu_material.py):
 @group(0) @binding(2) var<storage, read> geo_pos: array<vec4<f32>>;   // object pos, bitcast(by << 16 | bx)
 @group(0) @binding(3) var<storage, read> geo_nrm: array<vec4<f32>>;   // object normal, tangent sign
-@group(0) @binding(4) var<storage, read> geo_tan: array<vec4<f32>>;   // object tangent, 0
+@group(0) @binding(4) var<storage, read> geo_tan: array<vec4<f32>>;   // object tangent, texel foot
 @group(0) @binding(16) var<storage, read> geo_uv01: array<vec4<f32>>; // untiled uv of texels 0, 1
 @group(0) @binding(17) var<storage, read> geo_uv23: array<vec4<f32>>; // untiled uv of texels 2, 3
 @group(0) @binding(5) var out_tex: texture_storage_2d<{{ fmt | default('rgba16float') }}, write>;
@@ -80,9 +80,10 @@ fn shade_block(k: u32) -> vec4<u32> {
     let uc = (uv0 + uv1 + uv2 + uv3) * 0.25;
 {% if mat.lod_levels > 1 %}
     // prefiltered neural textures: the level of detail of the block's footprint, one atlas
-    // texel in the full-resolution texture's texels (twin: reference.block_lod)
+    // texel in the full-resolution texture's texels, from its triangle's uv Jacobian (the
+    // geometry atlas's tangent w; twin: reference.block_lod)
     let dims = vec2<f32>(textureDimensions({{ 'tex_b' if mat.arch == 'coarse_fine' else 'tex_a' }}, 0));
-    let foot = max(length((uv1 - uv0) * dims), length((uv2 - uv0) * dims));
+    let foot = geo_tan[k].w * max(P.tiling.x, P.tiling.y) * max(dims.x, dims.y);
     let lod = log2(max(foot, 1.0));
 {% set L = '_lod' %}
 {% set LA = ', lod' %}
