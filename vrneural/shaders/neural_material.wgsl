@@ -42,7 +42,13 @@ fn wrap_index(i: f32, n: i32) -> i32 {
 // Bilinear wrap lookup of {{ channels }} channels at material uv (texel centres at (i + 0.5) / W){{ ', at pyramid level `level`' if level is not none else '' }}.
 fn {{ name }}(uv: vec2<f32>{{ ', level: i32' if level is not none else '' }}) -> array<f32, {{ channels }}> {
 {% set lv = 'level' if level is not none else '0' %}
-    let dims = vec2<i32>(textureDimensions({{ tex }}{{ ', level' if level is not none else '' }}));
+{% if level is not none %}
+    // the level's size from level 0's: llvmpipe reads textureDimensions at a level that
+    // differs between the lanes of one SIMD group as if every lane had the first one's
+    let dims = max(vec2<i32>(textureDimensions({{ tex }}, 0)) >> vec2<u32>(u32(level)), vec2<i32>(1));
+{% else %}
+    let dims = vec2<i32>(textureDimensions({{ tex }}));
+{% endif %}
     let x = uv.x * f32(dims.x) - 0.5;
     let y = uv.y * f32(dims.y) - 0.5;
     let x0 = floor(x);
