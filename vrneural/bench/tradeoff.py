@@ -52,8 +52,10 @@ class TradeoffConfig:
     near: float = opt(0.5, "distance (m) of the sphere in the head-turn conditions (arm's length)")
     poses: str = opt("", "more pose logs (CSV: t,x,y,z,qx,qy,qz,qw) scored as conditions")
     light_speed: float = opt(120.0, "the moving light's speed about the sphere, deg/s (0: none)")
-    distances: str = opt("0.3,1,3,10,20", "sphere distances (m) of the distance sweep")
-    tilings: str = opt("1,4,16", "material tilings of the tiling sweep")
+    distances: str = opt(
+        "", "sphere distances (m) of a distance sweep (default none: `bench distance` has it)"
+    )
+    tilings: str = opt("", "material tilings of a tiling sweep (default none: `bench distance`)")
     texture_res: str = opt("256,512,1024", "texture sides compared")
     base_res: int = opt(512, "texture side of the base setting (the sphere is ~105 px across)")
     reuse: str = opt("0,2,4,8", "update intervals N compared")

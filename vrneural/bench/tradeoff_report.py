@@ -109,28 +109,32 @@ def markdown(doc: dict) -> list[str]:
 
 
 def speed_png(doc: dict, path) -> None:
-    """FLIP against the reference and the reuse error over head speed, per variant."""
+    """Over head speed, per setting: its FLIP difference from N = 0 (both against the
+    reference; the band is the condition's floor of a difference) and its reuse error."""
     recs = [r for r in doc["records"] if r["family"] in ("rest", "turn")]
     first = recs[0]["preset"] if recs else None
     recs = sorted((r for r in recs if r["preset"] == first), key=lambda r: r["value"])
     fig, axes = rp.figure(12, 4.2, 2)
     if recs:
         x = [r["value"] for r in recs]
-        names = [label(v) for v in recs[0]["variants"]]
-        for i, name in enumerate(names):
-            y = [r["variants"][i]["flip"]["mean"] for r in recs]
-            axes[0].plot(x, y, "o-", label=name, lw=1)
+        for i, v in enumerate(recs[0]["variants"]):
+            col = f"C{i % 10}"
+            d = [r["variants"][i]["flip"]["mean"] - r["variants"][0]["flip"]["mean"] for r in recs]
+            axes[0].plot(x, d, "o-", color=col, label=label(v), lw=1)
             e = [r["variants"][i]["reuse_error"] for r in recs]
             if all(v is not None for v in e):
-                axes[1].plot(x, [v["mean"] for v in e], "o-", label=name, lw=1)
-        axes[0].plot(x, [r["noise_floor"]["flip"] for r in recs], "k--", label="noise floor")
-    axes[0].set_ylabel("FLIP vs supersampled teacher (mean)")
-    axes[1].set_ylabel("reuse error: FLIP vs N = 0 (mean)")
+                axes[1].plot(x, [v["mean"] for v in e], "o-", color=col, label=label(v), lw=1)
+        band = [r["difference_floor"] for r in recs]
+        axes[0].fill_between(
+            x, [-b for b in band], band, color="0.8", label="floor of a difference"
+        )
+    axes[0].set_ylabel("FLIP vs supersampled teacher, minus N = 0's")
+    axes[1].set_ylabel("reuse error: FLIP vs the N = 0 render (mean)")
     for ax in axes:
         ax.set_xlabel("head turn speed, deg/s")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6)
-    fig.suptitle(f"bench tradeoff on {doc['adapter']['name']}: head speed", fontsize=9)
+    fig.suptitle(f"bench tradeoff on {doc['adapter']['name']}: head speed ({first})", fontsize=9)
     rp.save_png(fig, path)
 
 
