@@ -39,6 +39,11 @@ class RunConfig:
         "each object's radiance-texture side from its size on screen (about one texel per "
         "pixel; a power of two up to its own side)",
     )
+    neural_lod: bool = opt(
+        True,
+        "sample a pack's prefiltered neural-texture pyramid at each block's footprint "
+        "(packs without one: level 0 alone); off: level 0 everywhere",
+    )
     radiance: str = opt(
         "per-eye",
         "radiance textures per object: per-eye, or shared by both eyes (shaded from their "
@@ -232,6 +237,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         reuse_budget=budget,
         mips=bool(cfg.mips),
         screen_res=bool(cfg.screen_res),
+        neural_lod=bool(cfg.neural_lod),
         frames_in_flight=cfg.frames_in_flight,
     )
 

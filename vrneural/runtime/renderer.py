@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 import warnings
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -83,6 +84,9 @@ class Settings:
     #: each object's radiance texture side chosen at each update from its size on screen
     #: (about one texel per pixel; a power of two up to its side above; runtime/screen_res.py)
     screen_res: bool = False
+    #: sample the packs' prefiltered neural-texture pyramids at each block's footprint (False:
+    #: level 0 everywhere, as packs without pyramids)
+    neural_lod: bool = True
     #: frames the GPU may have queued while the host encodes the next (1 = none ahead)
     frames_in_flight: int = 2
     #: eye colour targets: "hdr" (rgba16float radiance: EXR, FLIP) or "display" (8-bit
@@ -179,6 +183,7 @@ class Renderer(FrameEncoding):
         self.warnings: list[str] = []  # one line each; `run` prints them and keeps them
         self.draws = []
         passes: dict = {}
+        self._level0: dict = {}  # id(pack) -> the pack without pyramids (neural_lod off)
         with warnings.catch_warnings(record=True) as caught:  # mesh warnings go in the summary
             warnings.simplefilter("always", VrnWarning)
             for i, o in enumerate(scene.objects):
@@ -251,6 +256,8 @@ class Renderer(FrameEncoding):
                     break
             n.level_sides = tuple(sides)
         mat = o.material.neural
+        if mat is not None and not s.neural_lod and mat.lod_levels > 1:
+            mat = self._level0.setdefault(id(mat), dataclasses.replace(mat, levels={}))
         if s.mode == "reference":
             ref = s.reference or o.material.reference
             if ref is None and o.material.source.endswith(".vrnm"):

@@ -487,6 +487,7 @@ def human_summary(sm: dict) -> str:
     shared = " radiance=shared" if r.get("radiance") == "shared" else ""
     shared += " mips" if r.get("mips") else ""
     shared += " screen-res" if r.get("screen_res") else ""
+    shared += " no-neural-lod" if r.get("neural_lod") is False else ""
     space = (
         f"reuse={reuse} schedule={r['schedule']}{shared} "
         if texture
