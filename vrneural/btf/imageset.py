@@ -90,7 +90,7 @@ def _grid(table: Path, rows: list[Entry]):
         old = grid[a][b]
         if old is not None:
             raise VrnError(
-                f"{table}: rows {old.row} ({old.file}) and {r.row} ({r.file}) give the same "
+                f"{table}: {old.row} ({old.file}) and {r.row} ({r.file}) give the same "
                 f"(light, view) pair (light {_angles(lights[a])}; view {_angles(views[b])}); "
                 "each pair needs exactly one image"
             )
@@ -135,13 +135,13 @@ def plan_import(folder, table=None, png_linear: bool = False) -> Plan:
         key = str(Path(r.file))
         if key in seen:
             raise VrnError(
-                f"{tpath}: rows {seen[key].row} and {r.row} both name {r.file}; each image "
+                f"{tpath}: {seen[key].row} and {r.row} both name {r.file}; each image "
                 "belongs to one (light, view) pair"
             )
         seen[key] = r
         p = folder / r.file
         if not p.is_file():
-            raise VrnError(f"{p}: missing image (named in {tpath.name}, row {r.row})")
+            raise VrnError(f"{p}: missing image (named in {tpath.name}, {r.row})")
     named = {(folder / r.file).resolve() for r in rows}
     extra = sorted(
         str(p.relative_to(folder))

@@ -21,12 +21,12 @@ VECTOR_KEYS = ("wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z")
 @dataclass
 class Entry:
     """One row: the image's path relative to the folder, ``wi`` and ``wo`` (unit ``[3]``
-    float64), and the row number for messages (CSV: the line; JSON: the item, from 1)."""
+    float64), and where it is for messages (``"line 4"`` of a CSV, ``"image 3"`` of JSON)."""
 
     file: str
     wi: np.ndarray
     wo: np.ndarray
-    row: int
+    row: str
 
 
 def find_table(folder: Path, table=None) -> Path:
@@ -89,7 +89,7 @@ def _vector(where: str, name: str, xyz: list[float]) -> np.ndarray:
     return d
 
 
-def _entry(where: str, row: int, rec: dict) -> Entry:
+def _entry(where: str, row: str, rec: dict) -> Entry:
     f = str(rec.get("file") or "").strip()
     if not f:
         raise VrnError(f"{where}: no file name (column 'file')")
@@ -133,7 +133,7 @@ def read_table(path: Path) -> list[Entry]:
                 v = rec.pop(name, None)
                 if isinstance(v, list) and len(v) == 3:
                     rec.update({f"{name}_{c}": x for c, x in zip("xyz", v, strict=True)})
-            rows.append(_entry(f"{path}, image {n}", n, rec))
+            rows.append(_entry(f"{path}, image {n}", f"image {n}", rec))
     else:
         reader = csv.DictReader(text.splitlines())
         if not reader.fieldnames or "file" not in [k.strip().lower() for k in reader.fieldnames]:
@@ -146,8 +146,8 @@ def read_table(path: Path) -> list[Entry]:
             clean = {(k or "").strip().lower(): (v or "").strip() for k, v in rec.items()}
             if not any(clean.values()):
                 continue
-            line = reader.line_num
-            rows.append(_entry(f"{path}, line {line}", line, clean))
+            line = f"line {reader.line_num}"
+            rows.append(_entry(f"{path}, {line}", line, clean))
     if not rows:
         raise VrnError(f"{path}: the direction table has no rows")
     return rows
