@@ -254,3 +254,14 @@ def test_existing_output_is_kept_and_missing_mitsuba_names_the_extra(tiny, tmp_p
     assert code.returncode == 2 and len(err) == 1, code.stderr
     assert "vrneural[render]" in err[0] and "Mitsuba 3 is not installed" in err[0]
     assert not (tmp_path / "n.btf").exists() and not (tmp_path / "n.btf.partial").exists()
+
+
+def test_noise_floor_of_a_render(tiny):
+    """Another sample seed of the same settings: a small, nonzero L1 (pure Monte Carlo noise:
+    the same material)."""
+    from vrneural.btf.pt_render import noise_floor
+
+    r = noise_floor(tiny, views=2, progress=False)
+    assert r["views"] == [0, 2] and r["preset"] == "weave" and r["spp"] == 4
+    assert 0 < r["l1"] < 0.5 * r["mean"]
+    assert r["l1_vs_converged"] == pytest.approx(r["l1"] / 2**0.5)

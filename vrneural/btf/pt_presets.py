@@ -115,7 +115,8 @@ def _pack(rng, count: int, rmin: float, rmax: float, tries: int = 4000):
 
 def pebbles(rng, count: int = 34) -> Tile:
     """Packed pebbles (ellipsoids with bumps) of six kinds of stone, some wet and glossy,
-    bedded in bright sand: deep gaps, interreflection between the bright stones."""
+    bedded in bright sand: deep gaps, interreflection between the bright stones. Up to
+    ``count`` are tried; as many as fit without overlapping are placed (22 with seed 0)."""
     kinds = [
         plastic((0.80, 0.76, 0.68), 0.35),  # pale limestone, slightly polished
         diffuse((0.85, 0.83, 0.80)),  # white quartz
@@ -125,7 +126,8 @@ def pebbles(rng, count: int = 34) -> Tile:
         diffuse((0.45, 0.44, 0.42)),  # grey granite
     ]
     groups: list[list] = [[] for _ in kinds]
-    for x, y, r in _pack(rng, count, 0.06, 0.13):
+    placed = _pack(rng, count, 0.06, 0.13)  # as many as fit without overlapping
+    for x, y, r in placed:
         rz = r * rng.uniform(0.55, 0.85)
         kind = int(rng.choice(len(kinds), p=[0.25, 0.15, 0.2, 0.1, 0.1, 0.2]))
         level = 3 if r > 0.09 else 2
@@ -134,7 +136,7 @@ def pebbles(rng, count: int = 34) -> Tile:
     parts = [Part(merge(g), kinds[k], name=f"stone{k}") for k, g in enumerate(groups) if g]
     sand = 0.004 * spectral_noise(rng, 64, 4, 24, beta=1.5)
     parts.append(Part(heightfield(sand), diffuse((0.70, 0.62, 0.48)), name="sand"))
-    return Tile(parts, f"{count} packed pebbles of six stones on sand")
+    return Tile(parts, f"{len(placed)} packed pebbles of six stones on sand")
 
 
 def fur(rng, tufts: int = 100, per_tuft: int = 14) -> Tile:

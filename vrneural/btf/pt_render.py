@@ -158,3 +158,57 @@ def render_btf(
             raise
     bar.close()
     return w.finalize()
+
+
+def noise_floor(path, views: int = 6, progress: bool = True) -> dict:
+    """The Monte Carlo noise of a rendered BTF: ``views`` evenly spaced views (all lights) of
+    the file at ``path`` rendered again with the next ``sample_seed`` (same material, same
+    settings), and the L1 between the two (mean |a - b| over those slices, texels and
+    channels, linear BTF units). Two independent renders differ by about sqrt(2) times each
+    one's distance to the converged image, so ``l1_vs_converged`` is ``l1 / sqrt(2)``.
+    Returns ``{"file", "views", "l1", "l1_vs_converged", "mean", "relative", "seconds"}``."""
+    import dataclasses
+    import time
+
+    from tqdm import tqdm
+
+    from vrneural.btf import pathtrace as pt
+    from vrneural.btf.format import read_btf
+
+    btf = read_btf(path)
+    gen = dict(btf.meta.get("generator") or {})
+    if gen.get("config") != "RenderConfig":
+        raise VrnError(f"{path}: not made by btf render (no RenderConfig in its header)")
+    fields = {f.name for f in dataclasses.fields(RenderConfig)}
+    cfg = RenderConfig(**{k: v for k, v in gen.items() if k in fields})
+    cfg = dataclasses.replace(cfg, sample_seed=cfg.sample_seed + 1)
+    t0 = time.perf_counter()
+    ps, _, _ = build(cfg)
+    dirs = direction_set(cfg.dirs)
+    pick = np.unique(np.linspace(0, len(dirs) - 1, min(views, len(dirs))).round().astype(int))
+    diff = total = 0.0
+    n = 0
+    with tqdm(total=len(pick) * len(dirs), desc="noise", disable=not progress) as bar:
+        for v in pick:
+            cam = pt.sensor(ps, dirs[v], cfg.res, cfg.spp)
+            for li in range(len(dirs)):
+                seed = pt.slice_seed(cfg.sample_seed, li, int(v))
+                b = pt.render_slice(ps, cam, dirs[li], cfg.spp, seed)
+                b = np.clip(b, 0, F16_MAX).astype(np.float16).astype(np.float64)
+                a = np.asarray(btf.values[li, v], np.float64)
+                diff += float(np.abs(a - b).sum())
+                total += float(a.sum())
+                n += a.size
+                bar.update(1)
+    l1 = diff / n
+    return {
+        "file": str(path),
+        "preset": cfg.preset,
+        "spp": cfg.spp,
+        "views": [int(v) for v in pick],
+        "l1": l1,
+        "l1_vs_converged": l1 / np.sqrt(2.0),
+        "mean": total / n,
+        "relative": l1 / max(total / n, 1e-12),
+        "seconds": time.perf_counter() - t0,
+    }
