@@ -265,3 +265,32 @@ def test_noise_floor_of_a_render(tiny):
     assert r["views"] == [0, 2] and r["preset"] == "weave" and r["spp"] == 4
     assert 0 < r["l1"] < 0.5 * r["mean"]
     assert r["l1_vs_converged"] == pytest.approx(r["l1"] / 2**0.5)
+
+
+def test_render_stops_on_sigterm_and_resumes(tmp_path):
+    """`kill` (SIGTERM) stops `btf render` after the current slice: exit 130, the partial
+    file kept, and --resume finishes it with the same bytes as a run never stopped."""
+    import signal
+    import time
+
+    out = tmp_path / "f.btf"
+    argv = [sys.executable, "-m", "vrneural", "btf", "render", "fur", "--res", "8"]
+    argv += ["--dirs", "12", "--spp", "4", "-o", str(out), "--no-progress"]
+    env = dict(os.environ, XDG_RUNTIME_DIR="/tmp")
+    proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True, env=env)
+    done = tmp_path / "f.btf.partial.done"
+    deadline = time.monotonic() + 120
+    while not done.exists() and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.02)
+    assert proc.poll() is None, "finished before it could be stopped: make it bigger"
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "interrupted after" in err and "--resume" in err, err
+    assert (tmp_path / "f.btf.partial").exists() and not out.exists()
+    r = subprocess.run([*argv, "--resume"], capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0 and "resuming" in r.stderr, r.stderr
+    straight = tmp_path / "g.btf"
+    argv[argv.index(str(out))] = str(straight)
+    assert subprocess.run(argv, capture_output=True, env=env, timeout=300).returncode == 0
+    assert out.read_bytes() == straight.read_bytes()
