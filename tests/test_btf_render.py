@@ -163,7 +163,7 @@ def tiny(tmp_path_factory):
     return out
 
 
-def test_tiny_preset_end_to_end(tiny, tmp_path):
+def test_tiny_preset_end_to_end(tiny, tmp_path, capsys):
     b = read_btf(tiny)
     assert b.shape == (3, 3, 8, 8)
     np.testing.assert_allclose(b.light_dirs, direction_set(3), atol=1e-6)
@@ -176,6 +176,10 @@ def test_tiny_preset_end_to_end(tiny, tmp_path):
         assert int.from_bytes(f.read(12)[8:12], "little") == 2
     gen = b.meta["generator"]
     assert gen["preset"] == "weave" and gen["spp"] == 4 and gen["mitsuba_variant"] == "scalar_rgb"
+    from vrneural.cli import main
+
+    assert main(["btf", "info", str(tiny)]) == 0
+    assert "height    16x16 height field" in capsys.readouterr().out
     cfg = json.loads(tiny.with_name("weave.btf.config.json").read_text())
     assert cfg["config"] == "RenderConfig" and cfg["height_grid_used"] == 16
     # same settings, same bytes; another sample seed: another render of the same material

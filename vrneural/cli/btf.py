@@ -232,6 +232,12 @@ def run_info(args) -> int:
         f"values    min {s['value_min']:.4g}  max {s['value_max']:.4g}  "
         f"mean {s['value_mean']:.4g}{tag}"
     )
+    hf = s["height_field"]
+    if hf is not None:
+        print(
+            f"height    {hf['shape'][0]}x{hf['shape'][1]} height field, {hf['min']:.4g} to "
+            f"{hf['max']:.4g} tile widths about the reference plane"
+        )
     m = s["meta"]
     print(f"meta      name={m.get('name')} convention={m.get('convention')} seed={m.get('seed')}")
     gen = m.get("generator")
