@@ -298,3 +298,35 @@ def test_render_stops_on_sigterm_and_resumes(tmp_path):
     argv[argv.index(str(out))] = str(straight)
     assert subprocess.run(argv, capture_output=True, env=env, timeout=300).returncode == 0
     assert out.read_bytes() == straight.read_bytes()
+
+
+def test_direct_light_matches_btf_synth_on_a_heightfield():
+    """Both renderers on one smooth heightfield (Lambert, albedo 0.5, direct light only):
+    `btf synth`'s ray marcher with shadow-height maps and Mitsuba on the triangulated tile
+    agree texel by texel (measured: 0.1-0.5% mean relative difference per slice, theta up to
+    70 degrees): the same rectification, parallax, masking, shadowing and convention."""
+    from vrneural.btf.heightfield import flat_maps
+    from vrneural.btf.render import make_scene, render_view
+
+    n = 64
+    x = (np.arange(n) + 0.5) / n
+    h = 0.03 * np.cos(2 * np.pi * x)[None, :] * np.cos(4 * np.pi * x)[:, None]
+    h = (h + 0.02 * np.sin(2 * np.pi * (x[None, :] + x[:, None]))).astype(np.float32)
+    maps = flat_maps(n, albedo=(0.5, 0.5, 0.5), f0=(0, 0, 0))
+    maps.height = h
+    dirs = spherical(np.radians([20, 60, 70, 40]), np.radians([0, 90, 200, 300]))
+    synth = make_scene(maps, dirs)
+    k = 8  # the same stratified sub-sample positions in both
+    cells = (np.stack(np.meshgrid(np.arange(k), np.arange(k)), -1).reshape(-1, 2) + 0.5) / k
+    samples = np.broadcast_to(cells - 0.5, (16, 16, k * k, 2)).copy()
+    lam = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}}
+    ps = pt.build_scene(Tile([Part(heightfield(h), lam)]), 1, ring=2)
+    ps.z_ref = float(pt.height_field(ps, 64).mean())
+    worst = 0.0
+    for wo in dirs[[0, 2]]:
+        a = render_view(synth, wo, samples, (16, 16))
+        cam = pt.sensor(ps, wo, 16, 256)
+        for li, wi in enumerate(dirs):
+            b = pt.render_slice(ps, cam, wi, 256, 3)
+            worst = max(worst, float(np.abs(a[li] - b).mean() / a[li].mean()))
+    assert worst < 0.02, worst
