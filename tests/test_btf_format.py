@@ -237,3 +237,37 @@ def test_meta_cannot_override_the_convention(tmp_path, rng):
     b = read_btf(write_btf(tmp_path / "b.btf", vals, ld, vd, {"name": "t"}))
     c = read_btf(write_btf(tmp_path / "c.btf", vals, ld, vd, b.meta))
     assert c.meta == b.meta
+
+
+def _version(p) -> int:
+    with open(p, "rb") as f:
+        return struct.unpack("<I", f.read(12)[8:12])[0]
+
+
+def test_height_field_travels_with_the_data_as_version_2(tmp_path, rng):
+    """An optional height field [N, N] (UV units; issue #44's parallax needs it): a file with
+    one is version 2, one without stays version 1 byte for byte (old readers refuse the new
+    version by name instead of misreading it)."""
+    vals, ld, vd = _small(rng)
+    h = (rng.random((8, 8)) - 0.5).astype(np.float32) * 0.1
+    p1 = write_btf(tmp_path / "v1.btf", vals, ld, vd, {"name": "t"})
+    p2 = write_btf(tmp_path / "v2.btf", vals, ld, vd, {"name": "t"}, height=h)
+    assert _version(p1) == 1 and _version(p2) == 2
+    assert read_btf(p1).height is None
+    b = read_btf(p2)
+    np.testing.assert_array_equal(b.height, h)
+    np.testing.assert_array_equal(b.values, read_btf(p1).values)
+    # the streaming writer too, and its resume
+    w = BtfWriter(tmp_path / "s.btf", ld, vd, (5, 6), {"name": "s"}, height=h)
+    w.values[:, 0] = 1.0
+    w.mark_done(0)
+    del w
+    w = BtfWriter(tmp_path / "s.btf", ld, vd, (5, 6), {"name": "s"}, resume=True, height=h)
+    assert w.resumed and w.done == {0}
+    w.values[:, 1:] = 2.0
+    s = read_btf(w.finalize())
+    np.testing.assert_array_equal(s.height, h)
+    assert _version(s.path) == 2
+    for bad in (np.zeros((4, 5), np.float32), np.full((4, 4), np.nan, np.float32)):
+        with pytest.raises(VrnError, match="height"):
+            write_btf(tmp_path / "bad.btf", vals, ld, vd, {}, height=bad)

@@ -36,7 +36,16 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
-from vrneural.config import config_dict, mark_explicit, name_flag, opt, quick_defaults
+from vrneural.bench.quality_btf import btf_path as btf_file
+from vrneural.bench.quality_btf import check_given, is_given
+from vrneural.config import (
+    config_dict,
+    is_explicit,
+    mark_explicit,
+    name_flag,
+    opt,
+    quick_defaults,
+)
 from vrneural.distill.config import BEFORE_FIELD, COMPILE_MODES, NEUMIP_DIRS
 from vrneural.errors import VrnError, check_range, check_seed, count
 from vrneural.formats.atomic import (
@@ -73,7 +82,15 @@ def labels(width: int = 8) -> dict[str, str]:
 class QualityConfig:
     """`vrneural bench quality`."""
 
-    presets: str = opt("leather,fabric,wood", "comma-separated synthetic BTF presets")
+    presets: str = opt(
+        "leather,fabric,wood",
+        "comma-separated synthetic BTF presets (none by default when --btf is given)",
+    )
+    btf: str = opt(
+        "",
+        "comma-separated .btf files to bench beside --presets, each labelled by its file name "
+        "(--res and --dirs apply to the presets only)",
+    )
     out: str = opt("bench-quality", "output directory", cli=False)
     res: int = opt(32, "BTF texels per side")
     dirs: int = opt(30, "light and view directions (dirs^2 slices)")
@@ -139,6 +156,8 @@ def make_btf(preset: str, cfg: QualityConfig, path: Path) -> Path:
 
     With ``--resume`` a BTF synthesised with other settings is an error, not replaced: the
     teachers there were trained on it, and a file from an older release cannot be remade."""
+    if is_given(preset, cfg):  # --btf: benched as it is
+        return path
     try:
         from vrneural.btf.synth import BtfConfig, synthesize
     except ImportError as e:
@@ -385,7 +404,7 @@ def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> 
     from vrneural.btf.identity import btf_fingerprint
 
     quiet = dataclasses.replace(cfg, progress=False)
-    btfs = {p: root / "btf" / f"{p}.btf" for p in presets}
+    btfs = {p: btf_file(p, cfg, root) for p in presets}
     with job_pool(cfg.jobs) as pool:
         run_jobs(pool, [(f"{p}: btf", "synth", (p, quiet, btfs[p])) for p in presets], log)
         teach = []
@@ -446,7 +465,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bo
     d = root / preset
     d.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    btf_path = make_btf(preset, cfg, root / "btf" / f"{preset}.btf")
+    btf_path = make_btf(preset, cfg, btf_file(preset, cfg, root))
     synth_s = time.perf_counter() - t0
     btf = read_btf(btf_path)
     tcfg = _teach_config(preset, cfg, root, btf_path, btf_fingerprint(btf)["sha256"])
@@ -586,7 +605,7 @@ def _check_resumable(presets: list[str], cfg: QualityConfig, root: Path) -> None
     trained with this run's settings (the BTF and teacher hashes are compared later, once
     the BTFs exist), so a mismatch stops the run before hours of other presets."""
     for p in presets:
-        btf_path = root / "btf" / f"{p}.btf"
+        btf_path = btf_file(p, cfg, root)
         _teach_config(p, cfg, root, btf_path, None)
         _distill_configs(p, cfg, root, btf_path, check_teacher=False)
 
@@ -719,9 +738,12 @@ def validate(cfg: QualityConfig) -> list[str]:
     if not cfg.out:
         raise VrnError("--out is empty; pass an output directory")
     check_resume_force(cfg.resume, cfg.force)
+    given = check_given(cfg)
     presets = [p.strip() for p in cfg.presets.split(",") if p.strip()]
-    if not presets:
-        raise VrnError("--presets is empty")
+    if given and not is_explicit(cfg, "presets"):
+        presets = []  # --btf alone: only those files
+    if not presets and not given:
+        raise VrnError("--presets is empty (and no --btf file given)")
     twice = sorted({p for p in presets if presets.count(p) > 1})
     if twice:
         raise VrnError(f"--presets names {', '.join(twice)} more than once")
@@ -745,6 +767,7 @@ def validate(cfg: QualityConfig) -> list[str]:
         BtfConfig(preset=p, res=cfg.res, dirs=cfg.dirs, seed=cfg.seed).validate(
             {"preset": "--presets"}
         )
+    presets = presets + list(given)  # the given BTFs, labelled by file name
     check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
     check_train_config(  # --ema and the like, as `distill` checks them
         DistillConfig(

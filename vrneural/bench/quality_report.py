@@ -172,8 +172,7 @@ def markdown(doc: dict) -> str:
     lines = [
         "# Quality: whole-BTF L1 per material and method (paper Table 1 analog)",
         "",
-        f"Budget: {cfg['res']}^2 texels, {cfg['dirs']} x {cfg['dirs']} (light, view) "
-        f"directions, teacher {cfg['teacher_epochs']} epochs, every other network "
+        f"Budget: {_data(doc)}, teacher {cfg['teacher_epochs']} epochs, every other network "
         f"{cfg['epochs']} epochs"
         + (f" with weight averaging (--ema {cfg['ema']:g})" if cfg.get("ema") else "")
         + (
@@ -386,6 +385,23 @@ def write_report(doc: dict, slices: dict, root: Path) -> None:
         tmp.write_text(markdown(doc))
     curves_png(doc, root / "curves.png")
     slices_png(doc, slices, root / "slices.png")
+
+
+def _data(doc: dict) -> str:
+    """The data of the table: the presets' size (``--res``, ``--dirs``) and each BTF file's
+    own (``--btf``: the materials named ``*.btf``)."""
+    cfg, res = doc["config"], doc["results"]
+    parts = []
+    if any(not p.endswith(".btf") for p in res):
+        parts.append(
+            f"{cfg['res']}^2 texels, {cfg['dirs']} x {cfg['dirs']} (light, view) directions"
+            + (" (the presets)" if cfg.get("btf") else "")
+        )
+    for p, r in res.items():
+        if p.endswith(".btf") and "shape" in r.get("btf", {}):
+            L, V, H, W = r["btf"]["shape"]
+            parts.append(f"{p} {H}x{W} texels, {L} x {V} (light, view) directions")
+    return "; ".join(parts)
 
 
 def _trained_on(doc: dict) -> str:

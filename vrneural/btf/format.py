@@ -6,6 +6,11 @@ Container: :mod:`vrneural.formats.container` with magic ``b"VRNBTF"``. Arrays:
   radiance per unit irradiance measured perpendicular to ``wi``; cos(theta_i) is inside)
 - ``light_dirs``  ``[L, 3]`` float32 unit vectors, local frame, pointing away from the surface
 - ``view_dirs``   ``[V, 3]`` float32 unit vectors
+- ``height``      optional ``[N, N]`` float32: the tile's height field (version 2 files only),
+  the height of the top surface seen from straight above at grid cell centres
+  ``((j + 0.5) / N, (i + 0.5) / N)``, in UV units (fractions of the tile width) above the
+  reference plane (its mean is 0: the plane the rectified slices are taken on). For parallax
+  and displacement; a file without it is written as version 1, byte for byte as before.
 
 Header: ``name``, ``convention`` ("cos_inside"), ``generator`` (config dict or import source),
 ``seed``, ``texel_size_mm`` (optional), plus anything the writer adds (except the keys in
@@ -26,6 +31,9 @@ from vrneural.formats.f16 import F16_MAX
 
 BTF_MAGIC = b"VRNBTF"
 BTF_VERSION = 1
+#: the version of a file that carries a height field; readers take both
+BTF_VERSION_HEIGHT = 2
+BTF_VERSIONS = (BTF_VERSION, BTF_VERSION_HEIGHT)
 CONVENTION = "cos_inside"
 #: header keys a writer's ``meta`` may not set: the container's own (array table, file size,
 #: per-array CRC32s, the unfinished-write mark) and the BTF convention
@@ -41,6 +49,7 @@ class Btf:
     light_dirs: np.ndarray  # [L, 3] float32
     view_dirs: np.ndarray  # [V, 3] float32
     meta: dict = field(default_factory=dict)
+    height: np.ndarray | None = None  # [N, N] float32, UV units (version 2), or None
 
     @property
     def shape(self) -> tuple[int, int, int, int]:
@@ -83,7 +92,7 @@ def _header(path, meta: dict) -> dict:
     return {"convention": CONVENTION, **meta}
 
 
-def _validate(path, values, light_dirs, view_dirs) -> None:
+def _validate(path, values, light_dirs, view_dirs, height=None) -> None:
     if values.ndim != 5 or values.shape[4] != 3:
         raise VrnError(f"{path}: values has shape {list(values.shape)}, expected [L, V, H, W, 3]")
     _check_not_empty(path, *values.shape[:4])
@@ -92,6 +101,13 @@ def _validate(path, values, light_dirs, view_dirs) -> None:
         raise VrnError(f"{path}: light_dirs has shape {list(light_dirs.shape)}, expected [{L}, 3]")
     if view_dirs.shape != (V, 3):
         raise VrnError(f"{path}: view_dirs has shape {list(view_dirs.shape)}, expected [{V}, 3]")
+    if height is not None:
+        if height.ndim != 2 or height.shape[0] != height.shape[1] or height.shape[0] < 2:
+            raise VrnError(
+                f"{path}: height has shape {list(height.shape)}, expected a square [N, N], N >= 2"
+            )
+        if not np.isfinite(np.asarray(height, np.float64)).all():
+            raise VrnError(f"{path}: the height field contains NaN or Inf")
     for name, d in (("light_dirs", light_dirs), ("view_dirs", view_dirs)):
         n = np.linalg.norm(np.asarray(d, np.float64), axis=1)
         if not np.all(np.isfinite(n)) or np.abs(n - 1).max(initial=0) > 1e-3:
@@ -101,7 +117,7 @@ def _validate(path, values, light_dirs, view_dirs) -> None:
 def read_btf(path) -> Btf:
     """Open and validate a ``.btf`` file (magic, version, truncation, shapes)."""
     header, arrays, _ = read_container(
-        path, BTF_MAGIC, (BTF_VERSION,), what="BTF file", verify_crc=False
+        path, BTF_MAGIC, BTF_VERSIONS, what="BTF file", verify_crc=False
     )
     missing = {"values", "light_dirs", "view_dirs"} - set(arrays)
     if missing:
@@ -109,32 +125,45 @@ def read_btf(path) -> Btf:
     values = arrays["values"]
     if values.dtype != np.float16:
         raise VrnError(f"{path}: values are {values.dtype}, expected float16")
-    _validate(path, values, arrays["light_dirs"], arrays["view_dirs"])
+    height = arrays.get("height")
+    if height is not None and height.dtype != np.float32:
+        raise VrnError(f"{path}: height is {height.dtype}, expected float32")
+    _validate(path, values, arrays["light_dirs"], arrays["view_dirs"], height)
     meta = {k: v for k, v in header.items() if k not in ("arrays", "file_size", "array_crc32")}
     return Btf(
-        Path(path), values, np.asarray(arrays["light_dirs"]), np.asarray(arrays["view_dirs"]), meta
+        Path(path),
+        values,
+        np.asarray(arrays["light_dirs"]),
+        np.asarray(arrays["view_dirs"]),
+        meta,
+        None if height is None else np.asarray(height),
     )
 
 
 def write_btf(
-    path, values: np.ndarray, light_dirs: np.ndarray, view_dirs: np.ndarray, meta: dict
+    path,
+    values: np.ndarray,
+    light_dirs: np.ndarray,
+    view_dirs: np.ndarray,
+    meta: dict,
+    height: np.ndarray | None = None,
 ) -> Path:
-    """Write an in-memory BTF atomically (values become float16, clamped to its range)."""
+    """Write an in-memory BTF atomically (values become float16, clamped to its range);
+    with a ``height`` field ``[N, N]`` (UV units) the file is version 2."""
     values = np.asarray(values)
     light_dirs = np.asarray(light_dirs, np.float32)
     view_dirs = np.asarray(view_dirs, np.float32)
-    _validate(path, values, light_dirs, view_dirs)
+    height = None if height is None else np.asarray(height, np.float32)
+    _validate(path, values, light_dirs, view_dirs, height)
     if not np.isfinite(values).all():
         raise VrnError(f"{path}: BTF values contain NaN or Inf")
     header = _header(path, meta)
     v16 = np.clip(values, 0, F16_MAX).astype(np.float16)
-    return write_container(
-        path,
-        BTF_MAGIC,
-        BTF_VERSION,
-        header,
-        {"values": v16, "light_dirs": light_dirs, "view_dirs": view_dirs},
-    )
+    arrays = {"values": v16, "light_dirs": light_dirs, "view_dirs": view_dirs}
+    if height is not None:
+        arrays["height"] = height
+    version = BTF_VERSION if height is None else BTF_VERSION_HEIGHT
+    return write_container(path, BTF_MAGIC, version, header, arrays)
 
 
 def check_partial_settings(partial: Path, generator: dict) -> None:
@@ -143,7 +172,7 @@ def check_partial_settings(partial: Path, generator: dict) -> None:
     if not partial.exists():
         return
     try:
-        old = read_container(partial, BTF_MAGIC, (BTF_VERSION,), "partial BTF", False, True)[0]
+        old = read_container(partial, BTF_MAGIC, BTF_VERSIONS, "partial BTF", False, True)[0]
     except VrnError as e:
         raise VrnError(f"{e}; pass --force instead of --resume to start over") from None
     have = old.get("generator", {})
@@ -163,6 +192,7 @@ class BtfWriter:
     Data goes to ``<path>.partial``; :meth:`finalize` renames it into place. With
     ``resume=True`` an identical unfinished write is reopened (see ``done`` for finished views).
     The caller marks progress with :meth:`mark_done` (per view index; kept in a sidecar file).
+    A ``height`` field ``[N, N]`` (UV units) makes it a version 2 file.
     """
 
     def __init__(
@@ -173,6 +203,7 @@ class BtfWriter:
         resolution: tuple[int, int],
         meta: dict,
         resume: bool = False,
+        height: np.ndarray | None = None,
     ):
         L, V = len(light_dirs), len(view_dirs)
         H, W = resolution
@@ -183,13 +214,22 @@ class BtfWriter:
             "light_dirs": ((L, 3), "float32"),
             "view_dirs": ((V, 3), "float32"),
         }
-        self._w = ContainerWriter(path, BTF_MAGIC, BTF_VERSION, header, specs, resume=resume)
+        version = BTF_VERSION
+        if height is not None:
+            height = np.asarray(height, np.float32)
+            if height.ndim != 2 or height.shape[0] != height.shape[1]:
+                raise VrnError(f"{path}: height has shape {list(height.shape)}, expected [N, N]")
+            specs["height"] = (height.shape, "float32")
+            version = BTF_VERSION_HEIGHT
+        self._w = ContainerWriter(path, BTF_MAGIC, version, header, specs, resume=resume)
         self.partial = self._w.partial  #: the file being written (``<path>.partial``)
         self.resumed = self._w.resumed  #: True when an identical unfinished write was reopened
         self.progress_file = self._w.partial.with_name(self._w.partial.name + ".done")
         if not self._w.resumed:
             self._w.array("light_dirs")[:] = light_dirs
             self._w.array("view_dirs")[:] = view_dirs
+            if height is not None:
+                self._w.array("height")[:] = height
             self.progress_file.unlink(missing_ok=True)
         self.values = self._w.array("values")
         self.done: set[int] = set()  #: view indices already written (from the sidecar)

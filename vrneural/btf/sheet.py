@@ -136,6 +136,13 @@ def summary(btf: Btf, max_slices: int = 256) -> dict:
         "value_mean": total / max(count, 1),
         "value_range_sampled": bool(n > max_slices),
         "nonfinite_values": bad,
+        "height_field": None
+        if btf.height is None
+        else {
+            "shape": list(btf.height.shape),
+            "min": float(btf.height.min()),
+            "max": float(btf.height.max()),
+        },
         "meta": btf.meta,
     }
 

@@ -1,6 +1,7 @@
 """`vrneural btf`: synthesize, inspect, show and import tabulated BTFs.
 
     vrneural btf synth --preset leather --res 64 --dirs 151 --seed 0 -o leather.btf [--force]
+    vrneural btf render weave --res 64 --dirs 24 --spp 64 -o weave.btf [--force] [--resume]
     vrneural btf info FILE [--json]
     vrneural btf show FILE -o sheet.png [--texel X Y] [--force]
     vrneural btf import UBO.btf -o out.btf [--force] [--resume]
@@ -43,6 +44,26 @@ def register(sub) -> None:
     s.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     s.set_defaults(func=run_synth)
 
+    from vrneural.btf.pt_render import RenderConfig
+
+    r = bsub.add_parser(
+        "render",
+        help="path-trace a microgeometry preset with Mitsuba 3 into a .btf (resumable)",
+        description="Path-trace a preset's microgeometry (triangle meshes surrounded by copies "
+        "of the tile, Mitsuba's own BSDFs, multiple bounces) into a .btf file, one view at a "
+        "time; rectified slices, cos(theta_i) inside. Presets: weave, pebbles, fur, bark, "
+        "mosaic. Needs the render extra: pip install 'vrneural[render]'.",
+    )
+    r.add_argument("preset", help="the preset to render (weave, pebbles, fur, bark, mosaic)")
+    add_config_args(r, RenderConfig, skip=("preset",))
+    r.add_argument("-o", "--output", required=True, help="output .btf file")
+    r.add_argument("--force", action="store_true", help="overwrite an existing output")
+    r.add_argument(
+        "--resume", action="store_true", help="continue an interrupted run (<output>.partial)"
+    )
+    r.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    r.set_defaults(func=run_render)
+
     i = bsub.add_parser(
         "info",
         help="shape, directions, value range, size and metadata",
@@ -73,11 +94,25 @@ def register(sub) -> None:
 
     im = bsub.add_parser(
         "import",
-        help="convert a UBO2014 .btf (needs btf-extractor)",
-        description="convert a UBO2014 .btf (needs btf-extractor).",
+        help="convert a UBO2014 .btf (needs btf-extractor) or a folder of images",
+        description="Convert a UBO2014 .btf file (needs btf-extractor), or a folder of images "
+        "(EXR/HDR/PNG/TIFF/PFM, one per (light, view) pair) with a direction table "
+        "(directions.csv or directions.json: file, theta_i, phi_i, theta_v, phi_v in degrees, "
+        "or file, wi_x, wi_y, wi_z, wo_x, wo_y, wo_z unit vectors). 8/16-bit images are "
+        "taken as sRGB and linearised.",
     )
-    im.add_argument("file", help="a UBO2014 .btf file")
+    im.add_argument("file", help="a UBO2014 .btf file, or a folder of images")
     im.add_argument("-o", "--output", required=True, help="output .btf file (our format)")
+    im.add_argument(
+        "--table",
+        help="image sets: the direction table (default: directions.csv or directions.json "
+        "in the folder)",
+    )
+    im.add_argument(
+        "--png-linear",
+        action="store_true",
+        help="image sets: 8/16-bit images hold linear values (default: sRGB, linearised)",
+    )
     im.add_argument("--force", action="store_true", help="overwrite an existing output")
     im.add_argument("--resume", action="store_true", help="continue an interrupted import")
     im.add_argument("--no-progress", action="store_true", help="hide the progress bar")
@@ -126,6 +161,36 @@ def run_synth(args) -> int:
     return 0
 
 
+def run_render(args) -> int:
+    from vrneural.btf.pt_render import RenderConfig, render_btf
+    from vrneural.config import config_from_args, config_path, write_config
+    from vrneural.formats.atomic import (
+        check_outputs,
+        check_resume_force,
+        check_suffix,
+        lock_output_file,
+        output_locks,
+    )
+
+    cfg = config_from_args(RenderConfig, args)
+    cfg.validate()
+    check_resume_force(args.resume, args.force)
+    check_suffix(args.output, ".btf", "BTF", "weave.btf")
+    from vrneural.btf.pathtrace import load_mitsuba
+
+    load_mitsuba()  # not installed: one line naming the extra, before any output
+    with output_locks():
+        lock_output_file(args.output)
+        out, _ = check_outputs([args.output, config_path(args.output)], args.force)
+        _check_partial(out, args.resume, args.force)
+        path = render_btf(
+            cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force
+        )
+        write_config(path, cfg, {"height_grid_used": cfg.grid_size})
+    print(path)
+    return 0
+
+
 def _warn_nonfinite(file: str, s: dict) -> None:
     """Warn about NaN/Inf values (``s``: :func:`vrneural.btf.sheet.summary`)."""
     if s["nonfinite_values"]:
@@ -167,6 +232,12 @@ def run_info(args) -> int:
         f"values    min {s['value_min']:.4g}  max {s['value_max']:.4g}  "
         f"mean {s['value_mean']:.4g}{tag}"
     )
+    hf = s["height_field"]
+    if hf is not None:
+        print(
+            f"height    {hf['shape'][0]}x{hf['shape'][1]} height field, {hf['min']:.4g} to "
+            f"{hf['max']:.4g} tile widths about the reference plane"
+        )
     m = s["meta"]
     print(f"meta      name={m.get('name')} convention={m.get('convention')} seed={m.get('seed')}")
     gen = m.get("generator")
@@ -211,13 +282,39 @@ def run_show(args) -> int:
 
 def run_import(args) -> int:
     from vrneural.btf.ubo2014 import import_ubo, load_extractor, parse_header
+    from vrneural.errors import VrnError
     from vrneural.formats.atomic import check_outputs, check_resume_force, check_suffix
 
     check_resume_force(args.resume, args.force)
     check_suffix(args.output, ".btf", "BTF", "leather.btf")  # as btf synth
+    if Path(args.file).is_dir():
+        return _import_images(args)
+    if args.table or args.png_linear:
+        flag = "--table" if args.table else "--png-linear"
+        raise VrnError(f"{flag} is for a folder of images; {args.file} is not a folder")
     load_extractor()
     parse_header(args.file)
     (out,) = check_outputs([args.output], args.force, inputs=[args.file])
     _check_partial(out, args.resume, args.force)
     print(import_ubo(args.file, out, resume=args.resume, progress=not args.no_progress))
+    return 0
+
+
+def _import_images(args) -> int:
+    """`btf import DIR`: an image set (vrneural/btf/imageset.py)."""
+    from vrneural.btf.imageset import import_images, plan_import
+    from vrneural.formats.atomic import check_outputs
+
+    plan_import(args.file, args.table, args.png_linear)  # every check before any output
+    (out,) = check_outputs([args.output], args.force)
+    _check_partial(out, args.resume, args.force)
+    path = import_images(
+        args.file,
+        out,
+        table=args.table,
+        png_linear=args.png_linear,
+        resume=args.resume,
+        progress=not args.no_progress,
+    )
+    print(path)
     return 0

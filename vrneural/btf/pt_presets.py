@@ -1,0 +1,237 @@
+"""Path-traced material presets (`vrneural btf render`): microgeometry a heightfield or a lobe
+cannot express. Each is ``(rng) -> Tile`` in tile units (the tile is the unit square; heights in
+tile widths); all randomness comes from ``rng``, so a seed fixes the material.
+
+- ``weave``:   plain-weave fabric, each yarn a bundle of twisted fibre cylinders (overhangs,
+  see-through gaps onto a dark backing, anisotropic glossy fibres);
+- ``pebbles``: packed pebbles of bright and dark stone, some wet and glossy, on sand (deep gaps,
+  strong interreflection between bright stones);
+- ``fur``:     cut pile of thin curved strands on a backing (fibre-scale masking and
+  shadowing, light scattered deep into the pile);
+- ``bark``:    a fissured bark of plates and deep narrow crevices, lichen on the plates
+  (a textured blend of two BSDFs), glossy sap in the cracks' walls;
+- ``mosaic``:  tesserae of polished and brushed metals and glossy plastics, each tilted and
+  bevelled, in recessed grout (mirror-like highlights that jump from tile to tile).
+
+Values stay physically plausible: diffuse albedo <= 0.85, dielectrics with IOR 1.5, metals
+from Mitsuba's measured conductor data.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vrneural.btf.heightfield import smoothstep, spectral_noise, toroidal_cells
+from vrneural.btf.pt_geometry import Part, Tile, blob, heightfield, merge, slab, tube
+
+
+def _rgb(c) -> dict:
+    return {"type": "rgb", "value": [float(x) for x in c]}
+
+
+def plastic(colour, alpha: float) -> dict:
+    """A rough dielectric coating over a diffuse base (Mitsuba ``roughplastic``, GGX)."""
+    return {
+        "type": "roughplastic",
+        "distribution": "ggx",
+        "alpha": float(alpha),
+        "diffuse_reflectance": _rgb(colour),
+        "int_ior": 1.5,
+    }
+
+
+def diffuse(colour) -> dict:
+    return {
+        "type": "diffuse",
+        "reflectance": _rgb(colour) if not isinstance(colour, dict) else colour,
+    }
+
+
+def metal(material: str, alpha_u: float, alpha_v: float | None = None) -> dict:
+    """A rough conductor (GGX; ``alpha_u`` along the mesh's u, ``alpha_v`` across)."""
+    d = {"type": "roughconductor", "material": material, "distribution": "ggx"}
+    if alpha_v is None or alpha_v == alpha_u:
+        return {**d, "alpha": float(alpha_u)}
+    return {**d, "alpha_u": float(alpha_u), "alpha_v": float(alpha_v)}
+
+
+def weave(rng, threads: int = 4, fibres: int = 5) -> Tile:
+    """Plain weave: ``threads`` warp yarns (along y) and weft yarns (along x) per tile, each a
+    bundle of ``fibres`` fibre cylinders twisted around the yarn's centreline, going over and
+    under each other; gaps between the yarns show a dark backing."""
+    pitch = 1.0 / threads
+    R = 0.32 * pitch  # yarn radius: gaps of about a third of the pitch
+    A = 0.95 * R  # undulation amplitude: crossing yarns just touch
+    rf = 0.42 * R  # fibre radius
+    k = 32 * threads + 1
+    s = np.linspace(0.0, 1.0, k)
+    twist = 3 * threads  # whole turns per tile: periodic
+    parts: dict[str, list] = {"warp_a": [], "warp_b": [], "weft_a": [], "weft_b": []}
+    for j in range(threads):
+        for kind in ("warp", "weft"):
+            c = (j + 0.5) * pitch
+            sign = 1.0 if kind == "warp" else -1.0
+            z = sign * A * np.cos(np.pi * (threads * s - 0.5 - j))
+            phase0 = rng.uniform(0, 2 * np.pi)
+            for f in range(fibres):
+                ang = 2 * np.pi * (twist * s + f / fibres) + phase0
+                off = (R - rf) * (1.0 + 0.08 * rng.standard_normal())
+                a, b = c + off * np.cos(ang), z + off * np.sin(ang)
+                path = np.column_stack([a, s, b] if kind == "warp" else [s, a, b])
+                ref = [1.0, 0.0, 0.0] if kind == "warp" else [0.0, 1.0, 0.0]
+                m = tube(path, rf * (1.0 + 0.1 * rng.standard_normal()), sides=8, ref=ref)
+                parts[f"{kind}_{'ab'[j % 2]}"].append(m)
+    cols = {
+        "warp_a": (0.04, 0.08, 0.32),
+        "warp_b": (0.05, 0.12, 0.40),
+        "weft_a": (0.62, 0.50, 0.30),
+        "weft_b": (0.70, 0.58, 0.36),
+    }
+    out = [Part(merge(ms), plastic(cols[name], 0.22), name=name) for name, ms in parts.items()]
+    back = heightfield(np.full((4, 4), -A - 1.6 * R))
+    out.append(Part(back, diffuse((0.03, 0.03, 0.035)), name="backing"))
+    return Tile(out, f"plain weave, {threads} yarns of {fibres} twisted fibres per tile")
+
+
+def _pack(rng, count: int, rmin: float, rmax: float, tries: int = 4000):
+    """Up to ``count`` discs on the unit torus, radii in ``[rmin, rmax]``, largest first,
+    not overlapping (toroidal distances). Returns ``[(x, y, r)]``."""
+    out: list[tuple[float, float, float]] = []
+    radii = np.sort(rng.uniform(rmin, rmax, count))[::-1]
+    for r in radii:
+        for _ in range(tries // count):
+            x, y = rng.random(2)
+            ok = True
+            for px, py, pr in out:
+                dx, dy = abs(x - px), abs(y - py)
+                if np.hypot(min(dx, 1 - dx), min(dy, 1 - dy)) < 0.95 * (r + pr):
+                    ok = False
+                    break
+            if ok:
+                out.append((float(x), float(y), float(r)))
+                break
+    return out
+
+
+def pebbles(rng, count: int = 34) -> Tile:
+    """Packed pebbles (ellipsoids with bumps) of six kinds of stone, some wet and glossy,
+    bedded in bright sand: deep gaps, interreflection between the bright stones. Up to
+    ``count`` are tried; as many as fit without overlapping are placed (22 with seed 0)."""
+    kinds = [
+        plastic((0.80, 0.76, 0.68), 0.35),  # pale limestone, slightly polished
+        diffuse((0.85, 0.83, 0.80)),  # white quartz
+        diffuse((0.55, 0.30, 0.18)),  # red sandstone
+        plastic((0.08, 0.08, 0.09), 0.06),  # wet black basalt: a sharp highlight
+        plastic((0.35, 0.40, 0.30), 0.12),  # green serpentine, glossy
+        diffuse((0.45, 0.44, 0.42)),  # grey granite
+    ]
+    groups: list[list] = [[] for _ in kinds]
+    placed = _pack(rng, count, 0.06, 0.13)  # as many as fit without overlapping
+    for x, y, r in placed:
+        rz = r * rng.uniform(0.55, 0.85)
+        kind = int(rng.choice(len(kinds), p=[0.25, 0.15, 0.2, 0.1, 0.1, 0.2]))
+        level = 3 if r > 0.09 else 2
+        m = blob(rng, (x, y, rz * 0.55), (r, r * rng.uniform(0.7, 1.0), rz), level, bumps=0.12)
+        groups[kind].append(m)
+    parts = [Part(merge(g), kinds[k], name=f"stone{k}") for k, g in enumerate(groups) if g]
+    sand = 0.004 * spectral_noise(rng, 64, 4, 24, beta=1.5)
+    parts.append(Part(heightfield(sand), diffuse((0.70, 0.62, 0.48)), name="sand"))
+    return Tile(parts, f"{len(placed)} packed pebbles of six stones on sand")
+
+
+def fur(rng, tufts: int = 100, per_tuft: int = 14) -> Tile:
+    """Cut pile: ``tufts`` tufts (on a jittered grid) of ``per_tuft`` thin tapered strands
+    each, standing on a backing, leaning and curling; three yarn colours."""
+    k = round(np.sqrt(tufts))
+    base = (np.stack(np.meshgrid(np.arange(k), np.arange(k)), -1).reshape(-1, 2) + 0.5) / k
+    centres = (base + (rng.random(base.shape) - 0.5) * 0.6 / k) % 1.0
+    cols = [(0.55, 0.08, 0.06), (0.62, 0.30, 0.06), (0.50, 0.45, 0.40)]
+    groups: list[list] = [[] for _ in cols]
+    t = np.linspace(0.0, 1.0, 7)
+    for cx, cy in centres:
+        c = int(rng.choice(3, p=[0.6, 0.25, 0.15]))
+        lean = rng.normal(0, 0.15, 2)
+        for _ in range(per_tuft):
+            p0 = np.array([cx, cy]) + rng.normal(0, 0.022, 2)
+            h = rng.uniform(0.11, 0.16)
+            tilt = lean + rng.normal(0, 0.12, 2)
+            curl = rng.normal(0, 0.02, 2)
+            xy = p0 + np.outer(t, tilt * h) + np.outer(t**2, curl)
+            path = np.column_stack([xy, h * t])
+            radius = 0.009 * (1.0 - 0.8 * t)
+            groups[c].append(tube(path, radius, sides=6, ref=[1.0, 0.0, 0.0]))
+    parts = [
+        Part(merge(g), plastic(cols[i], 0.35), name=f"yarn{i}") for i, g in enumerate(groups) if g
+    ]
+    back = heightfield(0.002 * spectral_noise(rng, 32, 2, 12))
+    parts.append(Part(back, diffuse((0.20, 0.16, 0.11)), name="backing"))
+    return Tile(parts, f"cut pile, {k * k} tufts of {per_tuft} strands")
+
+
+def bark(rng, n: int = 160) -> Tile:
+    """Fissured bark: raised plates elongated along y between deep, narrow crevices (about
+    a fifth of the tile deep); lichen patches on the plates (a texture blending two BSDFs);
+    darker, glossier crevice walls."""
+    f1, f2, ids = toroidal_cells(rng, n, 40, jitter=0.9)
+    # stretch the cells along y: distance field of a squashed copy of the grid
+    ridge = spectral_noise(rng, n, 1, 10, beta=2.5, stretch=(1.0, 5.0))
+    gap = f2 - f1
+    crevice = 1.0 - smoothstep(0.0, 0.025, gap + 0.01 * ridge)
+    plates = 0.012 * spectral_noise(rng, n, 2, 30, beta=2.0)
+    height = 0.08 * (1.0 - crevice) ** 0.5 + plates - 0.12 * crevice
+    tone = rng.uniform(0.7, 1.1, ids.max() + 1)[ids]
+    lichen = smoothstep(0.6, 1.2, spectral_noise(rng, n, 3, 20, beta=2.0)) * (1 - crevice)
+    albedo = np.stack([0.30 * tone, 0.22 * tone, 0.15 * tone], -1) * (
+        1.0 - 0.7 * crevice[..., None]
+    )
+    albedo = albedo * (1 - lichen[..., None]) + lichen[..., None] * np.array([0.55, 0.62, 0.40])
+    bark_bsdf = {
+        "type": "blendbsdf",
+        "weight": {"type": "bitmap", "data": crevice[..., None].astype(np.float32)},
+        "bsdf_0": {
+            "type": "diffuse",
+            "reflectance": {"type": "bitmap", "data": albedo.astype(np.float32)},
+        },
+        "bsdf_1": plastic((0.06, 0.04, 0.03), 0.15),
+    }
+    return Tile([Part(heightfield(height), bark_bsdf, name="bark")], "fissured bark with lichen")
+
+
+def mosaic(rng, cells: int = 5) -> Tile:
+    """A ``cells x cells`` mosaic of tesserae: polished and brushed metals (copper, gold,
+    aluminium, chromium) and glossy coloured plastics, each with jittered corners, a random
+    tilt of up to 7 degrees and a bevel, set in recessed grout."""
+    pitch = 1.0 / cells
+    mats = [
+        lambda: metal("Cu", rng.uniform(0.05, 0.2)),
+        lambda: metal("Au", rng.uniform(0.03, 0.15)),
+        lambda: metal("Al", 0.04, rng.uniform(0.25, 0.4)),  # brushed along u
+        lambda: metal("Cr", rng.uniform(0.02, 0.1)),
+        lambda: plastic(rng.uniform(0.05, 0.6, 3), rng.uniform(0.02, 0.12)),
+        lambda: plastic(rng.uniform(0.05, 0.6, 3), rng.uniform(0.02, 0.12)),
+    ]
+    parts = []
+    for i in range(cells):
+        for j in range(cells):
+            lo = np.array([j, i]) * pitch + 0.07 * pitch
+            hi = lo + 0.86 * pitch
+            corners = np.array([lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]])
+            corners += rng.normal(0, 0.025 * pitch, corners.shape)
+            tilt = np.tan(np.radians(rng.uniform(0, 7))) * np.array(
+                [np.cos(a := rng.uniform(0, 2 * np.pi)), np.sin(a)]
+            )
+            m = slab(corners, -0.02, (rng.uniform(0.012, 0.02), *tilt), bevel=0.1 * pitch)
+            bsdf = mats[int(rng.integers(len(mats)))]()
+            parts.append(Part(m, bsdf, smooth=False, name=f"tessera{i}_{j}"))
+    grout = heightfield(-0.012 + 0.0015 * spectral_noise(rng, 64, 4, 32, beta=1.0))
+    parts.append(Part(grout, diffuse((0.50, 0.48, 0.45)), name="grout"))
+    return Tile(parts, f"{cells}x{cells} mosaic of metal and plastic tesserae")
+
+
+PT_PRESETS = {
+    "weave": weave,
+    "pebbles": pebbles,
+    "fur": fur,
+    "bark": bark,
+    "mosaic": mosaic,
+}
