@@ -4,8 +4,9 @@
 #   2. the pinned PyTorch (a CPU build: see VRNEURAL_TORCH_INDEX below), installed BEFORE the
 #      package, so pip never resolves a bare `torch` (which would pull several GB of CUDA
 #      packages)
-#   3. vrneural itself, editable, with the train/dev/metrics/view/render extras (render: Mitsuba
-#      3, `btf render`), and btf-extractor (UBO2014 import; built without isolation, see below)
+#   3. vrneural itself, editable, with the train/dev/metrics/view/render/docs extras (render:
+#      Mitsuba 3, `btf render`; docs: mkdocs-material and mkdocstrings, the documentation
+#      site), and btf-extractor (UBO2014 import; built without isolation, see below)
 #   4. Mesa's lavapipe CPU Vulkan driver, only when wgpu finds no Vulkan (or Metal, D3D12)
 #      adapter (an OpenGL one, e.g. llvmpipe through EGL, does not count)
 #   5. Xvfb and the X11 libraries glfw loads (`vrneural view`; its window tests start an
@@ -29,9 +30,9 @@ fi
 stamp=.venv/.vrneural-setup
 want="$(cat pyproject.toml scripts/setup.sh | sha256sum | cut -c1-16) $TORCH_SPEC ${VRNEURAL_TORCH_INDEX:-}"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
-    echo "[setup] installing $TORCH_SPEC (CPU) and vrneural[train,dev,metrics,view,render] into .venv"
+    echo "[setup] installing $TORCH_SPEC (CPU) and vrneural[train,dev,metrics,view,render,docs] into .venv"
     .venv/bin/python -m pip install -q --disable-pip-version-check "${TORCH_INDEX[@]}" "$TORCH_SPEC"
-    .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[train,dev,metrics,view,render]"
+    .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[train,dev,metrics,view,render,docs]"
     # UBO2014 import: btf-extractor's own build pins numpy<1.20 (no Python 3.11 build), so it
     # is built against the installed numpy without build isolation.
     echo "[setup] building btf-extractor (UBO2014 import) against the installed numpy"
