@@ -1,4 +1,5 @@
-"""The README's "Python API" section runs as written (each ```python block, in order)."""
+"""The docs page "Python API" (docs/python-api.md) runs as written (each ```python block, in
+order)."""
 
 from __future__ import annotations
 
@@ -14,13 +15,16 @@ from vrneural.btf.format import write_btf
 ROOT = Path(__file__).resolve().parent.parent
 
 
+PAGE = ROOT / "docs" / "python-api.md"
+
+
 def _blocks() -> list[str]:
-    text = (ROOT / "README.md").read_text()
-    sec = text.split("\n## Python API\n", 1)[1].split("\n## ", 1)[0]
-    return re.findall(r"```python\n(.*?)```", sec, flags=re.S)
+    text = PAGE.read_text()
+    assert text.startswith("# Python API\n")
+    return re.findall(r"```python\n(.*?)```", text, flags=re.S)
 
 
-def test_the_section_has_its_three_recipes():
+def test_the_page_has_its_three_recipes():
     blocks = _blocks()
     assert len(blocks) == 3
     assert "predict_slice" in blocks[0] and "evaluate" in blocks[1] and "Renderer" in blocks[2]
@@ -39,14 +43,14 @@ def workdir(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("k", [0, 1])
 def test_numpy_recipes(workdir, k, capsys):
-    exec(compile(_blocks()[k], f"README.md python block {k}", "exec"), {})
+    exec(compile(_blocks()[k], f"docs/python-api.md python block {k}", "exec"), {})
     assert capsys.readouterr().out.strip()
 
 
 @pytest.mark.gpu
 def test_frames_in_memory_recipe(workdir, adapter, capsys):
     ns: dict = {}
-    exec(compile(_blocks()[2], "README.md python block 2", "exec"), ns)
+    exec(compile(_blocks()[2], "docs/python-api.md python block 2", "exec"), ns)
     assert ns["left"].shape[-1] == 4 and np.isfinite(ns["left"]).all()
     assert float(ns["left"][..., :3].max()) > 0  # something was lit
     assert ns["radiance"].shape[0] == ns["radiance"].shape[1]
