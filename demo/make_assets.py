@@ -43,7 +43,7 @@ RECIPE = {
     "seed": 0,  # btf synth seed and training seed
     "teach_epochs": 16,
     "distill_epochs": 24,
-    "ema": 0.999,  # weight average of teacher and student (README: Training, --ema)
+    "ema": 0.999,  # weight average of teacher and student (docs/training.md, --ema)
 }
 
 

@@ -9,6 +9,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+export NO_MKDOCS_2_WARNING=1   # mkdocs-material's notice about its successor, on every build
 [ -x .venv/bin/mkdocs ] || bash scripts/setup.sh
 case "${1:-build}" in
     build) shift || true; exec .venv/bin/mkdocs build --strict --site-dir site "$@" ;;

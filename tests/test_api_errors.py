@@ -1,4 +1,4 @@
-"""The Python API (README: Python API) gives one-line VrnErrors for wrong values and types,
+"""The Python API (docs/python-api.md) gives one-line VrnErrors for wrong values and types,
 as the CLI does, instead of tracebacks from deep inside."""
 
 from __future__ import annotations

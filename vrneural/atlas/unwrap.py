@@ -19,7 +19,7 @@ asked for 1200^2 came back 1378 x 1384), and a fixed ``resolution`` with too hig
 3. The packed pixel coordinates are scaled *up* uniformly by ``R / max(W, H) >= 1`` into the
    R x R texture: gaps between charts only grow.
 
-Speed (measured, see README "Atlas"): xatlas's chart growing and parameterization get much
+Speed (measured, see docs/atlas.md): xatlas's chart growing and parameterization get much
 slower with chart size. CPU time of ``generate`` on the 100k-triangle knot with
 ``max_iterations = 0``: unlimited charts 83 s, charts capped at ~2000 triangles 31 s, at ~300
 triangles 3.8 s (8.1 s with xatlas's default single iteration).

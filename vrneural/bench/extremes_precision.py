@@ -114,7 +114,7 @@ def case_prec_f16_vs_f32(quick: bool) -> dict:
     # Documented behaviour: finite and non-negative everywhere (no overflow, no NaN). The error
     # is measured and reported, not bounded: with random, untrained weights f16's absolute
     # error scales with the activations, not the output, so near-cancelling outputs can come
-    # out 0 (README "Numerical behaviour at the extremes").
+    # out 0 (docs/extremes.md).
     return {
         "ok": ok,
         "max_rel_err": worst_max,

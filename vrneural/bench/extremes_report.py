@@ -52,8 +52,8 @@ def write_report(root: Path, doc: dict, t0: float) -> dict:
         f"{n_fail} FAIL.",
         "",
         "Outcomes: **works** = ran and its documented behaviour held; **rejected** = a one-line "
-        "error, which is the documented behaviour; **FAIL** = anything else. Behaviours: README "
-        'section "Numerical behaviour at the extremes".',
+        "error, which is the documented behaviour; **FAIL** = anything else. Behaviours: "
+        "docs/extremes.md (the documentation site's page Numerical behaviour at the extremes).",
         "",
     ]
     rows = [

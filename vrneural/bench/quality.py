@@ -130,7 +130,7 @@ class QualityConfig:
     jobs: int = opt(
         1,
         "train this many networks at once, each in its own process (teachers first, then "
-        "every network and seed of every preset; with --device cuda see README on MPS)",
+        "every network and seed of every preset; with --device cuda see docs/training.md on MPS)",
     )
     quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps")
     progress: bool = opt(True, "show progress bars")

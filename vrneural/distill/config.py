@@ -1,7 +1,7 @@
 """Stage configs for training (``vrneural teach``) and distillation (``vrneural distill``).
 
 One field, one ``--flag``; the resolved config is stored in every checkpoint and written as
-JSON beside every output. Model-size fields are explained in README section "Training".
+JSON beside every output. Model-size fields are explained in docs/training.md.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ class TrainConfig:
     lr_min: float = opt(1e-7, "ReduceLROnPlateau floor")
     lr_factor: float = opt(0.5, "ReduceLROnPlateau decay factor")
     lr_threshold: float = opt(
-        5e-3, "halve lr when the test L1 improves by less than this (see README: Training)"
+        5e-3, "halve lr when the test L1 improves by less than this (see docs/training.md)"
     )
     lr_threshold_mode: str = opt(
         "rel",
@@ -42,7 +42,7 @@ class TrainConfig:
     ema: float = opt(
         0.0,
         "decay of an exponential moving average of the weights, evaluated and exported "
-        "instead of the last step (0 = off; see README: Training)",
+        "instead of the last step (0 = off; see docs/training.md)",
     )
     test_fraction: float = opt(0.1, "held-out fraction of (wi, wo) pairs (distill: teacher's)")
     split_seed: int = opt(0, "seed of the train/test split (distill reuses the teacher's split)")
@@ -52,12 +52,13 @@ class TrainConfig:
     device: str = opt(
         "cpu",
         "train on cpu, cuda or cuda:N (CUDA: same result to float tolerance, not bit-exact; "
-        "see README: Training)",
+        "see docs/training.md)",
     )
     compile: str = opt(
         "off",
         "torch.compile the networks: off, default, or reduce-overhead (adds CUDA graphs); "
-        "fewer kernel launches per step, paid for with a compile at the start (see README)",
+        "fewer kernel launches per step, paid for with a compile at the start (see "
+        "docs/training.md)",
         choices=COMPILE_MODES,
     )
     threads: int = opt(1, "torch CPU threads (1 was 15-70x faster than 2 on the shared 2-core box)")
@@ -95,26 +96,26 @@ class DistillConfig(TrainConfig):
     neumip_dirs: str = opt(
         "xy",
         "NeuMIP's direction inputs: xy (wi.xy, wo.xy, as NeuMIP has them) or full (wi, wo, h "
-        "like the student; a stronger baseline than the paper's, see README: Training)",
+        "like the student; a stronger baseline than the paper's, see docs/training.md)",
         choices=NEUMIP_DIRS,
     )
     width: int = opt(
         8,
         "hidden width of the student's M_c and M_f, and of single8 (NeuMIP is always 25); the "
         "paper's 8, or 12 with --wide-start 24 to come within a tenth of NeuMIP's L1 on our "
-        "presets (see README: Quality)",
+        "presets (see docs/quality.md)",
     )
     init_from: str = opt(
         "",
         "start from this run of the same method and teacher (trained at this --width or wider), "
-        "its hidden units pruned to --width; see README: Training",
+        "its hidden units pruned to --width; see docs/training.md",
     )
     wide_start: int = opt(
         0,
         "train this wide for --epochs // 2 epochs (into <output>.wide.pt), then prune to "
         "--width and train on for the rest: --width and --init-from in one run; --resume of "
         "the output continues either half (0 = off, from random weights as the paper; see "
-        "README: Training)",
+        "docs/training.md)",
     )
     # recorded in both halves of a --wide-start run (the wide one has no init_from): what the
     # whole run was started with, so that --resume of either half continues that run
@@ -123,8 +124,8 @@ class DistillConfig(TrainConfig):
     lod_levels: int = opt(
         1,
         "prefiltered neural textures: pyramid levels (1 = level 0 alone), each trained against "
-        "the BTF averaged over its texels' footprint (see README: Filtering and level of "
-        "detail)",
+        "the BTF averaged over its texels' footprint (see "
+        "docs/lod.md)",
     )
     lod_kind: str = opt(
         "filter",

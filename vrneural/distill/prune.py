@@ -1,8 +1,8 @@
 """``distill --init-from``: start a narrow network from a wider trained one, pruned.
 
 An 8-wide network trained from random weights ends in a worse and more seed-dependent minimum
-than the same 8-wide network cut out of a 16-wide one after part of the budget (README:
-Training; research log). Pruning keeps, in every hidden layer, the ``width`` units with the
+than the same 8-wide network cut out of a 16-wide one after part of the budget (docs/training.md;
+research log). Pruning keeps, in every hidden layer, the ``width`` units with the
 largest importance
 
     importance_j = std(a_j) * ||W_next[:, j]||

@@ -36,7 +36,7 @@ def compile_networks(mode: str, *models: nn.Module, backend: str = "inductor") -
     """``torch.compile`` each network in place (``--compile``; state dicts keep their keys).
 
     Every step of one slice is a few hundred small kernels; on a GPU their launches, not the
-    arithmetic, bound the step, and fusing them is what compiling buys (README: Training).
+    arithmetic, bound the step, and fusing them is what compiling buys (docs/training.md).
 
     The compiler's caches are reset first. Every network shares the code of
     ``NeuralModel.forward``, and each one trained adds two or three entries to that code's

@@ -4,7 +4,7 @@
   ``ceil(C / 8)`` layers: 8 float16 channels per texel and layer, two per u32 (channel 2k in the
   low half, 2k + 1 in the high half; zero-padded), read by ``textureLoad`` and
   ``unpack2x16float``. One 128-bit load brings 8 channels: half the loads of 4-channel
-  ``rgba16float`` layers (measured on llvmpipe: see README, Runtime), same values.
+  ``rgba16float`` layers (measured on llvmpipe: see docs/runtime.md), same values.
 - Weights: constants in the generated code; or one float32 storage buffer in
   :func:`vrneural.runtime.codegen.packed_weights` layout (``"storage"``, ``"streamed"``); or uniform
   buffers in :func:`vrneural.runtime.codegen.uniform_weights` layout (``"uniform"``).
@@ -144,7 +144,7 @@ class GpuAtlas:
         ``tan`` (object tangent; w: one atlas texel's untiled material-UV length, the LOD
         footprint), ``uv01`` and ``uv23`` (untiled material UVs of texels
         0, 1 and 2, 3). The texture-space kernels read these instead of the mesh: no triangle
-        fetch or barycentrics per update (README, Runtime)."""
+        fetch or barycentrics per update (docs/runtime.md)."""
         if self._geometry is None:
             import wgpu
 

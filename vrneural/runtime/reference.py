@@ -85,7 +85,7 @@ def camera_relative(model, eye, light_pos):
     """``(model [4, 4], eye [3], light_pos [L, 3])`` re-expressed with the eye at the origin,
     subtracted in float64 before anything is rounded to f32. Shading is translation invariant,
     so this changes nothing but precision: an object 1e5 m from the world origin (f32 spacing
-    7.8 mm there) shades like one at the origin (README "Numerical behaviour at the extremes")."""
+    7.8 mm there) shades like one at the origin (docs/extremes.md)."""
     o = np.asarray(eye, np.float64).reshape(-1)[:3]
     m = np.array(model, np.float64)
     m[:3, 3] -= o

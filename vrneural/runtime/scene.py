@@ -325,7 +325,7 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         f.one_of("colour", "color")
         colour = f.vec("colour" if "colour" in lt else "color", (1, 1, 1), lo=0.0)
         intensity = f.num("intensity", 1.0, 0.0, MAX_INTENSITY)
-        if max(colour) * intensity > MAX_INTENSITY:  # README: numerical behaviour at extremes
+        if max(colour) * intensity > MAX_INTENSITY:  # docs/extremes.md
             raise f.err("intensity", f"* colour = {max(colour) * intensity:g} W/sr is above 1e6")
         motion = f.str("motion", "none", MOTIONS)
         idle = [k for k in ("radius", "period", "phase") if k in lt]

@@ -18,7 +18,7 @@
 // the slot within the subgroup is an exclusive prefix sum of the keep flags, and one global
 // atomic per subgroup reserves the subgroup's run. No workgroup barrier or workgroup atomic
 // (llvmpipe runs barriers as coroutine switches); on llvmpipe the timing difference to the
-// workgroup variant below stayed within the machine's noise (README, Runtime). Call from
+// workgroup variant below stayed within the machine's noise (docs/runtime.md). Call from
 // subgroup-uniform control flow.
 fn compact_append(keep: bool, value: u32, lid: u32) {
     let one = select(0u, 1u, keep);

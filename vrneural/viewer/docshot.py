@@ -1,5 +1,5 @@
-"""The README's picture of the viewer: a real window under Xvfb (the window tests' machinery),
-read back from its surface after a few frames and key presses.
+"""The docs' picture of the viewer (docs/viewer.md): a real window under Xvfb (the window
+tests' machinery), read back from its surface after a few frames and key presses.
 
     python -m vrneural.viewer.docshot docs/viewer.png [--force]
 

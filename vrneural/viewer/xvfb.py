@@ -1,4 +1,4 @@
-"""A virtual X display (Xvfb) for the window tests, the viewer benchmark and the README
+"""A virtual X display (Xvfb) for the window tests, the viewer benchmark and the docs'
 screenshot: a real X server, so glfw opens a real window and lavapipe presents to a real X11
 surface; only the monitor is missing."""
 
