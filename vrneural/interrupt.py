@@ -53,10 +53,9 @@ def _ignored(sig) -> bool:
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised where Ctrl-C's KeyboardInterrupt would be (every ``except
     KeyboardInterrupt`` cleans up after it too). Its own type because CPython, having marked
-    a KeyboardInterrupt as unhandled (it compares the exact type), ends the process by
-    SIGINT after our handler returned 130: a plain KeyboardInterrupt here exited -2 in 2 of
-    6 SIGTERM tests under pytest (the cause inside CPython not pinned down), this subclass in
-    none of 8."""
+    a KeyboardInterrupt as unhandled (it compares the exact type), can end the process by
+    SIGINT after our handler returned 130 (docs/quality-research.md, "Notes moved out of the
+    code")."""
 
 
 def raise_terminated(*_) -> None:

@@ -7,8 +7,8 @@ compilation and every object's first full update) is never measured. A configura
 over ``cycles * (N + 1)`` frames (at least ``min_frames``), so every radiance-texture block is
 updated exactly ``cycles`` times in it under either schedule. Before it, unmeasured frames are
 rendered for ``warmup`` seconds (at least one): a GPU lowers its clocks while the host builds
-the next configuration and needs tens of frames to raise them again (on an H100, frame times
-fell from 27 to 7.6 ms over the first dozen frames of a run); a CPU adapter spends one frame.
+the next configuration and needs tens of frames to raise them again (docs/benchmarks.md, the
+H100 section); a CPU adapter spends one frame.
 """
 
 from __future__ import annotations

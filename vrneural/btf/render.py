@@ -183,8 +183,7 @@ def render_view(
     M = hu.size
     out = np.empty((L, H * W, 3), np.float32)
     # Work in blocks of <= chunk (light, sample) pairs: lights x whole texels (S samples each).
-    # Small blocks keep temporaries in cache and out of mmap/munmap churn (measured: 2^18 pairs
-    # has no system time, 2^21 pairs spends a third of the time in the kernel).
+    # Small blocks keep temporaries in cache and out of mmap/munmap churn.
     m_step = min(M, max(S, chunk // S * S))
     l_step = max(1, chunk // m_step)
     for m0 in range(0, M, m_step):

@@ -115,7 +115,7 @@ def synthesize(
     # Ctrl-C or SIGTERM (also where a non-interactive shell started this in the background
     # with SIGINT ignored) stops after the current view; a second one at once. The handler is
     # in place before the .partial file appears, so a signal sent once it exists is never
-    # missed (an ignored SIGINT used to be lost in between, and the run went on to the end)
+    # missed
     with Stop() as stop:
         stop.second_raises = True
         w = BtfWriter(out, dirs, dirs, (cfg.res, cfg.res), meta, resume=resume and not force)

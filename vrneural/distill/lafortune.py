@@ -36,7 +36,7 @@ def lafortune_eval(p: torch.Tensor, wi: torch.Tensor, wo: torch.Tensor) -> torch
     """BTF values ``[T, M, 3]`` of per-texel parameters ``p: [T, 55]`` at ``wi, wo: [M, 3]``.
 
     The lobe base ``wo^T M wi`` is clamped to ``[0, 1]`` before the power (unclamped lobes with
-    large ``M`` and ``n`` overflow at directions outside the fit; measured: test L1 1e13).
+    large ``M`` and ``n`` overflow at directions outside the fit).
     """
     A = (wo[:, :, None] * wi[:, None, :]).reshape(-1, 9)
     _, s, _, _, _ = _lobes(p, A)

@@ -170,8 +170,8 @@ def vs_torch(res=512, repeats=7, n_lights=3) -> dict:
     the kernel (first layers split, the light-independent part once per block / texel, W_z z_c
     once per (block, light)), so the kernel gets no credit for arithmetic torch could skip too.
     ``ratio`` is the median over repeats of (faster torch variant) / kernel, each repeat running
-    the three back to back. Seven repeats by default: torch's time on the shared 2-core machine
-    varied 2x between runs (59-122 ms), the kernel's by a few percent."""
+    the three back to back. Seven repeats by default: torch's time on a shared CPU varies far
+    more between runs than the kernel's."""
     import torch
 
     from vrneural.material import half_vector, sample_bilinear_wrap
