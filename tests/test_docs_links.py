@@ -162,3 +162,12 @@ def test_every_page_of_the_site_has_content():
         if words < 150:
             thin.append(f"{page.relative_to(site)}: {words} words")
     assert not thin, "\n".join(thin)
+
+
+def test_the_api_pages_show_no_sphinx_role_names():
+    """The docstrings' ``:func:`x``` render as the code span alone (scripts/docs_hooks.py)."""
+    site = built_site()
+    api = article(site / "reference" / "api" / "index.html")
+    assert api.count("<code>") > 100  # the docstrings are there
+    bad = [p.relative_to(site) for p in pages(site) if re.search(r":\w+:<code>", article(p))]
+    assert not bad
