@@ -15,6 +15,7 @@ side from the screen; ``lod``: the student with prefiltered neural textures, tra
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -143,7 +144,7 @@ def run_distance(cfg: DistanceConfig) -> dict:
     full, ppd = prof.eye_res, metrics.pixels_per_degree(prof.eye_res[1], prof.fov_y)
     doc["ppd"] = ppd
     conds = conditions(c)
-    bar = tqdm(total=len(conds) * (len(VARIANTS) + 1), desc="bench distance", unit="render",
+    bar = tqdm(total=len(conds) * (len(VARIANTS) + 3), desc="bench distance", unit="render",
                disable=not c.progress)  # fmt: skip
     for cond in conds:
         teacher = mats["teacher"]
@@ -159,15 +160,25 @@ def run_distance(cfg: DistanceConfig) -> dict:
                                              for f in nf])),
                "variants": []}  # fmt: skip
         cache: dict = {}
+        own = {}  # pack -> its level 0 per pixel, supersampled: the filtering error alone
+        for key in ("student", "student_lod"):
+            bar.set_postfix_str(f"{cond.name}: {key} supersampled")
+            lvl0 = dataclasses.replace(mats[key], levels={})
+            os_ = settings(c, cond, prof, False, False, "reference", lvl0)
+            own[key] = tr.reference(ts.scene_for(cond, lvl0, lvl0), os_, cond, c.crop, full,
+                                    cond.scored, c.spp, 0)  # fmt: skip
         for name, (mips, screen, lod) in VARIANTS.items():
             bar.set_postfix_str(f"{cond.name}: {name}")
-            mat = mats["student_lod" if lod else "student"]
+            key = "student_lod" if lod else "student"
+            mat = mats[key]
             s = settings(c, cond, prof, mips, screen)
             imgs, st = tr.render(ts.scene_for(cond, mat), s, cond, c.crop, full, set(cond.scored))
             sc = tr.scores(ref, imgs, None, ppd, cond.scored, cache)
+            flip_own = [metrics.flip_hdr_eyes(own[key][f], imgs[f], ppd) for f in cond.scored]
             w = st[1:]
             rec["variants"].append({
                 "variant": name, "mips": mips, "screen_res": screen, "neural_lod": lod,
+                "flip_own": float(np.mean(flip_own)),
                 **{k: sc[k] for k in ("flip", "psnr", "ssim", "change", "change_ref")},
                 "flicker": sc["change"] / max(sc["change_ref"], 1e-12),
                 "texels_shaded": float(np.mean([4 * x.object_blocks[0] for x in w])),
@@ -175,6 +186,7 @@ def run_distance(cfg: DistanceConfig) -> dict:
                 **tr.work(st),
             })  # fmt: skip
             bar.update()
+        bar.update(2)  # the two own references
         doc["records"].append(rec)
     bar.close()
     return finish(root, doc, t0)
@@ -189,6 +201,8 @@ def finish(root, doc: dict, t0: float) -> dict:
         f"{doc['ppd']:.1f} ppd following it, slow head sway; reference: the teacher per pixel "
         f"with {doc['config']['spp']} stratified samples. flicker: the mean frame-to-frame "
         "change of the displayed image over the reference's own (1 = as steady as the truth). "
+        "FLIP own: against the variant's own pack (level 0) per pixel with the same samples, "
+        "the filtering error without the network's error against the teacher. "
         "texels: texels shaded for the sphere per frame; side: its radiance texture's median "
         "side." + (" **Quick run: reduced settings.**" if doc["config"]["quick"] else ""),
         "",
@@ -198,10 +212,11 @@ def finish(root, doc: dict, t0: float) -> dict:
         for v in rec["variants"]:
             rows.append([rec["condition"], v["variant"],
                          f"{v['flip']['mean']:.4f} ({v['flip']['worst']:.4f})",
-                         f"{rec['noise_floor']:.4f}", v["flicker"], v["texels_shaded"],
-                         v["texture_side"], v["frame_ms"]["mean"]])  # fmt: skip
-    md += rp.table(["condition", "variant", "FLIP (worst)", "floor", "flicker", "texels",
-                    "side", "frame ms"], rows)  # fmt: skip
+                         f"{v['flip_own']:.4f}", f"{rec['noise_floor']:.4f}", v["flicker"],
+                         v["texels_shaded"], v["texture_side"],
+                         v["frame_ms"]["mean"]])  # fmt: skip
+    md += rp.table(["condition", "variant", "FLIP (worst)", "FLIP own", "floor", "flicker",
+                    "texels", "side", "frame ms"], rows)  # fmt: skip
     png(doc, root / "distance.png")
     md += ["", "![distance](distance.png)"]
     return rp.finish(root, doc, md, t0)
@@ -215,12 +230,14 @@ def png(doc: dict, path) -> None:
             continue
         x = [r["value"] for r in recs]
         for i, v in enumerate(recs[0]["variants"]):
-            ax.plot(x, [r["variants"][i]["flip"]["mean"] for r in recs], "o-", lw=1,
-                    label=v["variant"])  # fmt: skip
+            (line,) = ax.plot(x, [r["variants"][i]["flip"]["mean"] for r in recs], "o-", lw=1,
+                              label=v["variant"])  # fmt: skip
+            ax.plot(x, [r["variants"][i]["flip_own"] for r in recs], "s:", lw=1, ms=3,
+                    color=line.get_color())  # fmt: skip
         ax.plot(x, [r["noise_floor"] for r in recs], "k--", lw=0.8, label="noise floor")
         ax.set_xscale("log")
         ax.set_xlabel("distance, m" if fam == "distance" else "tiling")
-        ax.set_ylabel("FLIP vs supersampled teacher")
+        ax.set_ylabel("FLIP vs supersampled teacher (dotted: vs own pack)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6)
     recs = sorted(
