@@ -9,7 +9,7 @@ import shutil
 
 from distill_helpers import trained  # noqa: F401 (fixture)
 
-from vrneural.formats.atomic import file_sha256
+from vrneural.outputs import file_sha256
 from vrneural.formats.vrnm import read_vrnm, write_vrnm
 from vrneural.material import random_material
 from vrneural.runtime.run import teacher_beside

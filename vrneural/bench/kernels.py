@@ -194,18 +194,18 @@ def run_kernels(cfg: KernelsConfig) -> dict:
         raise VrnError("--precisions is empty; choose from f32, f16")
     if "f16" in precs and not adapter_summary().features.get("shader-f16"):
         raise VrnError("--precisions: f16 needs the shader-f16 feature, which the adapter lacks")
-    root = rp.prepare_out(cfg.out, cfg.force, "kernels")
-    import torch
+    with rp.prepare_out(cfg.out, cfg.force, "kernels") as root:
+        import torch
 
-    t0 = time.perf_counter()
-    doc = rp.header("kernels", c)
-    threads_before = torch.get_num_threads()
-    try:
-        if c.threads:
-            torch.set_num_threads(c.threads)
-        return _run(c, doc, nets, precs, root, t0)
-    finally:
-        torch.set_num_threads(threads_before)  # `bench all` goes on in this process
+        t0 = time.perf_counter()
+        doc = rp.header("kernels", c)
+        threads_before = torch.get_num_threads()
+        try:
+            if c.threads:
+                torch.set_num_threads(c.threads)
+            return _run(c, doc, nets, precs, root, t0)
+        finally:
+            torch.set_num_threads(threads_before)  # `bench all` goes on in this process
 
 
 def _sgemm(c: KernelsConfig) -> float:

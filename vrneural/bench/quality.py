@@ -48,12 +48,7 @@ from vrneural.config import (
 )
 from vrneural.distill.config import BEFORE_FIELD, COMPILE_MODES, NEUMIP_DIRS
 from vrneural.errors import VrnError, check_range, check_seed, count
-from vrneural.formats.atomic import (
-    check_output_dir,
-    check_resume_force,
-    file_sha256,
-    mark_output_dir,
-)
+from vrneural.outputs import OutputDir, check_resume_force, file_sha256
 from vrneural.versions import package_versions
 
 METHODS = ("lafortune", "neumip", "single8", "student_nodistill", "student")
@@ -675,7 +670,7 @@ def _lafortune(data, every, slices, cfg: QualityConfig, out: dict, path: Path, b
     import torch
 
     from vrneural.distill.lafortune import N_PARAMS, fit_lafortune, predict_lafortune
-    from vrneural.formats.atomic import atomic_path
+    from vrneural.outputs import atomic_path
 
     L = data.values.shape[0]
     H, W = data.res
@@ -787,31 +782,27 @@ def run_quality(cfg: QualityConfig) -> dict:
     cfg = cfg.resolved()
     presets = validate(cfg)
     root = Path(cfg.out)
-    check_bench_out(root, cfg, "bench quality", "report")
+    od = check_bench_out(root, cfg, "bench quality", "report")
     if cfg.resume:
         _check_resumable(presets, cfg, root)
-    mark_output_dir(root, "bench quality")  # its checkpoints stay in it
-    with resume_hint(root):
+    with od, resume_hint(root):
+        od.open()  # its checkpoints stay in it
         return _run(presets, cfg, root)
 
 
-def check_bench_out(root: Path, cfg, command: str, what: str) -> None:
-    """The output folder of a training bench: ``--resume`` needs it to exist; one with files
-    in it needs ``--resume`` or ``--force`` and must be this command's (its checkpoints are
-    kept either way: --resume reuses them, --force retrains each)."""
+def check_bench_out(root: Path, cfg, command: str, what: str) -> OutputDir:
+    """The output folder of a training bench, checked: ``--resume`` needs it to exist; one
+    with files in it needs ``--resume`` or ``--force`` and must be this command's (its
+    checkpoints are kept either way: --resume reuses them, --force retrains each)."""
     if cfg.resume and not root.exists():  # as teach, distill and btf synth --resume
         raise VrnError(
             f"--resume: nothing to resume, {root} does not exist; drop --resume to start a new "
             f"{what} there"
         )
-    if not (root.is_dir() and not any(root.iterdir())):  # an empty directory needs no flag
-        check_output_dir(
-            root,
-            cfg.force or cfg.resume,
-            command,
-            deletes=False,
-            remedy="pass --resume to reuse its checkpoints or --force to retrain",
-        )
+    remedy = "pass --resume to reuse its checkpoints or --force to retrain"
+    od = OutputDir(root, command, resume=cfg.force or cfg.resume, remedy=remedy)
+    od.check()
+    return od
 
 
 @contextlib.contextmanager
@@ -839,7 +830,7 @@ def resume_hint(root: Path):
 
 def _run(presets: list[str], cfg: QualityConfig, root: Path) -> dict:
     from vrneural.bench.quality_report import write_report
-    from vrneural.formats.atomic import write_json
+    from vrneural.outputs import write_json
 
     results, slices, t_all = {}, {}, time.perf_counter()
     if cfg.jobs > 1:

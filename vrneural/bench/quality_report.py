@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.formats.atomic import atomic_path
+from vrneural.outputs import atomic_path
 from vrneural.errors import count
 
 ORDER = ("lafortune", "neumip", "single8", "student_nodistill", "student", "teacher")

@@ -479,71 +479,71 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
 
     c = cfg.resolved()
     check(c)
-    root = rp.prepare_out(cfg.out, cfg.force, "tradeoff")
-    t0 = time.perf_counter()
-    doc = rp.header("tradeoff", c)
-    tt = time.perf_counter()
-    mats = load_materials(c, root)
-    doc["packs"] = {"source": c.packs or "trained", "seconds": time.perf_counter() - tt,
-                    "materials": {k: sorted(v) for k, v in mats.items()}}  # fmt: skip
-    if c.packs:
-        from vrneural.bench.packs import PACKS
+    with rp.prepare_out(cfg.out, cfg.force, "tradeoff") as root:
+        t0 = time.perf_counter()
+        doc = rp.header("tradeoff", c)
+        tt = time.perf_counter()
+        mats = load_materials(c, root)
+        doc["packs"] = {"source": c.packs or "trained", "seconds": time.perf_counter() - tt,
+                        "materials": {k: sorted(v) for k, v in mats.items()}}  # fmt: skip
+        if c.packs:
+            from vrneural.bench.packs import PACKS
 
-        doc["packs"]["absent"] = [k for k in PACKS if k not in next(iter(mats.values()))]
-    prof = get_profile(QUEST3)
-    full = prof.eye_res
-    ppd = metrics.pixels_per_degree(full[1], prof.fov_y)
-    doc["ppd"] = ppd
-    conds = conditions(c, prof.fps, root / "poses")
-    first = next(iter(mats))
-    nets = [k for k in mats[first] if k not in REQUIRED]
-    has_f16 = adapter_summary().features.get("shader-f16", False)
-    # adaptive reuse at the fixed N's mean work, matched on the fastest turn
-    fastest = max((x for x in conds if x.family in ("turn", "log")), key=lambda x: x.value,
-                  default=None)  # fmt: skip
-    budget = None
-    if fastest is not None:
-        scene = ts.scene_for(fastest, mats[first]["student"], n_lights=c.lights)
-        budget, matched, target = match_budget(scene, c, fastest, prof)
-        doc["adaptive"] = {"condition": fastest.name, "budget_deg": budget,
-                           "base_candidates_per_frame": target,
-                           "matched_candidates_per_frame": matched}  # fmt: skip
-    jobs = []
-    for cond in conds:
-        presets = list(mats) if cond.family == "smooth" or cond is fastest else [first]
-        for preset in presets:
-            vs = variants_for(c, cond, nets if preset == first else [], has_f16, budget)
-            jobs.append((cond, preset, vs))
-    total = sum(len(vs) for _, _, vs in jobs)
-    bar = tqdm(total=total, desc="bench tradeoff", unit="variant", disable=not c.progress)
-    for cond, preset, vs in jobs:
-        pm = mats[preset]
-        teacher = pm["teacher"]
-        rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
-               "preset": preset, "scored_frames": cond.scored, "variants": []}  # fmt: skip
-        rs = settings_for(c, variant(mode="reference"), cond, prof, teacher)
-        rscene = ts.scene_for(cond, pm["student"], teacher, c.lights)
-        bar.set_postfix_str(f"{cond.name} / {preset}: reference")
-        ref = reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
-        nf = cond.scored[: max(2, len(cond.scored) // 2)]
-        ref2 = reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
-        floor = [metrics.flip_hdr_eyes(ref[f], ref2[f], ppd) for f in nf]
-        rec["noise_floor"] = {"flip": float(np.mean(floor)), "frames": nf}
-        cache: dict = {}
-        n0 = None
-        for v in vs:
-            bar.set_postfix_str(f"{cond.name} / {preset}: {label(v)}")
-            mat = pm.get(v["material"], pm["student"])
-            scene = ts.scene_for(cond, mat, None, c.lights)
-            imgs, st = render(scene, settings_for(c, v, cond, prof), cond, c.crop, full,
-                              set(cond.scored))  # fmt: skip
-            if v["knob"] == "reuse" and v["value"] == 0:
-                n0 = imgs
-            n0_ = n0 if v is not vs[0] else None
-            r = {**v, **work(st), **scores(ref, imgs, n0_, ppd, cond.scored, cache, ref2)}
-            rec["variants"].append(r)
-            bar.update()
-        rec["difference_floor"] = difference_floor(rec["variants"])
-        doc["records"].append(rec)
-    bar.close()
-    return finish_report(root, doc, t0)
+            doc["packs"]["absent"] = [k for k in PACKS if k not in next(iter(mats.values()))]
+        prof = get_profile(QUEST3)
+        full = prof.eye_res
+        ppd = metrics.pixels_per_degree(full[1], prof.fov_y)
+        doc["ppd"] = ppd
+        conds = conditions(c, prof.fps, root / "poses")
+        first = next(iter(mats))
+        nets = [k for k in mats[first] if k not in REQUIRED]
+        has_f16 = adapter_summary().features.get("shader-f16", False)
+        # adaptive reuse at the fixed N's mean work, matched on the fastest turn
+        fastest = max((x for x in conds if x.family in ("turn", "log")), key=lambda x: x.value,
+                      default=None)  # fmt: skip
+        budget = None
+        if fastest is not None:
+            scene = ts.scene_for(fastest, mats[first]["student"], n_lights=c.lights)
+            budget, matched, target = match_budget(scene, c, fastest, prof)
+            doc["adaptive"] = {"condition": fastest.name, "budget_deg": budget,
+                               "base_candidates_per_frame": target,
+                               "matched_candidates_per_frame": matched}  # fmt: skip
+        jobs = []
+        for cond in conds:
+            presets = list(mats) if cond.family == "smooth" or cond is fastest else [first]
+            for preset in presets:
+                vs = variants_for(c, cond, nets if preset == first else [], has_f16, budget)
+                jobs.append((cond, preset, vs))
+        total = sum(len(vs) for _, _, vs in jobs)
+        bar = tqdm(total=total, desc="bench tradeoff", unit="variant", disable=not c.progress)
+        for cond, preset, vs in jobs:
+            pm = mats[preset]
+            teacher = pm["teacher"]
+            rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
+                   "preset": preset, "scored_frames": cond.scored, "variants": []}  # fmt: skip
+            rs = settings_for(c, variant(mode="reference"), cond, prof, teacher)
+            rscene = ts.scene_for(cond, pm["student"], teacher, c.lights)
+            bar.set_postfix_str(f"{cond.name} / {preset}: reference")
+            ref = reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
+            nf = cond.scored[: max(2, len(cond.scored) // 2)]
+            ref2 = reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
+            floor = [metrics.flip_hdr_eyes(ref[f], ref2[f], ppd) for f in nf]
+            rec["noise_floor"] = {"flip": float(np.mean(floor)), "frames": nf}
+            cache: dict = {}
+            n0 = None
+            for v in vs:
+                bar.set_postfix_str(f"{cond.name} / {preset}: {label(v)}")
+                mat = pm.get(v["material"], pm["student"])
+                scene = ts.scene_for(cond, mat, None, c.lights)
+                imgs, st = render(scene, settings_for(c, v, cond, prof), cond, c.crop, full,
+                                  set(cond.scored))  # fmt: skip
+                if v["knob"] == "reuse" and v["value"] == 0:
+                    n0 = imgs
+                n0_ = n0 if v is not vs[0] else None
+                r = {**v, **work(st), **scores(ref, imgs, n0_, ppd, cond.scored, cache, ref2)}
+                rec["variants"].append(r)
+                bar.update()
+            rec["difference_floor"] = difference_floor(rec["variants"])
+            doc["records"].append(rec)
+        bar.close()
+        return finish_report(root, doc, t0)

@@ -30,7 +30,6 @@ from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt, quick_defaults
 from vrneural.distill.config import COMPILE_MODES
 from vrneural.errors import VrnError, check_range, check_seed, count
-from vrneural.formats.atomic import mark_output_dir
 from vrneural.versions import package_versions
 
 #: the networks ``--methods`` may name: their `distill` settings and their names in the report
@@ -171,7 +170,7 @@ def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = T
     """``((method, width, start), stem, config)`` of every network and seed (wide halves: None
     instead of the triple), in an order one process can train them in."""
     from vrneural.bench.quality import network_runs as one
-    from vrneural.formats.atomic import file_sha256
+    from vrneural.outputs import file_sha256
 
     q = plan.quality
     d = root / q.presets
@@ -197,7 +196,7 @@ def run_widths(cfg: WidthsConfig) -> dict:
     cfg = cfg.resolved()
     plan = validate(cfg)
     root = Path(cfg.out)
-    check_bench_out(root, cfg, "bench widths", "sweep")
+    od = check_bench_out(root, cfg, "bench widths", "sweep")
     _check_same_preset(cfg, root)
     if cfg.resume:  # every checkpoint it would meet matches, before any work
         from vrneural.bench.quality import _teach_config
@@ -205,8 +204,8 @@ def run_widths(cfg: WidthsConfig) -> dict:
         btf_path = root / "btf" / f"{cfg.preset}.btf"
         _teach_config(cfg.preset, plan.quality, root, btf_path, None)
         network_runs(plan, root, btf_path, check_teacher=False)
-    mark_output_dir(root, "bench widths")
-    with resume_hint(root):
+    with od, resume_hint(root):
+        od.open()
         return _run(cfg, plan, root)
 
 
@@ -266,7 +265,7 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
     from vrneural.distill.data import SliceData
     from vrneural.distill.distill import model_from_checkpoint
     from vrneural.distill.evaluate import mean_l1
-    from vrneural.formats.atomic import write_json
+    from vrneural.outputs import write_json
 
     t0 = time.perf_counter()
     tck, done = _train(plan, root, print)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from vrneural.errors import count
-from vrneural.formats.atomic import atomic_path
+from vrneural.outputs import atomic_path
 
 
 def _label(r: dict) -> str:

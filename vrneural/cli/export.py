@@ -34,7 +34,7 @@ def run(args) -> int:
     from vrneural.config import config_path
     from vrneural.distill.checkpoint import load_checkpoint
     from vrneural.distill.export import export_checkpoint, ranges_table
-    from vrneural.formats.atomic import check_outputs, check_suffix, write_json
+    from vrneural.outputs import check_outputs, check_suffix, write_json
     from vrneural.formats.vrnm import read_vrnm
 
     check_suffix(args.output, ".vrnm", "pack", "material.vrnm")

@@ -28,6 +28,7 @@ import torch
 
 from vrneural.errors import VrnError
 from vrneural.warn import VrnWarning
+from vrneural.outputs import make_parent
 
 FORMAT = "vrneural-checkpoint"
 VERSION = 1
@@ -51,7 +52,7 @@ def unfinished_run(ck: dict) -> str:
 def save_checkpoint(path, payload: dict) -> None:
     """``torch.save`` to a temporary sibling, then ``os.replace`` (atomic): a failed write
     (one-line :class:`VrnError`) leaves the previous checkpoint as it was."""
-    p = Path(path)
+    p = make_parent(path)
     tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
     try:
         torch.save({"format": FORMAT, "version": VERSION, **payload}, tmp)

@@ -49,7 +49,13 @@ from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import Interrupted, compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, count
 from vrneural.grazing import DEFAULT_THETA_MAX_DEG
-from vrneural.formats.atomic import check_not_input, check_resume_force, file_sha256, same_file
+from vrneural.outputs import (
+    check_not_input,
+    check_resume_force,
+    file_sha256,
+    output_lock,
+    same_file,
+)
 
 
 def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
@@ -435,10 +441,8 @@ def _resume_pruned_half(cfg, narrow, wide_path: str, on_step) -> dict:
 
 def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     """Train (or resume) a student/baseline; returns the final checkpoint dict. Holds a lock on its
-    outputs while it trains (:func:`vrneural.formats.atomic.lock_output_file`)."""
-    from vrneural.formats.atomic import output_locks
-
-    with output_locks():
+    outputs while it trains (:func:`vrneural.outputs.output_lock`)."""
+    with output_lock(cfg.output):
         return _run_distill(cfg, on_step)
 
 
@@ -478,7 +482,8 @@ def _run_distill(cfg: DistillConfig, on_step=None) -> dict:
         check_method_options(cfg)
     stored = stored_wide_start(cfg.output) if cfg.resume else None
     if cfg.wide_start or stored:
-        return run_wide_start(cfg, on_step, stored)
+        with output_lock(wide_output(cfg.output)):  # its wide half's outputs too
+            return run_wide_start(cfg, on_step, stored)
     wide = cfg.output.endswith(".pt") and Path(wide_output(cfg.output))
     if not cfg.resume and wide and wide.is_file():  # an unfinished wide half left behind?
         try:

@@ -177,7 +177,7 @@ def export_checkpoint(
     from vrneural.btf.format import read_btf
     from vrneural.distill.checkpoint import recorded_btf
     from vrneural.btf.identity import btf_fingerprint, check_btf_record
-    from vrneural.formats.atomic import check_not_input, check_output
+    from vrneural.outputs import check_not_input, check_output
     from vrneural.formats.vrnm import write_vrnm
 
     out = check_output(out, force)
@@ -206,7 +206,7 @@ def ranges_table(ranges: dict) -> str:
 
 
 def _sha256_or_none(path) -> str | None:
-    from vrneural.formats.atomic import file_sha256
+    from vrneural.outputs import file_sha256
 
     return file_sha256(path) if path and Path(path).is_file() else None
 

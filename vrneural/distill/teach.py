@@ -106,10 +106,10 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
 
 def run_teach(cfg: TeachConfig, on_step=None) -> dict:
     """Train (or resume) a teacher; returns the final checkpoint dict. Holds a lock on its
-    outputs while it trains (:func:`vrneural.formats.atomic.lock_output_file`)."""
-    from vrneural.formats.atomic import output_locks
+    outputs while it trains (:func:`vrneural.outputs.output_lock`)."""
+    from vrneural.outputs import output_lock
 
-    with output_locks():
+    with output_lock(cfg.output):
         return _run_teach(cfg, on_step)
 
 

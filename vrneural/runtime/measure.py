@@ -24,7 +24,7 @@ import time
 
 import numpy as np
 
-from vrneural.formats.atomic import write_json
+from vrneural.outputs import write_json
 
 
 def _wall_ms(fn) -> float:
@@ -479,7 +479,7 @@ def main(argv=None) -> int:
 
     from vrneural.cli import _Parser
     from vrneural.errors import VrnError
-    from vrneural.formats.atomic import check_output
+    from vrneural.outputs import check_output
 
     prog = "python -m vrneural.runtime.measure"
     p = _Parser(prog=prog, description=__doc__.splitlines()[0])

@@ -13,15 +13,7 @@ import numpy as np
 from vrneural.config import config_dict, is_explicit, replace_config
 from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.interrupt import Stop
-from vrneural.formats.atomic import (
-    OUTPUT_MARK,
-    check_output_dir,
-    make_output_dir,
-    new_output_dir,
-    same_file,
-    seal_output_dir,
-    write_json,
-)
+from vrneural.outputs import OUTPUT_MARK, OutputDir, new_output_dir, same_file, write_json
 from vrneural.runtime.config import LIGHTS_MAX, RunConfig, resolve
 from vrneural.runtime.output import (
     VideoWriter,
@@ -151,7 +143,7 @@ def teacher_beside(pack: Path, mat) -> tuple[Path | None, object, list[str]]:
 
 def _read_teacher(t: Path, pack: Path, want: str | None, strict: bool) -> tuple[object, str]:
     """``(material, "")`` when ``t`` is the teacher of ``pack``, else ``(None, why not)``."""
-    from vrneural.formats.atomic import file_sha256
+    from vrneural.outputs import file_sha256
     from vrneural.formats.vrnm import read_vrnm
 
     if not t.is_file():
@@ -198,10 +190,12 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     if is_explicit(cfg, "out") and not cfg.out.strip():
         raise VrnError("--out is empty; name a directory, or leave --out out for out/run-<time>")
     if cfg.out:
-        return _run(cfg, Path(cfg.out), progress)
+        with OutputDir(cfg.out, "run", force=cfg.force) as od:
+            return _run(cfg, od, progress)
     out = default_out()
     try:
-        return _run(cfg, out, progress)
+        with OutputDir(out, "run", force=cfg.force) as od:
+            return _run(cfg, od, progress)
     except BaseException:
         # failed or stopped before it wrote anything: leave nothing behind
         if out.is_dir() and all(c.name == OUTPUT_MARK for c in out.iterdir()):
@@ -210,13 +204,14 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
         raise
 
 
-def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
+def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
     from tqdm import tqdm
 
     from vrneural.gpu.device import adapter_summary
     from vrneural.runtime.renderer import Renderer
     from vrneural.runtime.scene import builtin_lights, builtin_scene, load_scene
 
+    out = od.path
     cfg = replace_config(cfg, out=str(out))
     n_builtin = len(builtin_lights())
     if cfg.scene and cfg.pack:
@@ -243,7 +238,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
             cfg = replace_config(cfg, video_scale=min(cfg.video_scale, top))
         check_range("--video-scale", cfg.video_scale, 1, top)
         check_video()
-    check_output_dir(out, cfg.force, "run")
+    od.check()
     t_setup = time.perf_counter()
     # set-up stages (mesh load, atlas, shader compile per object) on one transient bar, on a
     # terminal only (a log or a captured stderr keeps its lines: errors stay one line)
@@ -291,7 +286,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         r.warnings.append("--video-scale only applies to the video, and --no-video writes none")
     for w in r.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    make_output_dir(out, "run")
+    od.open()
     if cfg.video:
         video = VideoWriter(out / ("stereo.mp4" if s.eyes == 2 else "mono.mp4"), s.fps)
     stats, files = [], []
@@ -353,7 +348,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         summary = make_summary(cfg, s, scene, adapter, stats, setup_s, files, r)
         summary["interrupted"] = interrupted
         write_json(out / "summary.json", summary)
-        seal_output_dir(out, "run")
+        od.seal()
     if interrupted:
         kept = ["summary.json"]
         n_png = sum(f.endswith(".png") for f in files)

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.errors import VrnError
-from vrneural.formats.atomic import write_json
+from vrneural.outputs import write_json
 from vrneural.runtime.output import write_exr, write_png
 
 

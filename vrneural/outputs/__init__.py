@@ -1,0 +1,60 @@
+"""The output layer: every file and directory a command writes goes through here.
+
+- :class:`OutputDir`: an ``--out`` directory for a ``with`` block (checked, locked, emptied,
+  marked with its manifest, sealed however the block ends);
+- :func:`output_lock`: the lock of output files being trained or written (``-o x.pt``);
+- checks of output files before any work (:func:`check_output`, ...) and atomic writes
+  (:func:`atomic_path`, :func:`write_json`).
+
+It depends on nothing in vrneural but :mod:`vrneural.errors`.
+"""
+
+from vrneural.outputs.files import (
+    atomic_path,
+    check_free_space,
+    check_not_input,
+    check_output,
+    check_outputs,
+    check_resume_force,
+    check_suffix,
+    check_writable,
+    file_sha256,
+    json_safe,
+    make_parent,
+    same_file,
+    write_json,
+)
+from vrneural.outputs.lock import OutputLock, lock_path, output_lock
+from vrneural.outputs.outdir import (
+    OUTPUT_MARK,
+    OutputDir,
+    new_output_dir,
+    read_mark,
+    seal_output_dir,
+    write_mark,
+)
+
+__all__ = [
+    "OUTPUT_MARK",
+    "OutputDir",
+    "OutputLock",
+    "atomic_path",
+    "check_free_space",
+    "check_not_input",
+    "check_output",
+    "check_outputs",
+    "check_resume_force",
+    "check_suffix",
+    "check_writable",
+    "file_sha256",
+    "json_safe",
+    "lock_path",
+    "make_parent",
+    "new_output_dir",
+    "output_lock",
+    "read_mark",
+    "same_file",
+    "seal_output_dir",
+    "write_json",
+    "write_mark",
+]
