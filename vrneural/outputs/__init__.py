@@ -1,13 +1,6 @@
-"""The output layer: every file and directory a command writes goes through here.
-
-- :class:`OutputDir`: an ``--out`` directory for a ``with`` block (checked, locked, emptied,
-  marked with its manifest, sealed however the block ends);
-- :func:`output_lock`: the lock of output files being trained or written (``-o x.pt``);
-- checks of output files before any work (:func:`check_output`, ...) and atomic writes
-  (:func:`atomic_path`, :func:`write_json`).
-
-It depends on nothing in vrneural but :mod:`vrneural.errors`.
-"""
+"""The output layer, through which every command writes: :class:`OutputDir` (an ``--out``
+directory for a ``with`` block), :func:`output_lock` (files being trained, ``-o x.pt``), checks
+before any work (:func:`check_output`, ...) and atomic writes (:func:`atomic_path`)."""
 
 from vrneural.outputs.files import (
     atomic_path,
@@ -28,7 +21,6 @@ from vrneural.outputs.lock import OutputLock, lock_path, output_lock
 from vrneural.outputs.outdir import (
     OUTPUT_MARK,
     OutputDir,
-    new_output_dir,
     read_mark,
     seal_output_dir,
     write_mark,
@@ -50,7 +42,6 @@ __all__ = [
     "json_safe",
     "lock_path",
     "make_parent",
-    "new_output_dir",
     "output_lock",
     "read_mark",
     "same_file",

@@ -1,9 +1,5 @@
-"""Output files: names and paths checked before any work, written atomically.
-
-Nothing here keeps state: a check creates no directory (the folders an output goes into are
-made when it is written, by :func:`make_parent`), so a command that fails after its checks
-leaves nothing behind, whoever called it.
-"""
+"""Output files: checked before any work (creating nothing: a folder is made when a file is
+written into it, by :func:`make_parent`), then written atomically."""
 
 from __future__ import annotations
 
@@ -23,10 +19,8 @@ from vrneural.errors import VrnError
 def check_suffix(
     path: str, suffix: str, what: str, example: str, ignore_case: bool = False
 ) -> None:
-    """A one-line error unless output ``path`` (``-o``) names a file ending in ``suffix``
-    (exactly, or with ``ignore_case`` in any case): an empty ``-o``, a bare ``.pt`` (a hidden
-    file without a suffix to Path) and another ending each get their own message.
-    ``example``: a name to suggest."""
+    """A one-line error unless ``-o path`` ends in ``suffix`` (any case with ``ignore_case``);
+    an empty ``-o`` and a bare ``.pt`` get their own message, suggesting ``example``."""
     if not str(path).strip():
         raise VrnError(f"-o is empty; name the output {what} (e.g. -o {example})")
     name = Path(path).name.lower() if ignore_case else Path(path).name
@@ -37,9 +31,8 @@ def check_suffix(
 
 
 def check_output(path: str | os.PathLike, force: bool) -> Path:
-    """Validate output file ``path`` before any work starts: a one-line :class:`VrnError`
-    when it is a directory, when it exists and ``force`` is false, or when its directory
-    cannot be created or written. Returns it as :class:`Path`."""
+    """Output file ``path`` as a :class:`Path`; a one-line error when it is a directory, exists
+    without ``force``, or its directory cannot be made or written."""
     p = Path(path)
     # a file goes here: even --force does not replace a directory, and a name given with a
     # trailing slash ("out/new/") means a directory, which Path would silently make a file
@@ -58,15 +51,13 @@ def check_outputs(
     force: bool,
     inputs: list[str | os.PathLike] = (),  # type: ignore[assignment]
 ) -> list[Path]:
-    """:func:`check_output` for every file a command will write, after refusing any output
-    that is one of its ``inputs`` (:func:`check_not_input`)."""
+    """:func:`check_output` for each of ``paths``, none of them one of ``inputs``."""
     check_not_input(paths, inputs)
     return [check_output(o, force) for o in paths]
 
 
 def check_not_input(paths: list, inputs: list) -> None:
-    """Refuse an output that is one of the command's inputs, even with ``--force`` (the
-    command would destroy what it reads). Empty inputs are skipped."""
+    """Refuse an output that is one of the (non-empty) ``inputs``, even with ``--force``."""
     for o in paths:
         for i in inputs:
             if i and same_file(i, o):
@@ -74,8 +65,7 @@ def check_not_input(paths: list, inputs: list) -> None:
 
 
 def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
-    """Whether ``a`` and ``b`` name the same file (``samefile`` when both exist, which also
-    sees hard links; else the resolved paths)."""
+    """Whether ``a`` and ``b`` name one file (hard links too, where both exist)."""
     pa, pb = Path(a), Path(b)
     if pa.exists() and pb.exists():
         return os.path.samefile(pa, pb)
@@ -92,8 +82,8 @@ def check_resume_force(resume: bool, force: bool) -> None:
 
 
 def check_free_space(path: str | os.PathLike, nbytes: int, reclaimed: int = 0) -> None:
-    """Refuse to start writing ``nbytes`` into ``path``'s directory when the disk has less
-    free space (``reclaimed``: bytes of a file the write replaces)."""
+    """Refuse to write ``nbytes`` to ``path`` with less free space (``reclaimed``: bytes of a
+    file the write replaces)."""
     p = Path(path)
     try:
         free = shutil.disk_usage(_existing(p.parent)).free + reclaimed
@@ -113,16 +103,23 @@ def _size(n: int) -> str:
     return f"{n} B"
 
 
+def _missing(d: Path) -> list[Path]:
+    """``d`` and its ancestors that do not exist, deepest first."""
+    out = []
+    while not (d.exists() or d.is_symlink()) and d != d.parent:
+        out.append(d)
+        d = d.parent
+    return out
+
+
 def _existing(d: Path) -> Path:
     """``d`` or its nearest ancestor that exists (as anything: a file in the way counts)."""
-    while not (d.exists() or d.is_symlink()) and d != d.parent:
-        d = d.parent
-    return d
+    missing = _missing(d)
+    return missing[-1].parent if missing else d
 
 
 def check_writable(d: Path) -> None:
-    """A one-line error unless directory ``d`` exists and takes new files, or can be made
-    (its nearest existing ancestor is a directory that takes them). Creates nothing."""
+    """A one-line error unless directory ``d`` takes new files or can be made (creates none)."""
     q = _existing(d)
     if not q.is_dir():
         raise VrnError(f"{d}: cannot create output directory ({q} is a file, not a directory)")
@@ -135,8 +132,7 @@ def check_writable(d: Path) -> None:
 
 
 def why(p: Path, e: OSError) -> str:
-    """An OSError's reason, plainer where the usual one misleads: a path component that is a
-    file gives ``File exists``/``Not a directory``."""
+    """An OSError's reason, or the file in ``p``'s way (``File exists`` would mislead)."""
     for q in (p, *p.parents):
         if q.exists() and not q.is_dir():
             return f"{q} is a file, not a directory"
@@ -144,12 +140,8 @@ def why(p: Path, e: OSError) -> str:
 
 
 def make_dirs(d: Path) -> list[Path]:
-    """Create directory ``d`` and its missing parents; returns those created, deepest first
-    (a one-line :class:`VrnError` when it cannot be)."""
-    missing, q = [], d
-    while not (q.exists() or q.is_symlink()) and q != q.parent:
-        missing.append(q)
-        q = q.parent
+    """Create directory ``d`` and its parents; returns those created, deepest first."""
+    missing = _missing(d)
     try:
         d.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -158,18 +150,15 @@ def make_dirs(d: Path) -> list[Path]:
 
 
 def make_parent(path: str | os.PathLike) -> Path:
-    """Create the directory output file ``path`` goes into (just before writing it)."""
-    p = Path(path)
-    make_dirs(p.parent)
-    return p
+    """Create the directory of output file ``path`` (just before writing it)."""
+    make_dirs(Path(path).parent)
+    return Path(path)
 
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
-    """Yield a temporary sibling path; on success it is renamed over ``path`` (atomic on POSIX).
-
-    On any exception the temporary file is removed and ``path`` is left untouched.
-    """
+    """A temporary sibling path, renamed over ``path`` when the block succeeds (atomic on
+    POSIX); removed on any exception, leaving ``path`` untouched."""
     p = make_parent(path)
     tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
     try:
@@ -185,8 +174,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
 
 
 def write_json(path: str | os.PathLike, obj: object) -> Path:
-    """Write ``obj`` as indented JSON, atomically. NaN and infinities become ``null``: bare
-    ``NaN``/``Infinity`` are not JSON, and strict readers refuse the whole file."""
+    """Write ``obj`` as indented JSON, atomically (NaN and infinities as ``null``)."""
     p = Path(path)
     text = json.dumps(json_safe(obj), indent=2, sort_keys=False, allow_nan=False)
     with atomic_path(p) as tmp:
@@ -195,7 +183,7 @@ def write_json(path: str | os.PathLike, obj: object) -> Path:
 
 
 def json_safe(o: object) -> object:
-    """``o`` with numpy values and paths converted and non-finite floats replaced by None."""
+    """``o`` with numpy values and paths converted, non-finite floats as None."""
     if isinstance(o, dict):
         return {k: json_safe(v) for k, v in o.items()}
     if isinstance(o, (list, tuple)):

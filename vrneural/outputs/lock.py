@@ -1,12 +1,7 @@
-"""A lock per output, so two commands given the same output cannot write it at once.
-
-Each output (a file, or a whole ``--out`` directory) is locked through a lock file in
-``$TMPDIR/vrneural-locks`` named by the output's absolute path (the output itself is replaced
-by renames, or is a directory, so it cannot carry the lock), with :mod:`filelock`'s ``flock``
-lock: the kernel releases it however the holder ends. A second process is a one-line error,
-never a wait. Where there are no locks (``flock`` missing or failing, a lock directory of
-another user), the output is written without one.
-"""
+"""A lock per output (a file or an ``--out`` directory), so two commands cannot write one
+output at once: a :mod:`filelock` ``flock`` on a file in ``$TMPDIR/vrneural-locks`` named by
+the output's absolute path, released by the kernel however its holder ends. A second process
+is a one-line error, never a wait; where there are no locks, outputs go without one."""
 
 from __future__ import annotations
 
@@ -23,7 +18,7 @@ from vrneural.errors import VrnError
 
 
 def lock_path(output: str | os.PathLike) -> Path:
-    """The lock file of ``output`` (which need not exist yet)."""
+    """The lock file of ``output`` (which need not exist)."""
     key = str(Path(output).resolve())
     name = hashlib.sha256(key.encode()).hexdigest()[:32] + ".lock"
     return Path(tempfile.gettempdir()) / "vrneural-locks" / name
@@ -37,8 +32,7 @@ class OutputLock:
         self._lock: filelock.FileLock | None = None
 
     def acquire(self) -> bool:
-        """Take the lock: True when held, False where locks are unavailable (go on without);
-        a one-line :class:`VrnError` where another process holds it."""
+        """True when taken, False where there are no locks; a one-line error when busy."""
         if self._lock is not None:
             return True
         path = lock_path(self.output)
@@ -57,7 +51,7 @@ class OutputLock:
         return True
 
     def held_elsewhere(self) -> bool:
-        """Whether another process holds this output's lock (False where there are none)."""
+        """Whether another process holds this output's lock."""
         if self._lock is not None:
             return False
         try:
@@ -68,8 +62,8 @@ class OutputLock:
         return False
 
     def release(self) -> None:
-        """Release the lock, removing its file first (while still held: a process waiting on
-        it then finds the file gone and takes a new one)."""
+        """Release the lock, removing its file while still held (filelock then sees a file
+        removed under it and takes a new one)."""
         lock, self._lock = self._lock, None
         if lock is not None:
             with contextlib.suppress(OSError):
@@ -79,8 +73,8 @@ class OutputLock:
 
 @contextlib.contextmanager
 def output_lock(*outputs: str | os.PathLike) -> Iterator[None]:
-    """Hold the lock of every output file in ``outputs`` for the block (a checkpoint, a BTF
-    being trained or written). Under ``torchrun`` only rank 0 locks (it alone writes)."""
+    """Hold the lock of each output file for the block (a checkpoint or BTF being written);
+    under ``torchrun`` only rank 0, which alone writes."""
     locks = [] if int(os.environ.get("RANK", "0") or 0) else [OutputLock(o) for o in outputs]
     try:
         for lk in locks:

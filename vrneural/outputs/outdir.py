@@ -1,11 +1,8 @@
-"""An output directory for the length of a ``with`` block: checked, emptied, marked, locked,
-and sealed however the block ends, whoever the caller is (the CLI or the Python API).
-
-Its marker (:data:`OUTPUT_MARK`) is the directory's manifest: the command that wrote it and,
-once sealed, the names it wrote (``entries``; ``None`` while it is being written). A later
-``--force`` of the same command replaces only those; files added after the seal, another
-command's output and a folder of the user's files are never deleted.
-"""
+"""An output directory for a ``with`` block: checked, locked, emptied, marked and sealed
+however the block ends, whoever the caller is. Its marker (:data:`OUTPUT_MARK`) is its
+manifest: the command and, once sealed, the names it wrote (``entries``; None while being
+written). ``--force`` of that command replaces only those: never files added after the seal,
+another command's output or a folder of the user's files."""
 
 from __future__ import annotations
 
@@ -17,15 +14,14 @@ from pathlib import Path
 
 from vrneural.errors import VrnError
 from vrneural.interrupt import hold_signals, put_back
-from vrneural.outputs.files import atomic_path, check_writable, make_dirs, why
+from vrneural.outputs.files import atomic_path, check_writable, make_dirs
 from vrneural.outputs.lock import OutputLock
 
 OUTPUT_MARK = ".vrneural-output"
 
 
 def read_mark(p: Path) -> dict | None:
-    """The marker of output directory ``p`` (``{"command", "entries"}``), ``{}`` for a marker
-    this release cannot read (an older one), None when there is none."""
+    """The marker of ``p`` (``{"command", "entries"}``); ``{}`` when unreadable, None if none."""
     f = Path(p) / OUTPUT_MARK
     if not f.is_file():
         return None
@@ -37,7 +33,7 @@ def read_mark(p: Path) -> dict | None:
 
 
 def write_mark(p: str | os.PathLike, command: str, entries: list[str] | None) -> None:
-    """Mark ``p`` as ``vrneural <command>``'s output that wrote ``entries`` (None: in progress)."""
+    """Mark ``p`` as ``vrneural <command>``'s output of ``entries`` (None: in progress)."""
     doc = {"written_by": f"vrneural {command}", "command": command, "entries": entries}
     doc["note"] = "--force of the same command may replace the entries listed here"
     with atomic_path(Path(p) / OUTPUT_MARK) as tmp:  # a killed write never leaves half a marker
@@ -45,25 +41,20 @@ def write_mark(p: str | os.PathLike, command: str, entries: list[str] | None) ->
 
 
 def seal_output_dir(path: str | os.PathLike, command: str) -> Path:
-    """Record what ``vrneural <command>`` wrote in ``path`` (the names now in it), so a later
-    ``--force`` deletes only those and refuses when anything else was added."""
+    """Record the names now in ``path`` as what ``vrneural <command>`` wrote there."""
     p = Path(path)
     write_mark(p, command, sorted(c.name for c in p.iterdir() if c.name != OUTPUT_MARK))
     return p
 
 
 class OutputDir:
-    """The output directory ``path`` of ``vrneural <command>``.
-
-    In ``with OutputDir(path, command, force=..., resume=...) as out:``, :meth:`check` refuses
-    before any work what may not be replaced; :meth:`open` (which checks too) then takes its
-    lock, empties it (keeping the names in ``keep``) and marks it; when the block ends, however
-    it ends, it is sealed (:meth:`close`).
-    An existing directory must be empty or this command's output; it needs ``force`` or
-    ``resume`` (else the error says ``remedy``). With ``resume`` what is there is kept (the
-    caller continues or overwrites it), so neither an unsealed output nor added files are
-    refused; ``keep=True`` keeps everything too, but is as strict as ``force``.
-    """
+    """``with OutputDir(path, command, force=..., resume=...) as out:`` the output directory of
+    ``vrneural <command>``. :meth:`check` refuses, before any work, what may not be replaced;
+    :meth:`open` (checking too) locks, empties (but the names in ``keep``) and marks it; the
+    block's end seals it (:meth:`close`). An existing non-empty one must be this command's and
+    needs ``force`` or ``resume`` (else the error says ``remedy``). ``resume`` keeps what is
+    there (so neither an unsealed output nor added files are refused); ``keep=True`` keeps
+    everything too, as strict as ``force``."""
 
     def __init__(
         self,
@@ -94,7 +85,7 @@ class OutputDir:
         return self.path / name
 
     def check(self, force: bool | None = None) -> Path:
-        """Refuse, before any work, what this output may not replace (one-line errors)."""
+        """Refuse what this output may not replace (one-line errors)."""
         p = self.path
         force = self.force or self.resume if force is None else force
         if p.exists() or p.is_symlink():
@@ -144,8 +135,8 @@ class OutputDir:
             )
 
     def open(self) -> Path:
-        """Create, lock, empty (unless ``resume``) and mark the directory: call it once the
-        inputs are validated, so a run that fails early leaves the old output as it was."""
+        """Create, lock, empty and mark the directory, once the inputs are validated (a run
+        that fails early leaves the old output as it was)."""
         p = self.path
         if not self.checked:
             self.check()
@@ -161,7 +152,7 @@ class OutputDir:
         return p
 
     def seal(self) -> Path:
-        """Record what was written (see :func:`seal_output_dir`) and release the lock."""
+        """Record what was written (:func:`seal_output_dir`) and release the lock."""
         if self.opened:
             seal_output_dir(self.path, self.command)
             self.opened = False
@@ -169,8 +160,8 @@ class OutputDir:
         return self.path
 
     def close(self, failed: bool = False) -> None:
-        """Seal the output. A ``failed`` block's directory that was made here and holds nothing
-        but the marker is removed instead, with the folders made for it that stay empty."""
+        """Seal the output; a ``failed`` block's directory made here that holds only the marker
+        is removed instead, with the folders made for it."""
         p, held = self.path, hold_signals()  # a second Ctrl-C or SIGTERM waits for this
         try:
             if self.opened and failed and p in self._created and _only_mark(p):
@@ -208,23 +199,3 @@ def _only_mark(p: Path) -> bool:
         return [c.name for c in p.iterdir()] == [OUTPUT_MARK]
     except OSError:
         return False
-
-
-def new_output_dir(base: str) -> Path:
-    """Create a fresh directory ``base`` (``base-2``, ``base-3``... if taken): the name is
-    claimed with an exclusive ``mkdir``, so two runs started in the same second never share
-    it."""
-    k = 1
-    while True:
-        p = Path(base if k == 1 else f"{base}-{k}")
-        try:
-            make_dirs(p.parent)
-            p.mkdir()
-            return p
-        except FileExistsError as e:
-            if p.parent.is_dir():  # the name is taken: the next one
-                k += 1
-                continue
-            raise VrnError(f"{p}: cannot create output directory ({why(p, e)})") from None
-        except OSError as e:
-            raise VrnError(f"{p}: cannot create output directory ({why(p, e)})") from None

@@ -13,7 +13,8 @@ import numpy as np
 from vrneural.config import config_dict, is_explicit, replace_config
 from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.interrupt import Stop
-from vrneural.outputs import OUTPUT_MARK, OutputDir, new_output_dir, same_file, write_json
+from vrneural.outputs import OUTPUT_MARK, OutputDir, same_file, write_json
+from vrneural.outputs.files import make_dirs, why
 from vrneural.runtime.config import LIGHTS_MAX, RunConfig, resolve
 from vrneural.runtime.output import (
     VideoWriter,
@@ -164,6 +165,26 @@ def _read_teacher(t: Path, pack: Path, want: str | None, strict: bool) -> tuple[
     if have is None:
         return (None, "cannot tell it is the recorded teacher") if strict else (mat, "")
     return (mat, "") if have == want else (None, "another teacher: its checkpoint hash differs")
+
+
+def new_output_dir(base: str) -> Path:
+    """Create a fresh directory ``base`` (``base-2``, ``base-3``... if taken): the name is
+    claimed with an exclusive ``mkdir``, so two runs started in the same second never share
+    it."""
+    k = 1
+    while True:
+        p = Path(base if k == 1 else f"{base}-{k}")
+        try:
+            make_dirs(p.parent)
+            p.mkdir()
+            return p
+        except FileExistsError as e:
+            if p.parent.is_dir():  # the name is taken: the next one
+                k += 1
+                continue
+            raise VrnError(f"{p}: cannot create output directory ({why(p, e)})") from None
+        except OSError as e:
+            raise VrnError(f"{p}: cannot create output directory ({why(p, e)})") from None
 
 
 def default_out() -> Path:
