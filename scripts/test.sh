@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The test command: set-up, lint, then the whole suite (GPU tests run on the adapter wgpu
-# finds; lavapipe on a machine without a GPU). Under CI=true the suite fails unless the
+# The test command: set-up, lint (ruff, the import contracts), then the whole suite (GPU tests
+# run on the adapter wgpu finds; lavapipe on a machine without a GPU). Under CI=true the suite fails unless the
 # adapter is lavapipe (llvmpipe), so GPU tests can never silently skip.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -8,4 +8,5 @@ bash scripts/setup.sh
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 .venv/bin/ruff check vrneural tests demo scripts
 .venv/bin/ruff format --check vrneural tests demo scripts
+.venv/bin/lint-imports --no-cache   # the import contracts in pyproject.toml: no cycles, layers
 exec .venv/bin/python -m pytest -q "$@"

@@ -215,7 +215,7 @@ def test_split_flip_shows_the_bench_flip_map(display):
     """Split view, FLIP: the right half shows HDR-FLIP of texture space against the reference
     (flip-evaluator in a worker process, as the bench computes it), left half texture space."""
     pytest.importorskip("flip_evaluator")
-    from vrneural.bench.metrics import flip_hdr, pixels_per_degree
+    from vrneural.scoring.metrics import flip_hdr, pixels_per_degree
     from vrneural.gpu.readback import read_texture
     from vrneural.viewer import View
     from vrneural.viewer.present import compose

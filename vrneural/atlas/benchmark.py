@@ -92,11 +92,11 @@ def main(argv: list[str] | None = None) -> int:
 
     from vrneural.atlas import BUILTIN_MESHES
     from vrneural.atlas.build import MAX_PADDING, MAX_RESOLUTION, MIN_RESOLUTION
-    from vrneural.cli import _Parser
+    from vrneural.errors import ArgumentParser
     from vrneural.errors import VrnError
 
     prog = "python -m vrneural.atlas.benchmark"
-    p = _Parser(
+    p = ArgumentParser(
         prog=prog,
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,

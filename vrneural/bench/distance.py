@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vrneural.bench import metrics
+from vrneural.scoring import metrics
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench import tradeoff as tr

@@ -454,7 +454,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bo
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
     from vrneural.distill.data import SliceData
-    from vrneural.distill.distill import model_from_checkpoint
+    from vrneural.distill.checkpoint import model_from_checkpoint
     from vrneural.distill.evaluate import mean_l1, predict_slice
 
     d = root / preset

@@ -26,17 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.bench import metrics
+from vrneural.scoring import metrics
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
+from vrneural.bench.tradeoff_report import finish_report, label
 from vrneural.config import is_explicit, opt, quick_defaults
-
-LABELS = {
-    "student": "student (distilled)",
-    "student_nodistill": "student w/o distillation",
-    "single8": "single-level 8-wide",
-    "neumip": "NeuMIP-sized 4x25",
-}
 
 
 @dataclass
@@ -128,29 +122,6 @@ def variant(knob="base", value="-", **kw) -> dict:
         budget=None,
     )
     return {**base, **kw}
-
-
-def label(r: dict) -> str:
-    if r["knob"] == "base":
-        return "base"
-    if r["knob"] == "network":
-        return LABELS[r["value"]]
-    return f"{r['knob']}={r['value']}"
-
-
-def pareto(points: list[tuple[float, float]], lower_better: bool) -> list[int]:
-    """Indices of the Pareto-optimal points ``(cost, error)``: no other point is at most as
-    costly and strictly better."""
-    out = []
-    for i, (ci, ei) in enumerate(points):
-        dominated = any(
-            cj <= ci and (ej < ei if lower_better else ej > ei) and (cj, ej) != (ci, ei)
-            for j, (cj, ej) in enumerate(points)
-            if j != i
-        )
-        if not dominated:
-            out.append(i)
-    return out
 
 
 def variants_for(c, cond: ts.Condition, nets, has_f16: bool, budget: float | None) -> list:
@@ -473,7 +444,6 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     from tqdm import tqdm
 
     from vrneural.bench.packs import REQUIRED
-    from vrneural.bench.tradeoff_report import finish_report
     from vrneural.gpu.device import adapter_summary
     from vrneural.runtime.profiles import get_profile
 

@@ -26,22 +26,14 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+from vrneural.bench.widths_report import METHODS, STARTS, within, write_report
 from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt, quick_defaults
 from vrneural.distill.config import COMPILE_MODES
-from vrneural.errors import VrnError, check_range, check_seed, count
+from vrneural.errors import VrnError, check_range, check_seed
 from vrneural.versions import package_versions
 
 #: the networks ``--methods`` may name: their `distill` settings and their names in the report
-METHODS = {
-    "student": (dict(method="student"), "student (coarse-to-fine, distilled)"),
-    "student_nodistill": (
-        dict(method="student", distill=False),
-        "student w/o distillation",
-    ),
-    "single8": (dict(method="single8"), "single-level (distilled)"),
-}
-STARTS = {"plain": "from random weights", "wide": "wide start (2W, pruned to W)"}
 NEUMIP = dict(method="neumip", distill=False)
 #: --wide-start trains 2W wide, and distill's widths end at 64
 MAX_WIDE = 32
@@ -260,10 +252,9 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
     import numpy as np
 
     from vrneural.bench.quality import _with_wide_start
-    from vrneural.bench.widths_report import write_report
     from vrneural.btf.format import read_btf
     from vrneural.distill.data import SliceData
-    from vrneural.distill.distill import model_from_checkpoint
+    from vrneural.distill.checkpoint import model_from_checkpoint
     from vrneural.distill.evaluate import mean_l1
     from vrneural.outputs import write_json
 
@@ -328,7 +319,6 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
 def narrowest(rows: dict, plan: Plan) -> dict:
     """Per ``method:start`` family: the narrowest width whose seed mean is within 10% of
     NeuMIP's (None where none is)."""
-    from vrneural.bench.widths_report import within
 
     nm = rows["neumip"]
     out = {}
@@ -337,14 +327,3 @@ def narrowest(rows: dict, plan: Plan) -> dict:
             ok = [w for w in plan.widths if within(rows[_key(m, w, start)], nm)]
             out[f"{m}:{start}"] = ok[0] if ok else None
     return out
-
-
-def describe(cfg: dict) -> str:
-    """The budget line of the report."""
-    reps = cfg["repeats"]
-    seeds = f"seed {cfg['seed']}" if reps == 1 else f"seeds {cfg['seed']}-{cfg['seed'] + reps - 1}"
-    return (
-        f"{cfg['preset']}, {cfg['res']}^2 texels, {cfg['dirs']} x {cfg['dirs']} directions; "
-        f"teacher {count(cfg['teacher_epochs'], 'epoch')}, every other network "
-        f"{count(cfg['epochs'], 'epoch')}, {seeds}"
-    )

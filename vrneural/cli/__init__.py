@@ -13,22 +13,14 @@ import signal
 import sys
 
 from vrneural import __version__
-from vrneural.errors import VrnError
+from vrneural.errors import ArgumentParser, VrnError
 
 #: Subcommand modules, in `--help` order. Only commands that work are listed.
 COMMANDS = ["info", "btf", "teach", "distill", "export", "eval", "run", "view", "bench", "atlas"]
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse with a one-line error (the problem and where the help is) instead of the
-    command's whole usage; subcommand parsers inherit it."""
-
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
-
-
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(
+    p = ArgumentParser(
         prog="vrneural",
         description="Neural materials at VR frame rates: BTF -> distilled student -> WGSL -> "
         "texture-space shading with reuse.",

@@ -30,7 +30,7 @@ def register(sub) -> None:
 def run(args) -> int:
     import json
 
-    from vrneural.bench.packs import width_words
+    from vrneural.material import width_words
     from vrneural.config import config_path
     from vrneural.distill.checkpoint import load_checkpoint
     from vrneural.distill.export import export_checkpoint, ranges_table

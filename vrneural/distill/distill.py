@@ -30,10 +30,11 @@ from vrneural.config import (
 from vrneural.distill.checkpoint import (
     UnfinishedRunWarning,
     load_checkpoint,
+    model_from_checkpoint,
     recorded_btf,
     unfinished_run,
 )
-from vrneural.distill.config import BEFORE_FIELD, DistillConfig
+from vrneural.distill.config import BEFORE_FIELD, DistillConfig, check_lod_levels
 from vrneural.btf.identity import btf_fingerprint, check_btf_record
 from vrneural.distill.data import SliceData
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
@@ -48,7 +49,6 @@ from vrneural.distill.prune import prune_to
 from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import Interrupted, compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, count
-from vrneural.grazing import DEFAULT_THETA_MAX_DEG
 from vrneural.outputs import (
     check_not_input,
     check_resume_force,
@@ -56,52 +56,6 @@ from vrneural.outputs import (
     output_lock,
     same_file,
 )
-
-
-def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
-    """The trained :class:`NeuralModel` of a checkpoint (frozen, eval mode): its weight
-    average where it was trained with ``--ema``, else the last step's weights. ``source``
-    (the file) names it in errors."""
-    where = source or "checkpoint"
-    try:
-        model = NeuralModel(ck["spec"])
-    except (KeyError, TypeError, ValueError) as e:
-        raise VrnError(f"{where}: invalid model spec ({type(e).__name__}: {e})") from None
-    net = dict(ck["net"])
-    if ck.get("ema"):
-        net.update(ck["ema"]["avg"])
-    state = {k[len("model.") :]: v for k, v in net.items() if k.startswith("model.")}
-    problem = _state_mismatch(model.state_dict(), state)
-    if problem:
-        raise VrnError(f"{where}: checkpoint weights do not match its spec: {problem}")
-    model.load_state_dict(state)
-    model.eval()
-    for p in model.parameters():
-        p.requires_grad_(False)
-    model.dir_range = recorded_dir_range(ck)
-    return model
-
-
-def check_lod_levels(cfg, res: tuple[int, int], btf_path) -> None:
-    """``--lod-levels`` fits the BTF: the last level still has whole 2x2 blocks (and the
-    student's half-resolution coarse texture a texel per block)."""
-    top = cfg.lod_levels - 1
-    ok = all(r % (1 << (top + 1)) == 0 for r in res)
-    if not ok:
-        most = 1
-        while all(r % (1 << (most + 1)) == 0 for r in res) and most < 12:
-            most += 1
-        raise VrnError(
-            f"--lod-levels = {cfg.lod_levels} does not fit {btf_path} ({res[0]}x{res[1]} "
-            f"texels): level {top} needs whole 2x2 blocks; allowed [1, {most}]"
-        )
-
-
-def recorded_dir_range(ck: dict) -> tuple[float, float]:
-    """The direction range of a checkpoint's BTF (its record; checkpoints from before it was
-    recorded: the default, which is what ``btf synth`` and UBO2014 hold)."""
-    rng = ck.get("btf", {}).get("dir_range")
-    return tuple(rng) if rng else (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
 
 
 class DistillNet(nn.Module):
@@ -211,20 +165,6 @@ SPEC_FLAGS = {
     "coarse_res": ("the BTF resolution / 2", lambda v: "x".join(map(str, v))),
     "fine_res": ("the BTF resolution", lambda v: "x".join(map(str, v))),
 }
-
-
-def _state_mismatch(want: dict, have: dict) -> str | None:
-    """The first difference between a model's state dict and a checkpoint's, in words."""
-    for k, v in have.items():
-        if k not in want:
-            return f"unexpected tensor 'model.{k}'"
-        if tuple(v.shape) != tuple(want[k].shape):
-            return (
-                f"'model.{k}' has shape {list(v.shape)} in the file, the spec needs "
-                f"{list(want[k].shape)}"
-            )
-    missing = [k for k in want if k not in have]
-    return f"tensor 'model.{missing[0]}' is missing" if missing else None
 
 
 def _latent_widths(spec: dict) -> list[int]:

@@ -83,11 +83,11 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None, lod_leve
     ``lod_levels`` > 1 for a checkpoint trained without a pyramid: give the pack one of box
     averages of level 0 (the ``filter`` pyramid, untrained)."""
     from vrneural import __version__
-    from vrneural.distill.distill import model_from_checkpoint
+    from vrneural.distill.checkpoint import model_from_checkpoint
 
     model = model_from_checkpoint(ck, source)
     if lod_levels > 1 and model.lod_levels == 1:
-        from vrneural.distill.distill import check_lod_levels
+        from vrneural.distill.config import check_lod_levels
 
         check_lod_levels(SimpleNamespace(lod_levels=lod_levels), data.res, source or "the BTF")
         model.lod_levels, model.lod_kind = lod_levels, "filter"

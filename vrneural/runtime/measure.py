@@ -477,12 +477,12 @@ def main(argv=None) -> int:
     line and exit 2); an existing output needs ``--force``."""
     import sys
 
-    from vrneural.cli import _Parser
+    from vrneural.errors import ArgumentParser
     from vrneural.errors import VrnError
     from vrneural.outputs import check_output
 
     prog = "python -m vrneural.runtime.measure"
-    p = _Parser(prog=prog, description=__doc__.splitlines()[0])
+    p = ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
     p.add_argument("out", help="output JSON file (its folder is created)")
     p.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
     p.add_argument(

@@ -158,7 +158,7 @@ def trainer_test(mat, test: list[int] | None) -> list[int] | None:
 
 def label(mat, path: str) -> dict:
     """What the table says of a pack: name, method, MACs per texel, bytes."""
-    from vrneural.bench.packs import distilled, width_words
+    from vrneural.material import distilled, width_words
 
     method = (mat.meta.get("method") or "?") + width_words(mat)
     if mat.meta.get("method") in ("student", "single8") and distilled(mat) is False:

@@ -1,4 +1,4 @@
-"""Image-quality metrics of the trade-off benchmark, against a reference frame.
+"""Image-quality metrics (of `eval` and the benchmarks), against a reference frame.
 
 - :func:`flip_hdr`: HDR-FLIP (NVIDIA ``flip-evaluator``) on linear radiance ``[H, W, 3]``, at a
   given pixels-per-degree; the mean of the per-pixel error map, in ``[0, 1]``.
