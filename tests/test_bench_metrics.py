@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from vrneural.scoring import metrics
 from vrneural.bench.report import int_list, stats
 from vrneural.bench.timing import frames_for
 from vrneural.bench.tradeoff_report import pareto
 from vrneural.errors import VrnError
+from vrneural.scoring import metrics
 
 
 def test_ssim_identical_is_one(rng):

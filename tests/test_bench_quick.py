@@ -1,13 +1,13 @@
 """`vrneural bench all --quick` end to end on the real adapter (about 3 min on lavapipe), and the
 benches' one-line user errors. Sanity only: never a threshold on an absolute time."""
 
+import itertools
 import json
 import math
 
 import pytest
 
 from vrneural.cli import main
-import itertools
 
 BENCHES = ("frames", "lights", "materials", "frame", "kernels", "tradeoff", "atlas", "distance")
 PNGS = {

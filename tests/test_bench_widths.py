@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 
 import pytest
-
 from distill_helpers import run_cli
 
 from vrneural.distill.checkpoint import load_checkpoint

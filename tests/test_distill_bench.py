@@ -6,7 +6,6 @@ import json
 
 import numpy as np
 import pytest
-
 from distill_helpers import expect_one_line_error, run_cli
 
 from vrneural.distill.checkpoint import load_checkpoint

@@ -9,9 +9,9 @@ import shutil
 
 from distill_helpers import trained  # noqa: F401 (fixture)
 
-from vrneural.outputs import file_sha256
 from vrneural.formats.vrnm import read_vrnm, write_vrnm
 from vrneural.material import random_material
+from vrneural.outputs import file_sha256
 from vrneural.runtime.run import teacher_beside
 
 

@@ -92,8 +92,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from vrneural.atlas import BUILTIN_MESHES
     from vrneural.atlas.build import MAX_PADDING, MAX_RESOLUTION, MIN_RESOLUTION
-    from vrneural.errors import ArgumentParser
-    from vrneural.errors import VrnError
+    from vrneural.errors import ArgumentParser, VrnError
 
     prog = "python -m vrneural.atlas.benchmark"
     p = ArgumentParser(

@@ -20,11 +20,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vrneural.scoring import metrics
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench import tradeoff as tr
 from vrneural.config import opt, quick_defaults
+from vrneural.scoring import metrics
 
 #: name -> (mips, screen_res, prefiltered neural textures)
 VARIANTS = {

@@ -44,9 +44,9 @@ class MaterialsConfig:
 
 def squares_scene(k: int, n_lights: int):
     """k upright squares (0.3 m) in a row facing the built-in head path, distinct materials."""
+    from vrneural.material import random_material
     from vrneural.runtime.lights import default_lights
     from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
-    from vrneural.material import random_material
 
     objs = []
     for i in range(k):

@@ -453,8 +453,8 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bo
     ``--jobs`` workers trained them all, so only load them."""
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
-    from vrneural.distill.data import SliceData
     from vrneural.distill.checkpoint import model_from_checkpoint
+    from vrneural.distill.data import SliceData
     from vrneural.distill.evaluate import mean_l1, predict_slice
 
     d = root / preset

@@ -43,8 +43,8 @@ def stats(x) -> dict:
 
 def header(bench: str, cfg) -> dict:
     """The common head of every ``results.json``: bench name, adapter, versions, config."""
-    from vrneural.versions import package_versions
     from vrneural.gpu.device import adapter_summary
+    from vrneural.versions import package_versions
 
     resolved = cfg.resolved() if hasattr(cfg, "resolved") else cfg
     return {

@@ -26,11 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.scoring import metrics
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench.tradeoff_report import finish_report, label
 from vrneural.config import is_explicit, opt, quick_defaults
+from vrneural.scoring import metrics
 
 
 @dataclass

@@ -253,8 +253,8 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
 
     from vrneural.bench.quality import _with_wide_start
     from vrneural.btf.format import read_btf
-    from vrneural.distill.data import SliceData
     from vrneural.distill.checkpoint import model_from_checkpoint
+    from vrneural.distill.data import SliceData
     from vrneural.distill.evaluate import mean_l1
     from vrneural.outputs import write_json
 

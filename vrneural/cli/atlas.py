@@ -70,7 +70,6 @@ def register(sub) -> None:
 
 def _meshes(spec: str, crease: float | None = None):
     from vrneural.atlas import BUILTIN_MESHES, builtin_mesh, load_mesh
-
     from vrneural.errors import VrnError
 
     if spec in BUILTIN_MESHES and not Path(spec).exists():

@@ -139,8 +139,8 @@ def run_synth(args) -> int:
     from vrneural.config import config_from_args, config_path, write_config
     from vrneural.outputs import (
         check_outputs,
-        check_suffix,
         check_resume_force,
+        check_suffix,
         output_lock,
     )
 

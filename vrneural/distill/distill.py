@@ -20,6 +20,7 @@ import torch.distributed as dist
 from torch import nn
 
 from vrneural.btf.format import read_btf
+from vrneural.btf.identity import btf_fingerprint, check_btf_record
 from vrneural.config import (
     is_explicit,
     keep_flag_names,
@@ -35,7 +36,6 @@ from vrneural.distill.checkpoint import (
     unfinished_run,
 )
 from vrneural.distill.config import BEFORE_FIELD, DistillConfig, check_lod_levels
-from vrneural.btf.identity import btf_fingerprint, check_btf_record
 from vrneural.distill.data import SliceData
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
 from vrneural.distill.models import NeuralModel, apply_output, make_spec

@@ -175,10 +175,10 @@ def export_checkpoint(
 ) -> tuple[Path, dict]:
     """Write the ``.vrnm`` of a loaded checkpoint. Returns ``(path, meta)``."""
     from vrneural.btf.format import read_btf
-    from vrneural.distill.checkpoint import recorded_btf
     from vrneural.btf.identity import btf_fingerprint, check_btf_record
-    from vrneural.outputs import check_not_input, check_output
+    from vrneural.distill.checkpoint import recorded_btf
     from vrneural.formats.vrnm import write_vrnm
+    from vrneural.outputs import check_not_input, check_output
 
     out = check_output(out, force)
     if data is None:

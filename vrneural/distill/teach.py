@@ -8,9 +8,9 @@ import torch
 from torch import nn
 
 from vrneural.btf.format import read_btf
+from vrneural.btf.identity import btf_fingerprint, check_btf_record, split_pairs
 from vrneural.config import flag, is_explicit, keep_flag_names
 from vrneural.distill.config import TeachConfig
-from vrneural.btf.identity import btf_fingerprint, check_btf_record, split_pairs
 from vrneural.distill.data import SliceData
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec

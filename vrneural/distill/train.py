@@ -28,8 +28,8 @@ from torch import nn
 from vrneural.config import flag
 from vrneural.distill.checkpoint import save_checkpoint
 from vrneural.distill.data import SliceData
-from vrneural.interrupt import Stop
 from vrneural.errors import VrnError, count
+from vrneural.interrupt import Stop
 
 
 def compile_networks(mode: str, *models: nn.Module, backend: str = "inductor") -> None:

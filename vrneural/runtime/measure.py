@@ -477,8 +477,7 @@ def main(argv=None) -> int:
     line and exit 2); an existing output needs ``--force``."""
     import sys
 
-    from vrneural.errors import ArgumentParser
-    from vrneural.errors import VrnError
+    from vrneural.errors import ArgumentParser, VrnError
     from vrneural.outputs import check_output
 
     prog = "python -m vrneural.runtime.measure"

@@ -8,9 +8,9 @@ counters and per-pass GPU ms (timestamps) come back in its own submit and arrive
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
-import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,7 +24,6 @@ from vrneural.gpu.uniforms import UniformArena
 from vrneural.runtime import forward as fw
 from vrneural.runtime.adaptive import AdaptiveState, coverage_slack, near_scale, object_directions
 from vrneural.runtime.assets import collapsed_triangles, get_atlas, get_mesh, lost_triangles
-from vrneural.runtime.encode import FrameEncoding
 from vrneural.runtime.camera import (
     Eye,
     OrbitPath,
@@ -33,6 +32,7 @@ from vrneural.runtime.camera import (
     window_matrix,
 )
 from vrneural.runtime.codegen import reference_weights
+from vrneural.runtime.encode import FrameEncoding
 from vrneural.runtime.gpu_material import GpuAtlas
 from vrneural.runtime.lights import light_arrays
 from vrneural.runtime.schedule import frame_slice

@@ -144,8 +144,8 @@ def teacher_beside(pack: Path, mat) -> tuple[Path | None, object, list[str]]:
 
 def _read_teacher(t: Path, pack: Path, want: str | None, strict: bool) -> tuple[object, str]:
     """``(material, "")`` when ``t`` is the teacher of ``pack``, else ``(None, why not)``."""
-    from vrneural.outputs import file_sha256
     from vrneural.formats.vrnm import read_vrnm
+    from vrneural.outputs import file_sha256
 
     if not t.is_file():
         return None, "not found"

@@ -14,8 +14,9 @@ window lies inside the image (a 5-pixel border is dropped) and over the 3 channe
 
 from __future__ import annotations
 
-import numpy as np
 import itertools
+
+import numpy as np
 
 SSIM_SIGMA = 1.5
 SSIM_TRUNCATE = 3.5

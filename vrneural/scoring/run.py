@@ -229,8 +229,8 @@ def write_outputs(cfg: EvalConfig, out: Path, doc: dict, mats: list, btf) -> Non
     output is replaced and the files written with Ctrl-C held off, so an interrupted eval
     leaves the old output or the whole new one, never a mix."""
     from vrneural.config import config_dict
-    from vrneural.outputs import OutputDir, atomic_path, write_json
     from vrneural.interrupt import Stop
+    from vrneural.outputs import OutputDir, atomic_path, write_json
     from vrneural.scoring.figure import slices_png
 
     png = slices_png(mats, [p["name"] for p in doc["packs"]], btf, cfg.precision)
