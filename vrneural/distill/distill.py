@@ -17,7 +17,6 @@ from pathlib import Path
 
 import torch
 import torch.distributed as dist
-from torch import nn
 
 from vrneural.btf.format import read_btf
 from vrneural.btf.identity import btf_fingerprint, check_btf_record
@@ -36,16 +35,17 @@ from vrneural.distill.checkpoint import (
     unfinished_run,
 )
 from vrneural.distill.config import BEFORE_FIELD, DistillConfig, check_lod_levels
+from vrneural.distill.core import DistillNet
 from vrneural.distill.data import SliceData
-from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
-from vrneural.distill.models import NeuralModel, apply_output, make_spec
+from vrneural.distill.evaluate import mean_l1, test_pairs
+from vrneural.distill.models import NeuralModel, make_spec
 from vrneural.distill.outputs import (
     clear_outputs,
     finish_outputs,
     outputs_of,
     prepare_outputs,
 )
-from vrneural.distill.prune import prune_to
+from vrneural.distill.prune import check_init, prune_to
 from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import Interrupted, compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, count
@@ -56,121 +56,6 @@ from vrneural.outputs import (
     output_lock,
     same_file,
 )
-
-
-class DistillNet(nn.Module):
-    """Student + T maps; ``forward`` returns the Eq. 5 loss of one slice (this rank's share)."""
-
-    def __init__(self, model, teacher, data: SliceData, cfg: DistillConfig):
-        super().__init__()
-        self.model = model
-        self.data = data
-        self.cfg = cfg
-        self.space = cfg.space
-        self.teacher = [teacher]  # a list: not a submodule (frozen, not synchronised by DDP)
-        if cfg.distill:
-            dt = [teacher.spec["hidden"][i] for i in teacher.latent_layers]
-            ds = _latent_widths(model.spec)
-            self.T1 = nn.Linear(dt[0], ds[0], bias=False)
-            self.T2 = nn.Linear(dt[1], ds[1], bias=False)
-
-    def lod_loss(self, wi, wo, pair):
-        """The prefiltered levels' L1 (each level's output at its texel centres against the
-        slice averaged over its texels), weighted by ``lod_weight`` shared by the levels; None
-        with one level. No jitter: the level's lookups are the exact box averages of level 0's
-        texels, and nothing random is drawn, so a resumed run stays bit for bit."""
-        levels = self.model.lod_levels
-        if levels <= 1:
-            return None
-        total = 0.0
-        for k in range(1, levels):
-            uv = self.data.uv_level(k, None)
-            raw, _ = self.model(wi, wo, uv, k)
-            total = total + space_l1(raw, self.data.target_level(pair, k), self.space)
-        return self.cfg.lod_weight * total / (levels - 1)
-
-    def forward(self, wi, wo, uv, pair):
-        raw, zs = self.model(wi, wo, uv)
-        gt = space_l1(raw, self.data.target(pair), self.space)
-        lod = self.lod_loss(wi, wo, pair)
-        gt_total = gt if lod is None else gt + lod
-        if not self.cfg.distill:
-            return gt_total, {"gt": gt.detach()}
-        teacher = self.teacher[0]
-        with torch.no_grad():
-            raw_t, zt = teacher(wi, wo, uv)
-            yt = to_space(apply_output(raw_t, teacher.output), self.space)
-        out = (raw - yt).abs().mean()
-        l1 = ((zs[0] - self.T1(zt[0])) ** 2).mean()
-        l2 = ((zs[1] - self.T2(zt[1])) ** 2).mean()
-        c = self.cfg
-        loss = gt_total + c.sigma * out + c.lambda1 * l1 + c.lambda2 * l2
-        return loss, {"gt": gt.detach(), "teacher": out.detach()}
-
-
-WIDTH_KEYS = ("hidden", "coarse_hidden", "fine_hidden")
-
-
-def check_init(path: str, ick: dict, cfg: DistillConfig, spec: dict, teacher_sha: str) -> None:
-    """``--init-from``: a run of this method, from this teacher (so the same BTF and split:
-    its weights never saw this run's held-out slices), of this architecture at this width or
-    wider. One-line error otherwise."""
-    where = f"--init-from {path}"
-    if cfg.method == "neumip":
-        raise VrnError(f"{where}: --init-from prunes the 8-wide networks (student, single8)")
-    if ick.get("method") != cfg.method:
-        raise VrnError(
-            f"{where}: is a {ick.get('method')} run; this run trains {cfg.method} "
-            f"(train the wide run with --method {cfg.method} --width 16)"
-        )
-    if ick.get("teacher", {}).get("sha256") != teacher_sha:
-        raise VrnError(
-            f"{where}: was distilled from another teacher than {cfg.teacher}; its "
-            "training slices may be this run's held-out ones (use a run of this teacher)"
-        )
-    theirs = ick["spec"]
-    for k in sorted(set(spec) | set(theirs)):
-        if k in WIDTH_KEYS:
-            mine, wide = spec.get(k), theirs.get(k)
-            if not isinstance(wide, list) or len(wide) != len(mine):
-                raise VrnError(f"{where}: its {k} {wide} has another depth than {mine}")
-            if any(w < m for w, m in zip(wide, mine, strict=True)):
-                raise VrnError(
-                    f"{where}: is {max(wide)} wide, narrower than --width {cfg.width}; "
-                    f"--init-from needs a run at least {cfg.width} wide (train one with "
-                    f"--width {max(16, 2 * cfg.width)}), or ask for --width {max(wide)} or less"
-                )
-        elif k not in ("tex_init",) and spec.get(k) != theirs.get(k):
-            name, show = SPEC_FLAGS.get(k, (k, lambda v: v))
-            raise VrnError(
-                f"{where}: was trained with {name} {show(theirs.get(k))}, this run with "
-                f"{show(spec.get(k))}"
-            )
-    if not ick.get("finished", True):
-        warnings.warn(
-            f"{path}: {unfinished_run(ick)}; starting from it as it is",
-            UnfinishedRunWarning,
-            stacklevel=2,
-        )
-
-
-#: spec fields -> the option that sets them and its value, for --init-from's messages
-SPEC_FLAGS = {
-    "output": ("--space", lambda v: "log" if v == "log1p" else "linear"),
-    "coarse_channels": ("--coarse-channels", lambda v: v),
-    "fine_channels": ("--fine-channels", lambda v: v),
-    "channels": ("texture channels", lambda v: v),
-    "dir_inputs": ("--neumip-dirs", lambda v: v),
-    "tex_res": ("the BTF resolution", lambda v: "x".join(map(str, v))),
-    "coarse_res": ("the BTF resolution / 2", lambda v: "x".join(map(str, v))),
-    "fine_res": ("the BTF resolution", lambda v: "x".join(map(str, v))),
-}
-
-
-def _latent_widths(spec: dict) -> list[int]:
-    if spec["arch"] == "single":
-        return [spec["hidden"][i] for i in spec["latent_layers"]]
-    return [spec["coarse_hidden"][-1], spec["fine_hidden"][0]]
 
 
 def resolve_method(cfg: DistillConfig) -> DistillConfig:
