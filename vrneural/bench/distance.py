@@ -164,7 +164,7 @@ def run_distance(cfg: DistanceConfig) -> dict:
                 bar.set_postfix_str(f"{cond.name}: {name}")
                 mat = mats["student_lod" if lod else "student"]
                 s = settings(c, cond, prof, mips, screen)
-                imgs, st = tr.render(
+                imgs, st = ts.render(
                     ts.scene_for(cond, mat), s, cond, c.crop, full, set(cond.scored)
                 )
                 sc = tr.scores(ref, imgs, None, ppd, cond.scored, cache)

@@ -163,12 +163,13 @@ def _gpu_ms(parts, texels, precision, buffer_weights, repeats, rng) -> float:
 def _torch_ms(parts, texels, repeats, rng) -> float:
     import torch
 
-    from vrneural.runtime.measure import _median_ms, _torch_net
+    from vrneural.runtime.measure import torch_net
+    from vrneural.runtime.measure_frames import median_ms
 
     nets, xs = [], []
     for layers, f in parts:
         rows = max(1, int(texels * f))
-        nets.append(_torch_net(layers))
+        nets.append(torch_net(layers))
         xs.append(torch.from_numpy(rng.standard_normal((rows, layers[0].n_in), np.float32)))
 
     def run():
@@ -176,7 +177,7 @@ def _torch_ms(parts, texels, repeats, rng) -> float:
             for net, x in zip(nets, xs, strict=True):
                 net(x)
 
-    return _median_ms(run, repeats)
+    return median_ms(run, repeats)
 
 
 def run_kernels(cfg: KernelsConfig) -> dict:

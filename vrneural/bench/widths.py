@@ -183,7 +183,7 @@ def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = T
 
 def run_widths(cfg: WidthsConfig) -> dict:
     """Run the sweep; writes results.json, results.md and widths.png in ``out``."""
-    from vrneural.bench.quality import check_bench_out, resume_hint
+    from vrneural.bench.quality_train import check_bench_out, resume_hint
 
     cfg = cfg.resolved()
     plan = validate(cfg)
@@ -220,8 +220,8 @@ def _check_same_preset(cfg: WidthsConfig, root: Path) -> None:
 def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
     """Synthesise the BTF, train the teacher and every network (``--jobs`` processes at a
     time); returns the teacher's checkpoint and ``(key, final checkpoint)`` of each network."""
-    from vrneural.bench.quality import (
-        _teach_config,
+    from vrneural.bench.quality import _teach_config
+    from vrneural.bench.quality_train import (
         job_pool,
         load_trained,
         make_btf,
@@ -251,7 +251,7 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
 def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
     import numpy as np
 
-    from vrneural.bench.quality import _with_wide_start
+    from vrneural.bench.quality_train import with_wide_start
     from vrneural.btf.format import read_btf
     from vrneural.distill.checkpoint import model_from_checkpoint
     from vrneural.distill.data import SliceData
@@ -269,7 +269,7 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
     for key, ck, wide_path in done:
         model = model_from_checkpoint(ck)
         mat = model.to_material()
-        whole = _with_wide_start(ck, wide_path)  # both halves' seconds and epochs
+        whole = with_wide_start(ck, wide_path)  # both halves' seconds and epochs
         method, width, start = key
         r = rows.setdefault(
             _key(*key),
