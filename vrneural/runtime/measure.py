@@ -24,7 +24,12 @@ import time
 import numpy as np
 
 from vrneural.outputs import write_json
-from vrneural.runtime.measure_frames import make_renderer, median_ms, wall_ms
+from vrneural.runtime.measure_frames import (
+    make_renderer,
+    median_ms,
+    schedules,  # noqa: F401 (run by name: measure_all)
+    wall_ms,
+)
 
 
 def texture_vs_screen(texture_res=1200, eye_res=(2064, 2208), reuse=4, frames=3) -> dict:
