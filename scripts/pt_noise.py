@@ -16,7 +16,7 @@ from pathlib import Path
 
 def main() -> int:
     from vrneural.btf.pt_render import noise_floor
-    from vrneural.formats.atomic import write_json
+    from vrneural.outputs import write_json
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("files", nargs="+")

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import tomllib
-
 import pytest
+import tomllib
 
 from vrneural.errors import VrnError
 from vrneural.runtime.scene import parse_scene

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from vrneural.bench import metrics
 from vrneural.bench.report import int_list, stats
 from vrneural.bench.timing import frames_for
-from vrneural.bench.tradeoff import pareto
+from vrneural.bench.tradeoff_report import pareto
 from vrneural.errors import VrnError
+from vrneural.scoring import metrics
 
 
 def test_ssim_identical_is_one(rng):
@@ -134,7 +134,7 @@ def test_quick_keeps_explicit_flags_even_at_their_default_value():
 def test_flip_of_both_eyes_leaves_the_gap_out():
     """One FLIP evaluation for both eyes side by side: the blank gap between them is not
     counted, so an error in one eye is halved by the other's exact pixels, no more."""
-    from vrneural.bench.metrics import flip_hdr_eyes
+    from vrneural.scoring.metrics import flip_hdr_eyes
 
     rng = np.random.default_rng(0)
     a = rng.uniform(0.05, 0.5, (2, 32, 40, 3)).astype(np.float32)

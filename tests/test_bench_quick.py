@@ -1,13 +1,13 @@
 """`vrneural bench all --quick` end to end on the real adapter (about 3 min on lavapipe), and the
 benches' one-line user errors. Sanity only: never a threshold on an absolute time."""
 
+import itertools
 import json
 import math
 
 import pytest
 
 from vrneural.cli import main
-import itertools
 
 BENCHES = ("frames", "lights", "materials", "frame", "kernels", "tradeoff", "atlas", "distance")
 PNGS = {
@@ -239,13 +239,13 @@ def test_bench_user_errors_are_one_line(capsys, tmp_path):
 def test_bench_options_are_checked_before_anything_is_replaced(capsys, tmp_path):
     """Empty lists, tradeoff's base setting and sample count, and the limits `run` has: one
     line each, before --force empties the folder (they crashed after it, deleting old results)."""
-    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+    from vrneural.outputs import OutputDir
 
     o = tmp_path / "o"
     for bench in ("frames", "tradeoff", "extremes"):
-        make_output_dir(o / bench, f"bench {bench}")
-        (o / bench / "results.json").write_text("old")
-        seal_output_dir(o / bench, f"bench {bench}")
+        with OutputDir(o / bench, f"bench {bench}") as out:
+            out.open()
+            (o / bench / "results.json").write_text("old")
     cases = [
         (["frames", "--schedules", ""], "--schedules is empty; choose from burst, staggered"),
         (["frames", "--schedules", "burst,"], "--schedules = 'burst,' has an empty item"),
@@ -303,12 +303,12 @@ def test_a_bench_that_fails_after_making_its_folder_still_tells_your_files_apart
 
 
 def test_bench_all_checks_every_bench_folder_before_running_any(capsys, tmp_path):
-    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+    from vrneural.outputs import OutputDir, seal_output_dir
 
     ba = tmp_path / "ba"
-    make_output_dir(ba / "kernels", "bench kernels")
-    (ba / "kernels" / "results.json").write_text("{}")
-    seal_output_dir(ba / "kernels", "bench kernels")
+    with OutputDir(ba / "kernels", "bench kernels") as out:
+        out.open()
+        (ba / "kernels" / "results.json").write_text("{}")
     seal_output_dir(ba, "bench all")
     (ba / "kernels" / "notes.md").write_text("mine")
     msg = _err(capsys, ["all", "--quick", "--force", "--out", str(ba)])
@@ -317,12 +317,12 @@ def test_bench_all_checks_every_bench_folder_before_running_any(capsys, tmp_path
 
 
 def test_bench_output_of_one_command_is_not_replaced_by_another(capsys, tmp_path):
-    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+    from vrneural.outputs import OutputDir
 
     o = tmp_path / "o"
-    make_output_dir(o, "bench materials")
-    (o / "results.json").write_text("{}")
-    seal_output_dir(o, "bench materials")
+    with OutputDir(o, "bench materials") as out:
+        out.open()
+        (o / "results.json").write_text("{}")
     assert "--force" in _err(capsys, ["materials", "--out", str(o)])
     msg = _err(capsys, ["kernels", "--force", "--out", str(o)])
     assert "holds the output of `vrneural bench materials`, not of `vrneural bench kernels`" in msg

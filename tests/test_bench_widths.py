@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 
 import pytest
-
 from distill_helpers import run_cli
 
 from vrneural.distill.checkpoint import load_checkpoint
@@ -158,7 +157,7 @@ def test_sigterm_outside_training_is_a_ctrl_c(tmp_path, capsys):
     import signal
     import time
 
-    from vrneural.bench.quality import resume_hint
+    from vrneural.bench.quality_train import resume_hint
 
     before = signal.getsignal(signal.SIGTERM)
     with pytest.raises(KeyboardInterrupt), resume_hint(tmp_path):

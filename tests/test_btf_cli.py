@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from vrneural.btf import direction_set, read_btf, write_btf
-from vrneural.cli import main
 from vrneural.btf.identity import btf_fingerprint
+from vrneural.cli import main
 
 
 def _vrn(*args, timeout=300):

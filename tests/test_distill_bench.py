@@ -6,7 +6,6 @@ import json
 
 import numpy as np
 import pytest
-
 from distill_helpers import expect_one_line_error, run_cli
 
 from vrneural.distill.checkpoint import load_checkpoint
@@ -432,7 +431,7 @@ def test_bench_quality_resume_takes_a_teacher_trained_without_its_pack(tmp_path)
     """A teacher trained by hand with `teach --no-export` at the bench's settings is the
     bench's teacher: --resume reuses it (the flag changes no weight), and the table is the
     same as with the bench's own teacher."""
-    from vrneural.formats.atomic import mark_output_dir
+    from vrneural.outputs import OutputDir
 
     out = tmp_path / "q"
     base = ["bench", "quality", "--presets", "leather", "--out", out, "--res", 8, "--dirs", 4]
@@ -442,11 +441,12 @@ def test_bench_quality_resume_takes_a_teacher_trained_without_its_pack(tmp_path)
     teacher = out / "leather" / "teacher.pt"
     want = load_checkpoint(teacher)["net"]
     fresh = tmp_path / "fresh"
-    mark_output_dir(fresh, "bench quality")
-    (fresh / "leather").mkdir()
-    (fresh / "btf").mkdir()
-    for f in ("leather.btf", "leather.btf.synth.json"):
-        (fresh / "btf" / f).write_bytes((out / "btf" / f).read_bytes())
+    with OutputDir(fresh, "bench quality") as od:
+        od.open()
+        (fresh / "leather").mkdir()
+        (fresh / "btf").mkdir()
+        for f in ("leather.btf", "leather.btf.synth.json"):
+            (fresh / "btf" / f).write_bytes((out / "btf" / f).read_bytes())
     mine = fresh / "leather" / "teacher.pt"
     argv = ["teach", fresh / "btf" / "leather.btf", "-o", mine, "--epochs", 1, "--no-export"]
     code, err = run_cli(*argv, "--max-test-slices", 0, "--no-progress")

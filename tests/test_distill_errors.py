@@ -3,8 +3,9 @@ existing is overwritten."""
 
 from __future__ import annotations
 
-import pytest
 from pathlib import Path
+
+import pytest
 import torch
 from distill_helpers import (  # noqa: F401 (fixture)
     FAST,

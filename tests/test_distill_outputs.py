@@ -321,8 +321,9 @@ def test_a_second_run_on_the_same_output_is_refused_while_the_first_runs(trained
     out = tmp_path / "race.pt"
     btf_out = tmp_path / "race.btf"
     hold = (
-        "import sys; from vrneural.formats.atomic import lock_output_file as lock; "
-        f"lock({str(out)!r}); lock({str(btf_out)!r}); print('held', flush=True); sys.stdin.read()"
+        "import sys; from vrneural.outputs import OutputLock as L; "
+        f"a, b = L({str(out)!r}), L({str(btf_out)!r}); assert a.acquire() and b.acquire(); "
+        "print('held', flush=True); sys.stdin.read()"
     )
     holder = subprocess.Popen(
         [sys.executable, "-c", hold], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True

@@ -10,9 +10,8 @@ import torch
 from distill_helpers import FAST, run_cli, trained  # noqa: F401 (fixture)
 
 from vrneural.btf.format import read_btf
-from vrneural.distill.checkpoint import load_checkpoint, save_checkpoint
+from vrneural.distill.checkpoint import load_checkpoint, model_from_checkpoint, save_checkpoint
 from vrneural.distill.data import SliceData, to_blocks
-from vrneural.distill.distill import model_from_checkpoint
 from vrneural.formats.vrnm import read_vrnm
 from vrneural.material import material_forward
 

@@ -16,9 +16,13 @@ import torch
 from distill_helpers import FAST, analytic_btf, expect_one_line_error, run_cli
 
 from vrneural.btf.format import read_btf
-from vrneural.distill.checkpoint import UnfinishedRunWarning, load_checkpoint, save_checkpoint
+from vrneural.distill.checkpoint import (
+    UnfinishedRunWarning,
+    load_checkpoint,
+    model_from_checkpoint,
+    save_checkpoint,
+)
 from vrneural.distill.data import SliceData
-from vrneural.distill.distill import model_from_checkpoint
 from vrneural.distill.models import NeuralModel, make_spec
 from vrneural.distill.prune import prune_to
 from vrneural.formats.vrnm import read_vrnm

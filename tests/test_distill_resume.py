@@ -142,11 +142,11 @@ def test_distill_with_ema_resumes_exactly_and_exports_the_average(btf, tmp_path)
     checkpoint's network, its test L1 and its pack are the average, not the last step."""
     import numpy as np
 
+    from vrneural.btf.format import read_btf
     from vrneural.distill.data import SliceData
     from vrneural.distill.distill import model_from_checkpoint, run_distill
     from vrneural.distill.evaluate import mean_l1
     from vrneural.formats.vrnm import read_vrnm
-    from vrneural.btf.format import read_btf
     from vrneural.material import material_forward
 
     t = tmp_path / "t.pt"

@@ -9,8 +9,8 @@ from hypothesis import strategies as st
 from vrneural.bench import extremes_precision as prec
 from vrneural.bench.extremes_fixtures import quad_atlas
 from vrneural.bench.extremes_shading import GpuShade
-from vrneural.formats.f16 import F16_MAX, F16_MIN_NORMAL
 from vrneural.errors import VrnError
+from vrneural.formats.f16 import F16_MAX, F16_MIN_NORMAL
 from vrneural.material import random_material
 from vrneural.runtime.codegen import texture_space_wgsl
 

@@ -8,7 +8,6 @@ pytestmark = pytest.mark.gpu
 
 def test_adapter_summary_has_what_info_needs():
     from vrneural.gpu import adapter_summary
-
     from vrneural.gpu.device import BACKENDS
 
     s = adapter_summary()

@@ -46,13 +46,13 @@ def test_screen_levels_and_their_hysteresis():
 
 @pytest.mark.gpu
 def test_gpu_mip_chain_equals_its_twin():
+    from runtime_helpers import quad_atlas
+
+    from vrneural.gpu.device import get_device
     from vrneural.gpu.readback import read_texture
     from vrneural.material import random_material
     from vrneural.runtime.gpu_material import GpuAtlas
     from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
-    from vrneural.gpu.device import get_device
-
-    from runtime_helpers import quad_atlas
 
     at = quad_atlas(64)
     tp = TextureSpacePass(random_material(2), "f32", 1)

@@ -65,12 +65,12 @@ def test_bad_flags(capsys, tmp_path, argv, needle):
 
 
 def test_existing_output_needs_force(capsys, tmp_path):
-    from vrneural.formats.atomic import make_output_dir, seal_output_dir
+    from vrneural.outputs import OutputDir, seal_output_dir
 
     o = tmp_path / "o"
-    make_output_dir(o, "run")
-    (o / "summary.json").write_text("{}")
-    seal_output_dir(o, "run")
+    with OutputDir(o, "run") as out:
+        out.open()
+        (o / "summary.json").write_text("{}")
     msg = _err(capsys, ["--profile", "tiny", "--out", str(o)])
     assert "--force" in msg
     # a bench's output is not a run's: --force does not help

@@ -9,10 +9,10 @@ import shutil
 
 from distill_helpers import trained  # noqa: F401 (fixture)
 
-from vrneural.formats.atomic import file_sha256
 from vrneural.formats.vrnm import read_vrnm, write_vrnm
 from vrneural.material import random_material
-from vrneural.runtime.run import teacher_beside
+from vrneural.outputs import file_sha256
+from vrneural.runtime.pack_teacher import teacher_beside
 
 
 def _other_teacher(path, sha=None):

@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 from vrneural.runtime.scene import builtin_scene
-
 from vrneural.runtime.timecheck import HIGH, LOW
 
 

@@ -3,7 +3,6 @@ twin (bit for bit), the renderer hooks it uses, and the Jupyter backend renderin
 
 import numpy as np
 import pytest
-
 from test_runtime_render import _scene
 
 

@@ -9,7 +9,6 @@ import pytest
 
 from vrneural.errors import VrnError
 
-
 # ----- keys
 
 

@@ -13,7 +13,6 @@ import sys
 
 import numpy as np
 import pytest
-
 from conftest import CI
 
 pytestmark = pytest.mark.gpu
@@ -215,8 +214,8 @@ def test_split_flip_shows_the_bench_flip_map(display):
     """Split view, FLIP: the right half shows HDR-FLIP of texture space against the reference
     (flip-evaluator in a worker process, as the bench computes it), left half texture space."""
     pytest.importorskip("flip_evaluator")
-    from vrneural.bench.metrics import flip_hdr, pixels_per_degree
     from vrneural.gpu.readback import read_texture
+    from vrneural.scoring.metrics import flip_hdr, pixels_per_degree
     from vrneural.viewer import View
     from vrneural.viewer.present import compose
 

@@ -15,7 +15,7 @@ import types
 import typing
 from pathlib import Path
 
-from vrneural.formats.atomic import write_json
+from vrneural.outputs import write_json
 
 
 def opt(default, help: str, **kw):

@@ -6,6 +6,7 @@ its message on one line and exits with code 2; it never shows a traceback for on
 
 from __future__ import annotations
 
+import argparse
 import math
 
 
@@ -13,6 +14,14 @@ class VrnError(Exception):
     """An input problem reported to the user as one line, exit code 2."""
 
     exit_code = 2
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse with a one-line error (the problem and where the help is) instead of the
+    command's whole usage, exit code 2; subcommand parsers inherit it."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
 def count(n: int, noun: str, plural: str | None = None) -> str:

@@ -7,7 +7,6 @@ from __future__ import annotations
 import signal
 import threading
 
-
 #: the signals :class:`Stop` turns into its flag
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 

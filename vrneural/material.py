@@ -301,3 +301,28 @@ def lambertian_material(albedo=(0.8, 0.5, 0.2), tex_res: int = 4) -> NeuralMater
         "linear",
         {"name": "lambertian", "albedo": list(map(float, albedo))},
     )
+
+
+def distilled(mat) -> bool | None:
+    """Whether a pack's network was distilled (its recorded config; True for an older record
+    without the field), None for a teacher."""
+    cfg = (mat.meta.get("provenance") or {}).get("config") or {}
+    return cfg.get("distill", True) if mat.meta.get("method") != "teacher" else None
+
+
+def pack_width(mat) -> int:
+    """The hidden width of a pack's network (its first layer's outputs)."""
+    return next(iter(mat.networks.values()))[0].n_out
+
+
+def width_words(mat) -> str:
+    """How a student or single8 pack's width differs from the paper's 8: ``" 16 wide"``, or
+    ``" (16 -> 8 wide)"`` for one pruned from a wide run (--wide-start / --init-from); ``""``
+    for an 8-wide one from random weights and for other packs."""
+    if mat.meta.get("method") not in ("student", "single8"):
+        return ""
+    width = pack_width(mat)
+    init = (mat.meta.get("provenance") or {}).get("init_from")
+    if init:
+        return f" ({init['width']} -> {width} wide)"
+    return f" {width} wide" if width != 8 else ""

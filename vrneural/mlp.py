@@ -7,9 +7,8 @@ wgpu; :mod:`vrneural.gpu.mlp_kernel` has the GPU twin with the same function nam
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import itertools
+from dataclasses import dataclass
 
 import numpy as np
 

@@ -67,7 +67,7 @@ def plot(result: dict, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from vrneural.formats.atomic import atomic_path
+    from vrneural.outputs import atomic_path
 
     fig, ax = plt.subplots(figsize=(7, 2.4))
     left = 0.0
@@ -92,11 +92,10 @@ def main(argv: list[str] | None = None) -> int:
 
     from vrneural.atlas import BUILTIN_MESHES
     from vrneural.atlas.build import MAX_PADDING, MAX_RESOLUTION, MIN_RESOLUTION
-    from vrneural.cli import _Parser
-    from vrneural.errors import VrnError
+    from vrneural.errors import ArgumentParser, VrnError
 
     prog = "python -m vrneural.atlas.benchmark"
-    p = _Parser(
+    p = ArgumentParser(
         prog=prog,
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -140,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     except VrnError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)
         return e.exit_code
-    from vrneural.formats.atomic import write_json
+    from vrneural.outputs import write_json
 
     write_json(out, result)
     plot(result, out.with_suffix(".png"))
@@ -158,7 +157,7 @@ def _check_args(a: argparse.Namespace) -> Path:
     path."""
     from vrneural.atlas.build import MAX_PADDING, check_texture_resolution
     from vrneural.errors import VrnError, check_range
-    from vrneural.formats.atomic import check_output
+    from vrneural.outputs import check_output
 
     check_texture_resolution("--res", a.res)
     check_range("--padding", a.padding, 0, MAX_PADDING)

@@ -154,51 +154,51 @@ def run_atlas(cfg: AtlasBenchConfig) -> dict:
     if bad or not names:
         raise VrnError(f"--meshes: {', '.join(bad) or '(none)'} not in {', '.join(NAMES)}")
     check_range("--eye", c.eye, 16, 4096)
-    root = rp.prepare_out(cfg.out, cfg.force, "atlas")
-    t0 = time.perf_counter()
-    records, previews, failures = [], {}, []
-    from tqdm import tqdm
+    with rp.prepare_out(cfg.out, cfg.force, "atlas") as root:
+        t0 = time.perf_counter()
+        records, previews, failures = [], {}, []
+        from tqdm import tqdm
 
-    with tempfile.TemporaryDirectory(prefix="vrneural-bench-atlas-") as tmp:
-        old = os.environ.get("VRNEURAL_CACHE")
-        os.environ["VRNEURAL_CACHE"] = str(Path(tmp) / "cache")  # the seam renders' atlases
-        try:
-            # every atlas first, each in a process forked from this small one (before any
-            # render grows it: a child's peak includes what it inherits), then the renders
-            bar = tqdm(names, desc="bench atlas", unit="mesh", disable=not c.progress)
-            paths = {}
-            for name in bar:
-                bar.set_postfix_str(name)
-                res = _resolution(name, c.quick)
-                kind, rec, img, path = _measure(name, Path(tmp), c.quick, res)
-                if kind != "ok":
-                    failures.append(f"{name}: {rec}")
-                    records.append({"mesh": name, "resolution": res, "error": rec})
-                    continue
-                records.append(rec)
-                previews[name], paths[name] = img, path
-            if c.seams:
-                from vrneural.bench.atlas_seams import seam_error
+        with tempfile.TemporaryDirectory(prefix="vrneural-bench-atlas-") as tmp:
+            old = os.environ.get("VRNEURAL_CACHE")
+            os.environ["VRNEURAL_CACHE"] = str(Path(tmp) / "cache")  # the seam renders' atlases
+            try:
+                # every atlas first, each in a process forked from this small one (before any
+                # render grows it: a child's peak includes what it inherits), then the renders
+                bar = tqdm(names, desc="bench atlas", unit="mesh", disable=not c.progress)
+                paths = {}
+                for name in bar:
+                    bar.set_postfix_str(name)
+                    res = _resolution(name, c.quick)
+                    kind, rec, img, path = _measure(name, Path(tmp), c.quick, res)
+                    if kind != "ok":
+                        failures.append(f"{name}: {rec}")
+                        records.append({"mesh": name, "resolution": res, "error": rec})
+                        continue
+                    records.append(rec)
+                    previews[name], paths[name] = img, path
+                if c.seams:
+                    from vrneural.bench.atlas_seams import seam_error
 
-                for rec in tqdm(records, desc="bench atlas seams", disable=not c.progress):
-                    if rec["mesh"] in paths:
-                        rec["seams"] = seam_error(paths[rec["mesh"]], rec["resolution"], c.eye)
-        finally:
-            if old is None:
-                os.environ.pop("VRNEURAL_CACHE", None)
-            else:
-                os.environ["VRNEURAL_CACHE"] = old
-    doc = rp.header("atlas", c)
-    doc["records"] = records
-    doc["failures"] = failures
-    doc["total_seconds"] = time.perf_counter() - t0
-    doc["load_avg_1m"] = os.getloadavg()[0]
-    doc["cpu_count"] = os.cpu_count()
-    _plot(previews, records, root / "atlases.png")
-    from vrneural.bench.atlas_report import write_reports
+                    for rec in tqdm(records, desc="bench atlas seams", disable=not c.progress):
+                        if rec["mesh"] in paths:
+                            rec["seams"] = seam_error(paths[rec["mesh"]], rec["resolution"], c.eye)
+            finally:
+                if old is None:
+                    os.environ.pop("VRNEURAL_CACHE", None)
+                else:
+                    os.environ["VRNEURAL_CACHE"] = old
+        doc = rp.header("atlas", c)
+        doc["records"] = records
+        doc["failures"] = failures
+        doc["total_seconds"] = time.perf_counter() - t0
+        doc["load_avg_1m"] = os.getloadavg()[0]
+        doc["cpu_count"] = os.cpu_count()
+        _plot(previews, records, root / "atlases.png")
+        from vrneural.bench.atlas_report import write_reports
 
-    write_reports(root, doc, c)
-    return doc
+        write_reports(root, doc, c)
+        return doc
 
 
 def _plot(previews: dict, records: list, path: Path) -> None:
@@ -207,7 +207,7 @@ def _plot(previews: dict, records: list, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from vrneural.formats.atomic import atomic_path
+    from vrneural.outputs import atomic_path
 
     n = max(len(previews), 1)
     cols = min(4, n)

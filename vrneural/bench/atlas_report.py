@@ -48,7 +48,7 @@ def targets(records: list) -> list[tuple[str, bool, str]]:
 
 
 def write_reports(root: Path, doc: dict, cfg) -> None:
-    from vrneural.formats.atomic import atomic_path, write_json
+    from vrneural.outputs import atomic_path, write_json
 
     write_json(root / "results.json", doc)
     rows = []

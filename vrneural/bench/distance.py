@@ -21,11 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vrneural.bench import metrics
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench import tradeoff as tr
 from vrneural.config import opt, quick_defaults
+from vrneural.scoring import metrics
 
 #: name -> (mips, screen_res, prefiltered neural textures)
 VARIANTS = {
@@ -130,66 +130,69 @@ def run_distance(cfg: DistanceConfig) -> dict:
 
     c = cfg.resolved()
     check(c)
-    root = rp.prepare_out(cfg.out, cfg.force, "distance")
-    t0 = time.perf_counter()
-    doc = rp.header("distance", c)
-    budget = dict(preset=c.preset, res=c.btf_res, dirs=c.btf_dirs, teacher_width=c.teacher_width,
-                  teacher_epochs=c.teacher_epochs, epochs=c.epochs, seed=c.seed)  # fmt: skip
-    tt = time.perf_counter()
-    paths = train_packs(root / "packs", budget, c.progress, lambda m: None,
-                        only=("student", "student_lod"))  # fmt: skip
-    mats = load_packs(paths)
-    doc["packs"] = {"budget": budget, "seconds": time.perf_counter() - tt}
-    prof = get_profile("quest3")
-    full, ppd = prof.eye_res, metrics.pixels_per_degree(prof.eye_res[1], prof.fov_y)
-    doc["ppd"] = ppd
-    conds = conditions(c)
-    bar = tqdm(total=len(conds) * (len(VARIANTS) + 3), desc="bench distance", unit="render",
-               disable=not c.progress)  # fmt: skip
-    for cond in conds:
-        teacher = mats["teacher"]
-        rs = settings(c, cond, prof, False, False, "reference", teacher)
-        rscene = ts.scene_for(cond, mats["student"], teacher)
-        bar.set_postfix_str(f"{cond.name}: reference")
-        ref = tr.reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
-        nf = cond.scored[:2]
-        ref2 = tr.reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
-        bar.update()
-        rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
-               "noise_floor": float(np.mean([metrics.flip_hdr_eyes(ref[f], ref2[f], ppd)
-                                             for f in nf])),
-               "variants": []}  # fmt: skip
-        cache: dict = {}
-        own = {}  # pack -> its level 0 per pixel, supersampled: the filtering error alone
-        for key in ("student", "student_lod"):
-            bar.set_postfix_str(f"{cond.name}: {key} supersampled")
-            lvl0 = dataclasses.replace(mats[key], levels={})
-            os_ = settings(c, cond, prof, False, False, "reference", lvl0)
-            own[key] = tr.reference(ts.scene_for(cond, lvl0, lvl0), os_, cond, c.crop, full,
-                                    cond.scored, c.spp, 0)  # fmt: skip
-        for name, (mips, screen, lod) in VARIANTS.items():
-            bar.set_postfix_str(f"{cond.name}: {name}")
-            key = "student_lod" if lod else "student"
-            mat = mats[key]
-            s = settings(c, cond, prof, mips, screen)
-            imgs, st = tr.render(ts.scene_for(cond, mat), s, cond, c.crop, full, set(cond.scored))
-            sc = tr.scores(ref, imgs, None, ppd, cond.scored, cache)
-            flip_own = [metrics.flip_hdr_eyes(own[key][f], imgs[f], ppd) for f in cond.scored]
-            w = st[1:]
-            rec["variants"].append({
-                "variant": name, "mips": mips, "screen_res": screen, "neural_lod": lod,
-                "flip_own": float(np.mean(flip_own)),
-                **{k: sc[k] for k in ("flip", "psnr", "ssim", "change", "change_ref")},
-                "flicker": sc["change"] / max(sc["change_ref"], 1e-12),
-                "texels_shaded": float(np.mean([4 * x.object_blocks[0] for x in w])),
-                "texture_side": int(np.median([x.object_res[0] for x in w])),
-                **tr.work(st),
-            })  # fmt: skip
+    with rp.prepare_out(cfg.out, cfg.force, "distance") as root:
+        t0 = time.perf_counter()
+        doc = rp.header("distance", c)
+        budget = dict(preset=c.preset, res=c.btf_res, dirs=c.btf_dirs,
+                      teacher_width=c.teacher_width, teacher_epochs=c.teacher_epochs,
+                      epochs=c.epochs, seed=c.seed)  # fmt: skip
+        tt = time.perf_counter()
+        paths = train_packs(root / "packs", budget, c.progress, lambda m: None,
+                            only=("student", "student_lod"))  # fmt: skip
+        mats = load_packs(paths)
+        doc["packs"] = {"budget": budget, "seconds": time.perf_counter() - tt}
+        prof = get_profile("quest3")
+        full, ppd = prof.eye_res, metrics.pixels_per_degree(prof.eye_res[1], prof.fov_y)
+        doc["ppd"] = ppd
+        conds = conditions(c)
+        bar = tqdm(total=len(conds) * (len(VARIANTS) + 3), desc="bench distance", unit="render",
+                   disable=not c.progress)  # fmt: skip
+        for cond in conds:
+            teacher = mats["teacher"]
+            rs = settings(c, cond, prof, False, False, "reference", teacher)
+            rscene = ts.scene_for(cond, mats["student"], teacher)
+            bar.set_postfix_str(f"{cond.name}: reference")
+            ref = tr.reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
+            nf = cond.scored[:2]
+            ref2 = tr.reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
             bar.update()
-        bar.update(2)  # the two own references
-        doc["records"].append(rec)
-    bar.close()
-    return finish(root, doc, t0)
+            rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
+                   "noise_floor": float(np.mean([metrics.flip_hdr_eyes(ref[f], ref2[f], ppd)
+                                                 for f in nf])),
+                   "variants": []}  # fmt: skip
+            cache: dict = {}
+            own = {}  # pack -> its level 0 per pixel, supersampled: the filtering error alone
+            for key in ("student", "student_lod"):
+                bar.set_postfix_str(f"{cond.name}: {key} supersampled")
+                lvl0 = dataclasses.replace(mats[key], levels={})
+                os_ = settings(c, cond, prof, False, False, "reference", lvl0)
+                own[key] = ts.reference(ts.scene_for(cond, lvl0, lvl0), os_, cond, c.crop,
+                                        full, cond.scored, c.spp, 0)  # fmt: skip
+            for name, (mips, screen, lod) in VARIANTS.items():
+                bar.set_postfix_str(f"{cond.name}: {name}")
+                key = "student_lod" if lod else "student"
+                mat = mats[key]
+                s = settings(c, cond, prof, mips, screen)
+                imgs, st = ts.render(
+                    ts.scene_for(cond, mat), s, cond, c.crop, full, set(cond.scored)
+                )
+                sc = tr.scores(ref, imgs, None, ppd, cond.scored, cache)
+                own_f = [metrics.flip_hdr_eyes(own[key][f], imgs[f], ppd) for f in cond.scored]
+                w = st[1:]
+                rec["variants"].append({
+                    "variant": name, "mips": mips, "screen_res": screen, "neural_lod": lod,
+                    "flip_own": float(np.mean(own_f)),
+                    **{k: sc[k] for k in ("flip", "psnr", "ssim", "change", "change_ref")},
+                    "flicker": sc["change"] / max(sc["change_ref"], 1e-12),
+                    "texels_shaded": float(np.mean([4 * x.object_blocks[0] for x in w])),
+                    "texture_side": int(np.median([x.object_res[0] for x in w])),
+                    **tr.work(st),
+                })  # fmt: skip
+                bar.update()
+            bar.update(2)  # the two own references
+            doc["records"].append(rec)
+        bar.close()
+        return finish(root, doc, t0)
 
 
 def finish(root, doc: dict, t0: float) -> dict:

@@ -118,30 +118,32 @@ def _register_all(sub) -> None:
 
 
 def _run_all(args) -> int:
-    from vrneural.formats.atomic import check_output_dir, mark_output_dir, seal_output_dir
+    from vrneural.outputs import OutputDir
 
     t0 = time.perf_counter()
     # the folder is checked as every bench checks its own: a folder of other files is refused,
     # and one of ours needs --force (each bench below then replaces only its own sub-folder)
-    check_output_dir(args.out, args.force, "bench all")
-    for name in SPECS:  # every bench's folder before the first bench replaces its own
-        check_output_dir(Path(args.out) / name, args.force, f"bench {name}")
-    mark_output_dir(args.out, "bench all")
-    docs = {}
-    for name in SPECS:
-        cls, fn = _load(name)
-        out = str(Path(args.out) / name)
-        docs[name] = fn(cls(out=out, quick=args.quick, force=args.force, progress=args.progress))
-        _summary(name, docs[name], out)
-    _write_index(Path(args.out), docs, args.quick, time.perf_counter() - t0)
-    seal_output_dir(args.out, "bench all")
+    with OutputDir(args.out, "bench all", force=args.force, keep=True) as od:
+        od.check()
+        for name in SPECS:  # every bench's folder before the first bench replaces its own
+            OutputDir(Path(args.out) / name, f"bench {name}", force=args.force).check()
+        od.open()
+        docs = {}
+        for name in SPECS:
+            cls, fn = _load(name)
+            out = str(Path(args.out) / name)
+            docs[name] = fn(
+                cls(out=out, quick=args.quick, force=args.force, progress=args.progress)
+            )
+            _summary(name, docs[name], out)
+        _write_index(Path(args.out), docs, args.quick, time.perf_counter() - t0)
     print(f"bench all: {args.out}/index.md ({time.perf_counter() - t0:.0f} s)")
     return 0
 
 
 def _write_index(out: Path, docs: dict, quick: bool, seconds: float) -> None:
     """``OUT/index.md`` + ``index.json``: what each bench reproduces, its time and its files."""
-    from vrneural.formats.atomic import atomic_path, write_json
+    from vrneural.outputs import atomic_path, write_json
 
     first = next(iter(docs.values()))
     a = first.get("adapter", {})

@@ -117,12 +117,12 @@ def run_extremes(cfg: ExtremesConfig, out: str) -> dict:
     from vrneural.bench.report import header, prepare_out
 
     cases = selected(cfg.only, is_explicit(cfg, "only"))
-    root = prepare_out(out, cfg.force, "extremes")
-    t0 = time.perf_counter()
-    doc = header("extremes", cfg)
-    bar = tqdm(cases, desc="bench extremes", unit="case", disable=not cfg.progress)
-    for name, group, fn, expect, what in bar:
-        rec = run_case(name, group, fn, expect, cfg.quick)
-        rec["checks"] = what
-        doc["records"].append(rec)
-    return write_report(root, doc, t0)
+    with prepare_out(out, cfg.force, "extremes") as root:
+        t0 = time.perf_counter()
+        doc = header("extremes", cfg)
+        bar = tqdm(cases, desc="bench extremes", unit="case", disable=not cfg.progress)
+        for name, group, fn, expect, what in bar:
+            rec = run_case(name, group, fn, expect, cfg.quick)
+            rec["checks"] = what
+            doc["records"].append(rec)
+        return write_report(root, doc, t0)

@@ -17,7 +17,6 @@ from vrneural.formats.f16 import F16_MAX, F16_MIN_NORMAL
 from vrneural.material import lambertian_material, random_material
 from vrneural.runtime import reference as ref
 
-
 HIST_EDGES = np.logspace(-8, 0, 17)  # relative-error histogram bins (half decades)
 
 

@@ -180,50 +180,52 @@ def run_frame(cfg: FrameConfig) -> dict:
     check_range("--repeats", c.repeats, 1, 100)
     check_range("--rounds", c.rounds, 1, 100)
     eye_res = parse_res(c.eye_res)
-    root = rp.prepare_out(cfg.out, cfg.force, "frame")
-    t0 = time.perf_counter()
-    doc = rp.header("frame", c)
-    scene = timing.bench_scene(c.lights)
-    hdr = _renderer(scene, c, eye_res, "hdr")
-    disp = _renderer(scene, c, eye_res, "display")
-    doc["timestamp_check"] = hdr.timestamp_check
-    floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_constant", "fs_floor_sample")}
-    n1 = c.reuse + 1
-    bar = timing.progress(c.rounds, "bench frame (rounds)", c.progress)
-    f = n1 * 2  # after a cycle of warm-up
-    for rnd in range(c.rounds):
-        rec = {"round": rnd, "loop": {}, "passes": {}}
-        for depth in (1, 2, 3):
-            hdr.set_frames_in_flight(depth)
-            hdr.frame(f)  # warm the new ring
+    with rp.prepare_out(cfg.out, cfg.force, "frame") as root:
+        t0 = time.perf_counter()
+        doc = rp.header("frame", c)
+        scene = timing.bench_scene(c.lights)
+        hdr = _renderer(scene, c, eye_res, "hdr")
+        disp = _renderer(scene, c, eye_res, "display")
+        doc["timestamp_check"] = hdr.timestamp_check
+        floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_constant", "fs_floor_sample")}
+        n1 = c.reuse + 1
+        bar = timing.progress(c.rounds, "bench frame (rounds)", c.progress)
+        f = n1 * 2  # after a cycle of warm-up
+        for rnd in range(c.rounds):
+            rec = {"round": rnd, "loop": {}, "passes": {}}
+            for depth in (1, 2, 3):
+                hdr.set_frames_in_flight(depth)
+                hdr.frame(f)  # warm the new ring
+                hdr.wait()
+                f += 1
+                f += (-f) % n1
+                rec["loop"][depth] = loop(hdr, c.frames, f)
+                f += c.frames
+            p, rep = rec["passes"], c.repeats
+            rec["empty_submit_ms"] = time_passes(hdr, lambda enc, timer: None, rep)["wall_ms"]
+            p["texture_full"] = time_passes(hdr, texture_update(hdr, "main", 0, 1, f), rep)
+            p["texture_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, 1, f), rep)
+            p["texture_slice"] = time_passes(hdr, texture_update(hdr, "main", 0, n1, f), rep)
+            p["texture_slice_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, n1, f), rep)
+            hdr.frame(f)  # the eyes' uniforms and radiance textures of a real frame
             hdr.wait()
             f += 1
-            f += (-f) % n1
-            rec["loop"][depth] = loop(hdr, c.frames, f)
-            f += c.frames
-        p, rep = rec["passes"], c.repeats
-        rec["empty_submit_ms"] = time_passes(hdr, lambda enc, timer: None, rep)["wall_ms"]
-        p["texture_full"] = time_passes(hdr, texture_update(hdr, "main", 0, 1, f), rep)
-        p["texture_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, 1, f), rep)
-        p["texture_slice"] = time_passes(hdr, texture_update(hdr, "main", 0, n1, f), rep)
-        p["texture_slice_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, n1, f), rep)
-        hdr.frame(f)  # the eyes' uniforms and radiance textures of a real frame
-        hdr.wait()
-        f += 1
-        p["forward"] = time_passes(hdr, forward(hdr), rep)
-        p["forward_floor_sample"] = time_passes(hdr, forward(hdr, floors["fs_floor_sample"]), rep)
-        p["forward_floor_constant"] = time_passes(
-            hdr, forward(hdr, floors["fs_floor_constant"]), rep
-        )
-        disp.frame(f)
-        disp.wait()
-        p["forward_display"] = time_passes(disp, forward(disp), rep)
-        doc["records"].append(rec)
-        bar.update()
-    bar.close()
-    doc["summary"] = summarise(doc, c.reuse)
-    doc["targets"] = TARGETS
-    md = markdown(doc)
-    plot(doc, root / "frame.png")
-    md += ["", "![frame breakdown](frame.png)"]
-    return rp.finish(root, doc, md, t0)
+            p["forward"] = time_passes(hdr, forward(hdr), rep)
+            p["forward_floor_sample"] = time_passes(
+                hdr, forward(hdr, floors["fs_floor_sample"]), rep
+            )
+            p["forward_floor_constant"] = time_passes(
+                hdr, forward(hdr, floors["fs_floor_constant"]), rep
+            )
+            disp.frame(f)
+            disp.wait()
+            p["forward_display"] = time_passes(disp, forward(disp), rep)
+            doc["records"].append(rec)
+            bar.update()
+        bar.close()
+        doc["summary"] = summarise(doc, c.reuse)
+        doc["targets"] = TARGETS
+        md = markdown(doc)
+        plot(doc, root / "frame.png")
+        md += ["", "![frame breakdown](frame.png)"]
+        return rp.finish(root, doc, md, t0)

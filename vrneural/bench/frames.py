@@ -62,34 +62,34 @@ def run_frames(cfg: FramesConfig) -> dict:
     check_range("--cycles", c.cycles, 1, 100)
     check_range("--warmup", c.warmup, 0.0, 60.0)
     check_range("--min-frames", c.min_frames, 1, 1000)
-    root = rp.prepare_out(cfg.out, cfg.force, "frames")
-    t0 = time.perf_counter()
-    prof = get_profile("quest3")
-    doc = rp.header("frames", c)
-    scene = timing.bench_scene(c.lights)
-    kw = dict(eye_res=eye_res, eyes=c.eyes, n_lights=c.lights, fps=prof.fps, fov_y=prof.fov_y)
-    per_res = sum(timing.frames_for(n, c.cycles, c.min_frames) for n in reuses) * len(scheds)
-    total = per_res * len(texs) + (c.min_frames if c.screen else 0)
-    bar = timing.progress(total, "bench frames", c.progress)
-    for res in texs:
-        r = timing.make_renderer(scene, texture_res=res, **kw)
-        for sched in scheds:
-            for n in reuses:
-                rec = timing.measured_record(
-                    r, n, sched, c.cycles, c.min_frames, bar.update, c.warmup
-                )
-                rec["schedule"], rec["reuse"] = sched, n
-                doc["records"].append(rec)
-        del r
-    if c.screen:
-        r = timing.make_renderer(scene, mode="screen", texture_res=texs[0], **kw)
-        rec = timing.measured_record(r, 0, "burst", 1, c.min_frames, bar.update, c.warmup)
-        doc["records"].append(rec)
-    bar.close()
-    md = markdown(doc)
-    plot(doc, root / "frames.png")
-    md += ["", "![frame time](frames.png)"]
-    return rp.finish(root, doc, md, t0)
+    with rp.prepare_out(cfg.out, cfg.force, "frames") as root:
+        t0 = time.perf_counter()
+        prof = get_profile("quest3")
+        doc = rp.header("frames", c)
+        scene = timing.bench_scene(c.lights)
+        kw = dict(eye_res=eye_res, eyes=c.eyes, n_lights=c.lights, fps=prof.fps, fov_y=prof.fov_y)
+        per_res = sum(timing.frames_for(n, c.cycles, c.min_frames) for n in reuses) * len(scheds)
+        total = per_res * len(texs) + (c.min_frames if c.screen else 0)
+        bar = timing.progress(total, "bench frames", c.progress)
+        for res in texs:
+            r = timing.make_renderer(scene, texture_res=res, **kw)
+            for sched in scheds:
+                for n in reuses:
+                    rec = timing.measured_record(
+                        r, n, sched, c.cycles, c.min_frames, bar.update, c.warmup
+                    )
+                    rec["schedule"], rec["reuse"] = sched, n
+                    doc["records"].append(rec)
+            del r
+        if c.screen:
+            r = timing.make_renderer(scene, mode="screen", texture_res=texs[0], **kw)
+            rec = timing.measured_record(r, 0, "burst", 1, c.min_frames, bar.update, c.warmup)
+            doc["records"].append(rec)
+        bar.close()
+        md = markdown(doc)
+        plot(doc, root / "frames.png")
+        md += ["", "![frame time](frames.png)"]
+        return rp.finish(root, doc, md, t0)
 
 
 def _cell(rec: dict) -> str:

@@ -163,12 +163,13 @@ def _gpu_ms(parts, texels, precision, buffer_weights, repeats, rng) -> float:
 def _torch_ms(parts, texels, repeats, rng) -> float:
     import torch
 
-    from vrneural.runtime.measure import _median_ms, _torch_net
+    from vrneural.runtime.measure import torch_net
+    from vrneural.runtime.measure_frames import median_ms
 
     nets, xs = [], []
     for layers, f in parts:
         rows = max(1, int(texels * f))
-        nets.append(_torch_net(layers))
+        nets.append(torch_net(layers))
         xs.append(torch.from_numpy(rng.standard_normal((rows, layers[0].n_in), np.float32)))
 
     def run():
@@ -176,7 +177,7 @@ def _torch_ms(parts, texels, repeats, rng) -> float:
             for net, x in zip(nets, xs, strict=True):
                 net(x)
 
-    return _median_ms(run, repeats)
+    return median_ms(run, repeats)
 
 
 def run_kernels(cfg: KernelsConfig) -> dict:
@@ -194,18 +195,18 @@ def run_kernels(cfg: KernelsConfig) -> dict:
         raise VrnError("--precisions is empty; choose from f32, f16")
     if "f16" in precs and not adapter_summary().features.get("shader-f16"):
         raise VrnError("--precisions: f16 needs the shader-f16 feature, which the adapter lacks")
-    root = rp.prepare_out(cfg.out, cfg.force, "kernels")
-    import torch
+    with rp.prepare_out(cfg.out, cfg.force, "kernels") as root:
+        import torch
 
-    t0 = time.perf_counter()
-    doc = rp.header("kernels", c)
-    threads_before = torch.get_num_threads()
-    try:
-        if c.threads:
-            torch.set_num_threads(c.threads)
-        return _run(c, doc, nets, precs, root, t0)
-    finally:
-        torch.set_num_threads(threads_before)  # `bench all` goes on in this process
+        t0 = time.perf_counter()
+        doc = rp.header("kernels", c)
+        threads_before = torch.get_num_threads()
+        try:
+            if c.threads:
+                torch.set_num_threads(c.threads)
+            return _run(c, doc, nets, precs, root, t0)
+        finally:
+            torch.set_num_threads(threads_before)  # `bench all` goes on in this process
 
 
 def _sgemm(c: KernelsConfig) -> float:

@@ -57,79 +57,83 @@ def run_lights(cfg: LightsConfig) -> dict:
     check_range("--cycles", c.cycles, 1, 100)
     check_range("--warmup", c.warmup, 0.0, 60.0)
     eye_res = parse_res(c.eye_res)
-    root = rp.prepare_out(cfg.out, cfg.force, "lights")
-    t0 = time.perf_counter()
-    prof = get_profile("quest3")
-    doc = rp.header("lights", c)
-    scene = timing.bench_scene(max(8, *counts))  # light k stays where it is for any list up to 8
-    n = timing.frames_for(c.reuse, c.cycles, 1)
-    bar = timing.progress(n * len(counts), "bench lights", c.progress)
-    for k in counts:
-        r = timing.make_renderer(
-            scene,
-            texture_res=c.texture_res,
-            eye_res=eye_res,
-            eyes=c.eyes,
-            n_lights=k,
-            reuse=c.reuse,
-            schedule=c.schedule,
-            fps=prof.fps,
-            fov_y=prof.fov_y,
-        )
-        rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update, c.warmup)
-        doc["records"].append(rec)
-        del r
-    bar.close()
-    recs = doc["records"]
-    first = min(recs, key=lambda r: r["lights"])  # the fewest lights measured, whatever the order
-    base = first["shading_ms_per_frame"] / first["lights"]
-    md = [
-        "# Lights: frame time over the number of point lights (paper Fig. 10)",
-        "",
-        rp.adapter_line(doc),
-        f"Benchmark scene, {count(c.eyes, 'eye')} at {c.eye_res}, texture {c.texture_res}^2, "
-        f"N = {c.reuse} ({c.schedule}), {n} frames per light count after frame 0 "
-        f"and {c.warmup} s of unmeasured frames."
-        + (" **Quick run: reduced grid.**" if c.quick else ""),
-        "",
-    ]
-    rows = [
-        [
-            r["lights"],
-            r["fps"],
-            r["frame_ms"]["median"],
-            r["frame_ms"]["p99"],
-            r["shading_ms_per_frame"],
-            r["shading_ms_per_frame"] / (base * r["lights"]),
-            r["forward_ms"],
-            r["mlp_evals_per_frame"],
+    with rp.prepare_out(cfg.out, cfg.force, "lights") as root:
+        t0 = time.perf_counter()
+        prof = get_profile("quest3")
+        doc = rp.header("lights", c)
+        scene = timing.bench_scene(
+            max(8, *counts)
+        )  # light k stays where it is for any list up to 8
+        n = timing.frames_for(c.reuse, c.cycles, 1)
+        bar = timing.progress(n * len(counts), "bench lights", c.progress)
+        for k in counts:
+            r = timing.make_renderer(
+                scene,
+                texture_res=c.texture_res,
+                eye_res=eye_res,
+                eyes=c.eyes,
+                n_lights=k,
+                reuse=c.reuse,
+                schedule=c.schedule,
+                fps=prof.fps,
+                fov_y=prof.fov_y,
+            )
+            rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update, c.warmup)
+            doc["records"].append(rec)
+            del r
+        bar.close()
+        recs = doc["records"]
+        first = min(
+            recs, key=lambda r: r["lights"]
+        )  # the fewest lights measured, whatever the order
+        base = first["shading_ms_per_frame"] / first["lights"]
+        md = [
+            "# Lights: frame time over the number of point lights (paper Fig. 10)",
+            "",
+            rp.adapter_line(doc),
+            f"Benchmark scene, {count(c.eyes, 'eye')} at {c.eye_res}, texture {c.texture_res}^2, "
+            f"N = {c.reuse} ({c.schedule}), {n} frames per light count after frame 0 "
+            f"and {c.warmup} s of unmeasured frames."
+            + (" **Quick run: reduced grid.**" if c.quick else ""),
+            "",
         ]
-        for r in recs
-    ]
-    md += rp.table(
-        [
-            "lights",
-            "FPS (mean frame ms)",
-            "frame ms median",
-            "frame ms p99",
-            "shading ms/frame",
-            "shading / linear",
-            "forward ms",
-            "MLP evals/frame",
-        ],
-        rows,
-    )
-    md += [
-        "",
-        rp.FPS_NOTE,
-        "",
-        f"shading / linear: shading ms over (shading ms per light at {first['lights']} "
-        "light(s) x lights); 1 = linear.",
-        "",
-        "![lights](lights.png)",
-    ]
-    plot(doc, base, root / "lights.png")
-    return rp.finish(root, doc, md, t0)
+        rows = [
+            [
+                r["lights"],
+                r["fps"],
+                r["frame_ms"]["median"],
+                r["frame_ms"]["p99"],
+                r["shading_ms_per_frame"],
+                r["shading_ms_per_frame"] / (base * r["lights"]),
+                r["forward_ms"],
+                r["mlp_evals_per_frame"],
+            ]
+            for r in recs
+        ]
+        md += rp.table(
+            [
+                "lights",
+                "FPS (mean frame ms)",
+                "frame ms median",
+                "frame ms p99",
+                "shading ms/frame",
+                "shading / linear",
+                "forward ms",
+                "MLP evals/frame",
+            ],
+            rows,
+        )
+        md += [
+            "",
+            rp.FPS_NOTE,
+            "",
+            f"shading / linear: shading ms over (shading ms per light at {first['lights']} "
+            "light(s) x lights); 1 = linear.",
+            "",
+            "![lights](lights.png)",
+        ]
+        plot(doc, base, root / "lights.png")
+        return rp.finish(root, doc, md, t0)
 
 
 def plot(doc: dict, base: float, path) -> None:

@@ -44,9 +44,9 @@ class MaterialsConfig:
 
 def squares_scene(k: int, n_lights: int):
     """k upright squares (0.3 m) in a row facing the built-in head path, distinct materials."""
+    from vrneural.material import random_material
     from vrneural.runtime.lights import default_lights
     from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
-    from vrneural.material import random_material
 
     objs = []
     for i in range(k):
@@ -71,82 +71,82 @@ def run_materials(cfg: MaterialsConfig) -> dict:
     check_range("--cycles", c.cycles, 1, 100)
     check_range("--warmup", c.warmup, 0.0, 60.0)
     eye_res = parse_res(c.eye_res)
-    root = rp.prepare_out(cfg.out, cfg.force, "materials")
-    t0 = time.perf_counter()
-    prof = get_profile("quest3")
-    doc = rp.header("materials", c)
-    n = timing.frames_for(c.reuse, c.cycles, 1)
-    bar = timing.progress(n * len(counts), "bench materials", c.progress)
-    for k in counts:
-        r = timing.make_renderer(
-            squares_scene(k, c.lights),
-            texture_res=c.texture_res,
-            eye_res=eye_res,
-            eyes=c.eyes,
-            n_lights=c.lights,
-            reuse=c.reuse,
-            schedule=c.schedule,
-            fps=prof.fps,
-            fov_y=prof.fov_y,
-        )
-        rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update, c.warmup)
-        per = c.texture_res**2 * 8 * c.eyes / 2**20  # rgba16float, per eye
-        rec["radiance_texture_mb_per_material"] = per
-        rec["radiance_texture_mb"] = per * k  # every material's textures, as the table shows
-        doc["records"].append(rec)
-        del r
-    bar.close()
-    recs = doc["records"]
-    md = [
-        "# Materials: several materials at once (paper Table 3)",
-        "",
-        rp.adapter_line(doc),
-        f"k squares with distinct materials, {count(c.lights, 'light')}, {count(c.eyes, 'eye')} at "
-        f"{c.eye_res}, "
-        f"texture {c.texture_res}^2 per material, N = {c.reuse} ({c.schedule}), {n} frames per "
-        f"count after frame 0 and {c.warmup} s of unmeasured frames."
-        + (" **Quick run: reduced grid.**" if c.quick else ""),
-        "",
-    ]
-    rows = [
-        [
-            r["materials"],
-            r["fps"],
-            r["frame_ms"]["median"],
-            r["frame_ms"]["p99"],
-            r["shading_ms_per_frame"],
-            r["forward_ms"],
-            r["radiance_texture_mb"],
+    with rp.prepare_out(cfg.out, cfg.force, "materials") as root:
+        t0 = time.perf_counter()
+        prof = get_profile("quest3")
+        doc = rp.header("materials", c)
+        n = timing.frames_for(c.reuse, c.cycles, 1)
+        bar = timing.progress(n * len(counts), "bench materials", c.progress)
+        for k in counts:
+            r = timing.make_renderer(
+                squares_scene(k, c.lights),
+                texture_res=c.texture_res,
+                eye_res=eye_res,
+                eyes=c.eyes,
+                n_lights=c.lights,
+                reuse=c.reuse,
+                schedule=c.schedule,
+                fps=prof.fps,
+                fov_y=prof.fov_y,
+            )
+            rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update, c.warmup)
+            per = c.texture_res**2 * 8 * c.eyes / 2**20  # rgba16float, per eye
+            rec["radiance_texture_mb_per_material"] = per
+            rec["radiance_texture_mb"] = per * k  # every material's textures, as the table shows
+            doc["records"].append(rec)
+            del r
+        bar.close()
+        recs = doc["records"]
+        md = [
+            "# Materials: several materials at once (paper Table 3)",
+            "",
+            rp.adapter_line(doc),
+            f"k squares with distinct materials, {count(c.lights, 'light')}, "
+            f"{count(c.eyes, 'eye')} at {c.eye_res}, "
+            f"texture {c.texture_res}^2 per material, N = {c.reuse} ({c.schedule}), {n} frames per "
+            f"count after frame 0 and {c.warmup} s of unmeasured frames."
+            + (" **Quick run: reduced grid.**" if c.quick else ""),
+            "",
         ]
-        for r in recs
-    ]
-    md += rp.table(
-        [
-            "materials",
-            "FPS (mean frame ms)",
-            "frame ms median",
-            "frame ms p99",
-            "shading ms/frame",
-            "forward ms",
-            "radiance textures MiB",
-        ],
-        rows,
-    )
-    md += [
-        "",
-        rp.FPS_NOTE,
-        "",
-        "![materials](materials.png)",
-    ]
-    fig, (ax,) = rp.figure(5, 3.5)
-    ks = [r["materials"] for r in recs]
-    ax.plot(ks, [r["frame_ms"]["median"] for r in recs], "o-", label="frame ms (median)")
-    ax.plot(ks, [r["shading_ms_per_frame"] for r in recs], "s-", label="shading ms/frame")
-    ax.set_xlabel("materials")
-    ax.set_ylabel("ms")
-    ax.set_xticks(ks)
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
-    ax.set_title(f"bench materials on {doc['adapter']['name']}", fontsize=9)
-    rp.save_png(fig, root / "materials.png")
-    return rp.finish(root, doc, md, t0)
+        rows = [
+            [
+                r["materials"],
+                r["fps"],
+                r["frame_ms"]["median"],
+                r["frame_ms"]["p99"],
+                r["shading_ms_per_frame"],
+                r["forward_ms"],
+                r["radiance_texture_mb"],
+            ]
+            for r in recs
+        ]
+        md += rp.table(
+            [
+                "materials",
+                "FPS (mean frame ms)",
+                "frame ms median",
+                "frame ms p99",
+                "shading ms/frame",
+                "forward ms",
+                "radiance textures MiB",
+            ],
+            rows,
+        )
+        md += [
+            "",
+            rp.FPS_NOTE,
+            "",
+            "![materials](materials.png)",
+        ]
+        fig, (ax,) = rp.figure(5, 3.5)
+        ks = [r["materials"] for r in recs]
+        ax.plot(ks, [r["frame_ms"]["median"] for r in recs], "o-", label="frame ms (median)")
+        ax.plot(ks, [r["shading_ms_per_frame"] for r in recs], "s-", label="shading ms/frame")
+        ax.set_xlabel("materials")
+        ax.set_ylabel("ms")
+        ax.set_xticks(ks)
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+        ax.set_title(f"bench materials on {doc['adapter']['name']}", fontsize=9)
+        rp.save_png(fig, root / "materials.png")
+        return rp.finish(root, doc, md, t0)

@@ -65,7 +65,7 @@ def turn_poses(speed: float, amplitude: float = 30.0, still: float = 0.1, after:
 
 def write_pose_log(path: Path, rows: np.ndarray) -> Path:
     """Write ``rows`` as a pose-log CSV with a header line."""
-    from vrneural.formats.atomic import atomic_path
+    from vrneural.outputs import atomic_path
 
     with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)

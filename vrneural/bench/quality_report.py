@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.formats.atomic import atomic_path
 from vrneural.errors import count
+from vrneural.outputs import atomic_path
 
 ORDER = ("lafortune", "neumip", "single8", "student_nodistill", "student", "teacher")
 

@@ -1,33 +1,30 @@
 """Shared output of the timing and trade-off benchmarks: ``results.json`` (adapter, package
 versions, resolved config, one record per configuration), ``results.md`` (tables) and PNG plots,
 all written atomically into ``--out DIR``: new, empty, or this bench's own earlier output with
-``--force`` (see :func:`vrneural.formats.atomic.check_output_dir`).
+``--force`` (see :class:`vrneural.outputs.OutputDir`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
 from vrneural.config import config_dict
-from vrneural.formats.atomic import (
-    atomic_path,
-    check_output_dir,
-    make_output_dir,
-    seal_output_dir,
-    write_json,
-)
+from vrneural.outputs import OutputDir, atomic_path, write_json
 
 
-def prepare_out(out: str | Path, force: bool, bench: str) -> Path:
-    """Validate and (re)create the output directory of ``vrneural bench <bench>`` (see
-    :func:`vrneural.formats.atomic.check_output_dir`). Cached packs under ``packs/`` survive a
-    ``--force`` rerun (they are keyed by their training config)."""
-    command = f"bench {bench}"
-    return make_output_dir(check_output_dir(out, force, command), command, keep=("packs",))
+@contextlib.contextmanager
+def prepare_out(out: str | Path, force: bool, bench: str) -> Iterator[Path]:
+    """Validate and (re)create the output directory of ``vrneural bench <bench>`` for the
+    block, sealed when it ends (see :class:`vrneural.outputs.OutputDir`). Cached packs under
+    ``packs/`` survive a ``--force`` rerun (they are keyed by their training config)."""
+    with OutputDir(out, f"bench {bench}", force=force, keep=("packs",)) as od:
+        yield od.open()
 
 
 def stats(x) -> dict:
@@ -46,8 +43,8 @@ def stats(x) -> dict:
 
 def header(bench: str, cfg) -> dict:
     """The common head of every ``results.json``: bench name, adapter, versions, config."""
-    from vrneural.versions import package_versions
     from vrneural.gpu.device import adapter_summary
+    from vrneural.versions import package_versions
 
     resolved = cfg.resolved() if hasattr(cfg, "resolved") else cfg
     return {
@@ -117,14 +114,13 @@ def plain_log_ticks(axis) -> None:
 
 
 def finish(root: Path, doc: dict, md: list[str], t0: float) -> dict:
-    """Stamp the run time, write ``results.json`` and ``results.md`` and seal ``root`` (a
-    later ``--force`` replaces only what this bench wrote)."""
+    """Stamp the run time, write ``results.json`` and ``results.md`` (``root`` is sealed when
+    :func:`prepare_out`'s block ends)."""
     doc["total_seconds"] = time.perf_counter() - t0
     md = [*md, "", f"Run time {doc['total_seconds']:.0f} s. Raw records: results.json."]
     write_json(root / "results.json", doc)
     with atomic_path(root / "results.md") as tmp:
         tmp.write_text("\n".join(md) + "\n")
-    seal_output_dir(root, f"bench {doc['bench']}")
     return doc
 
 

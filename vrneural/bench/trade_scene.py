@@ -176,3 +176,44 @@ def log_condition(path: Path, fps: float, scored: int, distance: float = DIST_M)
     return Condition(
         f"log {Path(path).name}", "log", speed, sc[-1] + 1, sc, distance, log=Path(path)
     )
+
+
+def render(scene, s, cond, crop, full, keep) -> tuple[dict, list]:
+    """Frames ``0 .. cond.frames - 1`` in order; returns (frame -> ``[2, H, W, 3]`` for the
+    frames in ``keep``, every frame's FrameStats)."""
+    from vrneural.runtime.renderer import Renderer
+
+    r = Renderer(scene, s)
+    track(r, cond, crop, full)
+    imgs, st = {}, []
+    for f in range(cond.frames):
+        st.append(r.frame(f))
+        if f in keep:
+            imgs[f] = np.stack([e[..., :3] for e in r.read_eyes()])
+    return imgs, st
+
+
+def reference(scene, s, cond, crop, full, frames, spp, seed) -> dict:
+    from vrneural.bench.supersample import SupersampledReference
+
+    ref = SupersampledReference(scene, s, spp, seed)
+    track(ref.r, cond, crop, full)
+    return {f: ref.frame(f) for f in frames}
+
+
+def scheduled_candidates(r, cond, budget: float | None) -> float:
+    """Candidate blocks per displayed frame (frame 0, the first full update, left out) that
+    renderer ``r``'s schedule hands the texture-space pass over ``cond``'s frames, with adaptive
+    reuse at ``budget`` degrees (None: the fixed N): the schedule alone, nothing shaded."""
+    from vrneural.runtime.adaptive import AdaptiveState
+    from vrneural.runtime.lights import light_arrays
+
+    r.s.reuse_budget = budget
+    for n in r.neural:
+        n.fresh, n.adapt = False, AdaptiveState()
+    total = 0
+    for f in range(cond.frames):
+        todo, _, _ = r._slices(f, r.eyes_at(f), light_arrays(r.lights, f / r.s.fps)[0])
+        if f:
+            total += sum(n.gatlas.block_list(per)[1][ph][1] for _, n, ph, per in todo)
+    return total * r.s.eyes / max(cond.frames - 1, 1)

@@ -26,17 +26,12 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.bench import metrics
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
+from vrneural.bench.trade_scene import reference, render, scheduled_candidates
+from vrneural.bench.tradeoff_report import finish_report, label
 from vrneural.config import is_explicit, opt, quick_defaults
-
-LABELS = {
-    "student": "student (distilled)",
-    "student_nodistill": "student w/o distillation",
-    "single8": "single-level 8-wide",
-    "neumip": "NeuMIP-sized 4x25",
-}
+from vrneural.scoring import metrics
 
 
 @dataclass
@@ -128,29 +123,6 @@ def variant(knob="base", value="-", **kw) -> dict:
         budget=None,
     )
     return {**base, **kw}
-
-
-def label(r: dict) -> str:
-    if r["knob"] == "base":
-        return "base"
-    if r["knob"] == "network":
-        return LABELS[r["value"]]
-    return f"{r['knob']}={r['value']}"
-
-
-def pareto(points: list[tuple[float, float]], lower_better: bool) -> list[int]:
-    """Indices of the Pareto-optimal points ``(cost, error)``: no other point is at most as
-    costly and strictly better."""
-    out = []
-    for i, (ci, ei) in enumerate(points):
-        dominated = any(
-            cj <= ci and (ej < ei if lower_better else ej > ei) and (cj, ej) != (ci, ei)
-            for j, (cj, ej) in enumerate(points)
-            if j != i
-        )
-        if not dominated:
-            out.append(i)
-    return out
 
 
 def variants_for(c, cond: ts.Condition, nets, has_f16: bool, budget: float | None) -> list:
@@ -247,47 +219,6 @@ def settings_for(c, v: dict, cond: ts.Condition, prof, ref=None):
         reuse_budget=v["budget"],
         crop=(0, 0, *prof.eye_res),
     )
-
-
-def render(scene, s, cond, crop, full, keep) -> tuple[dict, list]:
-    """Frames ``0 .. cond.frames - 1`` in order; returns (frame -> ``[2, H, W, 3]`` for the
-    frames in ``keep``, every frame's FrameStats)."""
-    from vrneural.runtime.renderer import Renderer
-
-    r = Renderer(scene, s)
-    ts.track(r, cond, crop, full)
-    imgs, st = {}, []
-    for f in range(cond.frames):
-        st.append(r.frame(f))
-        if f in keep:
-            imgs[f] = np.stack([e[..., :3] for e in r.read_eyes()])
-    return imgs, st
-
-
-def reference(scene, s, cond, crop, full, frames, spp, seed) -> dict:
-    from vrneural.bench.supersample import SupersampledReference
-
-    ref = SupersampledReference(scene, s, spp, seed)
-    ts.track(ref.r, cond, crop, full)
-    return {f: ref.frame(f) for f in frames}
-
-
-def scheduled_candidates(r, cond, budget: float | None) -> float:
-    """Candidate blocks per displayed frame (frame 0, the first full update, left out) that
-    renderer ``r``'s schedule hands the texture-space pass over ``cond``'s frames, with adaptive
-    reuse at ``budget`` degrees (None: the fixed N): the schedule alone, nothing shaded."""
-    from vrneural.runtime.adaptive import AdaptiveState
-    from vrneural.runtime.lights import light_arrays
-
-    r.s.reuse_budget = budget
-    for n in r.neural:
-        n.fresh, n.adapt = False, AdaptiveState()
-    total = 0
-    for f in range(cond.frames):
-        todo, _, _ = r._slices(f, r.eyes_at(f), light_arrays(r.lights, f / r.s.fps)[0])
-        if f:
-            total += sum(n.gatlas.block_list(per)[1][ph][1] for _, n, ph, per in todo)
-    return total * r.s.eyes / max(cond.frames - 1, 1)
 
 
 def match_budget(scene, c, cond, prof) -> tuple[float, float, float]:
@@ -473,77 +404,76 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
     from tqdm import tqdm
 
     from vrneural.bench.packs import REQUIRED
-    from vrneural.bench.tradeoff_report import finish_report
     from vrneural.gpu.device import adapter_summary
     from vrneural.runtime.profiles import get_profile
 
     c = cfg.resolved()
     check(c)
-    root = rp.prepare_out(cfg.out, cfg.force, "tradeoff")
-    t0 = time.perf_counter()
-    doc = rp.header("tradeoff", c)
-    tt = time.perf_counter()
-    mats = load_materials(c, root)
-    doc["packs"] = {"source": c.packs or "trained", "seconds": time.perf_counter() - tt,
-                    "materials": {k: sorted(v) for k, v in mats.items()}}  # fmt: skip
-    if c.packs:
-        from vrneural.bench.packs import PACKS
+    with rp.prepare_out(cfg.out, cfg.force, "tradeoff") as root:
+        t0 = time.perf_counter()
+        doc = rp.header("tradeoff", c)
+        tt = time.perf_counter()
+        mats = load_materials(c, root)
+        doc["packs"] = {"source": c.packs or "trained", "seconds": time.perf_counter() - tt,
+                        "materials": {k: sorted(v) for k, v in mats.items()}}  # fmt: skip
+        if c.packs:
+            from vrneural.bench.packs import PACKS
 
-        doc["packs"]["absent"] = [k for k in PACKS if k not in next(iter(mats.values()))]
-    prof = get_profile(QUEST3)
-    full = prof.eye_res
-    ppd = metrics.pixels_per_degree(full[1], prof.fov_y)
-    doc["ppd"] = ppd
-    conds = conditions(c, prof.fps, root / "poses")
-    first = next(iter(mats))
-    nets = [k for k in mats[first] if k not in REQUIRED]
-    has_f16 = adapter_summary().features.get("shader-f16", False)
-    # adaptive reuse at the fixed N's mean work, matched on the fastest turn
-    fastest = max((x for x in conds if x.family in ("turn", "log")), key=lambda x: x.value,
-                  default=None)  # fmt: skip
-    budget = None
-    if fastest is not None:
-        scene = ts.scene_for(fastest, mats[first]["student"], n_lights=c.lights)
-        budget, matched, target = match_budget(scene, c, fastest, prof)
-        doc["adaptive"] = {"condition": fastest.name, "budget_deg": budget,
-                           "base_candidates_per_frame": target,
-                           "matched_candidates_per_frame": matched}  # fmt: skip
-    jobs = []
-    for cond in conds:
-        presets = list(mats) if cond.family == "smooth" or cond is fastest else [first]
-        for preset in presets:
-            vs = variants_for(c, cond, nets if preset == first else [], has_f16, budget)
-            jobs.append((cond, preset, vs))
-    total = sum(len(vs) for _, _, vs in jobs)
-    bar = tqdm(total=total, desc="bench tradeoff", unit="variant", disable=not c.progress)
-    for cond, preset, vs in jobs:
-        pm = mats[preset]
-        teacher = pm["teacher"]
-        rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
-               "preset": preset, "scored_frames": cond.scored, "variants": []}  # fmt: skip
-        rs = settings_for(c, variant(mode="reference"), cond, prof, teacher)
-        rscene = ts.scene_for(cond, pm["student"], teacher, c.lights)
-        bar.set_postfix_str(f"{cond.name} / {preset}: reference")
-        ref = reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
-        nf = cond.scored[: max(2, len(cond.scored) // 2)]
-        ref2 = reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
-        floor = [metrics.flip_hdr_eyes(ref[f], ref2[f], ppd) for f in nf]
-        rec["noise_floor"] = {"flip": float(np.mean(floor)), "frames": nf}
-        cache: dict = {}
-        n0 = None
-        for v in vs:
-            bar.set_postfix_str(f"{cond.name} / {preset}: {label(v)}")
-            mat = pm.get(v["material"], pm["student"])
-            scene = ts.scene_for(cond, mat, None, c.lights)
-            imgs, st = render(scene, settings_for(c, v, cond, prof), cond, c.crop, full,
-                              set(cond.scored))  # fmt: skip
-            if v["knob"] == "reuse" and v["value"] == 0:
-                n0 = imgs
-            n0_ = n0 if v is not vs[0] else None
-            r = {**v, **work(st), **scores(ref, imgs, n0_, ppd, cond.scored, cache, ref2)}
-            rec["variants"].append(r)
-            bar.update()
-        rec["difference_floor"] = difference_floor(rec["variants"])
-        doc["records"].append(rec)
-    bar.close()
-    return finish_report(root, doc, t0)
+            doc["packs"]["absent"] = [k for k in PACKS if k not in next(iter(mats.values()))]
+        prof = get_profile(QUEST3)
+        full = prof.eye_res
+        ppd = metrics.pixels_per_degree(full[1], prof.fov_y)
+        doc["ppd"] = ppd
+        conds = conditions(c, prof.fps, root / "poses")
+        first = next(iter(mats))
+        nets = [k for k in mats[first] if k not in REQUIRED]
+        has_f16 = adapter_summary().features.get("shader-f16", False)
+        # adaptive reuse at the fixed N's mean work, matched on the fastest turn
+        fastest = max((x for x in conds if x.family in ("turn", "log")), key=lambda x: x.value,
+                      default=None)  # fmt: skip
+        budget = None
+        if fastest is not None:
+            scene = ts.scene_for(fastest, mats[first]["student"], n_lights=c.lights)
+            budget, matched, target = match_budget(scene, c, fastest, prof)
+            doc["adaptive"] = {"condition": fastest.name, "budget_deg": budget,
+                               "base_candidates_per_frame": target,
+                               "matched_candidates_per_frame": matched}  # fmt: skip
+        jobs = []
+        for cond in conds:
+            presets = list(mats) if cond.family == "smooth" or cond is fastest else [first]
+            for preset in presets:
+                vs = variants_for(c, cond, nets if preset == first else [], has_f16, budget)
+                jobs.append((cond, preset, vs))
+        total = sum(len(vs) for _, _, vs in jobs)
+        bar = tqdm(total=total, desc="bench tradeoff", unit="variant", disable=not c.progress)
+        for cond, preset, vs in jobs:
+            pm = mats[preset]
+            teacher = pm["teacher"]
+            rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
+                   "preset": preset, "scored_frames": cond.scored, "variants": []}  # fmt: skip
+            rs = settings_for(c, variant(mode="reference"), cond, prof, teacher)
+            rscene = ts.scene_for(cond, pm["student"], teacher, c.lights)
+            bar.set_postfix_str(f"{cond.name} / {preset}: reference")
+            ref = reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
+            nf = cond.scored[: max(2, len(cond.scored) // 2)]
+            ref2 = reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
+            floor = [metrics.flip_hdr_eyes(ref[f], ref2[f], ppd) for f in nf]
+            rec["noise_floor"] = {"flip": float(np.mean(floor)), "frames": nf}
+            cache: dict = {}
+            n0 = None
+            for v in vs:
+                bar.set_postfix_str(f"{cond.name} / {preset}: {label(v)}")
+                mat = pm.get(v["material"], pm["student"])
+                scene = ts.scene_for(cond, mat, None, c.lights)
+                imgs, st = render(scene, settings_for(c, v, cond, prof), cond, c.crop, full,
+                                  set(cond.scored))  # fmt: skip
+                if v["knob"] == "reuse" and v["value"] == 0:
+                    n0 = imgs
+                n0_ = n0 if v is not vs[0] else None
+                r = {**v, **work(st), **scores(ref, imgs, n0_, ppd, cond.scored, cache, ref2)}
+                rec["variants"].append(r)
+                bar.update()
+            rec["difference_floor"] = difference_floor(rec["variants"])
+            doc["records"].append(rec)
+        bar.close()
+        return finish_report(root, doc, t0)

@@ -6,7 +6,36 @@ positions."""
 from __future__ import annotations
 
 from vrneural.bench import report as rp
-from vrneural.bench.tradeoff import label, pareto
+
+LABELS = {
+    "student": "student (distilled)",
+    "student_nodistill": "student w/o distillation",
+    "single8": "single-level 8-wide",
+    "neumip": "NeuMIP-sized 4x25",
+}
+
+
+def label(r: dict) -> str:
+    if r["knob"] == "base":
+        return "base"
+    if r["knob"] == "network":
+        return LABELS[r["value"]]
+    return f"{r['knob']}={r['value']}"
+
+
+def pareto(points: list[tuple[float, float]], lower_better: bool) -> list[int]:
+    """Indices of the Pareto-optimal points ``(cost, error)``: no other point is at most as
+    costly and strictly better."""
+    out = []
+    for i, (ci, ei) in enumerate(points):
+        dominated = any(
+            cj <= ci and (ej < ei if lower_better else ej > ei) and (cj, ej) != (ci, ei)
+            for j, (cj, ej) in enumerate(points)
+            if j != i
+        )
+        if not dominated:
+            out.append(i)
+    return out
 
 
 def base_of(rec: dict) -> dict:

@@ -26,23 +26,14 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+from vrneural.bench.widths_report import METHODS, STARTS, within, write_report
 from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt, quick_defaults
 from vrneural.distill.config import COMPILE_MODES
-from vrneural.errors import VrnError, check_range, check_seed, count
-from vrneural.formats.atomic import mark_output_dir
+from vrneural.errors import VrnError, check_range, check_seed
 from vrneural.versions import package_versions
 
 #: the networks ``--methods`` may name: their `distill` settings and their names in the report
-METHODS = {
-    "student": (dict(method="student"), "student (coarse-to-fine, distilled)"),
-    "student_nodistill": (
-        dict(method="student", distill=False),
-        "student w/o distillation",
-    ),
-    "single8": (dict(method="single8"), "single-level (distilled)"),
-}
-STARTS = {"plain": "from random weights", "wide": "wide start (2W, pruned to W)"}
 NEUMIP = dict(method="neumip", distill=False)
 #: --wide-start trains 2W wide, and distill's widths end at 64
 MAX_WIDE = 32
@@ -171,7 +162,7 @@ def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = T
     """``((method, width, start), stem, config)`` of every network and seed (wide halves: None
     instead of the triple), in an order one process can train them in."""
     from vrneural.bench.quality import network_runs as one
-    from vrneural.formats.atomic import file_sha256
+    from vrneural.outputs import file_sha256
 
     q = plan.quality
     d = root / q.presets
@@ -192,12 +183,12 @@ def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = T
 
 def run_widths(cfg: WidthsConfig) -> dict:
     """Run the sweep; writes results.json, results.md and widths.png in ``out``."""
-    from vrneural.bench.quality import check_bench_out, resume_hint
+    from vrneural.bench.quality_train import check_bench_out, resume_hint
 
     cfg = cfg.resolved()
     plan = validate(cfg)
     root = Path(cfg.out)
-    check_bench_out(root, cfg, "bench widths", "sweep")
+    od = check_bench_out(root, cfg, "bench widths", "sweep")
     _check_same_preset(cfg, root)
     if cfg.resume:  # every checkpoint it would meet matches, before any work
         from vrneural.bench.quality import _teach_config
@@ -205,8 +196,8 @@ def run_widths(cfg: WidthsConfig) -> dict:
         btf_path = root / "btf" / f"{cfg.preset}.btf"
         _teach_config(cfg.preset, plan.quality, root, btf_path, None)
         network_runs(plan, root, btf_path, check_teacher=False)
-    mark_output_dir(root, "bench widths")
-    with resume_hint(root):
+    with od, resume_hint(root):
+        od.open()
         return _run(cfg, plan, root)
 
 
@@ -229,8 +220,8 @@ def _check_same_preset(cfg: WidthsConfig, root: Path) -> None:
 def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
     """Synthesise the BTF, train the teacher and every network (``--jobs`` processes at a
     time); returns the teacher's checkpoint and ``(key, final checkpoint)`` of each network."""
-    from vrneural.bench.quality import (
-        _teach_config,
+    from vrneural.bench.quality import _teach_config
+    from vrneural.bench.quality_train import (
         job_pool,
         load_trained,
         make_btf,
@@ -260,13 +251,12 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
 def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
     import numpy as np
 
-    from vrneural.bench.quality import _with_wide_start
-    from vrneural.bench.widths_report import write_report
+    from vrneural.bench.quality_train import with_wide_start
     from vrneural.btf.format import read_btf
+    from vrneural.distill.checkpoint import model_from_checkpoint
     from vrneural.distill.data import SliceData
-    from vrneural.distill.distill import model_from_checkpoint
     from vrneural.distill.evaluate import mean_l1
-    from vrneural.formats.atomic import write_json
+    from vrneural.outputs import write_json
 
     t0 = time.perf_counter()
     tck, done = _train(plan, root, print)
@@ -279,7 +269,7 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
     for key, ck, wide_path in done:
         model = model_from_checkpoint(ck)
         mat = model.to_material()
-        whole = _with_wide_start(ck, wide_path)  # both halves' seconds and epochs
+        whole = with_wide_start(ck, wide_path)  # both halves' seconds and epochs
         method, width, start = key
         r = rows.setdefault(
             _key(*key),
@@ -329,7 +319,6 @@ def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
 def narrowest(rows: dict, plan: Plan) -> dict:
     """Per ``method:start`` family: the narrowest width whose seed mean is within 10% of
     NeuMIP's (None where none is)."""
-    from vrneural.bench.widths_report import within
 
     nm = rows["neumip"]
     out = {}
@@ -338,14 +327,3 @@ def narrowest(rows: dict, plan: Plan) -> dict:
             ok = [w for w in plan.widths if within(rows[_key(m, w, start)], nm)]
             out[f"{m}:{start}"] = ok[0] if ok else None
     return out
-
-
-def describe(cfg: dict) -> str:
-    """The budget line of the report."""
-    reps = cfg["repeats"]
-    seeds = f"seed {cfg['seed']}" if reps == 1 else f"seeds {cfg['seed']}-{cfg['seed'] + reps - 1}"
-    return (
-        f"{cfg['preset']}, {cfg['res']}^2 texels, {cfg['dirs']} x {cfg['dirs']} directions; "
-        f"teacher {count(cfg['teacher_epochs'], 'epoch')}, every other network "
-        f"{count(cfg['epochs'], 'epoch')}, {seeds}"
-    )

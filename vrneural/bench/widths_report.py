@@ -5,12 +5,31 @@ from __future__ import annotations
 from pathlib import Path
 
 from vrneural.errors import count
-from vrneural.formats.atomic import atomic_path
+from vrneural.outputs import atomic_path
+
+METHODS = {
+    "student": (dict(method="student"), "student (coarse-to-fine, distilled)"),
+    "student_nodistill": (
+        dict(method="student", distill=False),
+        "student w/o distillation",
+    ),
+    "single8": (dict(method="single8"), "single-level (distilled)"),
+}
+STARTS = {"plain": "from random weights", "wide": "wide start (2W, pruned to W)"}
+
+
+def describe(cfg: dict) -> str:
+    """The budget line of the report."""
+    reps = cfg["repeats"]
+    seeds = f"seed {cfg['seed']}" if reps == 1 else f"seeds {cfg['seed']}-{cfg['seed'] + reps - 1}"
+    return (
+        f"{cfg['preset']}, {cfg['res']}^2 texels, {cfg['dirs']} x {cfg['dirs']} directions; "
+        f"teacher {count(cfg['teacher_epochs'], 'epoch')}, every other network "
+        f"{count(cfg['epochs'], 'epoch')}, {seeds}"
+    )
 
 
 def _label(r: dict) -> str:
-    from vrneural.bench.widths import METHODS, STARTS
-
     if r["method"] == "neumip":
         return "NeuMIP (4 x 25)"
     return f"{METHODS[r['method']][1]}, {STARTS[r['start']]}"
@@ -39,8 +58,6 @@ def families(doc: dict) -> list[tuple[str, str]]:
 
 
 def markdown(doc: dict) -> str:
-    from vrneural.bench.widths import describe
-
     rows, cfg = doc["rows"], doc["config"]
     nm = rows["neumip"]
     wide = ""
@@ -162,8 +179,6 @@ def widths_png(doc: dict, path: Path) -> None:
     ax.set_ylabel("whole-BTF L1" + (" (mean ± sd over seeds)" if several else ""))
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
-    from vrneural.bench.widths import describe
-
     ax.set_title(describe(doc["config"]), fontsize=8)
     fig.tight_layout()
     with atomic_path(path) as tmp:

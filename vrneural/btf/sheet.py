@@ -200,7 +200,7 @@ def sheet_figure(btf: Btf, texel: tuple[int, int] | None = None):
 
 def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
     """Write the contact sheet PNG to ``out``. ``texel = (x, y)`` picks the unfolded texel."""
-    from vrneural.formats.atomic import atomic_path
+    from vrneural.outputs import atomic_path
 
     fig = sheet_figure(btf, texel)  # selects the Agg backend before pyplot is imported here
     import matplotlib.pyplot as plt

@@ -13,22 +13,14 @@ import signal
 import sys
 
 from vrneural import __version__
-from vrneural.errors import VrnError
+from vrneural.errors import ArgumentParser, VrnError
 
 #: Subcommand modules, in `--help` order. Only commands that work are listed.
 COMMANDS = ["info", "btf", "teach", "distill", "export", "eval", "run", "view", "bench", "atlas"]
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse with a one-line error (the problem and where the help is) instead of the
-    command's whole usage; subcommand parsers inherit it."""
-
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
-
-
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(
+    p = ArgumentParser(
         prog="vrneural",
         description="Neural materials at VR frame rates: BTF -> distilled student -> WGSL -> "
         "texture-space shading with reuse.",
@@ -111,15 +103,12 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
-    """Parse ``argv`` and run its command; user errors, Ctrl-C and SIGTERM become exit codes,
-    and the command's outputs are sealed however it ends."""
-    from vrneural import interrupt
-
+    """Parse ``argv`` and run its command; user errors, Ctrl-C and SIGTERM become exit codes
+    (each command's :class:`vrneural.outputs.OutputDir` seals its output however it ends)."""
     args, extra = parser.parse_known_args(argv)
     if extra:  # named by the subcommand's parser: its usage line, not the top level's
         _command_parser(parser, args).error(f"unrecognized arguments: {' '.join(extra)}")
     args._explicit = explicit_dests(argv, parser)  # "--epochs 20" counts even at the default
-    code = 1  # an exception that escapes: the command failed
     try:
         code = int(args.func(args) or 0)
         sys.stdout.flush()  # a closed pipe (`| head`) shows here, not at interpreter exit
@@ -127,25 +116,13 @@ def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
     except BrokenPipeError:  # the reader went away: stop quietly, as `cat` does
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
-        code = 141  # 128 + SIGPIPE, what a shell reports for a command killed by it
-        return code
+        return 141  # 128 + SIGPIPE, what a shell reports for a command killed by it
     except VrnError as e:
         print(f"{command_name(args)}: error: {e}", file=sys.stderr)
-        code = e.exit_code
-        return code
+        return e.exit_code
     except KeyboardInterrupt:
         print(f"{command_name(args)}: interrupted", file=sys.stderr)
-        code = 130
-        return code
-    finally:  # however the command ended, record what it wrote in its output directories
-        from vrneural.formats.atomic import remove_empty_created_dirs, seal_marked
-
-        held = interrupt.hold_signals()  # a second Ctrl-C or SIGTERM waits for this
-        try:
-            seal_marked(failed=code != 0)  # a failed command's new, still empty --out: removed
-            remove_empty_created_dirs()  # and take back folders made for outputs never written
-        finally:
-            interrupt.put_back(held)
+        return 130
 
 
 if __name__ == "__main__":

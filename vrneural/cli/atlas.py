@@ -70,7 +70,6 @@ def register(sub) -> None:
 
 def _meshes(spec: str, crease: float | None = None):
     from vrneural.atlas import BUILTIN_MESHES, builtin_mesh, load_mesh
-
     from vrneural.errors import VrnError
 
     if spec in BUILTIN_MESHES and not Path(spec).exists():
@@ -96,7 +95,7 @@ def run(args) -> int:
     )
     from vrneural.config import config_from_args
     from vrneural.errors import VrnError, check_range
-    from vrneural.formats.atomic import check_output
+    from vrneural.outputs import check_output
     from vrneural.runtime.assets import collapsed_triangles, lost_triangles
 
     cfg = config_from_args(AtlasConfig, args)
@@ -173,7 +172,7 @@ def _write_png(path: Path, atlas, color: str) -> None:
     import imageio.v3 as iio
 
     from vrneural.atlas.visualize import atlas_image, gutter_mask
-    from vrneural.formats.atomic import atomic_path
+    from vrneural.outputs import atomic_path
 
     img = atlas_image(atlas, by=color, gutter=gutter_mask(atlas))
     with atomic_path(path) as tmp:
@@ -184,7 +183,7 @@ def _write_sidecar(
     out: Path, cfg, results: list[dict], notes: list[str], crease: float | None
 ) -> None:
     from vrneural.config import config_dict
-    from vrneural.formats.atomic import write_json
+    from vrneural.outputs import write_json
 
     # what write_config writes, at the path checked before anything was written (even where
     # OUT of a multi-mesh file is a directory: it is not written then)

@@ -137,20 +137,18 @@ def _check_partial(out: Path, resume: bool, force: bool) -> None:
 def run_synth(args) -> int:
     from vrneural.btf.synth import BtfConfig, synthesize
     from vrneural.config import config_from_args, config_path, write_config
-    from vrneural.formats.atomic import (
+    from vrneural.outputs import (
         check_outputs,
-        check_suffix,
         check_resume_force,
-        lock_output_file,
-        output_locks,
+        check_suffix,
+        output_lock,
     )
 
     cfg = config_from_args(BtfConfig, args)
     cfg.validate()
     check_resume_force(args.resume, args.force)
     check_suffix(args.output, ".btf", "BTF", "leather.btf")
-    with output_locks():
-        lock_output_file(args.output)  # a second synth on it meanwhile is refused
+    with output_lock(args.output):  # a second synth on it meanwhile is refused
         out, _ = check_outputs([args.output, config_path(args.output)], args.force)
         _check_partial(out, args.resume, args.force)
         path = synthesize(
@@ -164,12 +162,11 @@ def run_synth(args) -> int:
 def run_render(args) -> int:
     from vrneural.btf.pt_render import RenderConfig, render_btf
     from vrneural.config import config_from_args, config_path, write_config
-    from vrneural.formats.atomic import (
+    from vrneural.outputs import (
         check_outputs,
         check_resume_force,
         check_suffix,
-        lock_output_file,
-        output_locks,
+        output_lock,
     )
 
     cfg = config_from_args(RenderConfig, args)
@@ -179,8 +176,7 @@ def run_render(args) -> int:
     from vrneural.btf.pathtrace import load_mitsuba
 
     load_mitsuba()  # not installed: one line naming the extra, before any output
-    with output_locks():
-        lock_output_file(args.output)
+    with output_lock(args.output):
         out, _ = check_outputs([args.output, config_path(args.output)], args.force)
         _check_partial(out, args.resume, args.force)
         path = render_btf(
@@ -254,7 +250,7 @@ def run_show(args) -> int:
     from vrneural.btf.format import read_btf
     from vrneural.btf.sheet import contact_sheet, sheet_panels
     from vrneural.errors import check_range
-    from vrneural.formats.atomic import check_output, check_suffix
+    from vrneural.outputs import check_output, check_suffix
 
     check_suffix(args.output, ".png", "image", "sheet.png", ignore_case=True)
     btf = read_btf(args.file)
@@ -283,7 +279,7 @@ def run_show(args) -> int:
 def run_import(args) -> int:
     from vrneural.btf.ubo2014 import import_ubo, load_extractor, parse_header
     from vrneural.errors import VrnError
-    from vrneural.formats.atomic import check_outputs, check_resume_force, check_suffix
+    from vrneural.outputs import check_outputs, check_resume_force, check_suffix
 
     check_resume_force(args.resume, args.force)
     check_suffix(args.output, ".btf", "BTF", "leather.btf")  # as btf synth
@@ -303,7 +299,7 @@ def run_import(args) -> int:
 def _import_images(args) -> int:
     """`btf import DIR`: an image set (vrneural/btf/imageset.py)."""
     from vrneural.btf.imageset import import_images, plan_import
-    from vrneural.formats.atomic import check_outputs
+    from vrneural.outputs import check_outputs
 
     plan_import(args.file, args.table, args.png_linear)  # every check before any output
     (out,) = check_outputs([args.output], args.force)

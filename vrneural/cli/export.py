@@ -30,12 +30,12 @@ def register(sub) -> None:
 def run(args) -> int:
     import json
 
-    from vrneural.bench.packs import width_words
     from vrneural.config import config_path
     from vrneural.distill.checkpoint import load_checkpoint
     from vrneural.distill.export import export_checkpoint, ranges_table
-    from vrneural.formats.atomic import check_outputs, check_suffix, write_json
     from vrneural.formats.vrnm import read_vrnm
+    from vrneural.material import width_words
+    from vrneural.outputs import check_outputs, check_suffix, write_json
 
     check_suffix(args.output, ".vrnm", "pack", "material.vrnm")
     sidecar = config_path(args.output)

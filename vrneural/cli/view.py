@@ -34,10 +34,9 @@ def main(args) -> int:
 
     from vrneural.config import config_from_args, replace_config
     from vrneural.runtime.config import RunConfig
+    from vrneural.viewer.backends import check_display, import_glfw
     from vrneural.viewer.config import ViewConfig
     from vrneural.viewer.view import View
-
-    from vrneural.viewer.backends import check_display, import_glfw
 
     check_display()  # before the scene and its shaders take their seconds
     import_glfw()

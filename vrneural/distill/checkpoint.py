@@ -26,7 +26,10 @@ from pathlib import Path
 
 import torch
 
+from vrneural.distill.models import NeuralModel
 from vrneural.errors import VrnError
+from vrneural.grazing import DEFAULT_THETA_MAX_DEG
+from vrneural.outputs import make_parent
 from vrneural.warn import VrnWarning
 
 FORMAT = "vrneural-checkpoint"
@@ -51,7 +54,7 @@ def unfinished_run(ck: dict) -> str:
 def save_checkpoint(path, payload: dict) -> None:
     """``torch.save`` to a temporary sibling, then ``os.replace`` (atomic): a failed write
     (one-line :class:`VrnError`) leaves the previous checkpoint as it was."""
-    p = Path(path)
+    p = make_parent(path)
     tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
     try:
         torch.save({"format": FORMAT, "version": VERSION, **payload}, tmp)
@@ -193,3 +196,48 @@ def _first_sentence(e: Exception) -> str:
     first = text.splitlines()[0]
     cut = first.find(". ")
     return first[: cut + 1] if 0 < cut < 160 else first[:160]
+
+
+def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
+    """The trained :class:`NeuralModel` of a checkpoint (frozen, eval mode): its weight
+    average where it was trained with ``--ema``, else the last step's weights. ``source``
+    (the file) names it in errors."""
+    where = source or "checkpoint"
+    try:
+        model = NeuralModel(ck["spec"])
+    except (KeyError, TypeError, ValueError) as e:
+        raise VrnError(f"{where}: invalid model spec ({type(e).__name__}: {e})") from None
+    net = dict(ck["net"])
+    if ck.get("ema"):
+        net.update(ck["ema"]["avg"])
+    state = {k[len("model.") :]: v for k, v in net.items() if k.startswith("model.")}
+    problem = _state_mismatch(model.state_dict(), state)
+    if problem:
+        raise VrnError(f"{where}: checkpoint weights do not match its spec: {problem}")
+    model.load_state_dict(state)
+    model.eval()
+    for p in model.parameters():
+        p.requires_grad_(False)
+    model.dir_range = recorded_dir_range(ck)
+    return model
+
+
+def recorded_dir_range(ck: dict) -> tuple[float, float]:
+    """The direction range of a checkpoint's BTF (its record; checkpoints from before it was
+    recorded: the default, which is what ``btf synth`` and UBO2014 hold)."""
+    rng = ck.get("btf", {}).get("dir_range")
+    return tuple(rng) if rng else (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
+
+
+def _state_mismatch(want: dict, have: dict) -> str | None:
+    """The first difference between a model's state dict and a checkpoint's, in words."""
+    for k, v in have.items():
+        if k not in want:
+            return f"unexpected tensor 'model.{k}'"
+        if tuple(v.shape) != tuple(want[k].shape):
+            return (
+                f"'model.{k}' has shape {list(v.shape)} in the file, the spec needs "
+                f"{list(want[k].shape)}"
+            )
+    missing = [k for k in want if k not in have]
+    return f"tensor 'model.{missing[0]}' is missing" if missing else None

@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from vrneural.config import opt
+from vrneural.errors import VrnError
 
 SPACES = ("linear", "log")
 METHODS = ("student", "single8", "neumip")
@@ -137,3 +138,18 @@ class DistillConfig(TrainConfig):
     coarse_channels: int = opt(8, "student U_c channels (one texel per 2x2 block)")
     fine_channels: int = opt(8, "student U_f channels (full BTF resolution)")
     export: bool = opt(True, "also write the runtime pack beside the checkpoint (s.pt -> s.vrnm)")
+
+
+def check_lod_levels(cfg, res: tuple[int, int], btf_path) -> None:
+    """``--lod-levels`` fits the BTF: the last level still has whole 2x2 blocks (and the
+    student's half-resolution coarse texture a texel per block)."""
+    top = cfg.lod_levels - 1
+    ok = all(r % (1 << (top + 1)) == 0 for r in res)
+    if not ok:
+        most = 1
+        while all(r % (1 << (most + 1)) == 0 for r in res) and most < 12:
+            most += 1
+        raise VrnError(
+            f"--lod-levels = {cfg.lod_levels} does not fit {btf_path} ({res[0]}x{res[1]} "
+            f"texels): level {top} needs whole 2x2 blocks; allowed [1, {most}]"
+        )

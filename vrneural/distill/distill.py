@@ -17,9 +17,9 @@ from pathlib import Path
 
 import torch
 import torch.distributed as dist
-from torch import nn
 
 from vrneural.btf.format import read_btf
+from vrneural.btf.identity import btf_fingerprint, check_btf_record
 from vrneural.config import (
     is_explicit,
     keep_flag_names,
@@ -30,201 +30,32 @@ from vrneural.config import (
 from vrneural.distill.checkpoint import (
     UnfinishedRunWarning,
     load_checkpoint,
+    model_from_checkpoint,
     recorded_btf,
     unfinished_run,
 )
-from vrneural.distill.config import BEFORE_FIELD, DistillConfig
-from vrneural.btf.identity import btf_fingerprint, check_btf_record
+from vrneural.distill.config import BEFORE_FIELD, DistillConfig, check_lod_levels
+from vrneural.distill.core import DistillNet
 from vrneural.distill.data import SliceData
-from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs, to_space
-from vrneural.distill.models import NeuralModel, apply_output, make_spec
+from vrneural.distill.evaluate import mean_l1, test_pairs
+from vrneural.distill.models import NeuralModel, make_spec
 from vrneural.distill.outputs import (
     clear_outputs,
     finish_outputs,
     outputs_of,
     prepare_outputs,
 )
-from vrneural.distill.prune import prune_to
+from vrneural.distill.prune import check_init, prune_to
 from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import Interrupted, compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, count
-from vrneural.grazing import DEFAULT_THETA_MAX_DEG
-from vrneural.formats.atomic import check_not_input, check_resume_force, file_sha256, same_file
-
-
-def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
-    """The trained :class:`NeuralModel` of a checkpoint (frozen, eval mode): its weight
-    average where it was trained with ``--ema``, else the last step's weights. ``source``
-    (the file) names it in errors."""
-    where = source or "checkpoint"
-    try:
-        model = NeuralModel(ck["spec"])
-    except (KeyError, TypeError, ValueError) as e:
-        raise VrnError(f"{where}: invalid model spec ({type(e).__name__}: {e})") from None
-    net = dict(ck["net"])
-    if ck.get("ema"):
-        net.update(ck["ema"]["avg"])
-    state = {k[len("model.") :]: v for k, v in net.items() if k.startswith("model.")}
-    problem = _state_mismatch(model.state_dict(), state)
-    if problem:
-        raise VrnError(f"{where}: checkpoint weights do not match its spec: {problem}")
-    model.load_state_dict(state)
-    model.eval()
-    for p in model.parameters():
-        p.requires_grad_(False)
-    model.dir_range = recorded_dir_range(ck)
-    return model
-
-
-def check_lod_levels(cfg, res: tuple[int, int], btf_path) -> None:
-    """``--lod-levels`` fits the BTF: the last level still has whole 2x2 blocks (and the
-    student's half-resolution coarse texture a texel per block)."""
-    top = cfg.lod_levels - 1
-    ok = all(r % (1 << (top + 1)) == 0 for r in res)
-    if not ok:
-        most = 1
-        while all(r % (1 << (most + 1)) == 0 for r in res) and most < 12:
-            most += 1
-        raise VrnError(
-            f"--lod-levels = {cfg.lod_levels} does not fit {btf_path} ({res[0]}x{res[1]} "
-            f"texels): level {top} needs whole 2x2 blocks; allowed [1, {most}]"
-        )
-
-
-def recorded_dir_range(ck: dict) -> tuple[float, float]:
-    """The direction range of a checkpoint's BTF (its record; checkpoints from before it was
-    recorded: the default, which is what ``btf synth`` and UBO2014 hold)."""
-    rng = ck.get("btf", {}).get("dir_range")
-    return tuple(rng) if rng else (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
-
-
-class DistillNet(nn.Module):
-    """Student + T maps; ``forward`` returns the Eq. 5 loss of one slice (this rank's share)."""
-
-    def __init__(self, model, teacher, data: SliceData, cfg: DistillConfig):
-        super().__init__()
-        self.model = model
-        self.data = data
-        self.cfg = cfg
-        self.space = cfg.space
-        self.teacher = [teacher]  # a list: not a submodule (frozen, not synchronised by DDP)
-        if cfg.distill:
-            dt = [teacher.spec["hidden"][i] for i in teacher.latent_layers]
-            ds = _latent_widths(model.spec)
-            self.T1 = nn.Linear(dt[0], ds[0], bias=False)
-            self.T2 = nn.Linear(dt[1], ds[1], bias=False)
-
-    def lod_loss(self, wi, wo, pair):
-        """The prefiltered levels' L1 (each level's output at its texel centres against the
-        slice averaged over its texels), weighted by ``lod_weight`` shared by the levels; None
-        with one level. No jitter: the level's lookups are the exact box averages of level 0's
-        texels, and nothing random is drawn, so a resumed run stays bit for bit."""
-        levels = self.model.lod_levels
-        if levels <= 1:
-            return None
-        total = 0.0
-        for k in range(1, levels):
-            uv = self.data.uv_level(k, None)
-            raw, _ = self.model(wi, wo, uv, k)
-            total = total + space_l1(raw, self.data.target_level(pair, k), self.space)
-        return self.cfg.lod_weight * total / (levels - 1)
-
-    def forward(self, wi, wo, uv, pair):
-        raw, zs = self.model(wi, wo, uv)
-        gt = space_l1(raw, self.data.target(pair), self.space)
-        lod = self.lod_loss(wi, wo, pair)
-        gt_total = gt if lod is None else gt + lod
-        if not self.cfg.distill:
-            return gt_total, {"gt": gt.detach()}
-        teacher = self.teacher[0]
-        with torch.no_grad():
-            raw_t, zt = teacher(wi, wo, uv)
-            yt = to_space(apply_output(raw_t, teacher.output), self.space)
-        out = (raw - yt).abs().mean()
-        l1 = ((zs[0] - self.T1(zt[0])) ** 2).mean()
-        l2 = ((zs[1] - self.T2(zt[1])) ** 2).mean()
-        c = self.cfg
-        loss = gt_total + c.sigma * out + c.lambda1 * l1 + c.lambda2 * l2
-        return loss, {"gt": gt.detach(), "teacher": out.detach()}
-
-
-WIDTH_KEYS = ("hidden", "coarse_hidden", "fine_hidden")
-
-
-def check_init(path: str, ick: dict, cfg: DistillConfig, spec: dict, teacher_sha: str) -> None:
-    """``--init-from``: a run of this method, from this teacher (so the same BTF and split:
-    its weights never saw this run's held-out slices), of this architecture at this width or
-    wider. One-line error otherwise."""
-    where = f"--init-from {path}"
-    if cfg.method == "neumip":
-        raise VrnError(f"{where}: --init-from prunes the 8-wide networks (student, single8)")
-    if ick.get("method") != cfg.method:
-        raise VrnError(
-            f"{where}: is a {ick.get('method')} run; this run trains {cfg.method} "
-            f"(train the wide run with --method {cfg.method} --width 16)"
-        )
-    if ick.get("teacher", {}).get("sha256") != teacher_sha:
-        raise VrnError(
-            f"{where}: was distilled from another teacher than {cfg.teacher}; its "
-            "training slices may be this run's held-out ones (use a run of this teacher)"
-        )
-    theirs = ick["spec"]
-    for k in sorted(set(spec) | set(theirs)):
-        if k in WIDTH_KEYS:
-            mine, wide = spec.get(k), theirs.get(k)
-            if not isinstance(wide, list) or len(wide) != len(mine):
-                raise VrnError(f"{where}: its {k} {wide} has another depth than {mine}")
-            if any(w < m for w, m in zip(wide, mine, strict=True)):
-                raise VrnError(
-                    f"{where}: is {max(wide)} wide, narrower than --width {cfg.width}; "
-                    f"--init-from needs a run at least {cfg.width} wide (train one with "
-                    f"--width {max(16, 2 * cfg.width)}), or ask for --width {max(wide)} or less"
-                )
-        elif k not in ("tex_init",) and spec.get(k) != theirs.get(k):
-            name, show = SPEC_FLAGS.get(k, (k, lambda v: v))
-            raise VrnError(
-                f"{where}: was trained with {name} {show(theirs.get(k))}, this run with "
-                f"{show(spec.get(k))}"
-            )
-    if not ick.get("finished", True):
-        warnings.warn(
-            f"{path}: {unfinished_run(ick)}; starting from it as it is",
-            UnfinishedRunWarning,
-            stacklevel=2,
-        )
-
-
-#: spec fields -> the option that sets them and its value, for --init-from's messages
-SPEC_FLAGS = {
-    "output": ("--space", lambda v: "log" if v == "log1p" else "linear"),
-    "coarse_channels": ("--coarse-channels", lambda v: v),
-    "fine_channels": ("--fine-channels", lambda v: v),
-    "channels": ("texture channels", lambda v: v),
-    "dir_inputs": ("--neumip-dirs", lambda v: v),
-    "tex_res": ("the BTF resolution", lambda v: "x".join(map(str, v))),
-    "coarse_res": ("the BTF resolution / 2", lambda v: "x".join(map(str, v))),
-    "fine_res": ("the BTF resolution", lambda v: "x".join(map(str, v))),
-}
-
-
-def _state_mismatch(want: dict, have: dict) -> str | None:
-    """The first difference between a model's state dict and a checkpoint's, in words."""
-    for k, v in have.items():
-        if k not in want:
-            return f"unexpected tensor 'model.{k}'"
-        if tuple(v.shape) != tuple(want[k].shape):
-            return (
-                f"'model.{k}' has shape {list(v.shape)} in the file, the spec needs "
-                f"{list(want[k].shape)}"
-            )
-    missing = [k for k in want if k not in have]
-    return f"tensor 'model.{missing[0]}' is missing" if missing else None
-
-
-def _latent_widths(spec: dict) -> list[int]:
-    if spec["arch"] == "single":
-        return [spec["hidden"][i] for i in spec["latent_layers"]]
-    return [spec["coarse_hidden"][-1], spec["fine_hidden"][0]]
+from vrneural.outputs import (
+    check_not_input,
+    check_resume_force,
+    file_sha256,
+    output_lock,
+    same_file,
+)
 
 
 def resolve_method(cfg: DistillConfig) -> DistillConfig:
@@ -435,10 +266,8 @@ def _resume_pruned_half(cfg, narrow, wide_path: str, on_step) -> dict:
 
 def run_distill(cfg: DistillConfig, on_step=None) -> dict:
     """Train (or resume) a student/baseline; returns the final checkpoint dict. Holds a lock on its
-    outputs while it trains (:func:`vrneural.formats.atomic.lock_output_file`)."""
-    from vrneural.formats.atomic import output_locks
-
-    with output_locks():
+    outputs while it trains (:func:`vrneural.outputs.output_lock`)."""
+    with output_lock(cfg.output):
         return _run_distill(cfg, on_step)
 
 
@@ -478,7 +307,8 @@ def _run_distill(cfg: DistillConfig, on_step=None) -> dict:
         check_method_options(cfg)
     stored = stored_wide_start(cfg.output) if cfg.resume else None
     if cfg.wide_start or stored:
-        return run_wide_start(cfg, on_step, stored)
+        with output_lock(wide_output(cfg.output)):  # its wide half's outputs too
+            return run_wide_start(cfg, on_step, stored)
     wide = cfg.output.endswith(".pt") and Path(wide_output(cfg.output))
     if not cfg.resume and wide and wide.is_file():  # an unfinished wide half left behind?
         try:

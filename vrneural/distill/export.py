@@ -83,11 +83,11 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None, lod_leve
     ``lod_levels`` > 1 for a checkpoint trained without a pyramid: give the pack one of box
     averages of level 0 (the ``filter`` pyramid, untrained)."""
     from vrneural import __version__
-    from vrneural.distill.distill import model_from_checkpoint
+    from vrneural.distill.checkpoint import model_from_checkpoint
 
     model = model_from_checkpoint(ck, source)
     if lod_levels > 1 and model.lod_levels == 1:
-        from vrneural.distill.distill import check_lod_levels
+        from vrneural.distill.config import check_lod_levels
 
         check_lod_levels(SimpleNamespace(lod_levels=lod_levels), data.res, source or "the BTF")
         model.lod_levels, model.lod_kind = lod_levels, "filter"
@@ -175,10 +175,10 @@ def export_checkpoint(
 ) -> tuple[Path, dict]:
     """Write the ``.vrnm`` of a loaded checkpoint. Returns ``(path, meta)``."""
     from vrneural.btf.format import read_btf
-    from vrneural.distill.checkpoint import recorded_btf
     from vrneural.btf.identity import btf_fingerprint, check_btf_record
-    from vrneural.formats.atomic import check_not_input, check_output
+    from vrneural.distill.checkpoint import recorded_btf
     from vrneural.formats.vrnm import write_vrnm
+    from vrneural.outputs import check_not_input, check_output
 
     out = check_output(out, force)
     if data is None:
@@ -206,7 +206,7 @@ def ranges_table(ranges: dict) -> str:
 
 
 def _sha256_or_none(path) -> str | None:
-    from vrneural.formats.atomic import file_sha256
+    from vrneural.outputs import file_sha256
 
     return file_sha256(path) if path and Path(path).is_file() else None
 

@@ -165,7 +165,7 @@ class NeuralModel(nn.Module):
         self.latent_layers = spec["latent_layers"]
         self.register_buffer("dir_mask", dir_mask(spec), persistent=False)
         #: (theta_i_max, theta_o_max) degrees of the training data, set for evaluation
-        #: (:func:`vrneural.distill.distill.model_from_checkpoint`); None while training on
+        #: (:func:`vrneural.distill.checkpoint.model_from_checkpoint`); None while training on
         #: the BTF's own directions, where the extension beyond them is the identity
         self.dir_range: tuple[float, float] | None = None
 

@@ -20,12 +20,11 @@ from pathlib import Path
 from vrneural.config import config_path
 from vrneural.distill.checkpoint import load_checkpoint, unfinished_run
 from vrneural.errors import VrnError
-from vrneural.formats.atomic import (
+from vrneural.outputs import (
     check_outputs,
     check_resume_force,
     check_suffix,
     json_safe,
-    lock_output_file,
 )
 from vrneural.warn import VrnWarning
 
@@ -49,8 +48,7 @@ def prepare_outputs(cfg, outputs: list[str], inputs: list[str]) -> dict | None:
     at ``cfg.output`` is named as such), unwritable directories, --resume with --force, and on
     --resume a pack or config file that this run did not write (see the module docstring).
     """
-    check_resume_force(cfg.resume, cfg.force)
-    lock_output_file(cfg.output)  # before the checks: a run started a moment ago has no file yet
+    check_resume_force(cfg.resume, cfg.force)  # (the caller holds the output's lock)
     if cfg.resume:
         check_outputs(outputs, True, inputs)  # inputs and writable directories only
         if not Path(cfg.output).exists():

@@ -19,10 +19,14 @@ Deterministic: the slices are every k-th training pair (at most :data:`SLICES`),
 
 from __future__ import annotations
 
+import warnings
+
 import torch
 
+from vrneural.distill.checkpoint import UnfinishedRunWarning, unfinished_run
 from vrneural.distill.data import SliceData
 from vrneural.distill.models import NeuralModel
+from vrneural.errors import VrnError
 
 SLICES = 64
 
@@ -117,3 +121,62 @@ def _spec_of(spec: dict, state: dict) -> dict:
         s["coarse_hidden"] = widths("coarse", len(s["coarse_hidden"]))
         s["fine_hidden"] = widths("fine", len(s["fine_hidden"]))
     return s
+
+
+WIDTH_KEYS = ("hidden", "coarse_hidden", "fine_hidden")
+
+
+def check_init(path: str, ick: dict, cfg, spec: dict, teacher_sha: str) -> None:
+    """``--init-from``: a run of this method, from this teacher (so the same BTF and split:
+    its weights never saw this run's held-out slices), of this architecture at this width or
+    wider. One-line error otherwise."""
+    where = f"--init-from {path}"
+    if cfg.method == "neumip":
+        raise VrnError(f"{where}: --init-from prunes the 8-wide networks (student, single8)")
+    if ick.get("method") != cfg.method:
+        raise VrnError(
+            f"{where}: is a {ick.get('method')} run; this run trains {cfg.method} "
+            f"(train the wide run with --method {cfg.method} --width 16)"
+        )
+    if ick.get("teacher", {}).get("sha256") != teacher_sha:
+        raise VrnError(
+            f"{where}: was distilled from another teacher than {cfg.teacher}; its "
+            "training slices may be this run's held-out ones (use a run of this teacher)"
+        )
+    theirs = ick["spec"]
+    for k in sorted(set(spec) | set(theirs)):
+        if k in WIDTH_KEYS:
+            mine, wide = spec.get(k), theirs.get(k)
+            if not isinstance(wide, list) or len(wide) != len(mine):
+                raise VrnError(f"{where}: its {k} {wide} has another depth than {mine}")
+            if any(w < m for w, m in zip(wide, mine, strict=True)):
+                raise VrnError(
+                    f"{where}: is {max(wide)} wide, narrower than --width {cfg.width}; "
+                    f"--init-from needs a run at least {cfg.width} wide (train one with "
+                    f"--width {max(16, 2 * cfg.width)}), or ask for --width {max(wide)} or less"
+                )
+        elif k not in ("tex_init",) and spec.get(k) != theirs.get(k):
+            name, show = SPEC_FLAGS.get(k, (k, lambda v: v))
+            raise VrnError(
+                f"{where}: was trained with {name} {show(theirs.get(k))}, this run with "
+                f"{show(spec.get(k))}"
+            )
+    if not ick.get("finished", True):
+        warnings.warn(
+            f"{path}: {unfinished_run(ick)}; starting from it as it is",
+            UnfinishedRunWarning,
+            stacklevel=2,
+        )
+
+
+#: spec fields -> the option that sets them and its value, for --init-from's messages
+SPEC_FLAGS = {
+    "output": ("--space", lambda v: "log" if v == "log1p" else "linear"),
+    "coarse_channels": ("--coarse-channels", lambda v: v),
+    "fine_channels": ("--fine-channels", lambda v: v),
+    "channels": ("texture channels", lambda v: v),
+    "dir_inputs": ("--neumip-dirs", lambda v: v),
+    "tex_res": ("the BTF resolution", lambda v: "x".join(map(str, v))),
+    "coarse_res": ("the BTF resolution / 2", lambda v: "x".join(map(str, v))),
+    "fine_res": ("the BTF resolution", lambda v: "x".join(map(str, v))),
+}

@@ -8,9 +8,9 @@ import torch
 from torch import nn
 
 from vrneural.btf.format import read_btf
+from vrneural.btf.identity import btf_fingerprint, check_btf_record, split_pairs
 from vrneural.config import flag, is_explicit, keep_flag_names
 from vrneural.distill.config import TeachConfig
-from vrneural.btf.identity import btf_fingerprint, check_btf_record, split_pairs
 from vrneural.distill.data import SliceData
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
@@ -106,10 +106,10 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
 
 def run_teach(cfg: TeachConfig, on_step=None) -> dict:
     """Train (or resume) a teacher; returns the final checkpoint dict. Holds a lock on its
-    outputs while it trains (:func:`vrneural.formats.atomic.lock_output_file`)."""
-    from vrneural.formats.atomic import output_locks
+    outputs while it trains (:func:`vrneural.outputs.output_lock`)."""
+    from vrneural.outputs import output_lock
 
-    with output_locks():
+    with output_lock(cfg.output):
         return _run_teach(cfg, on_step)
 
 

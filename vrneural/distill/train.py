@@ -27,9 +27,10 @@ from torch import nn
 
 from vrneural.config import flag
 from vrneural.distill.checkpoint import save_checkpoint
+from vrneural.distill.core import Ema, NonFiniteLossError, epoch_order, epoch_steps
 from vrneural.distill.data import SliceData
-from vrneural.interrupt import Stop
 from vrneural.errors import VrnError, count
+from vrneural.interrupt import Stop
 
 
 def compile_networks(mode: str, *models: nn.Module, backend: str = "inductor") -> None:
@@ -99,54 +100,6 @@ def train_device(name: str) -> torch.device:
         raise VrnError(f"--device {name}: CUDA device {index} requested, {n} present")
     torch.cuda.set_device(index)
     return torch.device("cuda", index)
-
-
-def _seed(seed: int, epoch: int, salt: int) -> int:
-    return (seed * 1_000_003 + epoch * 7_919 + salt) % (2**63)
-
-
-class Ema:
-    """Exponential moving average of the trainable parameters (Polyak averaging).
-
-    With one ``(wi, wo)`` slice per step the weights jitter from step to step; the average is
-    a better network than the last iterate and a steadier test L1 for ReduceLROnPlateau. The
-    decay ramps up as ``min(decay, (1 + t) / (10 + t))`` so early averages do not remember the
-    random initialisation. ``applied()`` swaps the average in (evaluation, export) and back.
-    """
-
-    def __init__(self, net: nn.Module, decay: float):
-        self.decay = decay
-        self.params = {k: p for k, p in net.named_parameters() if p.requires_grad}
-        self.avg = {k: p.detach().clone() for k, p in self.params.items()}
-        self.count = 0
-
-    @torch.no_grad()
-    def update(self) -> None:
-        self.count += 1
-        d = min(self.decay, (1 + self.count) / (10 + self.count))
-        for k, p in self.params.items():
-            self.avg[k].lerp_(p.detach(), 1.0 - d)
-
-    @contextlib.contextmanager
-    def applied(self):
-        keep = {k: p.detach().clone() for k, p in self.params.items()}
-        with torch.no_grad():
-            for k, p in self.params.items():
-                p.copy_(self.avg[k])
-        try:
-            yield
-        finally:
-            with torch.no_grad():
-                for k, p in self.params.items():
-                    p.copy_(keep[k])
-
-    def state(self) -> dict:
-        return {"avg": {k: v.clone() for k, v in self.avg.items()}, "count": self.count}
-
-    def load(self, state: dict) -> None:
-        for k in self.avg:
-            self.avg[k].copy_(state["avg"][k])
-        self.count = int(state["count"])
 
 
 def half_words(cfg) -> str:
@@ -260,26 +213,17 @@ def fit(
     last_test = history[-1]["test_l1"] if history else float("nan")
     with Stop() as stop, bar or contextlib.nullcontext():
         while epoch < cfg.epochs:
-            order = torch.randperm(
-                n, generator=torch.Generator().manual_seed(_seed(cfg.seed, epoch, 1))
-            )
-            if step == 0:
-                gen.manual_seed(_seed(cfg.seed, epoch, 2))
+            order = epoch_order(cfg.seed, epoch, n, gen, step)
             t0 = time.perf_counter()
             net.train()
+            steps = epoch_steps(
+                model, opt, data, order, step, gen if cfg.jitter else None, ema, world
+            )
             while step < n:
-                pair = data.train[int(order[step])]
-                wi, wo = data.dirs(pair)
-                uv = data.uv(gen if cfg.jitter else None)
-                loss, _ = model(wi, wo, uv, pair)
-                value = _mean_over_ranks(loss.detach(), world)  # the whole slice's loss
-                if not math.isfinite(value):  # before the step: the weights stay finite
-                    raise _diverged(f"loss is {value}", epoch, step + 1, n, out)
-                opt.zero_grad(set_to_none=True)
-                loss.backward()
-                opt.step()
-                if ema is not None:
-                    ema.update()
+                try:
+                    value = next(steps)
+                except NonFiniteLossError as e:  # before the step: the weights stay finite
+                    raise _diverged(f"loss is {e.value}", epoch, step + 1, n, out) from None
                 loss_sum += value
                 step += 1
                 if bar is not None:
@@ -334,17 +278,6 @@ def _diverged(what: str, epoch: int, step: int, n: int, out: str) -> VrnError:
 def _l1_text(v: float) -> str:
     """The progress bar's test L1: ``-`` before the first epoch's evaluation."""
     return "-" if math.isnan(v) else f"{v:.4g}"
-
-
-def _mean_over_ranks(loss: torch.Tensor, world: int) -> float:
-    """The loss of the whole slice: each rank's is the mean over its equal share, so their
-    mean (the curve, the checkpoint and the bar say what one process would; every rank sees a
-    NaN together, so none waits for one that stopped)."""
-    if world == 1:
-        return float(loss)
-    t = loss.reshape(1).clone()
-    dist.all_reduce(t)
-    return float(t) / world
 
 
 def _stopping(flag: bool, world: int, device: torch.device) -> bool:

@@ -118,10 +118,11 @@ class ContainerWriter:
                     "it cannot be continued with these settings"
                 )
         if not self.resumed:
-            from vrneural.formats.atomic import check_free_space
+            from vrneural.outputs import check_free_space, make_parent
 
             old_size = self.partial.stat().st_size if self.partial.is_file() else 0
             check_free_space(self.path, self.file_size, reclaimed=old_size)
+            make_parent(self.partial)
             try:
                 with open(self.partial, "wb") as f:
                     f.write(start)

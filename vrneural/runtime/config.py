@@ -11,8 +11,8 @@ from vrneural.config import opt
 from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.runtime.lights import LIGHTS_MAX
 from vrneural.runtime.profiles import PROFILES, get_profile
-from vrneural.runtime.renderer import FRAMES_IN_FLIGHT_MAX, MODES, RADIANCE, Settings
 from vrneural.runtime.schedule import SCHEDULES
+from vrneural.runtime.settings import FRAMES_IN_FLIGHT_MAX, MODES, RADIANCE, Settings
 
 
 @dataclass

@@ -19,50 +19,22 @@ GPU times are medians over repeats, from timestamps (one compute pass per measur
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
 
-from vrneural.formats.atomic import write_json
-
-
-def _wall_ms(fn) -> float:
-    t0 = time.perf_counter()
-    fn()
-    return (time.perf_counter() - t0) * 1e3
-
-
-def _median_ms(fn, repeats: int) -> float:
-    fn()  # warm-up / compile
-    ts = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        ts.append((time.perf_counter() - t0) * 1e3)
-    return float(np.median(ts))
-
-
-def _renderer(mode, texture_res, eye_res, reuse=0, schedule="burst", frames=1, eyes=2):
-    from vrneural.runtime.renderer import Renderer, Settings
-    from vrneural.runtime.scene import builtin_scene
-
-    s = Settings(
-        eyes=eyes,
-        reuse=reuse,
-        texture_res=texture_res,
-        eye_res=eye_res,
-        frames=frames,
-        n_lights=3,
-        mode=mode,
-        schedule=schedule,
-    )
-    return Renderer(builtin_scene(3), s)
+from vrneural.outputs import write_json
+from vrneural.runtime.measure_frames import (
+    make_renderer,
+    median_ms,
+    schedules,  # noqa: F401 (run by name: measure_all)
+    wall_ms,
+)
 
 
 def texture_vs_screen(texture_res=1200, eye_res=(2064, 2208), reuse=4, frames=3) -> dict:
-    tex = _renderer("texture", texture_res, eye_res)
-    scr = _renderer("screen", texture_res, eye_res)
+    tex = make_renderer("texture", texture_res, eye_res)
+    scr = make_renderer("screen", texture_res, eye_res)
     for r in (tex, scr):  # timestamps that miss the compute passes (lavapipe): the wall clock
         if r.untimed:
             r.pass_clock = "wall"
@@ -191,7 +163,7 @@ def vs_torch(res=512, repeats=7, n_lights=3) -> dict:
     xc = np.concatenate([dirs, sample_bilinear_wrap(mat.textures["coarse"], uv.mean(1))], -1)
     ff = sample_bilinear_wrap(mat.textures["fine"], uv.reshape(-1, 2))
 
-    coarse, fine = _torch_net(mat.networks["coarse"]), _torch_net(mat.networks["fine"])
+    coarse, fine = torch_net(mat.networks["coarse"]), torch_net(mat.networks["fine"])
     txc, tff = torch.from_numpy(xc), torch.from_numpy(ff)
 
     def run_torch():
@@ -214,7 +186,7 @@ def vs_torch(res=512, repeats=7, n_lights=3) -> dict:
             "fb": wf0.bias,
         }.items()
     }
-    c_rest, f_rest = _torch_net(mat.networks["coarse"][1:]), _torch_net(mat.networks["fine"][1:])
+    c_rest, f_rest = torch_net(mat.networks["coarse"][1:]), torch_net(mat.networks["fine"][1:])
     c_act, f_act = _torch_act(wc0.act), _torch_act(wf0.act)
     tdir = torch.from_numpy(np.ascontiguousarray(dirs))
     tfc = torch.from_numpy(np.ascontiguousarray(xc[:nb, 9:]))
@@ -236,8 +208,8 @@ def vs_torch(res=512, repeats=7, n_lights=3) -> dict:
     g, t, f = [], [], []
     for _ in range(repeats):
         g.append(pt.once())
-        t.append(_wall_ms(run_torch))
-        f.append(_wall_ms(run_factored))
+        t.append(wall_ms(run_torch))
+        f.append(wall_ms(run_factored))
     g, t, f = (np.asarray(x) for x in (g, t, f))
     per = np.minimum(t, f) / g
     g_ms, t_ms, f_ms = (float(np.median(x)) for x in (g, t, f))
@@ -273,7 +245,7 @@ def _torch_act(act: str):
     return lambda x: x
 
 
-def _torch_net(layers):
+def torch_net(layers):
     import torch
 
     mods = []
@@ -316,7 +288,7 @@ def mlp_only(n_blocks=65536, repeats=3) -> dict:
             kf.run(xf, timer=timer)
             ms.append(a + timer.read()["mlp"])
         out[f"{name}_ms"] = float(np.median(ms))
-    tc, tf = _torch_net(mat.networks["coarse"]), _torch_net(mat.networks["fine"])
+    tc, tf = torch_net(mat.networks["coarse"]), torch_net(mat.networks["fine"])
     txc, txf = torch.from_numpy(xc), torch.from_numpy(xf)
 
     def run_torch():
@@ -324,104 +296,10 @@ def mlp_only(n_blocks=65536, repeats=3) -> dict:
             tc(txc)
             tf(txf)
 
-    out["torch_ms"] = _median_ms(run_torch, repeats)
+    out["torch_ms"] = median_ms(run_torch, repeats)
     out["torch_threads"] = torch.get_num_threads()
     out["constants_vs_buffer"] = out["buffer_ms"] / out["constants_ms"]
     out["constants_vs_torch"] = out["torch_ms"] / out["constants_ms"]
-    return out
-
-
-def _timed_frames(r, frames: int) -> dict:
-    """Frame wall ms, texture GPU ms and MLP evaluations of frames 1 .. frames - 1 of renderer
-    ``r``, rendered back to back (nothing else between frames; frame 0 compiles)."""
-    out = {"wall": [], "cpu": [], "tex": [], "work": []}
-    for f in range(frames):
-        c0 = time.process_time()
-        st = r.frame(f)
-        if f:
-            out["cpu"].append((time.process_time() - c0) * 1e3)
-            out["wall"].append(st.wall_ms)
-            out["tex"].append(st.gpu_ms.get("texture", 0.0))
-            out["work"].append(st.mlp_coarse + st.mlp_fine)
-    return out
-
-
-def _distribution(t: dict) -> dict:
-    w, work = np.asarray(t["wall"]), np.asarray(t["work"], np.float64)
-    return {
-        "frame_wall_ms": {
-            "median": float(np.median(w)),
-            "p95": float(np.percentile(w, 95)),
-            "p99": float(np.percentile(w, 99)),
-            "series": [round(float(x), 3) for x in w],  # frames 1.. in order
-        },
-        "p99_over_median": float(np.percentile(w, 99) / np.median(w)),
-        # CPU time of the whole process (all llvmpipe threads) per frame: on a CPU adapter the
-        # frame's cost without the time other jobs on the machine took from it
-        "frame_cpu_ms": {
-            "median": float(np.median(t["cpu"])),
-            "p99": float(np.percentile(t["cpu"], 99)),
-            "series": [round(float(x), 3) for x in t["cpu"]],
-        },
-        "cpu_p99_over_median": float(np.percentile(t["cpu"], 99) / np.median(t["cpu"])),
-        "texture_gpu_ms": {
-            "median": float(np.median(t["tex"])),
-            "max": float(np.max(t["tex"])),
-            "series": [round(float(x), 3) for x in t["tex"]],
-        },
-        # the work per frame from the counters (MLP evaluations), immune to CPU contention
-        "mlp_evals_per_frame": {
-            "median": float(np.median(work)),
-            "p99": float(np.percentile(work, 99)),
-        },
-        "work_p99_over_median": float(np.percentile(work, 99) / max(np.median(work), 1.0)),
-    }
-
-
-def schedules(texture_res=1200, eye_res=(256, 256), reuse=4, frames=91, quality_frames=41) -> dict:
-    """Frame-time distribution of burst and staggered (each renderer's frames back to back,
-    ``frames - 1`` timed), with a constant-work control of about the staggered frame's cost (a
-    full update every frame, N = 0, of a texture with 1 / (N + 1) of the texels) that shows this
-    machine's own frame-time noise; then, in a separate untimed run, their displayed-frame error
-    vs rendering with an update every frame, on the built-in scene."""
-    out = {}
-    kinds = ("burst", "staggered")
-    for k in kinds:
-        out[k] = _distribution(
-            _timed_frames(_renderer("texture", texture_res, eye_res, reuse, k), frames)
-        )
-    # constant work per frame of about the staggered frame's size: a full update every frame
-    # (N = 0) of a texture with 1 / (N + 1) of the texels (at least 64^2, for the atlas packer)
-    ctl_res = max(64, round(texture_res / math.sqrt(reuse + 1) / 2) * 2)
-    ctl = _distribution(_timed_frames(_renderer("texture", ctl_res, eye_res, 0), frames))
-    keep = ("frame_wall_ms", "p99_over_median", "frame_cpu_ms", "cpu_p99_over_median")
-    out["control_every_frame"] = {
-        "texture_res": ctl_res,
-        "mlp_evals_per_frame": ctl["mlp_evals_per_frame"],
-        **{k: ctl[k] for k in keep},
-    }
-    ref = _renderer("texture", texture_res, eye_res, 0, "burst")
-    runs = {k: _renderer("texture", texture_res, eye_res, reuse, k) for k in kinds}
-    err = {k: [] for k in runs}
-    for f in range(quality_frames):
-        ref.frame(f)
-        want = np.concatenate(ref.read_eyes(), 1)[..., :3]
-        for k, r in runs.items():
-            r.frame(f)
-            got = np.concatenate(r.read_eyes(), 1)[..., :3]
-            if f >= reuse + 1:  # after the first complete staggered cycle
-                err[k].append(float(np.abs(got - want).mean()))
-    for k in runs:
-        out[k]["mean_abs_error_vs_every_frame"] = float(np.mean(err[k]))
-    out["config"] = {
-        "texture_res": texture_res,
-        "eye_res": list(eye_res),
-        "reuse": reuse,
-        "frames": frames,
-        "quality_frames": quality_frames,
-        "mean_displayed_radiance": float(want.mean()),
-    }
-    out["target_staggered_p99_over_median"] = 1.2
     return out
 
 
@@ -477,12 +355,11 @@ def main(argv=None) -> int:
     line and exit 2); an existing output needs ``--force``."""
     import sys
 
-    from vrneural.cli import _Parser
-    from vrneural.errors import VrnError
-    from vrneural.formats.atomic import check_output
+    from vrneural.errors import ArgumentParser, VrnError
+    from vrneural.outputs import check_output
 
     prog = "python -m vrneural.runtime.measure"
-    p = _Parser(prog=prog, description=__doc__.splitlines()[0])
+    p = ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
     p.add_argument("out", help="output JSON file (its folder is created)")
     p.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
     p.add_argument(

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.errors import VrnError
-from vrneural.formats.atomic import atomic_path
+from vrneural.outputs import atomic_path, make_parent
 
 
 def tonemap(hdr: np.ndarray, exposure: float = 1.0) -> np.ndarray:
@@ -85,7 +85,7 @@ class VideoWriter:
         check_video()
         import imageio.v2 as iio2
 
-        self.path = Path(path)
+        self.path = make_parent(path)
         self.tmp = self.path.with_name(f".{self.path.stem}.tmp.mp4")
         self.w = iio2.get_writer(
             str(self.tmp), fps=fps, codec="libx264", quality=7, macro_block_size=2

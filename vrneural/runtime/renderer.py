@@ -8,10 +8,9 @@ counters and per-pass GPU ms (timestamps) come back in its own submit and arrive
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
-import dataclasses
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -22,9 +21,8 @@ from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
 from vrneural.gpu.uniforms import UniformArena
 from vrneural.runtime import forward as fw
-from vrneural.runtime.adaptive import AdaptiveState, coverage_slack, near_scale, object_directions
+from vrneural.runtime.adaptive import coverage_slack, near_scale, object_directions
 from vrneural.runtime.assets import collapsed_triangles, get_atlas, get_mesh, lost_triangles
-from vrneural.runtime.encode import FrameEncoding
 from vrneural.runtime.camera import (
     Eye,
     OrbitPath,
@@ -33,94 +31,21 @@ from vrneural.runtime.camera import (
     window_matrix,
 )
 from vrneural.runtime.codegen import reference_weights
+from vrneural.runtime.encode import FrameEncoding
 from vrneural.runtime.gpu_material import GpuAtlas
 from vrneural.runtime.lights import light_arrays
+from vrneural.runtime.objects import NeuralObject, bounding_sphere
 from vrneural.runtime.schedule import frame_slice
 from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget
 from vrneural.runtime.screen_res import choose, level_sides, mesh_area, wanted_side
+from vrneural.runtime.settings import ADAPTIVE_PERIOD_MAX, FRAMES_IN_FLIGHT_MAX, RADIANCE, Settings
 from vrneural.runtime.stats import FrameResults, FrameStats
 from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
 from vrneural.warn import VrnWarning
 
-MODES = ("texture", "screen", "reference")
-RADIANCE = ("per-eye", "shared")
 TARGETS = tuple(fw.TARGETS)
-#: the most frames a renderer lets the GPU queue (Settings.frames_in_flight)
-FRAMES_IN_FLIGHT_MAX = 3
-#: the longest refresh sweep of adaptive reuse, in frames
-ADAPTIVE_PERIOD_MAX = 16
-
-
-@dataclass
-class Settings:
-    """Resolved run settings (profile + scene + CLI)."""
-
-    eyes: int = 2
-    reuse: int = 4
-    texture_res: int = 1200
-    texture_res_given: bool = False  # --texture-res on the command line: beats objects' own
-    eye_res: tuple = (2064, 2208)
-    frames: int = 90
-    fps: float = 90.0
-    fov_y: float = 96.0
-    ipd: float = 0.063
-    n_lights: int = 3
-    mode: str = "texture"
-    schedule: str = "staggered"
-    precision: str = "f32"  # resolved (f32 | f16)
-    reference: object = None  # NeuralMaterial used by every object in reference mode
-    #: "per-eye": a radiance texture per object and eye; "shared": one per object, shaded from
-    #: the eyes' centre and sampled by both (half the texture-space work)
-    radiance: str = "per-eye"
-    #: adaptive reuse (``--reuse auto``): refresh an object when its view or light directions
-    #: have turned by this many degrees (runtime/adaptive.py); None: every reuse + 1 frames
-    reuse_budget: float | None = None
-    #: render the window ``(x0, y0)`` of a ``full_w x full_h`` eye image, ``eye_res`` in size
-    #: (``(x0, y0, full_w, full_h)``; the bench's crops at the headset's pixel density)
-    crop: tuple | None = None
-    #: radiance textures with mip chains, rebuilt after each update and sampled trilinearly
-    #: (anisotropically where the adapter allows) by the forward pass (runtime/radiance_mips.py)
-    mips: bool = False
-    #: each object's radiance texture side chosen at each update from its size on screen
-    #: (about one texel per pixel; a power of two up to its side above; runtime/screen_res.py)
-    screen_res: bool = False
-    #: sample the packs' prefiltered neural-texture pyramids at each block's footprint (False:
-    #: level 0 everywhere, as packs without pyramids)
-    neural_lod: bool = True
-    #: frames the GPU may have queued while the host encodes the next (1 = none ahead)
-    frames_in_flight: int = 2
-    #: eye colour targets: "hdr" (rgba16float radiance: EXR, FLIP) or "display" (8-bit
-    #: Reinhard-tonemapped sRGB, texture mode only: where HDR output is not needed)
-    target: str = "hdr"
-
 
 __all__ = ["FrameStats", "Renderer", "Settings"]
-
-
-@dataclass
-class _Neural:
-    idx: int
-    desc: object
-    atlas: object
-    gatlas: GpuAtlas
-    centre: np.ndarray  # object-space bounding sphere
-    radius: float
-    targets: list = field(default_factory=list)  # per eye: TextureTarget | ScreenTarget
-    fresh: bool = False  # its radiance textures hold a complete update since it was last culled
-    adapt: AdaptiveState = field(default_factory=AdaptiveState)  # --reuse auto
-    draw: object = None  # fw.DrawObject of the atlas in use
-    #: resolution levels (screen_res): side -> (atlas, GpuAtlas, DrawObject, targets), built
-    #: lazily; the one in use is also in atlas, gatlas, draw and targets
-    levels: dict = field(default_factory=dict)
-    level_sides: tuple = ()  # the sides it may use, largest first (its own side first)
-    area: float = 0.0  # mesh surface, object space, m^2
-    sphere: tuple = (None, None, 0.0, None)  # (model bytes, world centre, radius, [c, 1]): cache
-
-
-def bounding_sphere(mesh) -> tuple[np.ndarray, float]:
-    lo, hi = mesh.positions.min(0), mesh.positions.max(0)
-    c = (lo + hi) / 2
-    return c.astype(np.float64), float(np.linalg.norm(mesh.positions - c, axis=1).max())
 
 
 class Renderer(FrameEncoding):
@@ -179,7 +104,7 @@ class Renderer(FrameEncoding):
         n_neural = sum(o.material.kind == "neural" for o in scene.objects)
         self.counters = CounterBuffer(max(1, n_neural * s.eyes))
         self.timer = GpuTimer(max_passes=2 * n_neural * s.eyes + 2 * s.eyes + 2)
-        self.neural: list[_Neural] = []
+        self.neural: list[NeuralObject] = []
         self.warnings: list[str] = []  # one line each; `run` prints them and keeps them
         self.draws = []
         passes: dict = {}
@@ -241,7 +166,7 @@ class Renderer(FrameEncoding):
         if flat and s.mode == "texture":
             self.warnings.append(f"{scene.src}: objects[{i}] ({o.name}): {flat}")
         c, r = bounding_sphere(atlas.mesh)
-        n = _Neural(i, o, atlas, GpuAtlas(atlas), c, r)
+        n = NeuralObject(i, o, atlas, GpuAtlas(atlas), c, r)
         n.side, n.mesh = res, mesh
         if s.screen_res and s.mode == "texture":
             n.area = mesh_area(atlas.mesh) * abs(np.linalg.det(o.model[:3, :3])) ** (2 / 3)
@@ -296,7 +221,7 @@ class Renderer(FrameEncoding):
         n.levels[res] = (atlas, n.gatlas, n.draw, n.targets)
         self.draws.append((None, n))
 
-    def _use_level(self, n: _Neural, side: int) -> None:
+    def _use_level(self, n: NeuralObject, side: int) -> None:
         """Shade and draw neural object ``n`` at radiance-texture side ``side`` (screen_res):
         its GPU atlas, draw and targets are made on first use; the level gets a full update
         before it is shown."""
@@ -311,7 +236,7 @@ class Renderer(FrameEncoding):
         n.fresh = False
         self._bundles = None  # the eyes' draws name the level's vertices and texture
 
-    def _level_for(self, n: _Neural, eyes) -> int:
+    def _level_for(self, n: NeuralObject, eyes) -> int:
         """The side :mod:`~vrneural.runtime.screen_res` picks for ``n`` seen by ``eyes``."""
         s = self.s
         c, r = self.world_sphere(n)
@@ -337,13 +262,13 @@ class Renderer(FrameEncoding):
             return ScreenSpacePass(mat, "f32", len(self.lights), weights=reference_weights(mat))
         raise VrnError(f"mode = {s.mode!r} is not allowed; choose texture, screen or reference")
 
-    def _make_target(self, p, n: _Neural, eye: int):
+    def _make_target(self, p, n: NeuralObject, eye: int):
         if self.s.mode == "texture":
             return TextureTarget(p, n.gatlas, self.counters, self.arena, mips=self.s.mips)
         return ScreenTarget(p, n.gatlas, self.eye_t[eye], self.counters, self.arena)
 
     @staticmethod
-    def world_sphere(n: _Neural) -> tuple[np.ndarray, float]:
+    def world_sphere(n: NeuralObject) -> tuple[np.ndarray, float]:
         """Object ``n``'s bounding sphere in the world (centre [3], radius m)."""
         model = n.desc.model
         key = model.tobytes()
@@ -353,7 +278,7 @@ class Renderer(FrameEncoding):
             n.sphere = (key, c, r, np.append(c, 1.0))
         return n.sphere[1], n.sphere[2]
 
-    def _visible(self, n: _Neural, eyes) -> bool:
+    def _visible(self, n: NeuralObject, eyes) -> bool:
         """Whether ``n``'s bounding sphere touches any eye's frustum (``sphere_in_frustum``)."""
         self.world_sphere(n)
         _, _, r, ch = n.sphere
@@ -433,7 +358,7 @@ class Renderer(FrameEncoding):
         updated = len(todo)
         return todo, updated, culled
 
-    def _coverage(self, n: _Neural, eye) -> float:
+    def _coverage(self, n: NeuralObject, eye) -> float:
         """The fraction of the (whole) eye image the object's bounding sphere covers."""
         c, r = self.world_sphere(n)
         d = float(np.linalg.norm(c - eye.position))

@@ -13,15 +13,8 @@ import numpy as np
 from vrneural.config import config_dict, is_explicit, replace_config
 from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.interrupt import Stop
-from vrneural.formats.atomic import (
-    OUTPUT_MARK,
-    check_output_dir,
-    make_output_dir,
-    new_output_dir,
-    same_file,
-    seal_output_dir,
-    write_json,
-)
+from vrneural.outputs import OUTPUT_MARK, OutputDir, write_json
+from vrneural.outputs.files import make_dirs, why
 from vrneural.runtime.config import LIGHTS_MAX, RunConfig, resolve
 from vrneural.runtime.output import (
     VideoWriter,
@@ -31,6 +24,7 @@ from vrneural.runtime.output import (
     write_exr,
     write_png,
 )
+from vrneural.runtime.pack_teacher import teacher_beside
 
 
 def selected_frames(spec: str, frames: int) -> list[int]:
@@ -112,66 +106,24 @@ def use_pack(scene, path: str) -> None:
             )
 
 
-def teacher_beside(pack: Path, mat) -> tuple[Path | None, object, list[str]]:
-    """The teacher pack of the student ``pack`` (its path and material, or None, None) and the
-    paths tried before it (each with why it was passed over). Candidates, in order: the
-    ``.vrnm`` of the teacher checkpoint the pack records (beside the pack, at its absolute
-    path, at the path as typed then), ``<stem>.teacher.vrnm``
-    (the bundled packs' naming) and ``teacher.vrnm`` beside the pack. A candidate must be a
-    teacher pack, and where the student records its teacher's checkpoint hash, the candidate
-    must not belong to another checkpoint: its own recorded hash (or that of the ``.pt`` beside
-    it) must match. The typed path is resolved against the current directory, not the one
-    `distill` ran in, so it counts only when that hash confirms it."""
-    prov = mat.meta.get("provenance") or {}
-    want = prov.get("teacher") if isinstance(prov.get("teacher"), str) else None
-    typed = (prov.get("config") or {}).get("teacher")
-    typed = Path(typed).with_suffix(".vrnm") if isinstance(typed, str) and typed else None
-    absolute = prov.get("teacher_path")
-    cands: list[tuple[Path, bool]] = []  # (path, must the hash confirm it)
-    if typed:
-        cands.append((pack.with_name(typed.name), False))
-    if isinstance(absolute, str) and absolute:
-        cands.append((Path(absolute).with_suffix(".vrnm"), False))
-    if typed:
-        cands.append((typed, True))
-    cands += [(pack.with_name(f"{pack.stem}.teacher.vrnm"), False)]
-    cands += [(pack.with_name("teacher.vrnm"), False)]
-    tried, seen = [], set()
-    for t, strict in cands:
-        key = str(t.resolve())
-        if key in seen:
-            continue
-        seen.add(key)
-        teacher, why = _read_teacher(t, pack, want, strict)
-        if teacher is not None:
-            return t, teacher, tried
-        tried.append(f"{t}{'' if why == 'not found' else f' ({why})'}")
-    return None, None, tried
-
-
-def _read_teacher(t: Path, pack: Path, want: str | None, strict: bool) -> tuple[object, str]:
-    """``(material, "")`` when ``t`` is the teacher of ``pack``, else ``(None, why not)``."""
-    from vrneural.formats.atomic import file_sha256
-    from vrneural.formats.vrnm import read_vrnm
-
-    if not t.is_file():
-        return None, "not found"
-    if same_file(t, pack):
-        return None, "the pack itself"
-    try:
-        mat = read_vrnm(t)
-    except VrnError:
-        return None, "not a readable pack"
-    if mat.meta.get("method") != "teacher":
-        return None, f"a {mat.meta.get('method') or 'non-teacher'} pack, not a teacher"
-    if want is None:
-        return mat, ""
-    have = (mat.meta.get("provenance") or {}).get("checkpoint_sha256")
-    if have is None and t.with_suffix(".pt").is_file():
-        have = file_sha256(t.with_suffix(".pt"))
-    if have is None:
-        return (None, "cannot tell it is the recorded teacher") if strict else (mat, "")
-    return (mat, "") if have == want else (None, "another teacher: its checkpoint hash differs")
+def new_output_dir(base: str) -> Path:
+    """Create a fresh directory ``base`` (``base-2``, ``base-3``... if taken): the name is
+    claimed with an exclusive ``mkdir``, so two runs started in the same second never share
+    it."""
+    k = 1
+    while True:
+        p = Path(base if k == 1 else f"{base}-{k}")
+        try:
+            make_dirs(p.parent)
+            p.mkdir()
+            return p
+        except FileExistsError as e:
+            if p.parent.is_dir():  # the name is taken: the next one
+                k += 1
+                continue
+            raise VrnError(f"{p}: cannot create output directory ({why(p, e)})") from None
+        except OSError as e:
+            raise VrnError(f"{p}: cannot create output directory ({why(p, e)})") from None
 
 
 def default_out() -> Path:
@@ -198,10 +150,12 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     if is_explicit(cfg, "out") and not cfg.out.strip():
         raise VrnError("--out is empty; name a directory, or leave --out out for out/run-<time>")
     if cfg.out:
-        return _run(cfg, Path(cfg.out), progress)
+        with OutputDir(cfg.out, "run", force=cfg.force) as od:
+            return _run(cfg, od, progress)
     out = default_out()
     try:
-        return _run(cfg, out, progress)
+        with OutputDir(out, "run", force=cfg.force) as od:
+            return _run(cfg, od, progress)
     except BaseException:
         # failed or stopped before it wrote anything: leave nothing behind
         if out.is_dir() and all(c.name == OUTPUT_MARK for c in out.iterdir()):
@@ -210,13 +164,14 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
         raise
 
 
-def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
+def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
     from tqdm import tqdm
 
     from vrneural.gpu.device import adapter_summary
     from vrneural.runtime.renderer import Renderer
     from vrneural.runtime.scene import builtin_lights, builtin_scene, load_scene
 
+    out = od.path
     cfg = replace_config(cfg, out=str(out))
     n_builtin = len(builtin_lights())
     if cfg.scene and cfg.pack:
@@ -243,7 +198,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
             cfg = replace_config(cfg, video_scale=min(cfg.video_scale, top))
         check_range("--video-scale", cfg.video_scale, 1, top)
         check_video()
-    check_output_dir(out, cfg.force, "run")
+    od.check()
     t_setup = time.perf_counter()
     # set-up stages (mesh load, atlas, shader compile per object) on one transient bar, on a
     # terminal only (a log or a captured stderr keeps its lines: errors stay one line)
@@ -291,7 +246,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         r.warnings.append("--video-scale only applies to the video, and --no-video writes none")
     for w in r.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    make_output_dir(out, "run")
+    od.open()
     if cfg.video:
         video = VideoWriter(out / ("stereo.mp4" if s.eyes == 2 else "mono.mp4"), s.fps)
     stats, files = [], []
@@ -353,7 +308,7 @@ def _run(cfg: RunConfig, out: Path, progress: bool) -> dict:
         summary = make_summary(cfg, s, scene, adapter, stats, setup_s, files, r)
         summary["interrupted"] = interrupted
         write_json(out / "summary.json", summary)
-        seal_output_dir(out, "run")
+        od.seal()
     if interrupted:
         kept = ["summary.json"]
         n_png = sum(f.endswith(".png") for f in files)

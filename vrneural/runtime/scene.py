@@ -35,11 +35,11 @@ Format (all lengths in metres, angles in degrees)::
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import tomllib
 
 from vrneural.errors import SEED_MAX, VrnError, check_int, number_text
 from vrneural.material import NeuralMaterial, lambertian_material, random_material

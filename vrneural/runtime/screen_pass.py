@@ -12,7 +12,6 @@ import math
 
 import numpy as np
 
-
 from vrneural.gpu.device import get_device, has_feature
 from vrneural.gpu.pipelines import compute_pipeline
 from vrneural.gpu.uniforms import UniformArena

@@ -11,7 +11,6 @@ one slot per dispatch.
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from vrneural.gpu.device import get_device, has_feature

@@ -158,7 +158,7 @@ def trainer_test(mat, test: list[int] | None) -> list[int] | None:
 
 def label(mat, path: str) -> dict:
     """What the table says of a pack: name, method, MACs per texel, bytes."""
-    from vrneural.bench.packs import distilled, width_words
+    from vrneural.material import distilled, width_words
 
     method = (mat.meta.get("method") or "?") + width_words(mat)
     if mat.meta.get("method") in ("student", "single8") and distilled(mat) is False:
@@ -177,7 +177,7 @@ def evaluate(cfg: EvalConfig, progress: bool = True) -> dict:
     """Score ``cfg.packs``; print warnings; write ``cfg.out`` when set. Returns the results."""
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
-    from vrneural.formats.atomic import check_output_dir
+    from vrneural.outputs import OutputDir
 
     t0 = time.perf_counter()
     if isinstance(cfg.packs, (str, os.PathLike)):  # one pack given bare, from Python
@@ -193,7 +193,7 @@ def evaluate(cfg: EvalConfig, progress: bool = True) -> dict:
     pairs = pick_slices(cfg.slices, L * V, H * W)
     out = Path(cfg.out) if cfg.out else None
     if out is not None:
-        check_output_dir(out, cfg.force, "eval")
+        OutputDir(out, "eval", force=cfg.force).check()
     fp = btf_fingerprint(btf)
     warnings: list[str] = []
     tests = [held_out(p, m, fp, btf, warnings) for p, m in zip(cfg.packs, mats, strict=True)]
@@ -229,22 +229,21 @@ def write_outputs(cfg: EvalConfig, out: Path, doc: dict, mats: list, btf) -> Non
     output is replaced and the files written with Ctrl-C held off, so an interrupted eval
     leaves the old output or the whole new one, never a mix."""
     from vrneural.config import config_dict
-    from vrneural.formats.atomic import atomic_path, make_output_dir, seal_output_dir, write_json
     from vrneural.interrupt import Stop
+    from vrneural.outputs import OutputDir, atomic_path, write_json
     from vrneural.scoring.figure import slices_png
 
     png = slices_png(mats, [p["name"] for p in doc["packs"]], btf, cfg.precision)
     doc["files"] = [str(out / f) for f in OUT_FILES]
     md = markdown(doc) + "\n"
     config = {**config_dict(cfg), "btf_scored": doc["btf"]["path"]}
-    with Stop() as stop:
-        make_output_dir(out, "eval")
+    with Stop() as stop, OutputDir(out, "eval", force=cfg.force) as od:
+        od.open()
         write_json(out / "results.json", doc)
         for name, data in (("results.md", md.encode()), ("slices.png", png)):
             with atomic_path(out / name) as tmp:
                 tmp.write_bytes(data)
         write_json(out / "config.json", config)
-        seal_output_dir(out, "eval")
     if stop.flag:  # Ctrl-C came while writing: all was written, then stop as asked
         raise KeyboardInterrupt
 

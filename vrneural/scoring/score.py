@@ -14,7 +14,7 @@ what the runtime's half-precision path costs. Per pack and precision:
 - **RMSE**, linear;
 - **PSNR** (dB) and **SSIM** of each slice *as displayed*, averaged over slices: each slice at
   its own exposure (the BTF slice's 99th percentile of the max channel maps to 1), then the
-  runtime's tone map ``x / (1 + x)`` and the sRGB curve (:func:`vrneural.bench.metrics.display`),
+  runtime's tone map ``x / (1 + x)`` and the sRGB curve (:func:`vrneural.scoring.metrics.display`),
   so dim and bright slices count alike;
 - the **worst slices** by L1, with their angles.
 
@@ -133,7 +133,7 @@ def predict_slice(
 
 def display_slice(x: np.ndarray, exposure: float) -> np.ndarray:
     """A slice as displayed at ``exposure`` (see the module docstring), ``[H, W, 3]`` in [0, 1]."""
-    from vrneural.bench.metrics import display
+    from vrneural.scoring.metrics import display
 
     return display(x * exposure)
 
@@ -173,7 +173,7 @@ def score(
     docstring for the metrics)."""
     from tqdm import tqdm
 
-    from vrneural.bench.metrics import psnr, ssim
+    from vrneural.scoring.metrics import psnr, ssim
 
     L, V, H, W = btf.shape
     if H % 2 or W % 2:

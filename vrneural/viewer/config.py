@@ -37,7 +37,7 @@ class ViewConfig:
 
 def check_view_config(vc: ViewConfig) -> None:
     """Range and file checks before anything opens (one-line errors, as `run`'s)."""
-    from vrneural.formats.atomic import check_output
+    from vrneural.outputs import check_output
 
     if not isinstance(vc, ViewConfig):
         raise VrnError(f"view: config is a {type(vc).__name__}, expected a ViewConfig")

@@ -27,7 +27,7 @@ def shoot(frames: int = 8, split: str = "reference", **options):
 
 
 def main(argv=None) -> int:
-    from vrneural.formats.atomic import check_output
+    from vrneural.outputs import check_output
     from vrneural.runtime.output import write_png
 
     p = argparse.ArgumentParser(prog="python -m vrneural.viewer.docshot", description=__doc__)

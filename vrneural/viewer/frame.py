@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -13,6 +14,35 @@ from vrneural.errors import VrnError
 
 #: frames since a renderer was taken up that :meth:`View.replay_offscreen` can render again
 REPLAY_MAX = 5000
+
+
+@dataclass
+class FrameInput:
+    """What a frame was rendered from: enough to render it again offscreen."""
+
+    f: int
+    t: float
+    head: tuple
+    lights: list
+    reuse: int
+    schedule: str
+    reuse_budget: float | None = None  # adaptive reuse (`U`)
+
+
+@dataclass
+class FrameRecord:
+    """One drawn frame: timings (perf_counter seconds, ms), the renderer's statistics, the
+    settings it was rendered with, and the key actions handled just before it
+    (``(action, event time_stamp, handled at)``: each key's effect shows in this frame)."""
+
+    frame: int
+    start: float
+    end: float
+    render_ms: float
+    present_ms: float
+    stats: object
+    settings: dict
+    inputs: list = field(default_factory=list)
 
 
 class FrameWork:
@@ -111,7 +141,6 @@ class FrameWork:
 
     def _frame(self) -> None:
         from vrneural.viewer.controls import effective_lights
-        from vrneural.viewer.view import FrameInput, FrameRecord
 
         start = time.perf_counter()
         dt = 0.0 if self.t_last is None else min(start - self.t_last, 0.25)
@@ -235,7 +264,7 @@ class FrameWork:
         return rr.colour_textures()[0], False
 
     def _submit_flip(self, rr) -> None:
-        from vrneural.bench.metrics import pixels_per_degree
+        from vrneural.scoring.metrics import pixels_per_degree
         from vrneural.viewer.outputs import FlipWorker
 
         if self.flip is None:

@@ -13,7 +13,7 @@ STATUS_S = 8.0  # seconds a status line stays
 def hud_lines(view, st, last) -> tuple[list[str], set[int]]:
     """``(lines, alert line indices)``; ``st``: the newest frame statistics that have come back
     (frames in flight: a frame or two behind the one drawn), or None before the first;
-    ``last``: the previous :class:`~vrneural.viewer.view.FrameRecord` (its render / present
+    ``last``: the previous :class:`~vrneural.viewer.frame.FrameRecord` (its render / present
     ms), or None."""
     v, live, s = view, view.live, view.r.s
     texture = s.mode == "texture"

@@ -16,8 +16,9 @@ naming the file and the field, as the scene file's errors do.
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
+
+import tomllib
 
 from vrneural.errors import VrnError
 

@@ -244,7 +244,7 @@ def plot(res: dict, path) -> None:
     b.set_xlabel(f"ms from key to its frame's swap (dotted: 1, 2 x {frame_ms:.0f} ms)")
     b.set_ylabel("presses")
     fig.tight_layout()
-    from vrneural.formats.atomic import atomic_path
+    from vrneural.outputs import atomic_path
 
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, format="png")
@@ -252,7 +252,7 @@ def plot(res: dict, path) -> None:
 
 
 def main(argv=None) -> int:
-    from vrneural.formats.atomic import check_output, write_json
+    from vrneural.outputs import check_output, write_json
 
     p = argparse.ArgumentParser(prog="python -m vrneural.viewer.measure", description=__doc__)
     p.add_argument("out", help="results JSON (Markdown and PNG beside it)")
@@ -273,7 +273,7 @@ def main(argv=None) -> int:
             with virtual_display(2400, 2400):
                 res = measure(a.quick)
         write_json(out, res)
-        from vrneural.formats.atomic import atomic_path
+        from vrneural.outputs import atomic_path
 
         with atomic_path(out.with_suffix(".md")) as tmp:
             tmp.write_text(markdown(res))

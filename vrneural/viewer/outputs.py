@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.errors import VrnError
-from vrneural.formats.atomic import write_json
+from vrneural.outputs import write_json
 from vrneural.runtime.output import write_exr, write_png
 
 
@@ -90,7 +90,7 @@ class Recorder:
 
 def flip_map(ref: np.ndarray, test: np.ndarray, ppd: float) -> tuple[np.ndarray, float]:
     """HDR-FLIP of ``test`` against ``ref`` (linear ``[H, W, >=3]``) as the bench computes it
-    (:func:`vrneural.bench.metrics.flip_hdr`), with the magma colour map: ``([H, W, 4]`` uint8,
+    (:func:`vrneural.scoring.metrics.flip_hdr`), with the magma colour map: ``([H, W, 4]`` uint8,
     mean error)."""
     import flip_evaluator
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from vrneural.config import replace_config
 from vrneural.errors import VrnError
 from vrneural.runtime.config import REUSE_MAX, max_texture_res
-from vrneural.runtime.renderer import MODES
+from vrneural.runtime.settings import MODES
 
 #: renderers kept (the active one, the split view's reference, the one before)
 CACHE = 3

@@ -18,41 +18,11 @@ import dataclasses
 import sys
 import time
 from collections import deque
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from vrneural.errors import VrnError
-from vrneural.viewer.frame import FrameWork
-
-
-@dataclass
-class FrameInput:
-    """What a frame was rendered from: enough to render it again offscreen."""
-
-    f: int
-    t: float
-    head: tuple
-    lights: list
-    reuse: int
-    schedule: str
-    reuse_budget: float | None = None  # adaptive reuse (`U`)
-
-
-@dataclass
-class FrameRecord:
-    """One drawn frame: timings (perf_counter seconds, ms), the renderer's statistics, the
-    settings it was rendered with, and the key actions handled just before it
-    (``(action, event time_stamp, handled at)``: each key's effect shows in this frame)."""
-
-    frame: int
-    start: float
-    end: float
-    render_ms: float
-    present_ms: float
-    stats: object
-    settings: dict
-    inputs: list = field(default_factory=list)
+from vrneural.viewer.frame import REPLAY_MAX, FrameInput, FrameWork
 
 
 class View(FrameWork):
@@ -210,7 +180,6 @@ class View(FrameWork):
         offscreen :class:`~vrneural.runtime.renderer.Renderer` with the same settings: its
         eyes' HDR ``[H, W, 4]`` float32, what the window's last frame must show."""
         from vrneural.runtime.renderer import Renderer
-        from vrneural.viewer.frame import REPLAY_MAX
 
         if self.replay_log is None:
             raise VrnError(

@@ -1,4 +1,4 @@
-"""Image-quality metrics of the trade-off benchmark, against a reference frame.
+"""Image-quality metrics (of `eval` and the benchmarks), against a reference frame.
 
 - :func:`flip_hdr`: HDR-FLIP (NVIDIA ``flip-evaluator``) on linear radiance ``[H, W, 3]``, at a
   given pixels-per-degree; the mean of the per-pixel error map, in ``[0, 1]``.
@@ -14,8 +14,9 @@ window lies inside the image (a 5-pixel border is dropped) and over the 3 channe
 
 from __future__ import annotations
 
-import numpy as np
 import itertools
+
+import numpy as np
 
 SSIM_SIGMA = 1.5
 SSIM_TRUNCATE = 3.5

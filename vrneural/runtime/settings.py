@@ -1,0 +1,56 @@
+"""The renderer's resolved settings (profile + scene + options) and their limits; light, so
+that configs and the viewer can name them without loading the GPU modules."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+MODES = ("texture", "screen", "reference")
+RADIANCE = ("per-eye", "shared")
+#: the most frames a renderer lets the GPU queue (Settings.frames_in_flight)
+FRAMES_IN_FLIGHT_MAX = 3
+#: the longest refresh sweep of adaptive reuse, in frames
+ADAPTIVE_PERIOD_MAX = 16
+
+
+@dataclass
+class Settings:
+    """Resolved run settings (profile + scene + CLI)."""
+
+    eyes: int = 2
+    reuse: int = 4
+    texture_res: int = 1200
+    texture_res_given: bool = False  # --texture-res on the command line: beats objects' own
+    eye_res: tuple = (2064, 2208)
+    frames: int = 90
+    fps: float = 90.0
+    fov_y: float = 96.0
+    ipd: float = 0.063
+    n_lights: int = 3
+    mode: str = "texture"
+    schedule: str = "staggered"
+    precision: str = "f32"  # resolved (f32 | f16)
+    reference: object = None  # NeuralMaterial used by every object in reference mode
+    #: "per-eye": a radiance texture per object and eye; "shared": one per object, shaded from
+    #: the eyes' centre and sampled by both (half the texture-space work)
+    radiance: str = "per-eye"
+    #: adaptive reuse (``--reuse auto``): refresh an object when its view or light directions
+    #: have turned by this many degrees (runtime/adaptive.py); None: every reuse + 1 frames
+    reuse_budget: float | None = None
+    #: render the window ``(x0, y0)`` of a ``full_w x full_h`` eye image, ``eye_res`` in size
+    #: (``(x0, y0, full_w, full_h)``; the bench's crops at the headset's pixel density)
+    crop: tuple | None = None
+    #: radiance textures with mip chains, rebuilt after each update and sampled trilinearly
+    #: (anisotropically where the adapter allows) by the forward pass (runtime/radiance_mips.py)
+    mips: bool = False
+    #: each object's radiance texture side chosen at each update from its size on screen
+    #: (about one texel per pixel; a power of two up to its side above; runtime/screen_res.py)
+    screen_res: bool = False
+    #: sample the packs' prefiltered neural-texture pyramids at each block's footprint (False:
+    #: level 0 everywhere, as packs without pyramids)
+    neural_lod: bool = True
+    #: frames the GPU may have queued while the host encodes the next (1 = none ahead)
+    frames_in_flight: int = 2
+    #: eye colour targets: "hdr" (rgba16float radiance: EXR, FLIP) or "display" (8-bit
+    #: Reinhard-tonemapped sRGB, texture mode only: where HDR output is not needed)
+    target: str = "hdr"
