@@ -49,6 +49,7 @@ from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import Interrupted, compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, count
 from vrneural.grazing import DEFAULT_THETA_MAX_DEG
+from vrneural.parallax import setup_parallax
 from vrneural.formats.atomic import check_not_input, check_resume_force, file_sha256, same_file
 
 
@@ -567,6 +568,7 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
     if cfg.lod_levels > 1:
         check_lod_levels(cfg, (H, W), btf_path)
         spec["lod"] = {"levels": cfg.lod_levels, "kind": cfg.lod_kind}
+    height, parallax = setup_parallax(cfg, spec, btf, btf_path)
     model = NeuralModel(spec, cfg.seed)
     init = None
     if cfg.init_from and resume is None:  # a resumed run has its weights already
@@ -583,6 +585,8 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
             "spec": ick["spec"],
             "epochs": int(ick["epoch"]),
         }
+    if height is not None:  # after --init-from's pruning, which builds a fresh model
+        model.set_height(height)
     net = DistillNet(model, teacher.to(dev), data, cfg).to(dev)
     compile_networks(cfg.compile, model, teacher)
     pairs = test_pairs(data, cfg.max_test_slices)
@@ -593,6 +597,7 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
         "config": dataclasses.asdict(cfg),
         "btf": fp,
         "split": tck["split"],
+        "parallax": parallax,
         "teacher": {
             "path": str(cfg.teacher),
             "resolved": str(Path(cfg.teacher).resolve()),
