@@ -20,12 +20,36 @@ def bumps(n: int = 16, amp: float = 0.05) -> np.ndarray:
     return (amp * np.sin(2 * np.pi * x) * np.cos(4 * np.pi * y)).astype(np.float16)
 
 
-def parallax_material(steps: int = 16, seed: int = 0, amp: float = 0.05) -> NeuralMaterial:
+T75 = float(np.tan(np.radians(75.0)))
+
+
+def parallax_material(
+    steps: int = 16, seed: int = 0, amp: float = 0.05, march: str = "texel"
+) -> NeuralMaterial:
     m = random_material(seed, tex_res=16)
     return NeuralMaterial(
         m.arch, m.networks, m.textures, m.output, m.meta, m.dir_range, {},
-        {"kind": "height", "steps": steps}, bumps(16, amp),
+        {"kind": "height", "steps": steps, "march": march}, bumps(16, amp),
     )  # fmt: skip
+
+
+def test_the_step_count_follows_the_view():
+    """Full steps at the steepest view of the data, proportionally fewer below, at least 1."""
+    from vrneural.parallax import ray_slope, step_count
+
+    wo = np.concatenate([views(1, t) for t in (0.0, 30.0, 60.0, 75.0, 85.0)])
+    n = step_count(ray_slope(wo, (16, 16)), 16, np.float32(T75))
+    assert n.tolist() == [1, 3, 8, 16, 16]
+
+
+def test_block_march_shifts_a_block_alike():
+    rng = np.random.default_rng(4)
+    uv = rng.uniform(0, 1, (6, 4, 2)).astype(np.float32)
+    out = parallax_uv(bumps(), views(6, 60), uv, 16, T75, "block")
+    shift = out - uv
+    np.testing.assert_allclose(shift, np.repeat(shift[:, :1], 4, 1), atol=1e-6)
+    centre = parallax_uv(bumps(), views(6, 60), uv.mean(1, keepdims=True).repeat(4, 1), 16, T75)
+    np.testing.assert_allclose(shift[:, 0], (centre - uv.mean(1, keepdims=True))[:, 0], atol=1e-6)
 
 
 def views(n: int, theta_deg: float, phi_deg: float = 30.0) -> np.ndarray:
@@ -38,8 +62,8 @@ def test_flat_field_and_normal_view_leave_lookups_alone():
     rng = np.random.default_rng(0)
     uv = rng.uniform(0, 1, (8, 4, 2)).astype(np.float32)
     flat = np.zeros((16, 16), np.float16)
-    np.testing.assert_array_equal(parallax_uv(flat, views(8, 70), uv, 16), uv)
-    np.testing.assert_allclose(parallax_uv(bumps(), views(8, 0), uv, 16), uv, atol=0)
+    np.testing.assert_array_equal(parallax_uv(flat, views(8, 70), uv, 16, T75), uv)
+    np.testing.assert_allclose(parallax_uv(bumps(), views(8, 0), uv, 16, T75), uv, atol=0)
 
 
 def test_the_corrected_lookup_lies_on_the_relief():
@@ -53,7 +77,7 @@ def test_the_corrected_lookup_lies_on_the_relief():
     shifts = []
     for theta in (20.0, 45.0, 70.0):
         wo = views(64, theta)
-        out = parallax_uv(h, wo, uv, 64)
+        out = parallax_uv(h, wo, uv, 64, 0.1)  # every view at the full 64 steps
         d = np.float32([wo[0, 0] / wo[0, 2], wo[0, 1] / wo[0, 2]])
         z = ((out - uv) @ d / (d @ d)).reshape(-1)  # the ray height of the hit
         field = sample_bilinear_wrap(h.astype(np.float32)[..., None], out.reshape(-1, 2))[:, 0]
@@ -71,21 +95,23 @@ def test_torch_twin_equals_the_numpy_spec():
     h = bumps(16, 0.08)
     for theta in (10.0, 50.0, 74.0):
         wo = views(1, theta, 200.0)
-        want = parallax_uv(h, np.repeat(wo, 40, 0), uv, 12)
-        got = parallax_uv_t(
-            torch.from_numpy(h.astype(np.float32)), torch.from_numpy(wo[0]),
-            torch.from_numpy(uv), 12,
-        ).numpy()  # fmt: skip
-        np.testing.assert_array_equal(got, want)
+        for march in ("texel", "block"):
+            want = parallax_uv(h, np.repeat(wo, 40, 0), uv, 12, T75, march)
+            got = parallax_uv_t(
+                torch.from_numpy(h.astype(np.float32)), torch.from_numpy(wo[0]),
+                torch.from_numpy(uv), 12, T75, march,
+            ).numpy()  # fmt: skip
+            np.testing.assert_array_equal(got, want)
 
 
 def test_torch_model_with_parallax_is_the_pack():
     torch = pytest.importorskip("torch")
     from vrneural.distill.models import NeuralModel, make_spec
 
-    for method in ("student", "neumip"):
+    for method, march in (("student", "texel"), ("neumip", "texel"), ("student", "block")):
         spec = make_spec(method, (16, 16))
-        spec["parallax"] = {"kind": "height", "steps": 8, "res": [16, 16]}
+        spec["parallax"] = {"kind": "height", "steps": 8, "res": [16, 16], "march": march,
+                            "theta_o_max": 75.0}  # fmt: skip
         model = NeuralModel(spec, 3)
         model.set_height(bumps(16, 0.1))
         model.dir_range = (75.0, 75.0)
@@ -110,7 +136,7 @@ def test_pack_round_trip_and_old_packs_load_without_parallax(tmp_path, capsys):
     m = parallax_material(12)
     write_vrnm(tmp_path / "p.vrnm", m)
     back = read_vrnm(tmp_path / "p.vrnm")
-    assert back.parallax == {"kind": "height", "steps": 12}
+    assert back.parallax == {"kind": "height", "steps": 12, "march": "texel"}
     np.testing.assert_array_equal(back.height, m.height)
     assert back.height.dtype == np.float16
     # a version-3 pack (before height fields): parallax off, said once per file
@@ -190,8 +216,8 @@ def test_relief_measure_and_the_auto_choice():
 
 
 @pytest.mark.gpu
-@pytest.mark.parametrize("mesh", ["quad", "sphere"])
-def test_gpu_texture_space_parallax_follows_the_twin(mesh):
+@pytest.mark.parametrize("mesh,march", [("quad", "texel"), ("sphere", "texel"), ("quad", "block")])
+def test_gpu_texture_space_parallax_follows_the_twin(mesh, march):
     """The texture-space kernel marches each texel's view ray through the height field as the
     numpy twin does (per eye: two eye positions), at a grazing and a near-normal view."""
     from runtime_helpers import quad_atlas
@@ -200,7 +226,7 @@ def test_gpu_texture_space_parallax_follows_the_twin(mesh):
     from vrneural.runtime.assets import get_atlas, get_mesh
     from vrneural.runtime.texture_pass import shade_texture_space
 
-    m = parallax_material(16, amp=0.06)
+    m = parallax_material(16, amp=0.06, march=march)
     if mesh == "quad":
         at = quad_atlas(32)
         eyes = [np.float32([0.2, 0.1, 1.5]), np.float32([2.5, -1.0, 0.4])]
@@ -234,7 +260,7 @@ def test_flat_packs_generate_the_same_kernels_as_before():
         assert "height_tex" not in code and "parallax_uv" not in code
     par = parallax_material(16)
     for code in (texture_space_wgsl(par), screen_space_wgsl(par)):
-        assert "var height_tex: texture_2d<f32>" in code and "k <= 16" in code
+        assert "var height_tex: texture_2d<f32>" in code and "clamp(i32(n), 1, 16)" in code
 
 
 def _render(tmp_path, pack, mode):

@@ -46,7 +46,7 @@ def test_auto_gives_relief_parallax_and_flat_none(btfs):
     assert code == 0, err
     for pack in (d / "t.vrnm", d / "s.vrnm"):
         mat = read_vrnm(pack)
-        assert mat.parallax == {"kind": "height", "steps": 16}
+        assert mat.parallax == {"kind": "height", "steps": 16, "march": "texel"}
         assert mat.height.shape == (16, 16) and mat.height.dtype == np.float16
         rec = mat.meta["parallax"]
         assert rec["kind"] == "height" and rec["relief_texels"] > 1.0

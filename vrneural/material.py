@@ -120,7 +120,8 @@ class NeuralMaterial:
         if self.height is not None:
             res = self.textures[ARCHS[self.arch][1][-1]].shape[:2]  # fine / features
             steps = self.parallax.get("steps", 1) if kind == "height" else 1
-            self.height = check_pack_height(self.height, res, steps)
+            march = self.parallax.get("march", "texel")
+            self.height = check_pack_height(self.height, res, steps, march)
 
     @property
     def parallax_kind(self) -> str:
@@ -131,6 +132,20 @@ class NeuralMaterial:
     def parallax_steps(self) -> int:
         """March steps of height-field parallax (0 when off)."""
         return int(self.parallax.get("steps", 0)) if self.parallax_kind == "height" else 0
+
+    @property
+    def parallax_march(self) -> str:
+        """Where the parallax march runs: ``"texel"`` or once per 2x2 ``"block"``."""
+        return self.parallax.get("march", "texel")
+
+    @property
+    def parallax_slope_max(self) -> np.float32:
+        """The steepest view's ray slope (:func:`vrneural.parallax.slope_max`): the march's
+        full step count is reached there."""
+        from vrneural.grazing import boundary_consts
+        from vrneural.parallax import slope_max
+
+        return slope_max(*boundary_consts(self.dir_range[1]), self.height.shape)
 
     @property
     def lod_levels(self) -> int:
@@ -262,7 +277,9 @@ def material_forward(
     if mat.parallax_steps:  # lookups where the (extended) view ray meets the height field
         from vrneural.parallax import parallax_uv
 
-        uv = parallax_uv(mat.height, wo, uv, mat.parallax_steps)
+        uv = parallax_uv(
+            mat.height, wo, uv, mat.parallax_steps, mat.parallax_slope_max, mat.parallax_march
+        )
     dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)  # [N, 9]
     if mat.arch == "coarse_fine":
         uc = uv.mean(axis=1)

@@ -8,11 +8,16 @@ wo.y / wo.z * W / H)`` (local x = material u, y = v). A neural texture looked up
 one texel for every view; looked up where the ray meets the relief it can stay put under the
 view's shift, which a texel-local network cannot model (issue #44).
 
-:func:`parallax_uv` is parallax-occlusion mapping with a fixed step count: the ray is marched
-from the field's maximum ``hmax`` down to its minimum ``hmin`` in ``steps`` equal steps; at the
-first sample at or below the field it is intersected with the line between that sample and the
-one before (the classic linear refinement). Twins: ``parallax_uv`` in
-``shaders/neural_material.wgsl`` and :func:`vrneural.distill.models.parallax_uv`.
+:func:`parallax_uv` is parallax-occlusion mapping: the ray is marched from the field's maximum
+``hmax`` down to its minimum ``hmin`` in ``n`` equal steps; at the first sample at or below the
+field it is intersected with the line between that sample and the one before (the classic
+linear refinement). ``n`` follows the view (:func:`step_count`): the pack's ``steps`` at the
+steepest view of the data, proportionally fewer where the ray crosses fewer texels (the same
+texels per step at every angle). The march runs per texel (``march = "texel"``) or once per
+2x2 block at its mean UV, the block's 4 lookups shifted alike (``"block"``: a quarter of the
+height lookups; in the texture-space pass a block is 2x2 radiance texels, usually a fraction
+of a material texel). Twins: ``parallax_uv`` in ``shaders/neural_material.wgsl`` and
+:func:`vrneural.distill.models.parallax_uv`.
 
 The height field of a pack is ``[H, W]`` float16 on the neural textures' full-resolution texel
 grid, sampled bilinearly with wrap like them (:func:`vrneural.material.sample_bilinear_wrap`).
@@ -30,6 +35,8 @@ from vrneural.errors import VrnError
 PARALLAX_CHOICES = ("auto", "height", "neural", "off")
 #: the kinds a pack can carry
 PACK_KINDS = ("height", "off")
+#: where the march runs: per texel, or once per 2x2 block
+MARCHES = ("texel", "block")
 DEFAULT_STEPS = 16
 MAX_STEPS = 64
 #: ``auto`` gives a material parallax when its relief (:func:`relief_texels`) reaches this many
@@ -94,9 +101,14 @@ def choose_kind(requested: str, height: np.ndarray | None, where: str) -> tuple[
     return "off", f"relief {r:.2f} texels < {AUTO_MIN_RELIEF_TEXELS:g} (flat)"
 
 
-def check_pack_height(height: np.ndarray, res: tuple[int, int], steps: int) -> np.ndarray:
+def check_pack_height(
+    height: np.ndarray, res: tuple[int, int], steps: int, march: str = "texel"
+) -> np.ndarray:
     """Validate a pack's height field against its texels ``res = (H, W)``: ``[H, W]``, finite,
-    and the step count in ``[1, MAX_STEPS]``. Returns it as float16; ValueError otherwise."""
+    the step count in ``[1, MAX_STEPS]``, the march one of :data:`MARCHES`. Returns it as
+    float16; ValueError otherwise."""
+    if march not in MARCHES:
+        raise ValueError(f"parallax march {march!r} not in {MARCHES}")
     h = np.asarray(height)
     if h.shape != tuple(res):
         raise ValueError(
@@ -126,20 +138,57 @@ def ray_slope(wo: np.ndarray, res: tuple[int, int]) -> np.ndarray:
     return np.stack([wo[:, 0] / wo[:, 2], wo[:, 1] / wo[:, 2] * aspect], -1).astype(np.float32)
 
 
-def parallax_uv(height: np.ndarray, wo: np.ndarray, uv: np.ndarray, steps: int) -> np.ndarray:
+def slope_max(cos_max: np.float32, sin_max: np.float32, res: tuple[int, int]) -> np.float32:
+    """The largest ``|d|`` (:func:`ray_slope`) of the data's views: ``tan(theta_o_max)``
+    (times ``W / H`` where that is above 1), float32 (a WGSL constant)."""
+    aspect = np.float32(max(1.0, res[1] / res[0]))
+    return np.float32(np.float32(sin_max) / np.float32(cos_max) * aspect)
+
+
+def step_count(d: np.ndarray, steps: int, t_max: np.float32) -> np.ndarray:
+    """March steps ``[M]`` int for ray slopes ``d: [M, 2]``: ``ceil(steps |d| / t_max)`` in
+    ``[1, steps]`` (float32 arithmetic, as the shader's)."""
+    f = np.float32
+    t = np.sqrt((d * d).sum(-1, dtype=f)).astype(f)
+    n = np.ceil((f(steps) * t / f(t_max)).astype(f))
+    return np.clip(n, 1, steps).astype(np.int64)
+
+
+def parallax_uv(
+    height: np.ndarray,
+    wo: np.ndarray,
+    uv: np.ndarray,
+    steps: int,
+    t_max: float,
+    march: str = "texel",
+) -> np.ndarray:
     """Parallax-corrected material UVs ``[N, 4, 2]`` float32 of the 2x2 blocks ``uv: [N, 4,
     2]`` seen along ``wo: [N, 3]`` (one view per block, ``wo.z > 0``: the extended view of
-    :mod:`vrneural.grazing`), on the height field ``height: [H, W]`` float16 (UV units) in
-    ``steps`` march steps. See the module docstring."""
+    :mod:`vrneural.grazing`), on the height field ``height: [H, W]`` float16 (UV units), in at
+    most ``steps`` march steps (``t_max``: :func:`slope_max`), per texel or per block
+    (``march``). See the module docstring."""
+    f = np.float32
+    uv = np.asarray(uv, f)
+    d = ray_slope(wo, np.shape(height))  # [N, 2]
+    if march == "block":
+        hit = march_hits(height, uv.mean(axis=1).astype(f), d, steps, t_max)  # [N]
+        return (uv + (hit[:, None] * d)[:, None, :]).astype(f)
+    d4 = np.repeat(d, 4, axis=0)  # [N*4, 2]
+    u = uv.reshape(-1, 2)
+    hit = march_hits(height, u, d4, steps, t_max)
+    return (u + hit[:, None] * d4).astype(f).reshape(uv.shape)
+
+
+def march_hits(height, u: np.ndarray, d: np.ndarray, steps: int, t_max) -> np.ndarray:
+    """The ray heights ``[M]`` float32 where rays through ``u: [M, 2]`` with slopes ``d: [M,
+    2]`` meet ``height`` (the march and refinement of the module docstring)."""
     from vrneural.material import sample_bilinear_wrap
 
     f = np.float32
     tex = np.asarray(height, np.float32)[..., None]
     hmin, hmax = height_bounds(height)
-    uv = np.asarray(uv, f)
-    d = np.repeat(ray_slope(wo, tex.shape[:2]), 4, axis=0)  # [N*4, 2]
-    u = uv.reshape(-1, 2)
-    dz = f((hmax - hmin) / f(steps))
+    n = step_count(d, steps, f(t_max))
+    dz = ((hmax - hmin) / n.astype(f)).astype(f)
 
     def field(z):
         return sample_bilinear_wrap(tex, (u + z[:, None] * d).astype(f))[:, 0]
@@ -149,15 +198,15 @@ def parallax_uv(height: np.ndarray, wo: np.ndarray, uv: np.ndarray, steps: int) 
     hit = np.where(h_prev >= z_prev, hmax, hmin).astype(f)
     done = h_prev >= z_prev
     for k in range(1, steps + 1):
-        z = np.full(len(u), f(hmax - f(k) * dz), f)
+        z = (hmax - f(k) * dz).astype(f)
         h = field(z)
-        now = ~done & (z <= h)
+        now = ~done & (z <= h) & (k <= n)
         a = z_prev - h_prev
         t = a / np.where(now, a - (z - h), f(1))  # a > 0 >= z - h where `now`
         hit = np.where(now, z_prev + t * (z - z_prev), hit).astype(f)
         done |= now
         z_prev, h_prev = z, h
-    return (u + hit[:, None] * d).astype(f).reshape(uv.shape)
+    return hit
 
 
 def parallax_fetches(steps: int) -> int:
@@ -189,10 +238,16 @@ def setup_parallax(cfg, spec: dict, btf, where: str) -> tuple[np.ndarray | None,
         record["relief_texels"] = round(relief_texels(height), 4)
     if kind != "height":
         return None, record
+    from vrneural.grazing import directions_range
+
     spec["parallax"] = {
         "kind": "height",
         "steps": int(cfg.parallax_steps),
+        "march": cfg.parallax_march,
         "res": list(height.shape),
+        # the steepest view of the data: the march's full step count (the pack's dir_range)
+        "theta_o_max": directions_range(btf.light_dirs, btf.view_dirs)[1],
     }
     record["steps"] = int(cfg.parallax_steps)
+    record["march"] = cfg.parallax_march
     return height, record

@@ -15,8 +15,8 @@ spell of a shared machine hits every condition:
   shading).
 
 With ``--parallax-steps S`` the same rounds also time the texture-space update of the same two
-materials with height-field parallax of S steps (a renderer of its own; issue #44's target:
-at most 1.5x the update without it).
+materials with height-field parallax of up to S steps, marched per texel and once per 2x2 block
+(a renderer each; issue #44's target: at most 1.5x the update without it).
 
 Ratios: forward / one-sample floor (target <= 1.15), full update / bare kernel (<= 1.5),
 wall per frame / max(host CPU, GPU) with frames in flight (<= 1.1; GPU = the passes' times
@@ -39,6 +39,7 @@ TARGETS = {
     "texture_vs_bare": 1.5,
     "wall_vs_bound": 1.1,
     "parallax_vs_texture": 1.5,
+    "parallax_block_vs_texture": 1.5,
 }
 
 
@@ -202,10 +203,10 @@ def run_frame(cfg: FrameConfig) -> dict:
     hdr = _renderer(scene, c, eye_res, "hdr")
     disp = _renderer(scene, c, eye_res, "display")
     doc["timestamp_check"] = hdr.timestamp_check
-    par = None
-    if c.parallax_steps:
-        mats = timing.parallax_materials(c.parallax_steps)
-        par = _renderer(timing.bench_scene(c.lights, mats), c, eye_res, "hdr")
+    par = {}  # march -> renderer of the materials with parallax
+    for march in ("texel", "block") if c.parallax_steps else ():
+        mats = timing.parallax_materials(c.parallax_steps, march=march)
+        par[march] = _renderer(timing.bench_scene(c.lights, mats), c, eye_res, "hdr")
     floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_constant", "fs_floor_sample")}
     n1 = c.reuse + 1
     bar = timing.progress(c.rounds, "bench frame (rounds)", c.progress)
@@ -226,10 +227,13 @@ def run_frame(cfg: FrameConfig) -> dict:
         p["texture_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, 1, f), rep)
         p["texture_slice"] = time_passes(hdr, texture_update(hdr, "main", 0, n1, f), rep)
         p["texture_slice_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, n1, f), rep)
-        if par is not None:  # the same update, the materials with height-field parallax
-            p["texture_full_parallax"] = time_passes(par, texture_update(par, "main", 0, 1, f), rep)
-            p["texture_slice_parallax"] = time_passes(
-                par, texture_update(par, "main", 0, n1, f), rep
+        for march, rr in par.items():  # the same update, the materials with parallax
+            sfx = "" if march == "texel" else "_block"
+            p[f"texture_full_parallax{sfx}"] = time_passes(
+                rr, texture_update(rr, "main", 0, 1, f), rep
+            )
+            p[f"texture_slice_parallax{sfx}"] = time_passes(
+                rr, texture_update(rr, "main", 0, n1, f), rep
             )
         hdr.frame(f)  # the eyes' uniforms and radiance textures of a real frame
         hdr.wait()

@@ -17,6 +17,8 @@ PASS_RATIOS = (
     # --parallax-steps: the same update with height-field parallax
     ("parallax_vs_texture", "texture_full_parallax", "texture_full"),
     ("parallax_slice_vs_texture_slice", "texture_slice_parallax", "texture_slice"),
+    ("parallax_block_vs_texture", "texture_full_parallax_block", "texture_full"),
+    ("parallax_block_slice_vs_texture_slice", "texture_slice_parallax_block", "texture_slice"),
 )
 
 

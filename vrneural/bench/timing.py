@@ -164,7 +164,7 @@ def progress(total: int, desc: str, enabled: bool):
     return tqdm(total=total, desc=desc, unit="frame", disable=not enabled)
 
 
-def parallax_materials(steps: int, seeds=(3, 4), tex_res: int = 16):
+def parallax_materials(steps: int, seeds=(3, 4), tex_res: int = 16, march: str = "texel"):
     """The benchmark scene's two random students with height-field parallax of ``steps``
     march steps on a rough random relief (spectral noise over 0.15 tile widths, pebbles'
     range; the march ends where it meets it, so the cost depends on the relief)."""
@@ -178,8 +178,9 @@ def parallax_materials(steps: int, seeds=(3, 4), tex_res: int = 16):
         m = random_material(s, tex_res=tex_res)
         h = spectral_noise(np.random.default_rng(s), tex_res, 1, 8)
         h = 0.15 * (h - h.mean()) / max(float(np.ptp(h)), 1e-12)
-        out.append(NeuralMaterial(m.arch, m.networks, m.textures, m.output, m.meta, m.dir_range,
-                                  {}, {"kind": "height", "steps": steps}, h))  # fmt: skip
+        par = {"kind": "height", "steps": steps, "march": march}
+        args = (m.arch, m.networks, m.textures, m.output, m.meta, m.dir_range, {}, par, h)
+        out.append(NeuralMaterial(*args))
     return out
 
 

@@ -72,7 +72,14 @@ class TrainConfig:
         "module: not built yet) or off (see README: Parallax)",
         choices=PARALLAX,
     )
-    parallax_steps: int = opt(16, "march steps of height-field parallax, 1 to 64")
+    parallax_steps: int = opt(
+        16, "march steps of height-field parallax at the data's steepest view (fewer below), 1-64"
+    )
+    parallax_march: str = opt(
+        "texel",
+        "march per texel, or once per 2x2 block (a quarter of the height lookups)",
+        choices=("texel", "block"),
+    )
     progress: bool = opt(True, "show a tqdm progress bar")
     force: bool = opt(False, "overwrite existing outputs")
     resume: bool = opt(False, "continue the checkpoint at -o (exactly reproduces a straight run)")

@@ -76,6 +76,7 @@ class MaterialSpec:
     lod_levels: int = 1
     #: height-field parallax march steps (0: off) and the WGSL literals (hmin, hmax, W / H)
     parallax_steps: int = 0
+    parallax_march: str = "texel"
     height_consts: tuple = ()
     height_binding: int = 18
 
@@ -187,21 +188,23 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
         dir_consts=tuple(repr(float(c)) for t in mat.dir_range for c in boundary_consts(t)),
         lod_levels=mat.lod_levels,
         parallax_steps=mat.parallax_steps,
+        parallax_march=mat.parallax_march,
         height_consts=_height_consts(mat),
         height_binding=HEIGHT_BINDING,
     )
 
 
 def _height_consts(mat: NeuralMaterial) -> tuple:
-    """WGSL literals ``(hmin, hmax, W / H)`` of a parallax material's height field (exact
-    float32 values, as the numpy twin uses); ``()`` without parallax."""
+    """WGSL literals ``(hmin, hmax, W / H, slope max)`` of a parallax material's height field
+    (exact float32 values, as the numpy twin uses); ``()`` without parallax."""
     if not mat.parallax_steps:
         return ()
     from vrneural.parallax import height_bounds
 
     lo, hi = height_bounds(mat.height)
     H, W = mat.height.shape
-    return tuple(repr(float(v)) for v in (lo, hi, np.float32(W / H)))
+    vals = (lo, hi, np.float32(W / H), mat.parallax_slope_max)
+    return tuple(repr(float(v)) for v in vals)
 
 
 class _PlainLayer:

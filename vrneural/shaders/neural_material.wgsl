@@ -109,11 +109,13 @@ fn {{ name }}_lod(uv: vec2<f32>, lod_in: f32) -> array<f32, {{ channels }}> {
 {% macro parallax_fns(mat) %}
 {% if mat.parallax_steps > 0 %}
 // Height-field parallax: lookups where the view ray meets the height field, parallax-occlusion
-// mapping in {{ mat.parallax_steps }} fixed steps from its maximum to its minimum with the linear
-// refinement. Twin: vrneural/parallax.py:parallax_uv.
+// mapping from its maximum to its minimum in up to {{ mat.parallax_steps }} steps (fewer at
+// steeper views: step_count) with the linear refinement, per {{ mat.parallax_march }}.
+// Twin: vrneural/parallax.py:parallax_uv.
 const H_MIN: f32 = {{ mat.height_consts[0] }};
 const H_MAX: f32 = {{ mat.height_consts[1] }};
 const H_ASPECT: f32 = {{ mat.height_consts[2] }};  // W / H of the texel grid
+const T_MAX: f32 = {{ mat.height_consts[3] }};  // the steepest view's |d| (parallax.slope_max)
 
 // Bilinear wrap lookup of the height field (the neural textures' texel grid).
 fn height_at(uv: vec2<f32>) -> f32 {
@@ -140,13 +142,21 @@ fn parallax_d(wo: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(wo.x / wo.z, wo.y / wo.z * H_ASPECT);
 }
 
-fn parallax_uv(uv: vec2<f32>, d: vec2<f32>) -> vec2<f32> {
-    let dz = (H_MAX - H_MIN) / {{ mat.parallax_steps }}.0;
+// The march's steps for slope d: ceil(steps |d| / T_MAX) in [1, steps] (parallax.step_count).
+fn parallax_n(d: vec2<f32>) -> i32 {
+    let n = ceil({{ mat.parallax_steps }}.0 * sqrt(dot(d, d)) / T_MAX);
+    return clamp(i32(n), 1, {{ mat.parallax_steps }});
+}
+
+// The ray height where the ray through uv with slope d meets the field (parallax.march_hits).
+fn parallax_z(uv: vec2<f32>, d: vec2<f32>) -> f32 {
+    let n = parallax_n(d);
+    let dz = (H_MAX - H_MIN) / f32(n);
     var z_prev = H_MAX;
     var h_prev = height_at(uv + z_prev * d);
-    if (h_prev >= z_prev) { return uv + H_MAX * d; }
+    if (h_prev >= z_prev) { return H_MAX; }
     var hit = H_MIN;
-    for (var k = 1; k <= {{ mat.parallax_steps }}; k++) {
+    for (var k = 1; k <= n; k++) {
         let z = H_MAX - f32(k) * dz;
         let h = height_at(uv + z * d);
         if (z <= h) {
@@ -157,8 +167,10 @@ fn parallax_uv(uv: vec2<f32>, d: vec2<f32>) -> vec2<f32> {
         z_prev = z;
         h_prev = h;
     }
-    return uv + hit * d;
+    return hit;
 }
+
+fn parallax_uv(uv: vec2<f32>, d: vec2<f32>) -> vec2<f32> { return uv + parallax_z(uv, d) * d; }
 {% endif %}
 {% endmacro %}
 
