@@ -83,3 +83,12 @@ def test_bad_parallax_input_is_one_line(btfs):
         "--parallax-steps = 0", "allowed [1, 64]",
     )  # fmt: skip
     assert not any((d / f"e{i}.pt").exists() for i in range(1, 5))
+
+
+def test_btf_info_shows_the_relief_and_the_auto_choice(btfs, capsys):
+    for name, kind in (("relief", "height"), ("flat", "off")):
+        capsys.readouterr()
+        code, _ = run_cli("btf", "info", btfs[name])
+        assert code == 0
+        line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("relief"))
+        assert line.endswith(f"distill --parallax auto gives it {kind}"), line
