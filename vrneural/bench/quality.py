@@ -43,6 +43,7 @@ from vrneural.bench.quality_parallax import (
     VIEW_BINS,
     bin_pairs,
     check_parallax_data,
+    resolved_parallax,
     parallax_record,
     runs_table,
     teachers,
@@ -592,6 +593,8 @@ def _reuse_problem(cfg, btf_sha: str | None = None, teacher_sha: str | None = No
     except VrnError as e:
         return str(e).removeprefix(f"{cfg.output}: ")
     want, have = dataclasses.asdict(cfg), ck["config"]
+    if "parallax" in have:  # --parallax auto: what it chose (a teach run's default)
+        have = have | {"parallax": resolved_parallax(ck)}
     # a field newer than the checkpoint counts as what that run used: its default, or
     # BEFORE_FIELD where the default changed the behaviour
     default = {f.name: f.default for f in dataclasses.fields(cfg)} | BEFORE_FIELD

@@ -217,3 +217,13 @@ def check_parallax_data(presets: list[str], given: dict) -> None:
                 f"--parallax height: --btf {p} has no height field (BTF format version 1); "
                 "drop it or --parallax"
             )
+
+
+def resolved_parallax(ck: dict) -> str:
+    """The ``--parallax`` a checkpoint was trained with, ``auto`` resolved to what it chose
+    (the checkpoint's record), so a teacher trained with the default reuses as ``off`` or
+    ``height``."""
+    asked = ck["config"].get("parallax", "off")
+    if asked != "auto":
+        return asked
+    return (ck.get("parallax") or {}).get("kind", "off")
