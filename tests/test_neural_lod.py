@@ -56,18 +56,20 @@ def test_pack_keeps_its_pyramid_and_refuses_a_bad_one(tmp_path):
         for a, b in zip(m.levels[k], back.levels[k], strict=True):
             np.testing.assert_array_equal(a, b)
     from vrneural.formats.container import read_container, write_container
+    from vrneural.formats.vrnm import VRNM_VERSION
 
-    header, arrays, _ = read_container(tmp_path / "p.vrnm", b"VRNM", (3,))
+    header, arrays, _ = read_container(tmp_path / "p.vrnm", b"VRNM", (VRNM_VERSION,))
     arrays = {k: np.array(v) for k, v in arrays.items()}
     arrays["tex.fine.1"] = arrays["tex.fine.1"][:5]  # a level of the wrong size
-    write_container(tmp_path / "bad.vrnm", b"VRNM", 3, header, arrays)
+    write_container(tmp_path / "bad.vrnm", b"VRNM", VRNM_VERSION, header, arrays)
     with pytest.raises(VrnError, match=r"bad.vrnm: invalid runtime pack: texture 'fine' level 1"):
         read_vrnm(tmp_path / "bad.vrnm")
     header["levels"]["fine"] = 9  # more levels than the file holds (above log2 of the size)
     arrays = {
-        k: np.array(v) for k, v in read_container(tmp_path / "p.vrnm", b"VRNM", (3,))[1].items()
+        k: np.array(v)
+        for k, v in read_container(tmp_path / "p.vrnm", b"VRNM", (VRNM_VERSION,))[1].items()
     }
-    write_container(tmp_path / "bad2.vrnm", b"VRNM", 3, header, arrays)
+    write_container(tmp_path / "bad2.vrnm", b"VRNM", VRNM_VERSION, header, arrays)
     with pytest.raises(VrnError, match=r"bad2.vrnm: runtime pack lacks 'tex.fine.3'"):
         read_vrnm(tmp_path / "bad2.vrnm")
 

@@ -37,6 +37,7 @@ import numpy as np
 from vrneural.errors import VrnError
 from vrneural.grazing import DEFAULT_THETA_MAX_DEG, check_dir_range, extend
 from vrneural.mlp import Layer, mlp_forward, random_mlp
+from vrneural.sampling import sample_bilinear_wrap
 
 ARCHS = {
     "coarse_fine": (("coarse", "fine"), ("coarse", "fine")),
@@ -60,6 +61,11 @@ class NeuralMaterial:
     dir_range: tuple[float, float] = (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
     #: texture name -> its pyramid levels 1.. (``[H >> k, W >> k, C]`` float16 each)
     levels: dict = field(default_factory=dict)
+    #: height-field parallax (vrneural.parallax): ``{"kind": "height", "steps": n}`` or
+    #: ``{"kind": "off"}`` (also ``{}``)
+    parallax: dict = field(default_factory=dict)
+    #: ``[H, W]`` float16 height field, UV units, on the full-resolution texel grid (or None)
+    height: np.ndarray | None = None
 
     def __post_init__(self):
         self.dir_range = check_dir_range(self.dir_range)
@@ -101,6 +107,46 @@ class NeuralMaterial:
                 raise ValueError("fine network input != latent size + fine texture channels")
         if self.networks[nets[-1]][-1].n_out != 3:
             raise ValueError("the last network must output 3 values (RGB)")
+        self._check_parallax()
+
+    def _check_parallax(self) -> None:
+        from vrneural.parallax import PACK_KINDS, check_pack_height
+
+        self.parallax = dict(self.parallax or {"kind": "off"})
+        kind = self.parallax.get("kind")
+        if kind not in PACK_KINDS:
+            raise ValueError(f"parallax kind {kind!r} not in {PACK_KINDS}")
+        if kind == "height" and self.height is None:
+            raise ValueError("parallax kind 'height' needs a height field, and it has none")
+        if self.height is not None:
+            res = self.textures[ARCHS[self.arch][1][-1]].shape[:2]  # fine / features
+            steps = self.parallax.get("steps", 1) if kind == "height" else 1
+            march = self.parallax.get("march", "texel")
+            self.height = check_pack_height(self.height, res, steps, march)
+
+    @property
+    def parallax_kind(self) -> str:
+        """``"height"`` or ``"off"``."""
+        return self.parallax.get("kind", "off")
+
+    @property
+    def parallax_steps(self) -> int:
+        """March steps of height-field parallax (0 when off)."""
+        return int(self.parallax.get("steps", 0)) if self.parallax_kind == "height" else 0
+
+    @property
+    def parallax_march(self) -> str:
+        """Where the parallax march runs: ``"texel"`` or once per 2x2 ``"block"``."""
+        return self.parallax.get("march", "texel")
+
+    @property
+    def parallax_slope_max(self) -> np.float32:
+        """The steepest view's ray slope (:func:`vrneural.parallax.slope_max`): the march's
+        full step count is reached there."""
+        from vrneural.grazing import boundary_consts
+        from vrneural.parallax import slope_max
+
+        return slope_max(*boundary_consts(self.dir_range[1]), self.height.shape)
 
     @property
     def lod_levels(self) -> int:
@@ -134,25 +180,6 @@ def half_vector(wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
     ok = n2 >= HALF_EPS2
     h = np.where(ok, s / np.sqrt(np.where(ok, n2, 1.0)), np.array([0, 0, 1], np.float32))
     return h.astype(np.float32)
-
-
-def sample_bilinear_wrap(tex: np.ndarray, uv: np.ndarray) -> np.ndarray:
-    """Bilinear, wrap-around lookup of ``tex: [H, W, C]`` at ``uv: [..., 2]`` -> ``[..., C]``."""
-    t = np.asarray(tex, np.float32)
-    H, W = t.shape[:2]
-    x = np.asarray(uv[..., 0], np.float64) * W - 0.5
-    y = np.asarray(uv[..., 1], np.float64) * H - 0.5
-    x0 = np.floor(x)
-    y0 = np.floor(y)
-    fx = (x - x0)[..., None].astype(np.float32)
-    fy = (y - y0)[..., None].astype(np.float32)
-    xi0 = x0.astype(np.int64) % W
-    yi0 = y0.astype(np.int64) % H
-    xi1 = (xi0 + 1) % W
-    yi1 = (yi0 + 1) % H
-    top = t[yi0, xi0] * (1 - fx) + t[yi0, xi1] * fx
-    bot = t[yi1, xi0] * (1 - fx) + t[yi1, xi1] * fx
-    return top * (1 - fy) + bot * fy
 
 
 def pool_level(tex: np.ndarray, level: int) -> np.ndarray:
@@ -207,7 +234,9 @@ def material_forward(
     texel is independent (the 4 share only the directions). Directions beyond
     ``mat.dir_range`` are extended (:func:`vrneural.grazing.extend`): 0 for a light at or
     below the horizon. ``lod: [N]``: each block's level of detail in the neural textures'
-    pyramids (None: level 0; see :func:`sample_lod`).
+    pyramids (None: level 0; see :func:`sample_lod`). A material with height-field parallax
+    looks its textures up at :func:`vrneural.parallax.parallax_uv` of ``uv`` along the
+    extended ``wo`` (the coarse texture at the corrected texels' mean).
     """
     wi = np.asarray(wi, np.float32)
     wo = np.asarray(wo, np.float32)
@@ -227,6 +256,12 @@ def material_forward(
         if not np.isfinite(a).all():  # NaN in, NaN out, silently
             raise VrnError(f"material_forward: {name} holds NaN/Inf values")
     wi, wo, weight = extend(wi, wo, mat.dir_range)
+    if mat.parallax_steps:  # lookups where the (extended) view ray meets the height field
+        from vrneural.parallax import parallax_uv
+
+        uv = parallax_uv(
+            mat.height, wo, uv, mat.parallax_steps, mat.parallax_slope_max, mat.parallax_march
+        )
     dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)  # [N, 9]
     if mat.arch == "coarse_fine":
         uc = uv.mean(axis=1)

@@ -14,6 +14,10 @@ spell of a shared machine hits every condition:
   texture-space kernel (the same facing test, geometry records read and texels stored; no
   shading).
 
+With ``--parallax-steps S`` the same rounds also time the texture-space update of the same two
+materials with height-field parallax of up to S steps, marched per texel and once per 2x2 block
+(a renderer each; issue #44's target: at most 1.5x the update without it).
+
 Ratios: forward / one-sample floor (target <= 1.15), full update / bare kernel (<= 1.5),
 wall per frame / max(host CPU, GPU) with frames in flight (<= 1.1; GPU = the passes' times
 summed, amortised as the frame loop runs them).
@@ -30,7 +34,13 @@ from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.config import opt, quick_defaults
 
-TARGETS = {"forward_vs_sample_floor": 1.15, "texture_vs_bare": 1.5, "wall_vs_bound": 1.1}
+TARGETS = {
+    "forward_vs_sample_floor": 1.15,
+    "texture_vs_bare": 1.5,
+    "wall_vs_bound": 1.1,
+    "parallax_vs_texture": 1.5,
+    "parallax_block_vs_texture": 1.5,
+}
 
 
 @dataclass
@@ -45,6 +55,11 @@ class FrameConfig:
     frames: int = opt(20, "frames per loop measurement (after one cycle of warm-up)")
     repeats: int = opt(3, "passes timed alone per round (the median is kept)")
     rounds: int = opt(3, "interleaved rounds (the median over rounds is reported)")
+    parallax_steps: int = opt(
+        0,
+        "also time the texture-space update of the same materials with height-field parallax "
+        "of this many march steps, 1 to 64 (0 = off; see README: Parallax)",
+    )
     quick: bool = opt(False, "CI-sized: texture 128, eyes 96x96, 6 frames, 2 rounds")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
@@ -179,6 +194,7 @@ def run_frame(cfg: FrameConfig) -> dict:
     check_range("--frames", c.frames, 2, 10000)
     check_range("--repeats", c.repeats, 1, 100)
     check_range("--rounds", c.rounds, 1, 100)
+    check_range("--parallax-steps", c.parallax_steps, 0, 64)
     eye_res = parse_res(c.eye_res)
     with rp.prepare_out(cfg.out, cfg.force, "frame") as root:
         t0 = time.perf_counter()
@@ -187,6 +203,10 @@ def run_frame(cfg: FrameConfig) -> dict:
         hdr = _renderer(scene, c, eye_res, "hdr")
         disp = _renderer(scene, c, eye_res, "display")
         doc["timestamp_check"] = hdr.timestamp_check
+        par = {}  # march -> renderer of the materials with parallax
+        for march in ("texel", "block") if c.parallax_steps else ():
+            mats = timing.parallax_materials(c.parallax_steps, march=march)
+            par[march] = _renderer(timing.bench_scene(c.lights, mats), c, eye_res, "hdr")
         floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_constant", "fs_floor_sample")}
         n1 = c.reuse + 1
         bar = timing.progress(c.rounds, "bench frame (rounds)", c.progress)
@@ -207,6 +227,14 @@ def run_frame(cfg: FrameConfig) -> dict:
             p["texture_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, 1, f), rep)
             p["texture_slice"] = time_passes(hdr, texture_update(hdr, "main", 0, n1, f), rep)
             p["texture_slice_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, n1, f), rep)
+            for march, rr in par.items():  # the same update, the materials with parallax
+                sfx = "" if march == "texel" else "_block"
+                p[f"texture_full_parallax{sfx}"] = time_passes(
+                    rr, texture_update(rr, "main", 0, 1, f), rep
+                )
+                p[f"texture_slice_parallax{sfx}"] = time_passes(
+                    rr, texture_update(rr, "main", 0, n1, f), rep
+                )
             hdr.frame(f)  # the eyes' uniforms and radiance textures of a real frame
             hdr.wait()
             f += 1

@@ -14,6 +14,11 @@ PASS_RATIOS = (
     ("display_vs_hdr_forward", "forward_display", "forward"),
     ("texture_vs_bare", "texture_full", "texture_bare"),
     ("texture_slice_vs_bare", "texture_slice", "texture_slice_bare"),
+    # --parallax-steps: the same update with height-field parallax
+    ("parallax_vs_texture", "texture_full_parallax", "texture_full"),
+    ("parallax_slice_vs_texture_slice", "texture_slice_parallax", "texture_slice"),
+    ("parallax_block_vs_texture", "texture_full_parallax_block", "texture_full"),
+    ("parallax_block_slice_vs_texture_slice", "texture_slice_parallax_block", "texture_slice"),
 )
 
 
@@ -53,6 +58,8 @@ def summarise(doc: dict, reuse: int) -> dict:
         }
     ratios = {}
     for key, a, b in PASS_RATIOS:
+        if a not in recs[0]["passes"]:
+            continue
         ck = clock(a) if clock(a) == clock(b) else "wall_ms"
         per = [r["passes"][a][ck] / r["passes"][b][ck] for r in recs]
         ratios[key] = {"median": _med(per), "range": [float(min(per)), float(max(per))],

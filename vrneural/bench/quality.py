@@ -34,6 +34,14 @@ from pathlib import Path
 from vrneural.bench.quality_btf import btf_path as btf_file
 from vrneural.bench.quality_btf import check_given
 from vrneural.bench.quality_lafortune import img, lafortune, slice_pairs
+from vrneural.bench.quality_parallax import (
+    PARALLAX_LABELS,
+    VIEW_BINS,
+    check_parallax_data,
+    parallax_record,
+    runs_table,
+    teachers,
+)
 from vrneural.bench.quality_train import (
     check_bench_out,
     check_wide_start,
@@ -77,8 +85,8 @@ def labels(width: int = 8) -> dict[str, str]:
     """The methods' names in the reports; with ``--width W`` (not 8) the three networks it
     sets say so: ``Single-level 12-wide``, ``Ours (coarse-to-fine, distilled, 12 wide)``."""
     if width == 8:
-        return dict(LABELS)
-    out = dict(LABELS, single8=f"Single-level {width}-wide")
+        return dict(LABELS) | PARALLAX_LABELS
+    out = dict(LABELS, single8=f"Single-level {width}-wide") | PARALLAX_LABELS
     out["student_nodistill"] = f"Ours w/o distillation ({width} wide)"
     out["student"] = f"Ours (coarse-to-fine, distilled, {width} wide)"
     return out
@@ -117,6 +125,13 @@ class QualityConfig:
         2,
         "ReduceLROnPlateau patience of every network but the teacher (distill --lr-patience; "
         "see docs/quality-research.md on a gentler schedule)",
+    )
+    parallax: str = opt(
+        "off",
+        "height: also train the height-field parallax variants (a teacher, the distilled "
+        "student and NeuMIP, each with --parallax height) beside the others, which train "
+        "without parallax (see README: Parallax)",
+        choices=("off", "height"),
     )
     width: int = opt(
         8,
@@ -169,15 +184,25 @@ def _common(cfg: QualityConfig) -> dict:
     return dict(progress=cfg.progress, max_test_slices=0, device=cfg.device, compile=cfg.compile)
 
 
-def _teach_config(preset: str, cfg: QualityConfig, root: Path, btf_path: Path, btf_sha: str | None):
-    """The teacher's config; ``resume`` where ``--resume`` finds its checkpoint (it must match)."""
+def _teach_config(
+    preset: str,
+    cfg: QualityConfig,
+    root: Path,
+    btf_path: Path,
+    btf_sha: str | None,
+    stem: str = "teacher",
+    parallax: str = "off",
+):
+    """The teacher's config (``stem``: its file, ``parallax``: teach --parallax); ``resume``
+    where ``--resume`` finds its checkpoint (it must match)."""
     from vrneural.distill.config import TeachConfig
 
     tcfg = TeachConfig(
         btf=str(btf_path),
-        output=str(root / preset / "teacher.pt"),
+        output=str(root / preset / f"{stem}.pt"),
         epochs=cfg.teacher_epochs,
         seed=cfg.seed,
+        parallax=parallax,
         **_common(cfg),
     )
     mark_explicit(tcfg, "epochs")  # a resumed run goes to the bench's epochs, not its own
@@ -193,9 +218,10 @@ def _distill_configs(
     ``check_teacher=False`` skips comparing it with the teacher each checkpoint was made from,
     for the check before any work, when the teacher may not exist yet)."""
     d = root / preset
-    tsha = file_sha256(d / "teacher.pt") if check_teacher else None
     out = []
-    for name, kw in RUNS.items():
+    for name, kw in runs_table(cfg, RUNS).items():
+        tstem = kw.get("teacher", "teacher")
+        tsha = file_sha256(d / f"{tstem}.pt") if check_teacher else None
         for seed in range(cfg.seed, cfg.seed + cfg.repeats):
             # the first seed keeps the plain name, so a one-seed run's checkpoints are reused
             stem = name if seed == cfg.seed else f"{name}.seed{seed}"
@@ -264,9 +290,11 @@ def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
     from vrneural.distill.config import DistillConfig
     from vrneural.distill.distill import resolve_method
 
+    kw = dict(kw)
+    kw.setdefault("parallax", "off")  # the bench's networks: parallax only where it asks
     dcfg = resolve_method(
         DistillConfig(
-            teacher=str(d / "teacher.pt"),
+            teacher=str(d / f"{kw.pop('teacher', 'teacher')}.pt"),
             output=str(output),
             btf=str(btf_path),  # not the teacher's record: OUT may have moved
             ema=cfg.ema,
@@ -294,7 +322,9 @@ def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> 
         for p in presets:
             (root / p).mkdir(parents=True, exist_ok=True)
             sha = btf_fingerprint(read_btf(btfs[p]))["sha256"]
-            teach.append((f"{p}: teacher", "teach", _teach_config(p, quiet, root, btfs[p], sha)))
+            for stem, par in teachers(cfg):
+                c = _teach_config(p, quiet, root, btfs[p], sha, stem, par)
+                teach.append((f"{p}: {stem}", "teach", c))
         run_jobs(pool, teach, log)
         runs = [
             (p, n, stem, c)
@@ -319,9 +349,14 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bo
     btf_path = make_btf(preset, cfg, btf_file(preset, cfg, root))
     synth_s = time.perf_counter() - t0
     btf = read_btf(btf_path)
-    tcfg = _teach_config(preset, cfg, root, btf_path, btf_fingerprint(btf)["sha256"])
+    sha = btf_fingerprint(btf)["sha256"]
+    tcfgs = [_teach_config(preset, cfg, root, btf_path, sha, *t) for t in teachers(cfg)]
+    tcfg = tcfgs[0]
     runs = partial(_distill_configs, preset, cfg, root, btf_path)  # they read the teacher
-    tck, done = load_trained(tcfg, runs) if trained else train_in_process(preset, tcfg, runs, log)
+    if trained:
+        tck, done = load_trained(tcfg, runs, tcfgs[1:])
+    else:
+        tck, done = train_in_process(preset, tcfg, runs, log, tcfgs[1:])
     records = {"teacher": [tck]}
     for name, ck, init_from in done:
         records.setdefault(name, []).append(with_wide_start(ck, init_from))
@@ -366,11 +401,13 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bo
             "storage_bytes": mat.weight_bytes + mat.texture_bytes,
             "macs_per_texel": mat.macs_per_texel,
             "wide_start": wide_start_record(cks[0]),
+            **parallax_record(models, mat, data, every),  # view-angle bins, fetches, parallax
         }
         out["slices"][name] = [predict_slice(models[0], data, p).numpy() for p in slices]
     out["methods"]["lafortune"], reused = lafortune(
         data, every, slices, cfg, out, d / "lafortune.npz", tck["btf"]["sha256"]
     )
+    out["view_bins"] = [list(b) for b in VIEW_BINS]
     log(f"{preset}: lafortune  {took(out['methods']['lafortune'], reused)}")
     out["slice_pairs"] = slices
     return out
@@ -382,7 +419,8 @@ def _check_resumable(presets: list[str], cfg: QualityConfig, root: Path) -> None
     the BTFs exist), so a mismatch stops the run before hours of other presets."""
     for p in presets:
         btf_path = btf_file(p, cfg, root)
-        _teach_config(p, cfg, root, btf_path, None)
+        for t in teachers(cfg):
+            _teach_config(p, cfg, root, btf_path, None, *t)
         _distill_configs(p, cfg, root, btf_path, check_teacher=False)
 
 
@@ -426,6 +464,8 @@ def validate(cfg: QualityConfig) -> list[str]:
         BtfConfig(preset=p, res=cfg.res, dirs=cfg.dirs, seed=cfg.seed).validate(
             {"preset": "--presets"}
         )
+    if cfg.parallax == "height":
+        check_parallax_data(presets, given)
     presets = presets + list(given)  # the given BTFs, labelled by file name
     check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
     check_train_config(  # --ema and the like, as `distill` checks them

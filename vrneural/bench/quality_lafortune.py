@@ -7,6 +7,8 @@ import json
 import time
 from pathlib import Path
 
+from vrneural.bench.quality_parallax import bin_pairs
+
 
 def img(blocks, res):
     from vrneural.distill.data import from_blocks
@@ -63,7 +65,9 @@ def lafortune(data, every, slices, cfg, out: dict, path: Path, btf_sha: str):
         predict_lafortune(params, *data.dirs(p)).reshape(H, W, 3).numpy() for p in slices
     ]
     whole, test = l1(every), l1(data.test)
+    bins = [l1(ps) if ps else None for ps in bin_pairs(data, every)]
     return {
+        "view_bins_l1": bins,
         "whole_l1": whole,
         "test_l1": test,
         "whole_l1_seeds": [whole],  # deterministic: one fit

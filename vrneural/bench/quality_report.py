@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vrneural.bench.quality_parallax import bins_png, markdown_bins
 from vrneural.errors import count
 from vrneural.outputs import atomic_path
 
@@ -274,9 +275,11 @@ def markdown(doc: dict) -> str:
     lines += [
         "",
         "Figures: `curves.png` (test L1 per epoch; thick: the first seed, thin: the others), "
-        "`slices.png` (BTF slices vs ground truth, first seed).",
+        "`slices.png` (BTF slices vs ground truth, first seed), `view_bins.png` (L1 by view "
+        "angle).",
         "",
     ]
+    lines += markdown_bins(doc)
     return "\n".join(lines)
 
 
@@ -384,6 +387,7 @@ def write_report(doc: dict, slices: dict, root: Path) -> None:
     with atomic_path(root / "results.md") as tmp:
         tmp.write_text(markdown(doc))
     curves_png(doc, root / "curves.png")
+    bins_png(doc, root / "view_bins.png")
     slices_png(doc, slices, root / "slices.png")
 
 

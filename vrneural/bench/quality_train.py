@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from vrneural.bench.quality_btf import is_given
+from vrneural.bench.quality_parallax import resolved_parallax
 from vrneural.config import config_dict
 from vrneural.distill.config import BEFORE_FIELD
 from vrneural.errors import VrnError, count
@@ -205,6 +206,8 @@ def _reuse_problem(cfg, btf_sha: str | None = None, teacher_sha: str | None = No
     except VrnError as e:
         return str(e).removeprefix(f"{cfg.output}: ")
     want, have = dataclasses.asdict(cfg), ck["config"]
+    if "parallax" in have:  # --parallax auto: what it chose (a teach run's default)
+        have = have | {"parallax": resolved_parallax(ck)}
     # a field newer than the checkpoint counts as what that run used: its default, or
     # BEFORE_FIELD where the default changed the behaviour
     default = {f.name: f.default for f in dataclasses.fields(cfg)} | BEFORE_FIELD
@@ -251,7 +254,7 @@ def set_resume(cfg, resume: bool, **hashes) -> None:
     cfg.force = not cfg.resume
 
 
-def train_in_process(preset: str, tcfg, runs, log) -> tuple[dict, list]:
+def train_in_process(preset: str, tcfg, runs, log, more=()) -> tuple[dict, list]:
     """``--jobs 1``: train the teacher, then each ``(key, stem, DistillConfig)`` of ``runs()``
     (called once the teacher exists) in order, in this process; log each. Returns the
     teacher's checkpoint and ``(key, checkpoint, init_from)`` of every network with a key (a
@@ -263,6 +266,12 @@ def train_in_process(preset: str, tcfg, runs, log) -> tuple[dict, list]:
     tck = run_teach(tcfg)
     log(f"{preset}: teacher  {took(tck, reused)}")
     done = []
+    for c in more:  # further teachers (the parallax variant's), before the networks they teach
+        reused = _finished(c)
+        ck = run_teach(c)
+        stem = Path(c.output).stem
+        log(f"{preset}: {stem}  {took(ck, reused)}")
+        done.append((stem, ck, ""))
     for key, stem, c in runs():
         reused = _finished(c)
         ck = run_distill(c)
@@ -272,13 +281,14 @@ def train_in_process(preset: str, tcfg, runs, log) -> tuple[dict, list]:
     return tck, done
 
 
-def load_trained(tcfg, runs) -> tuple[dict, list]:
+def load_trained(tcfg, runs, more=()) -> tuple[dict, list]:
     """What :func:`train_in_process` returns, for networks the ``--jobs`` workers trained: read
     from their checkpoints, without another pass through the training loop (and its log)."""
     from vrneural.distill.checkpoint import load_checkpoint
 
     tck = load_checkpoint(tcfg.output, kind="teacher")
-    done = [(k, load_checkpoint(c.output), c.init_from) for k, _, c in runs() if k is not None]
+    done = [(Path(c.output).stem, load_checkpoint(c.output, kind="teacher"), "") for c in more]
+    done += [(k, load_checkpoint(c.output), c.init_from) for k, _, c in runs() if k is not None]
     return tck, done
 
 

@@ -164,6 +164,26 @@ def progress(total: int, desc: str, enabled: bool):
     return tqdm(total=total, desc=desc, unit="frame", disable=not enabled)
 
 
+def parallax_materials(steps: int, seeds=(3, 4), tex_res: int = 16, march: str = "texel"):
+    """The benchmark scene's two random students with height-field parallax of ``steps``
+    march steps on a rough random relief (spectral noise over 0.15 tile widths, pebbles'
+    range; the march ends where it meets it, so the cost depends on the relief)."""
+    import numpy as np
+
+    from vrneural.btf.heightfield import spectral_noise
+    from vrneural.material import NeuralMaterial, random_material
+
+    out = []
+    for s in seeds:
+        m = random_material(s, tex_res=tex_res)
+        h = spectral_noise(np.random.default_rng(s), tex_res, 1, 8)
+        h = 0.15 * (h - h.mean()) / max(float(np.ptp(h)), 1e-12)
+        par = {"kind": "height", "steps": steps, "march": march}
+        args = (m.arch, m.networks, m.textures, m.output, m.meta, m.dir_range, {}, par, h)
+        out.append(NeuralMaterial(*args))
+    return out
+
+
 def bench_scene(n_lights: int, materials=None):
     """The benchmark scene, independent of the bundled packs: a neural sphere (0.8 m) and a
     neural tile (0.45 m) on a plain 6 m floor, ``n_lights`` circling point lights

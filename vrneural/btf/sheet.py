@@ -136,13 +136,7 @@ def summary(btf: Btf, max_slices: int = 256) -> dict:
         "value_mean": total / max(count, 1),
         "value_range_sampled": bool(n > max_slices),
         "nonfinite_values": bad,
-        "height_field": None
-        if btf.height is None
-        else {
-            "shape": list(btf.height.shape),
-            "min": float(btf.height.min()),
-            "max": float(btf.height.max()),
-        },
+        "height_field": None if btf.height is None else _height_summary(btf),
         "meta": btf.meta,
     }
 
@@ -209,4 +203,26 @@ def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
     with atomic_path(out) as tmp:
         fig.savefig(tmp, format="png")
     plt.close(fig)
+    return out
+
+
+def _height_summary(btf) -> dict:
+    """The height field's size and range, and its relief on the texel grid with the parallax
+    ``distill --parallax auto`` gives it (vrneural.parallax; None where it does not fit)."""
+    from vrneural.errors import VrnError
+    from vrneural.parallax import choose_kind, height_at_texels, relief_texels
+
+    out = {
+        "shape": list(btf.height.shape),
+        "min": float(btf.height.min()),
+        "max": float(btf.height.max()),
+        "relief_texels": None,
+        "parallax_auto": None,
+    }
+    try:
+        h = height_at_texels(btf.height, btf.resolution)
+    except VrnError:
+        return out
+    out["relief_texels"] = relief_texels(h)
+    out["parallax_auto"] = choose_kind("auto", h, str(btf.path))[0]
     return out

@@ -234,6 +234,11 @@ def run_info(args) -> int:
             f"height    {hf['shape'][0]}x{hf['shape'][1]} height field, {hf['min']:.4g} to "
             f"{hf['max']:.4g} tile widths about the reference plane"
         )
+        if hf.get("relief_texels") is not None:
+            print(
+                f"relief    {hf['relief_texels']:.2f} texels (1st-99th percentile on the texel "
+                f"grid): distill --parallax auto gives it {hf['parallax_auto']}"
+            )
     m = s["meta"]
     print(f"meta      name={m.get('name')} convention={m.get('convention')} seed={m.get('seed')}")
     gen = m.get("generator")

@@ -16,9 +16,13 @@ METHODS = ("student", "single8", "neumip")
 LOD_KINDS = ("filter", "levels")
 COMPILE_MODES = ("off", "default", "reduce-overhead")
 NEUMIP_DIRS = ("xy", "full")
+PARALLAX = ("auto", "height", "neural", "off")  # vrneural.parallax.PARALLAX_CHOICES
 # What a checkpoint written before a field existed used for it, where that differs from the
 # field's default (resuming or reusing such a checkpoint must train what it trained).
-BEFORE_FIELD = {"neumip_dirs": "full"}  # NeuMIP read wi, wo and h before the option existed
+BEFORE_FIELD = {
+    "neumip_dirs": "full",  # NeuMIP read wi, wo and h before the option existed
+    "parallax": "off",  # no parallax before issue #44
+}
 
 
 @dataclass
@@ -63,6 +67,21 @@ class TrainConfig:
         choices=COMPILE_MODES,
     )
     threads: int = opt(1, "torch CPU threads (1 was 15-70x faster than 2 on the shared 2-core box)")
+    parallax: str = opt(
+        "auto",
+        "look the neural textures up where the view ray meets the BTF's height field: auto "
+        "(height where its relief reaches a texel, else off), height, neural (NeuMIP's offset "
+        "module: not built yet) or off (see README: Parallax)",
+        choices=PARALLAX,
+    )
+    parallax_steps: int = opt(
+        16, "march steps of height-field parallax at the data's steepest view (fewer below), 1-64"
+    )
+    parallax_march: str = opt(
+        "texel",
+        "march per texel, or once per 2x2 block (a quarter of the height lookups)",
+        choices=("texel", "block"),
+    )
     progress: bool = opt(True, "show a tqdm progress bar")
     force: bool = opt(False, "overwrite existing outputs")
     resume: bool = opt(False, "continue the checkpoint at -o (exactly reproduces a straight run)")

@@ -56,6 +56,7 @@ from vrneural.outputs import (
     output_lock,
     same_file,
 )
+from vrneural.parallax import setup_parallax
 
 
 def resolve_method(cfg: DistillConfig) -> DistillConfig:
@@ -397,6 +398,7 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
     if cfg.lod_levels > 1:
         check_lod_levels(cfg, (H, W), btf_path)
         spec["lod"] = {"levels": cfg.lod_levels, "kind": cfg.lod_kind}
+    height, parallax = setup_parallax(cfg, spec, btf, btf_path)
     model = NeuralModel(spec, cfg.seed)
     init = None
     if cfg.init_from and resume is None:  # a resumed run has its weights already
@@ -413,6 +415,8 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
             "spec": ick["spec"],
             "epochs": int(ick["epoch"]),
         }
+    if height is not None:  # after --init-from's pruning, which builds a fresh model
+        model.set_height(height)
     net = DistillNet(model, teacher.to(dev), data, cfg).to(dev)
     compile_networks(cfg.compile, model, teacher)
     pairs = test_pairs(data, cfg.max_test_slices)
@@ -423,6 +427,7 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
         "config": dataclasses.asdict(cfg),
         "btf": fp,
         "split": tck["split"],
+        "parallax": parallax,
         "teacher": {
             "path": str(cfg.teacher),
             "resolved": str(Path(cfg.teacher).resolve()),

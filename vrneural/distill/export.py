@@ -160,6 +160,8 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None, lod_leve
             "macs_per_texel": mat.macs_per_texel,
         },
         "ranges": ranges,
+        # height-field parallax: the kind chosen and why (vrneural.parallax.setup_parallax)
+        "parallax": ck.get("parallax") or {"kind": "off", "why": "trained before parallax"},
     }
     return mat, diff
 

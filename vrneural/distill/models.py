@@ -68,6 +68,54 @@ def sample_bilinear_wrap(tex: torch.Tensor, uv: torch.Tensor) -> torch.Tensor:
     return top * (1 - fy) + bot * fy
 
 
+def parallax_uv(
+    height: torch.Tensor,
+    wo: torch.Tensor,
+    uv: torch.Tensor,
+    steps: int,
+    t_max: float,
+    march: str = "texel",
+) -> torch.Tensor:
+    """Twin of :func:`vrneural.parallax.parallax_uv` for one view ``wo: [3]`` (``wo.z > 0``):
+    the blocks' UVs ``uv: [N, 4, 2]`` moved to where the view ray meets ``height: [H, W]``
+    (float16-valued, UV units) -> ``[N, 4, 2]``. No gradient (the field is data)."""
+    with torch.no_grad():
+        H, W = height.shape
+        d = torch.stack([wo[0] / wo[2], wo[1] / wo[2] * (W / H)]).to(uv.dtype)  # [2]
+        if march == "block":
+            hit = march_hits(height, uv.mean(1), d, steps, t_max)  # [N]
+            return uv + (hit[:, None] * d)[:, None, :]
+        u = uv.reshape(-1, 2)
+        return (u + march_hits(height, u, d, steps, t_max)[:, None] * d).reshape(uv.shape)
+
+
+def march_hits(height, u: torch.Tensor, d: torch.Tensor, steps: int, t_max: float):
+    """Twin of :func:`vrneural.parallax.march_hits` for one slope ``d: [2]``: ``[M]``."""
+    tex = height[..., None]
+    hmin, hmax = height.min(), height.max()
+    t = torch.sqrt((d * d).sum())
+    n = int(torch.clamp(torch.ceil(float(steps) * t / np.float32(t_max)), 1, steps))
+    dz = (hmax - hmin) / n
+
+    def field(z):
+        return sample_bilinear_wrap(tex, u + z[:, None] * d)[:, 0]
+
+    z_prev = hmax.expand(len(u)).clone()
+    h_prev = field(z_prev)
+    done = h_prev >= z_prev
+    hit = torch.where(done, hmax, hmin)
+    for k in range(1, n + 1):
+        z = (hmax - float(k) * dz).expand(len(u))
+        h = field(z)
+        now = ~done & (z <= h)
+        a = z_prev - h_prev
+        tt = a / torch.where(now, a - (z - h), torch.ones_like(a))
+        hit = torch.where(now, z_prev + tt * (z - z_prev), hit)
+        done = done | now
+        z_prev, h_prev = z, h
+    return hit
+
+
 def avg_pool_levels(t: torch.Tensor, level: int) -> torch.Tensor:
     """``t: [H, W, C]`` averaged over ``2^level x 2^level`` texel squares -> ``[H >> level,
     W >> level, C]`` (the box prefilter of a tileable texture; twin of
@@ -164,10 +212,31 @@ class NeuralModel(nn.Module):
                     self.tex[f"{name}@{k}"] = tex((t.shape[0] >> k, t.shape[1] >> k), t.shape[2])
         self.latent_layers = spec["latent_layers"]
         self.register_buffer("dir_mask", dir_mask(spec), persistent=False)
+        #: height-field parallax (vrneural.parallax): spec ``{"kind": "height", "steps": n,
+        #: "res": [H, W]}``; the field itself is a buffer set by :meth:`set_height` (float16
+        #: values, UV units) and saved with the weights
+        par = spec.get("parallax") or {"kind": "off"}
+        self.parallax_steps = int(par["steps"]) if par["kind"] == "height" else 0
+        self.parallax_march = par.get("march", "texel")
+        if self.parallax_steps:
+            self.register_buffer("height", torch.zeros(tuple(par["res"])))
+            from vrneural.grazing import boundary_consts
+            from vrneural.parallax import slope_max
+
+            cs = boundary_consts(par["theta_o_max"])
+            self.parallax_t_max = float(slope_max(*cs, tuple(par["res"])))
         #: (theta_i_max, theta_o_max) degrees of the training data, set for evaluation
         #: (:func:`vrneural.distill.checkpoint.model_from_checkpoint`); None while training on
         #: the BTF's own directions, where the extension beyond them is the identity
         self.dir_range: tuple[float, float] | None = None
+
+    def set_height(self, height: np.ndarray) -> None:
+        """The height field ``[H, W]`` (UV units) parallax marches, rounded to float16 (the
+        pack's)."""
+        h = torch.from_numpy(np.asarray(height, np.float16).astype(np.float32))
+        if h.shape != self.height.shape:
+            raise ValueError(f"height field {list(h.shape)} != {list(self.height.shape)}")
+        self.height.copy_(h)
 
     def _extended(self, wi: torch.Tensor, wo: torch.Tensor):
         """``(wi, wo, light weight)`` as :func:`vrneural.grazing.extend` gives them."""
@@ -201,6 +270,10 @@ class NeuralModel(nn.Module):
         the neural textures at pyramid level ``level``."""
         n = uv.shape[0]
         wi, wo, _ = self._extended(wi, wo)
+        if self.parallax_steps:
+            uv = parallax_uv(
+                self.height, wo, uv, self.parallax_steps, self.parallax_t_max, self.parallax_march
+            )
         dirs = torch.cat([wi, wo, half_vector(wi, wo)]) * self.dir_mask  # [9]
         if self.arch == "single":
             f = sample_bilinear_wrap(self.texture("features", level), uv)  # [N, 4, C]
@@ -237,6 +310,13 @@ class NeuralModel(nn.Module):
         rng = {} if self.dir_range is None else {"dir_range": self.dir_range}
         if self.lod_levels > 1:
             rng["levels"] = levels
+        if self.parallax_steps:
+            rng["parallax"] = {
+                "kind": "height",
+                "steps": self.parallax_steps,
+                "march": self.parallax_march,
+            }
+            rng["height"] = self.height.cpu().numpy().astype(np.float16)
         return NeuralMaterial(self.arch, nets, texs, self.output, meta or {}, **rng)
 
 

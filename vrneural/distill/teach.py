@@ -22,6 +22,7 @@ from vrneural.distill.outputs import (
 )
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, check_seed, count
+from vrneural.parallax import setup_parallax
 
 
 class GroundTruthNet(nn.Module):
@@ -123,7 +124,7 @@ def _run_teach(cfg: TeachConfig, on_step=None) -> dict:
     if resume is not None:
         if resume.get("kind") != "teacher":
             raise VrnError(f"{cfg.output}: is not a teacher checkpoint; cannot --resume teach")
-        old = resumed_config(cfg, resume["config"], resume)
+        old = resumed_config(cfg, {"parallax": "off"} | resume["config"], resume)
         cfg = keep_flag_names(cfg, TeachConfig(**(old | {"btf": cfg.btf})))
     btf = read_btf(cfg.btf)
     fp = btf_fingerprint(btf)
@@ -138,7 +139,10 @@ def _run_teach(cfg: TeachConfig, on_step=None) -> dict:
     spec = make_spec(
         "teacher", (H, W), cfg.space, width=cfg.width, layers=cfg.layers, channels=cfg.channels
     )
+    height, parallax = setup_parallax(cfg, spec, btf, cfg.btf)
     model = NeuralModel(spec, cfg.seed)
+    if height is not None:
+        model.set_height(height)
     net = GroundTruthNet(model, data, cfg.space).to(dev)
     compile_networks(cfg.compile, model)
     pairs = test_pairs(data, cfg.max_test_slices)
@@ -149,6 +153,7 @@ def _run_teach(cfg: TeachConfig, on_step=None) -> dict:
         "config": dataclasses.asdict(cfg),
         "btf": fp,
         "split": {"train": train, "test": test},
+        "parallax": parallax,
         "versions": {"torch": str(torch.__version__)},
     }
     if cfg.force and resume is None and rank == 0:

@@ -1,19 +1,23 @@
 """The runtime pack (``.vrnm``): one neural material, readable with numpy alone. No pickle.
 
-Container (:mod:`vrneural.formats.container`), magic ``b"VRNM"``, version 3. Header::
+Container (:mod:`vrneural.formats.container`), magic ``b"VRNM"``, version 4. Header::
 
     {"arch": "coarse_fine" | "single", "output": "linear" | "log1p",
      "networks": {name: [{"n_in": int, "n_out": int, "act": str}, ...]},
      "textures": {name: [H, W, C]},
      "dir_range": [theta_i_max, theta_o_max],   # degrees, each in (0, 90); since version 2
      "levels": {name: n},   # pyramid levels 1..n-1 of each neural texture; since version 3
+     "parallax": {"kind": "height", "steps": n} | {"kind": "off"},   # since version 4
      "meta": {"name": ..., "provenance": {...}, "metrics": {...}, "ranges": {...}}}
 
-Version 1 packs (no ``dir_range``) load with the default 75 degrees, said once per file.
+Version 1 packs (no ``dir_range``) load with the default 75 degrees, said once per file;
+packs before version 4 (no height field) load with parallax off, said once per file.
 
 Arrays: ``net.<name>.<i>.weight`` ``[out, in]`` float32, ``net.<name>.<i>.bias`` ``[out]``
 float32, ``tex.<name>`` ``[H, W, C]`` float16 and its levels ``tex.<name>.<k>`` ``[H >> k,
-W >> k, C]``, each with a CRC32. Writing refuses NaN/Inf.
+W >> k, C]``, ``height`` ``[H, W]`` float16 (UV units, the fine / features texels; present
+when the material has one, :mod:`vrneural.parallax`), each with a CRC32. Writing refuses
+NaN/Inf.
 """
 
 from __future__ import annotations
@@ -30,10 +34,12 @@ from vrneural.material import NeuralMaterial
 from vrneural.mlp import Layer
 
 VRNM_MAGIC = b"VRNM"
-VRNM_VERSION = 3
-#: versions this reader takes (1: before the recorded direction range; 2: before pyramids)
-VRNM_READS = (1, 2, 3)
+VRNM_VERSION = 4
+#: versions this reader takes (1: before the recorded direction range; 2: before pyramids;
+#: 3: before height fields)
+VRNM_READS = (1, 2, 3, 4)
 _said_default_range: set[str] = set()
+_said_no_parallax: set[str] = set()
 
 
 def write_vrnm(path, mat: NeuralMaterial) -> Path:
@@ -51,6 +57,8 @@ def write_vrnm(path, mat: NeuralMaterial) -> Path:
         arrays[f"tex.{name}"] = np.asarray(t, np.float16)
         for k, lv in enumerate(mat.levels.get(name, []), 1):
             arrays[f"tex.{name}.{k}"] = np.asarray(lv, np.float16)
+    if mat.height is not None:
+        arrays["height"] = np.asarray(mat.height, np.float16)
     for k, a in arrays.items():
         if not np.isfinite(a).all():
             raise VrnError(f"{path}: refusing to write non-finite values in '{k}'")
@@ -61,6 +69,7 @@ def write_vrnm(path, mat: NeuralMaterial) -> Path:
         "textures": {k: list(t.shape) for k, t in mat.textures.items()},
         "dir_range": [float(x) for x in mat.dir_range],
         "levels": {k: 1 + len(mat.levels.get(k, [])) for k in mat.textures},
+        "parallax": dict(mat.parallax),
         "meta": mat.meta,
     }
     return write_container(path, VRNM_MAGIC, VRNM_VERSION, header, arrays)
@@ -91,17 +100,36 @@ def read_vrnm(path) -> NeuralMaterial:
             for name, n in counts.items()
             if int(n) > 1
         }
+        if version >= 4:
+            parallax = header["parallax"]
+            height = np.array(arrays["height"], np.float16) if "height" in arrays else None
+        else:
+            parallax, height = _no_parallax(path), None
+        for k, a in arrays.items():  # before the material checks its height field
+            if not np.isfinite(np.asarray(a, np.float32)).all():
+                raise VrnError(f"{path}: '{k}' contains NaN/Inf")
         mat = NeuralMaterial(
-            header["arch"], nets, texs, header["output"], header.get("meta", {}), dir_range, levels
-        )
+            header["arch"], nets, texs, header["output"], header.get("meta", {}), dir_range,
+            levels, parallax, height,
+        )  # fmt: skip
     except KeyError as e:
         raise VrnError(f"{path}: runtime pack lacks {e}") from None
-    except ValueError as e:
+    except (ValueError, TypeError, AttributeError) as e:
         raise VrnError(f"{path}: invalid runtime pack: {e}") from None
-    for k, a in arrays.items():
-        if not np.isfinite(np.asarray(a, np.float32)).all():
-            raise VrnError(f"{path}: '{k}' contains NaN/Inf")
     return mat
+
+
+def _no_parallax(path) -> dict:
+    """The parallax of a pack from before height fields (version < 4): off, said once."""
+    key = str(Path(path).resolve())
+    if key not in _said_no_parallax:
+        _said_no_parallax.add(key)
+        print(
+            f"{path}: pack from before height fields (format < 4); parallax off (re-distill "
+            "with --parallax to give it one)",
+            file=sys.stderr,
+        )
+    return {"kind": "off"}
 
 
 def _default_range(path) -> tuple[float, float]:

@@ -42,6 +42,8 @@ PASS_UNIFORMS = 2
 STORAGE_MAX_WIDTH = 32
 #: first binding of the uniform weight buffers (one per layer, then the biases)
 UNIFORM_WEIGHTS_BINDING = 20
+#: binding of the height field of a parallax material (both passes)
+HEIGHT_BINDING = 18
 #: Unrolled code above this many multiply-adds per texel is refused (compile time explodes).
 MAX_UNROLLED_MACS = 20000
 
@@ -72,6 +74,11 @@ class MaterialSpec:
     #: pyramid levels of the neural textures (1: level 0 alone; more: LOD lookups in the
     #: texture-space pass)
     lod_levels: int = 1
+    #: height-field parallax march steps (0: off) and the WGSL literals (hmin, hmax, W / H)
+    parallax_steps: int = 0
+    parallax_march: str = "texel"
+    height_consts: tuple = ()
+    height_binding: int = 18
 
     @property
     def buffer_weights(self) -> bool:
@@ -180,7 +187,24 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
         uniform_binding=UNIFORM_WEIGHTS_BINDING,
         dir_consts=tuple(repr(float(c)) for t in mat.dir_range for c in boundary_consts(t)),
         lod_levels=mat.lod_levels,
+        parallax_steps=mat.parallax_steps,
+        parallax_march=mat.parallax_march,
+        height_consts=_height_consts(mat),
+        height_binding=HEIGHT_BINDING,
     )
+
+
+def _height_consts(mat: NeuralMaterial) -> tuple:
+    """WGSL literals ``(hmin, hmax, W / H, slope max)`` of a parallax material's height field
+    (exact float32 values, as the numpy twin uses); ``()`` without parallax."""
+    if not mat.parallax_steps:
+        return ()
+    from vrneural.parallax import height_bounds
+
+    lo, hi = height_bounds(mat.height)
+    H, W = mat.height.shape
+    vals = (lo, hi, np.float32(W / H), mat.parallax_slope_max)
+    return tuple(repr(float(v)) for v in vals)
 
 
 class _PlainLayer:

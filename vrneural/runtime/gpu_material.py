@@ -24,7 +24,12 @@ from vrneural.atlas.types import Atlas, Mesh
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import upload_buffer
 from vrneural.material import ARCHS, NeuralMaterial
-from vrneural.runtime.codegen import UNIFORM_WEIGHTS_BINDING, packed_weights, uniform_weights
+from vrneural.runtime.codegen import (
+    HEIGHT_BINDING,
+    UNIFORM_WEIGHTS_BINDING,
+    packed_weights,
+    uniform_weights,
+)
 from vrneural.runtime.reference import block_geometry
 
 
@@ -79,6 +84,8 @@ class GpuMaterial:
             for n in names
         ]
         self.views = [t.create_view(dimension="2d-array") for t in self.textures]
+        #: the height field of a parallax material (r32float ``[H, W]``), else None
+        self.height = upload_height_texture(mat.height) if mat.parallax_steps else None
         self.weights = (
             upload_buffer(packed_weights(mat), wgpu.BufferUsage.STORAGE, "weights")
             if weights in ("storage", "streamed")
@@ -100,7 +107,28 @@ class GpuMaterial:
             out.append({"binding": first_binding + 2, "resource": {"buffer": self.weights}})
         for i, b in enumerate(self.uniforms):
             out.append({"binding": UNIFORM_WEIGHTS_BINDING + i, "resource": {"buffer": b}})
+        if self.height is not None:
+            out.append({"binding": HEIGHT_BINDING, "resource": self.height.create_view()})
         return out
+
+
+def upload_height_texture(height: np.ndarray):
+    """A parallax material's height field ``[H, W]`` float16 -> an ``r32float`` texture (the
+    float16 values exactly; read with ``textureLoad``, see neural_material.wgsl)."""
+    import wgpu
+
+    h = np.ascontiguousarray(np.asarray(height, np.float32))
+    rows, cols = h.shape
+    t = get_device().create_texture(
+        size=(cols, rows, 1),
+        format="r32float",
+        usage=wgpu.TextureUsage.TEXTURE_BINDING | wgpu.TextureUsage.COPY_DST,
+        label="neural.height",
+    )
+    get_device().queue.write_texture(
+        {"texture": t}, h, {"bytes_per_row": cols * 4, "rows_per_image": rows}, (cols, rows, 1)
+    )
+    return t
 
 
 def vertex_table(mesh: Mesh, uv_atlas: np.ndarray) -> np.ndarray:

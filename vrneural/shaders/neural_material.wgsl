@@ -12,6 +12,9 @@
 
 {% macro bindings(mat, first_binding) %}
 @group(0) @binding({{ first_binding }}) var tex_a: texture_2d_array<u32>;  // coarse / features
+{% if mat.parallax_steps > 0 %}
+@group(0) @binding({{ mat.height_binding }}) var height_tex: texture_2d<f32>;  // r32float, UV units
+{% endif %}
 {% if mat.arch == 'coarse_fine' %}
 @group(0) @binding({{ first_binding + 1 }}) var tex_b: texture_2d_array<u32>;  // fine
 {% endif %}
@@ -101,6 +104,74 @@ fn {{ name }}_lod(uv: vec2<f32>, lod_in: f32) -> array<f32, {{ channels }}> {
 {% endfor %}
     return out;
 }
+{% endmacro %}
+
+{% macro parallax_fns(mat) %}
+{% if mat.parallax_steps > 0 %}
+// Height-field parallax: lookups where the view ray meets the height field, parallax-occlusion
+// mapping from its maximum to its minimum in up to {{ mat.parallax_steps }} steps (fewer at
+// steeper views: step_count) with the linear refinement, per {{ mat.parallax_march }}.
+// Twin: vrneural/parallax.py:parallax_uv.
+const H_MIN: f32 = {{ mat.height_consts[0] }};
+const H_MAX: f32 = {{ mat.height_consts[1] }};
+const H_ASPECT: f32 = {{ mat.height_consts[2] }};  // W / H of the texel grid
+const T_MAX: f32 = {{ mat.height_consts[3] }};  // the steepest view's |d| (parallax.slope_max)
+
+// Bilinear wrap lookup of the height field (the neural textures' texel grid).
+fn height_at(uv: vec2<f32>) -> f32 {
+    let dims = vec2<i32>(textureDimensions(height_tex));
+    let x = uv.x * f32(dims.x) - 0.5;
+    let y = uv.y * f32(dims.y) - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let xi0 = wrap_index(x0, dims.x);
+    let yi0 = wrap_index(y0, dims.y);
+    let xi1 = select(xi0 + 1, 0, xi0 + 1 == dims.x);
+    let yi1 = select(yi0 + 1, 0, yi0 + 1 == dims.y);
+    let top = textureLoad(height_tex, vec2<i32>(xi0, yi0), 0).x * (1.0 - fx)
+        + textureLoad(height_tex, vec2<i32>(xi1, yi0), 0).x * fx;
+    let bot = textureLoad(height_tex, vec2<i32>(xi0, yi1), 0).x * (1.0 - fx)
+        + textureLoad(height_tex, vec2<i32>(xi1, yi1), 0).x * fx;
+    return top * (1.0 - fy) + bot * fy;
+}
+
+// UV shift per unit height along the (extended, wo.z > 0) view: vrneural/parallax.py:ray_slope.
+fn parallax_d(wo: vec3<f32>) -> vec2<f32> {
+    return vec2<f32>(wo.x / wo.z, wo.y / wo.z * H_ASPECT);
+}
+
+// The march's steps for slope d: ceil(steps |d| / T_MAX) in [1, steps] (parallax.step_count).
+fn parallax_n(d: vec2<f32>) -> i32 {
+    let n = ceil({{ mat.parallax_steps }}.0 * sqrt(dot(d, d)) / T_MAX);
+    return clamp(i32(n), 1, {{ mat.parallax_steps }});
+}
+
+// The ray height where the ray through uv with slope d meets the field (parallax.march_hits).
+fn parallax_z(uv: vec2<f32>, d: vec2<f32>) -> f32 {
+    let n = parallax_n(d);
+    let dz = (H_MAX - H_MIN) / f32(n);
+    var z_prev = H_MAX;
+    var h_prev = height_at(uv + z_prev * d);
+    if (h_prev >= z_prev) { return H_MAX; }
+    var hit = H_MIN;
+    for (var k = 1; k <= n; k++) {
+        let z = H_MAX - f32(k) * dz;
+        let h = height_at(uv + z * d);
+        if (z <= h) {
+            let a = z_prev - h_prev;
+            hit = z_prev + a / (a - (z - h)) * (z - z_prev);
+            break;
+        }
+        z_prev = z;
+        h_prev = h;
+    }
+    return hit;
+}
+
+fn parallax_uv(uv: vec2<f32>, d: vec2<f32>) -> vec2<f32> { return uv + parallax_z(uv, d) * d; }
+{% endif %}
 {% endmacro %}
 
 {% macro output_fn(output) %}
@@ -334,6 +405,7 @@ fn view_ext(wo: vec3<f32>) -> vec3<f32> { return to_range(wo, COS_O_MAX, SIN_O_M
 {% endif %}
 {% endif %}
 {{ output_fn(mat.output) }}
+{{ parallax_fns(mat) }}
 // Evaluation API (both variants). The first layer of every network is split into the part that
 // does not change with the light (bias + W_f features: pre_a, pre_b, computed once per texel or
 // block outside the light loop) and the part that does (W_d dirs, and for the fine network

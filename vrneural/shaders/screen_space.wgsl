@@ -71,12 +71,18 @@ fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
     let dir = normalize(far.xyz / far.w - near.xyz / near.w);
     let l = ray_bary(id.y, near.xyz / near.w, dir);
     let s = surface_l(id.y, l);
-    let uv = material_uv_l(id.y, l);
     let wo = to_local(s, safe_normalize(P.eye.xyz - s.pos, s.n));
     if (wo.z <= 0.0) {
         textureStore(out_tex, px, vec4<f32>(0.0, 0.0, 0.0, 1.0));
         return vec4<u32>(0u, 1u, 0u, 0u);
     }
+{% if mat.parallax_steps > 0 %}
+    // height-field parallax (neural_material.parallax_uv): the pixel's lookup where its view
+    // ray meets the height field
+    let uv = parallax_uv(material_uv_l(id.y, l), parallax_d(view_ext(wo)));
+{% else %}
+    let uv = material_uv_l(id.y, l);
+{% endif %}
     let pa = pre_a(sample_a(uv));  // light-independent first-layer parts (neural_material)
 {% if mat.arch == 'coarse_fine' %}
     let pb = pre_b(sample_b(uv));

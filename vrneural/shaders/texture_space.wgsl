@@ -73,10 +73,33 @@ fn shade_block(k: u32) -> vec4<u32> {
     }
     let q01 = geo_uv01[k];
     let q23 = geo_uv23[k];
+{% if mat.parallax_steps > 0 %}
+    // height-field parallax: each texel's lookups where this eye's view ray meets the height
+    // field (the extended view, as the networks see it; neural_material.parallax_uv)
+    let pd = parallax_d(view_ext(wo));
+{% if mat.parallax_march == 'block' %}
+    // once per block, at the texels' mean (parallax.parallax_uv, march "block")
+    let t0 = tiled(q01.xy);
+    let t1 = tiled(q01.zw);
+    let t2 = tiled(q23.xy);
+    let t3 = tiled(q23.zw);
+    let shift = parallax_z((t0 + t1 + t2 + t3) * 0.25, pd) * pd;
+    let uv0 = t0 + shift;
+    let uv1 = t1 + shift;
+    let uv2 = t2 + shift;
+    let uv3 = t3 + shift;
+{% else %}
+    let uv0 = parallax_uv(tiled(q01.xy), pd);
+    let uv1 = parallax_uv(tiled(q01.zw), pd);
+    let uv2 = parallax_uv(tiled(q23.xy), pd);
+    let uv3 = parallax_uv(tiled(q23.zw), pd);
+{% endif %}
+{% else %}
     let uv0 = tiled(q01.xy);
     let uv1 = tiled(q01.zw);
     let uv2 = tiled(q23.xy);
     let uv3 = tiled(q23.zw);
+{% endif %}
     let uc = (uv0 + uv1 + uv2 + uv3) * 0.25;
 {% if mat.lod_levels > 1 %}
     // prefiltered neural textures: the level of detail of the block's footprint, one atlas

@@ -1,0 +1,56 @@
+"""`bench quality --parallax height`: the parallax variants on a tiny BTF with a height field,
+L1 by view-angle bins for every method, and the one-line errors before any work."""
+
+import json
+
+import numpy as np
+from test_bench_quality_btf import _btf, _one_line
+
+from vrneural.btf.format import read_btf, write_btf
+from vrneural.cli import main
+
+
+def _with_height(src, dst):
+    b = read_btf(src)
+    y, x = np.mgrid[0:16, 0:16] / 16
+    h = (0.2 * np.sin(2 * np.pi * x) * np.cos(2 * np.pi * y)).astype(np.float32)
+    return write_btf(dst, np.asarray(b.values, np.float32), b.light_dirs, b.view_dirs,
+                     {"name": dst.stem}, h)  # fmt: skip
+
+
+def test_parallax_variants_and_view_bins(tmp_path):
+    f = _with_height(_btf(tmp_path / "flat.btf"), tmp_path / "bumpy.btf")
+    out = tmp_path / "bq"
+    argv = ["bench", "quality", "--btf", str(f), "--parallax", "height", "--quick",
+            "--no-progress", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    doc = json.loads((out / "results.json").read_text())
+    r = doc["results"]["bumpy.btf"]
+    assert {"teacher_parallax", "student_parallax", "neumip_parallax"} <= set(r["methods"])
+    assert r["view_bins"] == [[0, 30], [30, 50], [50, 65], [65, 76]]
+    for name, m in r["methods"].items():
+        assert len(m["view_bins_l1"]) == 4, name
+        par = name.endswith("_parallax")
+        if name != "lafortune":
+            assert m["parallax"]["kind"] == ("height" if par else "off"), name
+            assert (m["fetches_per_texel"] > 50) == par  # the march's loads
+    # the variants read their own teacher; the plain networks train without parallax
+    ck = json.loads((out / "bumpy.btf" / "student_parallax.pt.config.json").read_text())
+    assert ck["teacher"].endswith("teacher_parallax.pt") and ck["parallax"] == "height"
+    ck = json.loads((out / "bumpy.btf" / "student.pt.config.json").read_text())
+    assert ck["parallax"] == "off"
+    md = (out / "results.md").read_text()
+    assert "## L1 by view angle" in md and "| 65-76 deg |" in md
+    assert "Ours (distilled) + height parallax / Ours (coarse-to-fine, distilled)" in md
+    assert (out / "view_bins.png").stat().st_size > 1000
+
+
+def test_parallax_needs_height_fields(tmp_path, capsys):
+    f = _btf(tmp_path / "v1.btf")
+    out = tmp_path / "bq"
+    base = ["bench", "quality", "--parallax", "height", "--quick", "--out", str(out)]
+    err = _one_line(capsys, [*base, "--btf", str(f)])
+    assert "--parallax height: --btf" in err and "v1.btf has no height field" in err
+    err = _one_line(capsys, [*base, "--presets", "leather"])
+    assert "synthetic presets (leather) carry no height field" in err
+    assert not out.exists()

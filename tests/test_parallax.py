@@ -1,0 +1,314 @@
+"""Height-field parallax (issue #44): the numpy spec (vrneural.parallax), its torch and WGSL
+twins, the pack's height field, and the choice ``--parallax auto`` makes."""
+
+import numpy as np
+import pytest
+
+from vrneural.errors import VrnError
+from vrneural.material import NeuralMaterial, material_forward, random_material
+from vrneural.parallax import (
+    choose_kind,
+    height_at_texels,
+    parallax_uv,
+    relief_texels,
+)
+
+
+def bumps(n: int = 16, amp: float = 0.05) -> np.ndarray:
+    """A smooth periodic height field ``[n, n]`` float16 (UV units, mean 0)."""
+    y, x = np.mgrid[0:n, 0:n] / n
+    return (amp * np.sin(2 * np.pi * x) * np.cos(4 * np.pi * y)).astype(np.float16)
+
+
+T75 = float(np.tan(np.radians(75.0)))
+
+
+def parallax_material(
+    steps: int = 16, seed: int = 0, amp: float = 0.05, march: str = "texel"
+) -> NeuralMaterial:
+    m = random_material(seed, tex_res=16)
+    return NeuralMaterial(
+        m.arch, m.networks, m.textures, m.output, m.meta, m.dir_range, {},
+        {"kind": "height", "steps": steps, "march": march}, bumps(16, amp),
+    )  # fmt: skip
+
+
+def test_the_step_count_follows_the_view():
+    """Full steps at the steepest view of the data, proportionally fewer below, at least 1."""
+    from vrneural.parallax import ray_slope, step_count
+
+    wo = np.concatenate([views(1, t) for t in (0.0, 30.0, 60.0, 75.0, 85.0)])
+    n = step_count(ray_slope(wo, (16, 16)), 16, np.float32(T75))
+    assert n.tolist() == [1, 3, 8, 16, 16]
+
+
+def test_block_march_shifts_a_block_alike():
+    rng = np.random.default_rng(4)
+    uv = rng.uniform(0, 1, (6, 4, 2)).astype(np.float32)
+    out = parallax_uv(bumps(), views(6, 60), uv, 16, T75, "block")
+    shift = out - uv
+    np.testing.assert_allclose(shift, np.repeat(shift[:, :1], 4, 1), atol=1e-6)
+    centre = parallax_uv(bumps(), views(6, 60), uv.mean(1, keepdims=True).repeat(4, 1), 16, T75)
+    np.testing.assert_allclose(shift[:, 0], (centre - uv.mean(1, keepdims=True))[:, 0], atol=1e-6)
+
+
+def views(n: int, theta_deg: float, phi_deg: float = 30.0) -> np.ndarray:
+    t, p = np.radians(theta_deg), np.radians(phi_deg)
+    w = np.float32([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
+    return np.tile(w, (n, 1))
+
+
+def test_flat_field_and_normal_view_leave_lookups_alone():
+    rng = np.random.default_rng(0)
+    uv = rng.uniform(0, 1, (8, 4, 2)).astype(np.float32)
+    flat = np.zeros((16, 16), np.float16)
+    np.testing.assert_array_equal(parallax_uv(flat, views(8, 70), uv, 16, T75), uv)
+    np.testing.assert_allclose(parallax_uv(bumps(), views(8, 0), uv, 16, T75), uv, atol=0)
+
+
+def test_the_corrected_lookup_lies_on_the_relief():
+    """Where the march ends, the ray's height equals the field's (to the refinement's error),
+    and the shift grows with the view angle."""
+    from vrneural.material import sample_bilinear_wrap
+
+    h = bumps(32, 0.03)
+    rng = np.random.default_rng(1)
+    uv = rng.uniform(0, 1, (64, 4, 2)).astype(np.float32)
+    shifts = []
+    for theta in (20.0, 45.0, 70.0):
+        wo = views(64, theta)
+        out = parallax_uv(h, wo, uv, 64, 0.1)  # every view at the full 64 steps
+        d = np.float32([wo[0, 0] / wo[0, 2], wo[0, 1] / wo[0, 2]])
+        z = ((out - uv) @ d / (d @ d)).reshape(-1)  # the ray height of the hit
+        field = sample_bilinear_wrap(h.astype(np.float32)[..., None], out.reshape(-1, 2))[:, 0]
+        assert np.abs(z - field).max() < 2e-3  # 64 steps over 0.06: the chord error
+        shifts.append(np.abs(out - uv).max())
+    assert shifts[0] < shifts[1] < shifts[2]
+
+
+def test_torch_twin_equals_the_numpy_spec():
+    torch = pytest.importorskip("torch")
+    from vrneural.distill.models import parallax_uv as parallax_uv_t
+
+    rng = np.random.default_rng(2)
+    uv = rng.uniform(-1, 2, (40, 4, 2)).astype(np.float32)
+    h = bumps(16, 0.08)
+    for theta in (10.0, 50.0, 74.0):
+        wo = views(1, theta, 200.0)
+        for march in ("texel", "block"):
+            want = parallax_uv(h, np.repeat(wo, 40, 0), uv, 12, T75, march)
+            got = parallax_uv_t(
+                torch.from_numpy(h.astype(np.float32)), torch.from_numpy(wo[0]),
+                torch.from_numpy(uv), 12, T75, march,
+            ).numpy()  # fmt: skip
+            np.testing.assert_array_equal(got, want)
+
+
+def test_torch_model_with_parallax_is_the_pack():
+    torch = pytest.importorskip("torch")
+    from vrneural.distill.models import NeuralModel, make_spec
+
+    for method, march in (("student", "texel"), ("neumip", "texel"), ("student", "block")):
+        spec = make_spec(method, (16, 16))
+        spec["parallax"] = {"kind": "height", "steps": 8, "res": [16, 16], "march": march,
+                            "theta_o_max": 75.0}  # fmt: skip
+        model = NeuralModel(spec, 3)
+        model.set_height(bumps(16, 0.1))
+        model.dir_range = (75.0, 75.0)
+        mat = model.to_material()
+        assert mat.parallax_steps == 8
+        rng = np.random.default_rng(3)
+        uv = rng.uniform(0, 1, (20, 4, 2)).astype(np.float32)
+        for theta in (30.0, 72.0, 85.0):  # 85: beyond the range, marched at its edge
+            wi, wo = views(1, 40.0, 10.0)[0], views(1, theta, 120.0)[0]
+            with torch.no_grad():
+                got = model.predict(
+                    torch.from_numpy(wi), torch.from_numpy(wo), torch.from_numpy(uv)
+                )
+            want = material_forward(mat, np.tile(wi, (20, 1)), np.tile(wo, (20, 1)), uv)
+            np.testing.assert_allclose(got.numpy(), want, rtol=1e-5, atol=1e-6)
+
+
+def test_pack_round_trip_and_old_packs_load_without_parallax(tmp_path, capsys):
+    from vrneural.formats.container import read_container, write_container
+    from vrneural.formats.vrnm import VRNM_VERSION, read_vrnm, write_vrnm
+
+    m = parallax_material(12)
+    write_vrnm(tmp_path / "p.vrnm", m)
+    back = read_vrnm(tmp_path / "p.vrnm")
+    assert back.parallax == {"kind": "height", "steps": 12, "march": "texel"}
+    np.testing.assert_array_equal(back.height, m.height)
+    assert back.height.dtype == np.float16
+    # a version-3 pack (before height fields): parallax off, said once per file
+    header, arrays, _ = read_container(tmp_path / "p.vrnm", b"VRNM", (VRNM_VERSION,))
+    arrays = {k: np.array(v) for k, v in arrays.items() if k != "height"}
+    del header["parallax"]
+    write_container(tmp_path / "old.vrnm", b"VRNM", 3, header, arrays)
+    capsys.readouterr()
+    for _ in range(2):
+        old = read_vrnm(tmp_path / "old.vrnm")
+        assert old.parallax_kind == "off" and old.height is None
+    err = capsys.readouterr().err
+    assert err.count("parallax off") == 1 and "old.vrnm" in err
+
+
+def _bad_pack(tmp_path, name, edit):
+    from vrneural.formats.container import read_container, write_container
+    from vrneural.formats.vrnm import VRNM_VERSION, read_vrnm, write_vrnm
+
+    write_vrnm(tmp_path / "p.vrnm", parallax_material(8))
+    header, arrays, _ = read_container(tmp_path / "p.vrnm", b"VRNM", (VRNM_VERSION,))
+    arrays = {k: np.array(v) for k, v in arrays.items()}
+    edit(header, arrays)
+    write_container(tmp_path / name, b"VRNM", VRNM_VERSION, header, arrays)
+    with pytest.raises(VrnError) as e:
+        read_vrnm(tmp_path / name)
+    return str(e.value)
+
+
+def test_bad_packs_are_one_line_errors(tmp_path):
+    def small(h, a):
+        a["height"] = a["height"][:8]
+
+    msg = _bad_pack(tmp_path, "size.vrnm", small)
+    assert "size.vrnm" in msg and "height field has shape [8, 16]" in msg and "[16, 16]" in msg
+
+    def nan(h, a):
+        a["height"][3, 4] = np.nan
+
+    assert "'height' contains NaN/Inf" in _bad_pack(tmp_path, "nan.vrnm", nan)
+
+    def missing(h, a):
+        del a["height"]
+
+    msg = _bad_pack(tmp_path, "none.vrnm", missing)
+    assert "parallax kind 'height' needs a height field" in msg
+
+    def steps(h, a):
+        h["parallax"]["steps"] = 0
+
+    assert "parallax steps = 0; allowed [1, 64]" in _bad_pack(tmp_path, "steps.vrnm", steps)
+
+    def kind(h, a):
+        h["parallax"]["kind"] = "magic"
+
+    assert "parallax kind 'magic'" in _bad_pack(tmp_path, "kind.vrnm", kind)
+
+
+def test_relief_measure_and_the_auto_choice():
+    flat = height_at_texels(np.zeros((64, 64)), (32, 32))
+    assert choose_kind("auto", flat, "f.btf")[0] == "off"
+    rough = height_at_texels(np.asarray(bumps(64, 0.05), np.float32), (32, 32))
+    assert relief_texels(rough) == pytest.approx(0.1 * 32, rel=0.05)
+    assert choose_kind("auto", rough, "r.btf")[0] == "height"
+    assert choose_kind("off", rough, "r.btf")[0] == "off"
+    assert choose_kind("auto", None, "v1.btf") == ("off", "v1.btf has no height field")
+    with pytest.raises(VrnError, match=r"--parallax height: v1\.btf has no height field"):
+        choose_kind("height", None, "v1.btf")
+    with pytest.raises(VrnError, match="neural offset module is not implemented"):
+        choose_kind("neural", rough, "r.btf")
+    with pytest.raises(VrnError, match=r"height field 48x48 does not fit the 32x32 texels"):
+        height_at_texels(np.zeros((48, 48)), (32, 32))
+    bad = np.zeros((64, 64))
+    bad[1, 2] = np.inf
+    with pytest.raises(VrnError, match="height field contains NaN or Inf"):
+        height_at_texels(bad, (32, 32))
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("mesh,march", [("quad", "texel"), ("sphere", "texel"), ("quad", "block")])
+def test_gpu_texture_space_parallax_follows_the_twin(mesh, march):
+    """The texture-space kernel marches each texel's view ray through the height field as the
+    numpy twin does (per eye: two eye positions), at a grazing and a near-normal view."""
+    from runtime_helpers import quad_atlas
+
+    from vrneural.runtime import reference as ref
+    from vrneural.runtime.assets import get_atlas, get_mesh
+    from vrneural.runtime.texture_pass import shade_texture_space
+
+    m = parallax_material(16, amp=0.06, march=march)
+    if mesh == "quad":
+        at = quad_atlas(32)
+        eyes = [np.float32([0.2, 0.1, 1.5]), np.float32([2.5, -1.0, 0.4])]
+    else:
+        at = get_atlas(get_mesh("sphere"), 64)
+        eyes = [np.float32([0.0, 1.5, 0.8]), np.float32([1.2, 0.3, 0.5])]
+    lp, lc = np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
+    tl = (2.0, 2.0, 0, 0)
+    flat = random_material(0, tex_res=16)
+    for eye in eyes:
+        want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
+        got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
+        np.testing.assert_array_equal(gc, wc)
+        w16 = want.astype(np.float16).astype(np.float32)
+        scale = 1e-2 * max(w16.max(), 1e-12)
+        rel = np.abs(got - w16) / (np.abs(w16) + scale)
+        # f32 math in another order; where a lane's march ends a step earlier or later the
+        # refinement lands within float rounding, so only a few texels exceed 2 f16 ulps
+        assert np.quantile(rel, 0.999) <= 2 * 2.0**-10
+        assert rel.max() < 0.05
+        base, _ = ref.shade_texture_space(at, flat, np.eye(4), eye, lp, lc, tiling=tl)
+        assert np.abs(base - want).max() > 50 * np.abs(got - w16).max()  # parallax shows
+
+
+def test_flat_packs_generate_the_same_kernels_as_before():
+    """Parallax off: no height binding, no march; the kernels are what they were."""
+    from vrneural.runtime.codegen import screen_space_wgsl, texture_space_wgsl
+
+    flat = random_material(0, tex_res=16)
+    for code in (texture_space_wgsl(flat), screen_space_wgsl(flat)):
+        assert "height_tex" not in code and "parallax_uv" not in code
+    par = parallax_material(16)
+    for code in (texture_space_wgsl(par), screen_space_wgsl(par)):
+        assert "var height_tex: texture_2d<f32>" in code and "clamp(i32(n), 1, 16)" in code
+
+
+def _render(tmp_path, pack, mode):
+    import tomllib
+
+    from vrneural.runtime.renderer import Renderer, Settings
+    from vrneural.runtime.scene import parse_scene
+
+    # a head 0.5 m above a 1 m plane, 1.2 m off to the side: views of 50-75 degrees
+    pose = "t,x,y,z,qx,qy,qz,qw\n0,0,0.5,1.2,-0.3826834,0,0,0.9238795\n"
+    (tmp_path / "pose.csv").write_text(pose)
+    toml = f"""
+[head]
+path = "pose.csv"
+[[objects]]
+mesh = "plane"
+[objects.material]
+pack = "{pack}"
+scale = 1.0
+[[lights]]
+position = [0.2, 0.8, 0.3]
+intensity = 2.0
+"""
+    scene = parse_scene(tomllib.loads(toml), "t.toml", tmp_path)
+    s = Settings(eyes=1, reuse=0, texture_res=512, eye_res=(128, 128), fov_y=70.0, n_lights=1,
+                 mode=mode)  # fmt: skip
+    r = Renderer(scene, s)
+    r.frame(0)
+    return r.read_eyes()[0][..., :3].astype(np.float32)
+
+
+@pytest.mark.gpu
+def test_gpu_screen_space_parallax_agrees_with_the_texture_space_pass(tmp_path):
+    """Per pixel (screen space) and per texel of the radiance texture the lookups move the
+    same way: the two modes agree far better with each other than with the pack without
+    parallax (the texture-space twin is checked texel for texel above)."""
+    from vrneural.formats.vrnm import write_vrnm
+
+    par = parallax_material(16, amp=0.08)
+    write_vrnm(tmp_path / "par.vrnm", par)
+    flat = NeuralMaterial(par.arch, par.networks, par.textures, par.output, par.meta)
+    write_vrnm(tmp_path / "flat.vrnm", flat)
+    tex = _render(tmp_path, "par.vrnm", "texture")
+    scr = _render(tmp_path, "par.vrnm", "screen")
+    scr_flat = _render(tmp_path, "flat.vrnm", "screen")
+    seen = scr.sum(-1) > 0
+    assert seen.mean() > 0.05
+    d_modes = np.abs(tex - scr)[seen].mean()
+    d_parallax = np.abs(scr_flat - scr)[seen].mean()
+    # llvmpipe: 0.0042 between the modes, 0.0485 between parallax and none
+    assert d_parallax > 5 * d_modes, (d_parallax, d_modes)
