@@ -20,6 +20,7 @@ has its centre at material UV ``((x + 0.5) / W, (y + 0.5) / H)``; tiles repeat (
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -232,6 +233,7 @@ class BtfWriter:
                 self._w.array("height")[:] = height
             self.progress_file.unlink(missing_ok=True)
         self.values = self._w.array("values")
+        self.clamped = (0, 0)  # values put_clamped clamped: (negative, above F16_MAX)
         self.done: set[int] = set()  #: view indices already written (from the sidecar)
         if self._w.resumed and self.progress_file.exists():
             self.done = self._read_progress(V)
@@ -284,6 +286,26 @@ class BtfWriter:
                     f"{f}: cannot rewrite the list of finished views ({e.strerror})"
                 ) from None
         return done
+
+    def put_clamped(self, li: int, v: int, rgb: np.ndarray) -> None:
+        """Store slice (light ``li``, view ``v``) from ``rgb: [H, W, 3]`` (finite), clamped to
+        the float16 range [0, F16_MAX]; :attr:`clamped` counts (negative, too large) values."""
+        rgb = np.asarray(rgb, np.float32)
+        neg, huge = self.clamped
+        self.clamped = (neg + int((rgb < 0).sum()), huge + int((rgb > F16_MAX).sum()))
+        self.values[li, v] = np.clip(rgb, 0.0, F16_MAX).astype(np.float16)
+
+    def report_clamped(self, src) -> None:
+        """One line on stderr per kind of value :meth:`put_clamped` clamped, naming ``src``."""
+        neg, huge = self.clamped
+        if neg:
+            print(f"{src}: clamped {neg} negative values to 0", file=sys.stderr)
+        if huge:
+            print(
+                f"{src}: clamped {huge} values above {F16_MAX:g} (the float16 maximum) to "
+                f"{F16_MAX:g}",
+                file=sys.stderr,
+            )
 
     def mark_done(self, view: int) -> None:
         """Flush data and record view index ``view`` as complete."""

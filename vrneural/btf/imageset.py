@@ -37,7 +37,6 @@ import numpy as np
 from vrneural.btf.format import BtfWriter, check_partial_settings
 from vrneural.btf.imagetable import TABLE_NAMES, Entry, find_table, read_table
 from vrneural.errors import VrnError
-from vrneural.formats.f16 import F16_MAX
 
 IMAGE_EXTS = (".exr", ".hdr", ".png", ".tif", ".tiff", ".pfm")
 GENERATOR = "vrneural.btf.imageset v1 (OpenImageIO)"
@@ -229,7 +228,6 @@ def import_images(
             file=sys.stderr,
         )
     w = BtfWriter(out, plan.light_dirs, plan.view_dirs, plan.size, meta, resume=resume)
-    neg = huge = 0
     bar = tqdm(total=V, initial=len(w.done), desc="import views", unit="view", disable=not progress)
     try:
         for v in range(V):
@@ -245,9 +243,7 @@ def import_images(
                         f"values (NaN/Inf); nothing was written (no {Path(out).name}, no "
                         ".partial)"
                     )
-                neg += int((rgb < 0).sum())
-                huge += int((rgb > F16_MAX).sum())
-                w.values[li, v] = np.clip(rgb, 0.0, F16_MAX).astype(np.float16)
+                w.put_clamped(li, v, rgb)
             w.mark_done(v)
             bar.update(1)
     except KeyboardInterrupt:
@@ -255,13 +251,7 @@ def import_images(
         print(f"\n{out}: interrupted; rerun with --resume to continue", file=sys.stderr)
         raise
     bar.close()
-    if neg:
-        print(f"{plan.folder}: clamped {neg} negative values to 0", file=sys.stderr)
-    if huge:
-        print(
-            f"{plan.folder}: clamped {huge} values above {F16_MAX:g} to {F16_MAX:g}",
-            file=sys.stderr,
-        )
+    w.report_clamped(plan.folder)
     H, W = plan.size
     if H % 2 or W % 2:
         print(

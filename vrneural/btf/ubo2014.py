@@ -25,7 +25,6 @@ import numpy as np
 from vrneural.btf.dirs import spherical
 from vrneural.btf.format import BtfWriter, check_partial_settings
 from vrneural.errors import VrnError
-from vrneural.formats.f16 import F16_MAX
 
 INSTALL_HINT = "pip install 'vrneural[ubo]' (or: pip install btf-extractor)"
 _COMMON = struct.Struct("<II80s80s80sf3f")  # BTFCommonHeader, 264 bytes
@@ -270,7 +269,6 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
         meta,
         resume=resume,
     )
-    neg = huge = 0
     bar = tqdm(total=V, initial=len(w.done), desc="import views", unit="view", disable=not progress)
     try:
         for v in range(V):
@@ -286,9 +284,7 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
                         f"{src}: non-finite values at light {li}, view {v}; nothing was written "
                         f"(no {Path(out).name}, no .partial)"
                     )
-                neg += int((rgb < 0).sum())
-                huge += int((rgb > F16_MAX).sum())
-                w.values[li, v] = np.clip(rgb, 0.0, F16_MAX).astype(np.float16)
+                w.put_clamped(li, v, rgb)
             w.mark_done(v)
             bar.update(1)
     except KeyboardInterrupt:
@@ -296,13 +292,7 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
         print(f"\n{out}: interrupted; rerun with --resume to continue", file=sys.stderr)
         raise
     bar.close()
-    if neg:
-        print(f"{src}: clamped {neg} negative values to 0", file=sys.stderr)
-    if huge:
-        print(
-            f"{src}: clamped {huge} values above {F16_MAX:g} (the float16 maximum) to {F16_MAX:g}",
-            file=sys.stderr,
-        )
+    w.report_clamped(src)
     if h_img % 2 or w_img % 2:
         print(
             f"warning: {out}: {h_img}x{w_img} texels, odd: packs shade 2x2 blocks, so teach, "
