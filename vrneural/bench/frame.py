@@ -58,7 +58,7 @@ class FrameConfig:
     parallax_steps: int = opt(
         0,
         "also time the texture-space update of the same materials with height-field parallax "
-        "of this many march steps, 1 to 64 (0 = off; see README: Parallax)",
+        "of this many march steps, 1 to 64 (0 = off; see docs/parallax.md)",
     )
     quick: bool = opt(False, "CI-sized: texture 128, eyes 96x96, 6 frames, 2 rounds")
     progress: bool = opt(True, "show progress bars")

@@ -130,7 +130,7 @@ class QualityConfig:
         "off",
         "height: also train the height-field parallax variants (a teacher, the distilled "
         "student and NeuMIP, each with --parallax height) beside the others, which train "
-        "without parallax (see README: Parallax)",
+        "without parallax (see docs/parallax.md)",
         choices=("off", "height"),
     )
     width: int = opt(

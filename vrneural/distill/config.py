@@ -71,7 +71,7 @@ class TrainConfig:
         "auto",
         "look the neural textures up where the view ray meets the BTF's height field: auto "
         "(height where its relief reaches a texel, else off), height, neural (NeuMIP's offset "
-        "module: not built yet) or off (see README: Parallax)",
+        "module: not built yet) or off (see docs/parallax.md)",
         choices=PARALLAX,
     )
     parallax_steps: int = opt(
