@@ -39,6 +39,26 @@ fn wrap_index(i: f32, n: i32) -> i32 {
     m = select(m, m + fn_, m < 0.0);
     return i32(m);
 }
+
+// The wrapped texels and weights of a bilinear lookup at uv in a dims-sized texel grid
+// (texel centres at (i + 0.5) / W): corners i0, i1 and the weight f of i1 per axis.
+struct Taps {
+    i0: vec2<i32>,
+    i1: vec2<i32>,
+    f: vec2<f32>,
+}
+
+fn bilinear_taps(uv: vec2<f32>, dims: vec2<i32>) -> Taps {
+    let x = uv.x * f32(dims.x) - 0.5;
+    let y = uv.y * f32(dims.y) - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let xi0 = wrap_index(x0, dims.x);
+    let yi0 = wrap_index(y0, dims.y);
+    let xi1 = select(xi0 + 1, 0, xi0 + 1 == dims.x);
+    let yi1 = select(yi0 + 1, 0, yi0 + 1 == dims.y);
+    return Taps(vec2<i32>(xi0, yi0), vec2<i32>(xi1, yi1), vec2<f32>(x - x0, y - y0));
+}
 {% endmacro %}
 
 {% macro sampler_fn(name, tex, channels, level=none) %}
@@ -52,16 +72,13 @@ fn {{ name }}(uv: vec2<f32>{{ ', level: i32' if level is not none else '' }}) ->
 {% else %}
     let dims = vec2<i32>(textureDimensions({{ tex }}));
 {% endif %}
-    let x = uv.x * f32(dims.x) - 0.5;
-    let y = uv.y * f32(dims.y) - 0.5;
-    let x0 = floor(x);
-    let y0 = floor(y);
-    let fx = x - x0;
-    let fy = y - y0;
-    let xi0 = wrap_index(x0, dims.x);
-    let yi0 = wrap_index(y0, dims.y);
-    let xi1 = select(xi0 + 1, 0, xi0 + 1 == dims.x);
-    let yi1 = select(yi0 + 1, 0, yi0 + 1 == dims.y);
+    let tp = bilinear_taps(uv, dims);
+    let xi0 = tp.i0.x;
+    let yi0 = tp.i0.y;
+    let xi1 = tp.i1.x;
+    let yi1 = tp.i1.y;
+    let fx = tp.f.x;
+    let fy = tp.f.y;
     var out: array<f32, {{ channels }}>;
 {% for layer in range((channels + 7) // 8) %}
     {
@@ -120,16 +137,13 @@ const T_MAX: f32 = {{ mat.height_consts[3] }};  // the steepest view's |d| (para
 // Bilinear wrap lookup of the height field (the neural textures' texel grid).
 fn height_at(uv: vec2<f32>) -> f32 {
     let dims = vec2<i32>(textureDimensions(height_tex));
-    let x = uv.x * f32(dims.x) - 0.5;
-    let y = uv.y * f32(dims.y) - 0.5;
-    let x0 = floor(x);
-    let y0 = floor(y);
-    let fx = x - x0;
-    let fy = y - y0;
-    let xi0 = wrap_index(x0, dims.x);
-    let yi0 = wrap_index(y0, dims.y);
-    let xi1 = select(xi0 + 1, 0, xi0 + 1 == dims.x);
-    let yi1 = select(yi0 + 1, 0, yi0 + 1 == dims.y);
+    let tp = bilinear_taps(uv, dims);
+    let xi0 = tp.i0.x;
+    let yi0 = tp.i0.y;
+    let xi1 = tp.i1.x;
+    let yi1 = tp.i1.y;
+    let fx = tp.f.x;
+    let fy = tp.f.y;
     let top = textureLoad(height_tex, vec2<i32>(xi0, yi0), 0).x * (1.0 - fx)
         + textureLoad(height_tex, vec2<i32>(xi1, yi0), 0).x * fx;
     let bot = textureLoad(height_tex, vec2<i32>(xi0, yi1), 0).x * (1.0 - fx)
