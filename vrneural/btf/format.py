@@ -295,6 +295,39 @@ class BtfWriter:
         self.clamped = (neg + int((rgb < 0).sum()), huge + int((rgb > F16_MAX).sum()))
         self.values[li, v] = np.clip(rgb, 0.0, F16_MAX).astype(np.float16)
 
+    def import_views(self, read, nonfinite, progress: bool = True) -> None:
+        """Write every view not yet done from ``read(li, v) -> rgb [H, W, 3]`` float32 (with
+        :meth:`put_clamped`; a progress bar of views). A slice with a non-finite value discards
+        the partial file and raises a VrnError that starts with ``nonfinite(li, v, rgb)``; a
+        Ctrl-C says how to resume and is raised again."""
+        from tqdm import tqdm
+
+        L, V = self.values.shape[:2]
+        name = self.partial.name.removesuffix(".partial")
+        bar = tqdm(total=V, initial=len(self.done), desc="import views", unit="view",
+                   disable=not progress)  # fmt: skip
+        try:
+            for v in range(V):
+                if v in self.done:
+                    continue
+                for li in range(L):
+                    rgb = read(li, v)
+                    if not np.isfinite(rgb).all():  # --resume would stop here again
+                        bar.close()
+                        self.discard()
+                        raise VrnError(
+                            f"{nonfinite(li, v, rgb)}; nothing was written (no {name}, no .partial)"
+                        )
+                    self.put_clamped(li, v, rgb)
+                self.mark_done(v)
+                bar.update(1)
+        except KeyboardInterrupt:
+            bar.close()
+            print(f"\n{self.partial.with_name(name)}: interrupted; rerun with --resume to "
+                  "continue", file=sys.stderr)  # fmt: skip
+            raise
+        bar.close()
+
     def report_clamped(self, src) -> None:
         """One line on stderr per kind of value :meth:`put_clamped` clamped, naming ``src``."""
         neg, huge = self.clamped

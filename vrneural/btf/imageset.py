@@ -202,7 +202,6 @@ def import_images(
     folder, out, table=None, png_linear: bool = False, resume: bool = False, progress=True
 ) -> Path:
     """Convert the image set in ``folder`` into ``out`` (streaming, one view at a time)."""
-    from tqdm import tqdm
 
     plan = plan_import(folder, table, png_linear)
     L, V = len(plan.light_dirs), len(plan.view_dirs)
@@ -228,29 +227,11 @@ def import_images(
             file=sys.stderr,
         )
     w = BtfWriter(out, plan.light_dirs, plan.view_dirs, plan.size, meta, resume=resume)
-    bar = tqdm(total=V, initial=len(w.done), desc="import views", unit="view", disable=not progress)
-    try:
-        for v in range(V):
-            if v in w.done:
-                continue
-            for li in range(L):
-                rgb = read_rgb(plan.files[li][v], png_linear)
-                if not np.isfinite(rgb).all():
-                    bar.close()
-                    w.discard()
-                    raise VrnError(
-                        f"{plan.files[li][v]}: {int((~np.isfinite(rgb)).sum())} non-finite "
-                        f"values (NaN/Inf); nothing was written (no {Path(out).name}, no "
-                        ".partial)"
-                    )
-                w.put_clamped(li, v, rgb)
-            w.mark_done(v)
-            bar.update(1)
-    except KeyboardInterrupt:
-        bar.close()
-        print(f"\n{out}: interrupted; rerun with --resume to continue", file=sys.stderr)
-        raise
-    bar.close()
+
+    def nonfinite(li, v, rgb):
+        return f"{plan.files[li][v]}: {int((~np.isfinite(rgb)).sum())} non-finite values (NaN/Inf)"
+
+    w.import_views(lambda li, v: read_rgb(plan.files[li][v], png_linear), nonfinite, progress)
     w.report_clamped(plan.folder)
     H, W = plan.size
     if H % 2 or W % 2:

@@ -228,7 +228,6 @@ def _degrees_to_dirs(angles) -> np.ndarray:
 
 def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
     """Convert a UBO2014 ``.btf`` into our format at ``out`` (streaming, one slice at a time)."""
-    from tqdm import tqdm
 
     Ubo2014 = load_extractor()
     src = Path(src)
@@ -269,29 +268,15 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
         meta,
         resume=resume,
     )
-    bar = tqdm(total=V, initial=len(w.done), desc="import views", unit="view", disable=not progress)
-    try:
-        for v in range(V):
-            if v in w.done:
-                continue
-            for li in range(L):
-                img = np.asarray(btf.angles_to_image(*light_ang[li], *view_ang[v]), np.float32)
-                rgb = img[..., ::-1]  # BGR -> RGB
-                if not np.isfinite(rgb).all():  # --resume would stop here again
-                    bar.close()
-                    w.discard()
-                    raise VrnError(
-                        f"{src}: non-finite values at light {li}, view {v}; nothing was written "
-                        f"(no {Path(out).name}, no .partial)"
-                    )
-                w.put_clamped(li, v, rgb)
-            w.mark_done(v)
-            bar.update(1)
-    except KeyboardInterrupt:
-        bar.close()
-        print(f"\n{out}: interrupted; rerun with --resume to continue", file=sys.stderr)
-        raise
-    bar.close()
+
+    def read(li, v):
+        img = np.asarray(btf.angles_to_image(*light_ang[li], *view_ang[v]), np.float32)
+        return img[..., ::-1]  # BGR -> RGB
+
+    def nonfinite(li, v, rgb):
+        return f"{src}: non-finite values at light {li}, view {v}"
+
+    w.import_views(read, nonfinite, progress)
     w.report_clamped(src)
     if h_img % 2 or w_img % 2:
         print(
