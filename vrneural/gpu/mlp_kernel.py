@@ -12,26 +12,39 @@ from vrneural.gpu.pipelines import compute_pipeline
 from vrneural.gpu.readback import read_texture, upload_buffer
 from vrneural.gpu.shaders import render_wgsl
 from vrneural.gpu.timing import GpuTimer
-from vrneural.mlp import Layer, pack_weights, wgsl_type
+from vrneural.gpu.unroll import IND, mlp_lines
+from vrneural.mlp import ACT_CODE, Layer, pack_weights, wgsl_type
 
-_ACT_CODE = {"relu": 0, "leaky_relu": 1, "none": 2}
 MAX_GROUPS_X = 32768
 
 
 def mlp_wgsl(layers: list[Layer], precision: str = "f32", buffer_weights: bool = False) -> str:
     """Generate the evaluator's WGSL for ``layers``."""
     dims = [layers[0].n_in] + [lay.n_out for lay in layers]
+    T = wgsl_type(precision)
     return render_wgsl(
         "mlp_eval",
         layers=layers,
         n_in=dims[0],
         n_out=dims[-1],
-        T=wgsl_type(precision),
+        T=T,
         buffer_weights=buffer_weights,
         dims=dims,
-        acts=[_ACT_CODE[lay.act] for lay in layers],
+        acts=[ACT_CODE[lay.act] for lay in layers],
+        act_code=ACT_CODE,
         max_width=max(dims),
+        body="" if buffer_weights else "\n".join(unrolled_body(layers, T)),
     )
+
+
+def unrolled_body(layers: list[Layer], T: str) -> list[str]:
+    """The constant-weight evaluator's body: inputs ``x0_k`` read from ``inputs[base + k]``,
+    the unrolled layers, ``let y`` (the first four outputs, zero-padded)."""
+    n_in, n_out, L = layers[0].n_in, layers[-1].n_out, len(layers)
+    lines = [f"{IND}let x0_{k} = {T}(inputs[base + {k}u]);" for k in range(n_in)]
+    lines += mlp_lines("x", [f"x0_{k}" for k in range(n_in)], layers, T)
+    outs = [f"f32(x{L}_{k})" if k < n_out else "0.0" for k in range(4)]
+    return [*lines, f"{IND}let y = vec4<f32>({', '.join(outs)});"]
 
 
 class MlpKernel:

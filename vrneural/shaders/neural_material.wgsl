@@ -8,7 +8,6 @@
 // sampled by manual bilinear wrap (4 textureLoads per 8 channels, unpack2x16float),
 // exactly like sample_bilinear_wrap. Weights are WGSL constants in unrolled code, or read from
 // buffers in loops (storage or uniform weights; wide teachers and the >=10x comparison).
-{% import 'mlp.wgsl' as m %}
 
 {% macro bindings(mat, first_binding) %}
 @group(0) @binding({{ first_binding }}) var tex_a: texture_2d_array<u32>;  // coarse / features
@@ -199,187 +198,7 @@ fn apply_output(r: vec3<f32>) -> vec3<f32> {
 }
 {% endmacro %}
 
-{% macro const_pre(fname, prefix, layer, T, arg_decl, n_arg, col0) %}
-{# The loop-invariant part of a first layer: bias + W[:, col0:col0+n_arg] f (see mlp.wgsl). #}
-fn {{ fname }}({{ arg_decl }}) -> array<{{ T }}, {{ layer.n_out }}> {
-{% set ins = {} %}
-{% for k in range(n_arg) %}
-    let in_{{ k }} = {{ T }}(f[{{ k }}]);
-{% set _ = ins.update({col0 + k: 'in_' ~ k}) %}
-{% endfor %}
-{{ m.affine(prefix ~ 'p', ins, layer, range(col0, col0 + n_arg), T, true) }}
-{% set outs = [] %}
-{% for o in range(layer.n_out) %}{% set _ = outs.append(prefix ~ 'p_' ~ o) %}{% endfor %}
-    return array<{{ T }}, {{ layer.n_out }}>({{ outs|join(', ') }});
-}
-{% endmacro %}
-
-{% macro const_net(fname, prefix, layers, T, arg_decls, input_exprs, first_cols, base_exprs, ret) %}
-{# input_exprs: one f32 expression per loop-varying input column (first_cols); base_exprs: the
-   first layer's hoisted part per unit; ret: 'latent' or 'rgb' #}
-fn {{ fname }}({{ arg_decls }}) -> {{ 'vec3<f32>' if ret == 'rgb' else 'array<' ~ T ~ ', ' ~ layers[-1].n_out ~ '>' }} {
-{% set ins = {} %}
-{% for e in input_exprs %}
-    let in_{{ loop.index0 }} = {{ T }}({{ e }});
-{% set _ = ins.update({first_cols[loop.index0]: 'in_' ~ loop.index0}) %}
-{% endfor %}
-{{ m.mlp_body(prefix, ins, layers, T, base_exprs, first_cols) }}
-{% set L = layers|length %}
-{% if ret == 'rgb' %}
-    return vec3<f32>(f32({{ prefix }}{{ L }}_0), f32({{ prefix }}{{ L }}_1), f32({{ prefix }}{{ L }}_2));
-{% else %}
-{% set outs = [] %}
-{% for k in range(layers[-1].n_out) %}{% set _ = outs.append(prefix ~ L ~ '_' ~ k) %}{% endfor %}
-    return array<{{ T }}, {{ layers[-1].n_out }}>({{ outs|join(', ') }});
-{% endif %}
-}
-{% endmacro %}
-
-{% macro buffer_net_lib(mat, T) %}
-// Storage-buffer weights, networks in order {{ mat.net_order|join(', ') }}: per layer W[out, in]
-// row-major then b[out] (mlp.pack_weights). The first layers are split
-// exactly as in the constant-weight code (loop-invariant part hoisted), so the two variants do
-// the same arithmetic and differ only in where the weights come from. Layer shapes, offsets
-// and activations are template constants; activations ping-pong between two local arrays. Only
-// for narrow networks: lavapipe computes wrong results once an invocation's dynamically indexed
-// arrays grow large (a 64-wide net in the texture pass; see streamed_single for wide ones).
-const MAXW: u32 = {{ mat.max_width }}u;
-{% endmacro %}
-
-{# An activation (codegen._ACT_CODE: 0 relu, 1 leaky relu, 2 none) applied to expression e. #}
-{% macro act_expr(a, e, T) -%}
-{% if a == 0 %}max({{ e }}, {{ T }}(0)){% elif a == 1 %}max({{ e }}, {{ T }}(0.01) * {{ e }}){% else %}{{ e }}{% endif %}
-{%- endmacro %}
-
-{# dst[o] = act(base + sum_k W_l[o, c0 + k] * src[k]) for o < n_out(l), k < n; base is the bias
-   (with_bias), or pre[o] when `pre` names an array, or 0. #}
-{% macro buf_layer(mat, T, l, dst, src, c0, n, with_bias, act=true, pre=none) %}
-{% set n_in = mat.buf_dims_in[l] %}
-{% set n_out = mat.buf_dims_out[l] %}
-{% set off = mat.buf_offsets[l] %}
-    for (var o = 0u; o < {{ n_out }}u; o++) {
-{% if pre is not none %}
-        var s = {{ pre }}[o];
-{% elif with_bias %}
-        var s = {{ T }}(weights[{{ off + n_out * n_in }}u + o]);
-{% else %}
-        var s = {{ T }}(0);
-{% endif %}
-        let row = {{ off + c0 }}u + o * {{ n_in }}u;
-        for (var k = 0u; k < {{ n }}u; k++) { s += {{ T }}(weights[row + k]) * {{ src }}[k]; }
-        {{ dst }}[o] = {{ act_expr(mat.buf_acts[l] if act else 2, 's', T) }};
-    }
-{% endmacro %}
-
-{# Layers first .. last - 1 on `a` (their input), ping-ponging between a and b; ends with
-   `let y = <the array holding the last output>;`. #}
-{% macro buf_rest(mat, T, first, last) %}
-    var b: array<{{ T }}, MAXW>;
-{% set names = ['a', 'b'] %}
-{% for l in range(first, last) %}
-{{ buf_layer(mat, T, l, names[(loop.index0 + 1) % 2], names[loop.index0 % 2], 0, mat.buf_dims_in[l], true) }}
-{% endfor %}
-    let y = {{ names[(last - first) % 2] }};
-{% endmacro %}
-
-{# First layer's direction part on top of its hoisted part `base`, with the activation -> a. #}
-{% macro dirs_first(mat, T, l) %}
-    var x: array<{{ T }}, 9>;
-    for (var k = 0u; k < 9u; k++) { x[k] = {{ T }}(d[k]); }
-    var a: array<{{ T }}, MAXW>;
-{{ buf_layer(mat, T, l, 'a', 'x', 0, 9, false, true, 'base') }}
-{% endmacro %}
-
-{# One weight / bias of layer l at a (dynamic) index expression, from the uniform buffers
-   (codegen.uniform_weights) or the storage buffer (mlp.pack_weights). #}
-{% macro wld(mat, l, idx) -%}
-{% if mat.weights == 'uniform' -%}
-wl{{ l }}[({{ idx }}) >> 2u][({{ idx }}) & 3u]
-{%- else -%}
-weights[{{ mat.buf_offsets[l] }}u + {{ idx }}]
-{%- endif %}
-{%- endmacro %}
-{% macro bld(mat, l, idx) -%}
-{% if mat.weights == 'uniform' -%}
-wbias[({{ mat.buf_bias_offsets[l] }}u + {{ idx }}) >> 2u][({{ mat.buf_bias_offsets[l] }}u + {{ idx }}) & 3u]
-{%- else -%}
-weights[{{ mat.buf_offsets[l] + mat.buf_dims_in[l] * mat.buf_dims_out[l] }}u + {{ idx }}]
-{%- endif %}
-{%- endmacro %}
-
-{# Streamed evaluation of a single-level net from buffer weights (weights "uniform" | "streamed"),
-   for wide networks (the 128-wide reference teacher). Layers are taken in pairs (A, B): one loop
-   over A's units o computes unit o from all of A's inputs, then adds its contribution to every
-   output of B (B's column o). Every activation is a named value with a constant index; the loops
-   index only the weights (the same index in every invocation: one scalar load per step from a
-   uniform buffer on a CPU adapter). An odd last layer is unrolled (it is 3 wide). No hoisting:
-   pre_a returns the features and the first layer reads all its inputs each time (for the teacher
-   8 x 128 more multiply-adds per light, 3%). #}
-{% macro streamed_single(mat, T) %}
-fn pre_a(f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, {{ mat.ca }}> {
-    var x: array<{{ T }}, {{ mat.ca }}>;
-{% for k in range(mat.ca) %}
-    x[{{ k }}] = {{ T }}(f[{{ k }}]);
-{% endfor %}
-    return x;
-}
-fn eval_single(d: array<f32, 9>, f: array<{{ T }}, {{ mat.ca }}>) -> vec3<f32> {
-{% set cur = [] %}
-{% for k in range(9) %}
-    let v0_{{ k }} = {{ T }}(d[{{ k }}]);
-{% set _ = cur.append('v0_' ~ k) %}
-{% endfor %}
-{% for k in range(mat.ca) %}
-    let v0_{{ 9 + k }} = f[{{ k }}];
-{% set _ = cur.append('v0_' ~ (9 + k)) %}
-{% endfor %}
-{% set L = mat.buf_dims_in|length %}
-{% set ns = namespace(l=0, cur=cur) %}
-{% for step in range(L) %}
-{% if ns.l < L %}
-{% set l = ns.l %}
-{% set nxt = [] %}
-{% if l + 1 < L %}
-{% set H = mat.buf_dims_out[l] %}
-{% set nb = mat.buf_dims_out[l + 1] %}
-{% for j in range(nb) %}
-    var acc{{ l }}_{{ j }} = {{ T }}({{ bld(mat, l + 1, j ~ 'u') }});
-{% endfor %}
-    for (var o = 0u; o < {{ H }}u; o++) {
-        let r = o * {{ mat.buf_dims_in[l] }}u;
-        var s = {{ T }}({{ bld(mat, l, 'o') }});
-{% for k in range(mat.buf_dims_in[l]) %}
-        s += {{ T }}({{ wld(mat, l, 'r + ' ~ k ~ 'u') }}) * {{ ns.cur[k] }};
-{% endfor %}
-        let h = {{ act_expr(mat.buf_acts[l], 's', T) }};
-{% for j in range(nb) %}
-        acc{{ l }}_{{ j }} += {{ T }}({{ wld(mat, l + 1, (j * H) ~ 'u + o') }}) * h;
-{% endfor %}
-    }
-{% for j in range(nb) %}
-    let v{{ l + 2 }}_{{ j }} = {{ act_expr(mat.buf_acts[l + 1], 'acc' ~ l ~ '_' ~ j, T) }};
-{% set _ = nxt.append('v' ~ (l + 2) ~ '_' ~ j) %}
-{% endfor %}
-{% set ns.l = l + 2 %}
-{% else %}
-{% for j in range(mat.buf_dims_out[l]) %}
-    var p{{ l }}_{{ j }} = {{ T }}({{ bld(mat, l, j ~ 'u') }});
-{% for k in range(mat.buf_dims_in[l]) %}
-    p{{ l }}_{{ j }} += {{ T }}({{ wld(mat, l, (j * mat.buf_dims_in[l] + k) ~ 'u') }}) * {{ ns.cur[k] }};
-{% endfor %}
-    let v{{ l + 1 }}_{{ j }} = {{ act_expr(mat.buf_acts[l], 'p' ~ l ~ '_' ~ j, T) }};
-{% set _ = nxt.append('v' ~ (l + 1) ~ '_' ~ j) %}
-{% endfor %}
-{% set ns.l = l + 1 %}
-{% endif %}
-{% set ns.cur = nxt %}
-{% endif %}
-{% endfor %}
-    return apply_output(vec3<f32>(f32({{ ns.cur[0] }}), f32({{ ns.cur[1] }}), f32({{ ns.cur[2] }})));
-}
-{% endmacro %}
-
-{% macro material_fns(mat, T) %}
+{% macro material_fns(mat, T, nets) %}
 {{ wrap_fn() }}
 // The training data's direction range (vrneural/grazing.py): cos and sin of theta_i_max and
 // theta_o_max, exact float32 values.
@@ -420,96 +239,15 @@ fn view_ext(wo: vec3<f32>) -> vec3<f32> { return to_range(wo, COS_O_MAX, SIN_O_M
 {% endif %}
 {{ output_fn(mat.output) }}
 {{ parallax_fns(mat) }}
-// Evaluation API (both variants). The first layer of every network is split into the part that
-// does not change with the light (bias + W_f features: pre_a, pre_b, computed once per texel or
-// block outside the light loop) and the part that does (W_d dirs, and for the fine network
-// W_z z_c, computed once per block per light by fine_z and shared by the block's 4 texels):
+// Evaluation API (every weight variant; generated in Python: runtime/codegen_mlp.py). The first
+// layer of every network is split into the part that does not change with the light (bias + W_f
+// features: pre_a, pre_b, computed once per texel or block outside the light loop) and the part
+// that does (W_d dirs, and for the fine network W_z z_c, computed once per block per light by
+// fine_z and shared by the block's 4 texels):
 //   coarse_fine: z = eval_coarse(dirs, pre_a(U_c(u_c))); zz = fine_z(z);
 //                rgb_k = eval_fine(zz, pre_b(U_f(u_k)))
 //   single:      rgb_k = eval_single(dirs, pre_a(U(u_k)))
-{% if mat.weights in ('uniform', 'streamed') %}
-{{ streamed_single(mat, T) }}
-{% elif mat.buffer_weights %}
-{{ buffer_net_lib(mat, T) }}
-fn pre_a(f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, MAXW> {
-    var x: array<{{ T }}, {{ mat.ca }}>;
-    for (var k = 0u; k < {{ mat.ca }}u; k++) { x[k] = {{ T }}(f[k]); }
-    var p: array<{{ T }}, MAXW>;
-{{ buf_layer(mat, T, 0, 'p', 'x', 9, mat.ca, true, false) }}
-    return p;
-}
-{% if mat.arch == 'coarse_fine' %}
-{% set nc = mat.n_layers[0] %}
-{% set nf = mat.n_layers[1] %}
-fn eval_coarse(d: array<f32, 9>, base: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
-{{ dirs_first(mat, T, 0) }}
-{{ buf_rest(mat, T, 1, nc) }}
-    return y;
-}
-fn pre_b(f: array<f32, {{ mat.cb }}>) -> array<{{ T }}, MAXW> {
-    var x: array<{{ T }}, {{ mat.cb }}>;
-    for (var k = 0u; k < {{ mat.cb }}u; k++) { x[k] = {{ T }}(f[k]); }
-    var p: array<{{ T }}, MAXW>;
-{{ buf_layer(mat, T, nc, 'p', 'x', mat.z, mat.cb, true, false) }}
-    return p;
-}
-fn fine_z(z: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
-    var p: array<{{ T }}, MAXW>;
-{{ buf_layer(mat, T, nc, 'p', 'z', 0, mat.z, false, false) }}
-    return p;
-}
-fn eval_fine(zz: array<{{ T }}, MAXW>, pb: array<{{ T }}, MAXW>) -> vec3<f32> {
-    var a: array<{{ T }}, MAXW>;
-    for (var o = 0u; o < {{ mat.buf_dims_out[nc] }}u; o++) {
-        let s = zz[o] + pb[o];
-        a[o] = {{ act_expr(mat.buf_acts[nc], 's', T) }};
-    }
-{{ buf_rest(mat, T, nc + 1, nc + nf) }}
-    return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
-}
-{% else %}
-fn eval_single(d: array<f32, 9>, base: array<{{ T }}, MAXW>) -> vec3<f32> {
-{{ dirs_first(mat, T, 0) }}
-{{ buf_rest(mat, T, 1, mat.n_layers[0]) }}
-    return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
-}
-{% endif %}
-{% else %}
-{% set dexprs = [] %}
-{% for k in range(9) %}{% set _ = dexprs.append('d[' ~ k ~ ']') %}{% endfor %}
-{% if mat.arch == 'coarse_fine' %}
-{% set cl = mat.networks['coarse'] %}
-{% set fl = mat.networks['fine'] %}
-{% set pab = [] %}
-{% for o in range(cl[0].n_out) %}{% set _ = pab.append('pa[' ~ o ~ ']') %}{% endfor %}
-{% set zzb = [] %}
-{% for o in range(fl[0].n_out) %}{% set _ = zzb.append('(zz[' ~ o ~ '] + pb[' ~ o ~ '])') %}{% endfor %}
-{{ const_pre('pre_a', 'c', cl[0], T, 'f: array<f32, ' ~ mat.ca ~ '>', mat.ca, 9) }}
-{{ const_pre('pre_b', 'q', fl[0], T, 'f: array<f32, ' ~ mat.cb ~ '>', mat.cb, mat.z) }}
-fn fine_z(z: array<{{ T }}, {{ mat.z }}>) -> array<{{ T }}, {{ fl[0].n_out }}> {
-{% set zin = {} %}
-{% for k in range(mat.z) %}{% set _ = zin.update({k: 'z[' ~ k ~ ']'}) %}{% endfor %}
-{{ m.affine('zz', zin, fl[0], range(mat.z), T, false) }}
-{% set outs = [] %}
-{% for o in range(fl[0].n_out) %}{% set _ = outs.append('zz_' ~ o) %}{% endfor %}
-    return array<{{ T }}, {{ fl[0].n_out }}>({{ outs|join(', ') }});
-}
-{{ const_net('eval_coarse', 'c', cl, T, 'd: array<f32, 9>, pa: array<' ~ T ~ ', ' ~ cl[0].n_out ~ '>', dexprs, range(9)|list, pab, 'latent') }}
-{{ const_net('fine_net', 'q', fl, T, 'zz: array<' ~ T ~ ', ' ~ fl[0].n_out ~ '>, pb: array<' ~ T ~ ', ' ~ fl[0].n_out ~ '>', [], [], zzb, 'rgb') }}
-fn eval_fine(zz: array<{{ T }}, {{ fl[0].n_out }}>, pb: array<{{ T }}, {{ fl[0].n_out }}>) -> vec3<f32> {
-    return apply_output(fine_net(zz, pb));
-}
-{% else %}
-{% set sl = mat.networks['mlp'] %}
-{% set pab = [] %}
-{% for o in range(sl[0].n_out) %}{% set _ = pab.append('pa[' ~ o ~ ']') %}{% endfor %}
-{{ const_pre('pre_a', 's', sl[0], T, 'f: array<f32, ' ~ mat.ca ~ '>', mat.ca, 9) }}
-{{ const_net('single_net', 's', sl, T, 'd: array<f32, 9>, pa: array<' ~ T ~ ', ' ~ sl[0].n_out ~ '>', dexprs, range(9)|list, pab, 'rgb') }}
-fn eval_single(d: array<f32, 9>, pa: array<{{ T }}, {{ sl[0].n_out }}>) -> vec3<f32> {
-    return apply_output(single_net(d, pa));
-}
-{% endif %}
-{% endif %}
+{{ nets }}
 {% endmacro %}
 
 {% macro frame_fns() %}

@@ -38,7 +38,7 @@ struct Light {
 const EMPTY: u32 = 0xFFFFFFFFu;
 
 {{ nm.frame_fns() }}
-{{ nm.material_fns(mat, T) }}
+{{ nm.material_fns(mat, T, nets) }}
 {{ nm.surface_fns() }}
 {{ nm.mesh_fns() }}
 
