@@ -55,7 +55,7 @@ def test_load_wgsl_and_cache():
     from vrneural.mlp import random_mlp
 
     assert "macro material_fns" in load_wgsl("neural_material")
-    assert load_wgsl("neural_material") is load_wgsl("neural_material.wgsl")
+    assert load_wgsl("neural_material") == load_wgsl("neural_material.wgsl")
     cache = pipeline_cache()
     code = mlp_wgsl(random_mlp([3, 4, 2], seed=0))
     c = {"N": 16, "WIDTH": 16, "STRIDE": 64}
