@@ -5,45 +5,38 @@
 // and hoist the light-independent part of the first layers, then per light: coarse MLP once at
 // the mean material uv, fine MLP 4 times, sum lights with inverse-square falloff, clamp
 // to the f16 range and store rgba16float (or, as an option, rgba32float). numpy twin: runtime/reference.py:shade_texture_space.
-// Template parameters: T (f32|f16), mat (runtime/codegen.py:MaterialSpec), n_lights (uniform
-// array size, >= 1), n_active (lights shaded, 0 allowed: black).
+// Template parameters: T (f32|f16), mat (runtime/codegen.py:MaterialSpec), n_active (lights
+// shaded, 0 allowed: black), the generated structs, bindings and networks.
 
+// The uniforms and bindings (declared once, in runtime/interface.py: TEXTURE_PARAMS, LIGHT,
+// texture_bindings).
 struct Params {
-    model: mat4x4<f32>,       // object -> world
+    model: mat4x4<f32>,  // object -> world (camera-relative: the eye at the origin)
     normal_mat: mat4x4<f32>,  // inverse transpose of the model's 3x3 (upper-left)
-    eye: vec4<f32>,           // eye position, world, metres; w: facing margin, metres (a block
-                              // is front when it faces any point within w of the eye: the
-                              // shared radiance texture of both eyes, shaded from their centre)
-    tiling: vec4<f32>,        // material uv = uv * tiling.xy + tiling.zw
-    sched: vec4<u32>,         // (candidate list offset, candidate count, counter slot, unused)
+    eye: vec4<f32>,  // eye position (camera-relative: 0); w: facing margin, metres
+    tiling: vec4<f32>,  // material uv = uv * tiling.xy + tiling.zw
+    sched: vec4<u32>,  // (candidate list offset, candidate count, counter slot, unused)
 }
-
 struct Light {
-    pos: vec4<f32>,       // world position, metres
+    pos: vec4<f32>,  // world position, metres (relative to the shaded eye where noted)
     radiance: vec4<f32>,  // colour * intensity, W/sr
 }
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<uniform> lights: array<Light, 2>;
-// The geometry atlas (one vec4 per non-empty block in each array, see gpu_material.py):
-@group(0) @binding(2) var<storage, read> geo_pos: array<vec4<f32>>;   // object pos, bitcast(by << 16 | bx)
-@group(0) @binding(3) var<storage, read> geo_nrm: array<vec4<f32>>;   // object normal, tangent sign
-@group(0) @binding(4) var<storage, read> geo_tan: array<vec4<f32>>;   // object tangent, texel foot
-@group(0) @binding(16) var<storage, read> geo_uv01: array<vec4<f32>>; // untiled uv of texels 0, 1
-@group(0) @binding(17) var<storage, read> geo_uv23: array<vec4<f32>>; // untiled uv of texels 2, 3
+@group(0) @binding(2) var<storage, read> geo_pos: array<vec4<f32>>;  // object pos, bitcast(by << 16 | bx)
+@group(0) @binding(3) var<storage, read> geo_nrm: array<vec4<f32>>;  // object normal, tangent sign
+@group(0) @binding(4) var<storage, read> geo_tan: array<vec4<f32>>;  // object tangent, texel foot
+@group(0) @binding(16) var<storage, read> geo_uv01: array<vec4<f32>>;  // untiled uv of texels 0, 1
+@group(0) @binding(17) var<storage, read> geo_uv23: array<vec4<f32>>;  // untiled uv of texels 2, 3
 @group(0) @binding(5) var out_tex: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;  // 4 per slot
 @group(0) @binding(7) var tex_a: texture_2d_array<u32>;  // coarse / features
 @group(0) @binding(8) var tex_b: texture_2d_array<u32>;  // fine
-
-// Candidate blocks: indices into the geometry atlas of the non-empty blocks, grouped by block
-// row phase (gpu_material.GpuAtlas.block_list, built once per atlas and row period).
-@group(0) @binding(12) var<storage, read> cand: array<u32>;
-// Compaction (compact.wgsl; the large spans' path): the front-facing blocks to shade.
+@group(0) @binding(12) var<storage, read> cand: array<u32>;  // candidate blocks
 @group(0) @binding(13) var<storage, read_write> todo: array<u32>;
 @group(0) @binding(14) var<storage, read_write> todo_n: array<atomic<u32>>;
 @group(0) @binding(15) var<storage, read_write> ind: array<u32>;  // (x, y, z) workgroups
-
 
 const EMPTY: u32 = 0xFFFFFFFFu;  // padding of the compacted list
 

@@ -30,6 +30,14 @@ from vrneural.grazing import boundary_consts
 from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.mlp import pack_weights, wgsl_type
 from vrneural.runtime.codegen_mlp import network_wgsl
+from vrneural.runtime.interface import (
+    LIGHT,
+    SCREEN_PARAMS,
+    TEXTURE_PARAMS,
+    screen_bindings,
+    structs_wgsl,
+    texture_bindings,
+)
 
 PRECISIONS = ("auto", "f16", "f32")
 WEIGHTS = ("constants", "storage", "uniform", "streamed")
@@ -41,10 +49,6 @@ PASS_UNIFORMS = 2
 #: widest layer the "storage" variant takes: lavapipe computed wrong results for a 64-wide
 #: single-level net in the texture pass (dynamically indexed local arrays of 4 x 64 floats)
 STORAGE_MAX_WIDTH = 32
-#: first binding of the uniform weight buffers (one per layer, then the biases)
-UNIFORM_WEIGHTS_BINDING = 20
-#: binding of the height field of a parallax material (both passes)
-HEIGHT_BINDING = 18
 #: Unrolled code above this many multiply-adds per texel is refused (compile time explodes).
 MAX_UNROLLED_MACS = 20000
 
@@ -68,7 +72,6 @@ class MaterialSpec:
     buf_offsets: list
     buf_acts: list  # activation names (vrneural.mlp.ACTIVATIONS)
     buf_bias_offsets: list  # per layer, into the uniform bias buffer (uniform weights)
-    uniform_binding: int
     #: WGSL literals of (cos, sin) of theta_i_max, then of theta_o_max (the data's direction
     #: range, vrneural.grazing); exact float32 values, as the numpy twin uses
     dir_consts: tuple = ()
@@ -79,7 +82,6 @@ class MaterialSpec:
     parallax_steps: int = 0
     parallax_march: str = "texel"
     height_consts: tuple = ()
-    height_binding: int = 18
 
     @property
     def buffer_weights(self) -> bool:
@@ -185,13 +187,11 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
         buf_offsets=offs,
         buf_acts=[lay.act for lay in layers],
         buf_bias_offsets=boffs,
-        uniform_binding=UNIFORM_WEIGHTS_BINDING,
         dir_consts=tuple(repr(float(c)) for t in mat.dir_range for c in boundary_consts(t)),
         lod_levels=mat.lod_levels,
         parallax_steps=mat.parallax_steps,
         parallax_march=mat.parallax_march,
         height_consts=_height_consts(mat),
-        height_binding=HEIGHT_BINDING,
     )
 
 
@@ -255,7 +255,8 @@ def texture_space_wgsl(
         T=T,
         mat=spec,
         nets=network_wgsl(spec, T),
-        n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
+        structs=structs_wgsl(TEXTURE_PARAMS, LIGHT),
+        bindings=texture_bindings(spec, n_lights, radiance_format).wgsl(),
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
         fmt=radiance_format,
         subgroups=subgroups,
@@ -277,7 +278,8 @@ def screen_space_wgsl(
         T=T,
         mat=spec,
         nets=network_wgsl(spec, T),
-        n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
+        structs=structs_wgsl(SCREEN_PARAMS, LIGHT),
+        bindings=screen_bindings(spec, n_lights).wgsl(),
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
         subgroups=subgroups,
     )

@@ -6,26 +6,10 @@
 // dirs = [wi, wo, h] in the local frame (9 floats). Neural textures are texture_2d_array<u32>
 // (rgba32uint: 8 float16 channels per texel and layer, two per u32, see gpu_material.py)
 // sampled by manual bilinear wrap (4 textureLoads per 8 channels, unpack2x16float),
-// exactly like sample_bilinear_wrap. Weights are WGSL constants in unrolled code, or read from
+// exactly like sample_bilinear_wrap. The bindings are declared by runtime/interface.py
+// (material_bindings). Weights are WGSL constants in unrolled code, or read from
 // buffers in loops (storage or uniform weights; wide teachers and the >=10x comparison).
 
-{% macro bindings(mat, first_binding) %}
-@group(0) @binding({{ first_binding }}) var tex_a: texture_2d_array<u32>;  // coarse / features
-{% if mat.parallax_steps > 0 %}
-@group(0) @binding({{ mat.height_binding }}) var height_tex: texture_2d<f32>;  // r32float, UV units
-{% endif %}
-{% if mat.arch == 'coarse_fine' %}
-@group(0) @binding({{ first_binding + 1 }}) var tex_b: texture_2d_array<u32>;  // fine
-{% endif %}
-{% if mat.weights in ('storage', 'streamed') %}
-@group(0) @binding({{ first_binding + 2 }}) var<storage, read> weights: array<f32>;
-{% elif mat.weights == 'uniform' %}
-{% for l in range(mat.buf_dims_in|length) %}
-@group(0) @binding({{ mat.uniform_binding + loop.index0 }}) var<uniform> wl{{ l }}: array<vec4<f32>, {{ (mat.buf_dims_in[l] * mat.buf_dims_out[l] + 3) // 4 }}>;
-{% endfor %}
-@group(0) @binding({{ mat.uniform_binding + mat.buf_dims_in|length }}) var<uniform> wbias: array<vec4<f32>, {{ (mat.buf_dims_out|sum + 3) // 4 }}>;
-{% endif %}
-{% endmacro %}
 
 {% macro wrap_fn() %}
 // i mod n in [0, n) for an integer-valued float i (|i| < 2^24), without an integer division:
