@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from vrneural.gpu.bindings import Binding, Bindings
 from vrneural.gpu.device import get_device
 from vrneural.gpu.pipelines import compute_pipeline
 from vrneural.gpu.readback import read_texture, upload_buffer
@@ -16,6 +17,12 @@ from vrneural.gpu.unroll import IND, mlp_lines
 from vrneural.mlp import ACT_CODE, Layer, pack_weights, wgsl_type
 
 MAX_GROUPS_X = 32768
+#: the evaluator's bindings (``weights``: buffer weights only)
+BINDINGS = Bindings([
+    Binding(0, "inputs", "storage", "array<f32>", "[N, N_IN]"),
+    Binding(1, "out_tex", "storage_texture", "texture_storage_2d<rgba32float, write>"),
+    Binding(2, "weights", "storage", "array<f32>", "per layer W[out, in], b[out]"),
+])  # fmt: skip
 
 
 def mlp_wgsl(layers: list[Layer], precision: str = "f32", buffer_weights: bool = False) -> str:
@@ -33,6 +40,7 @@ def mlp_wgsl(layers: list[Layer], precision: str = "f32", buffer_weights: bool =
         acts=[ACT_CODE[lay.act] for lay in layers],
         act_code=ACT_CODE,
         max_width=max(dims),
+        bindings=BINDINGS.wgsl(None if buffer_weights else ("inputs", "out_tex")),
         body="" if buffer_weights else "\n".join(unrolled_body(layers, T)),
     )
 
@@ -88,12 +96,10 @@ class MlpKernel:
             format="rgba32float",
             usage=wgpu.TextureUsage.STORAGE_BINDING | wgpu.TextureUsage.COPY_SRC,
         )
-        entries = [
-            {"binding": 0, "resource": {"buffer": inp}},
-            {"binding": 1, "resource": out.create_view()},
-        ]
+        res = {"inputs": {"buffer": inp}, "out_tex": out.create_view()}
         if self._wbuf is not None:
-            entries.append({"binding": 2, "resource": {"buffer": self._wbuf}})
+            res["weights"] = {"buffer": self._wbuf}
+        entries = BINDINGS.entries(res)
         bg = self.dev.create_bind_group(layout=pipe.get_bind_group_layout(0), entries=entries)
         enc = self.dev.create_command_encoder()
         for _ in range(repeats):

@@ -153,6 +153,13 @@ def forward_bindings(n_lights: int) -> tuple[Bindings, Bindings]:
     return frame, obj
 
 
+#: a radiance texture's mip chain (radiance_mips.wgsl): the level read and the level written
+MIP_BINDINGS = Bindings([
+    Binding(0, "src", "texture", "texture_2d<f32>"),
+    Binding(1, "dst", "storage_texture", "texture_storage_2d<rgba16float, write>"),
+])  # fmt: skip
+
+
 def structs_wgsl(*structs: Struct) -> str:
     """The WGSL declarations of ``structs``."""
     return "\n".join(s.wgsl() for s in structs)

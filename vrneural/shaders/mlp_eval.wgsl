@@ -7,11 +7,8 @@
 enable f16;
 {% endif %}
 
-@group(0) @binding(0) var<storage, read> inputs: array<f32>;   // [N, N_IN]
-@group(0) @binding(1) var out_tex: texture_storage_2d<rgba32float, write>;
-{% if buffer_weights %}
-@group(0) @binding(2) var<storage, read> weights: array<f32>;  // per layer W[out, in], b[out]
-{% endif %}
+// Bindings: gpu/mlp_kernel.py:BINDINGS.
+{{ bindings }}
 
 override N: u32;        // number of evaluations
 override WIDTH: u32;    // output texture width
