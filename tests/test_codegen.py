@@ -1,5 +1,6 @@
-"""Code generation in Python (gpu/unroll.py, runtime/codegen_mlp.py): the unrolled lines, their
-multiply-adds against the networks', and one golden WGSL snapshot.
+"""Code generation in Python (gpu/unroll.py, runtime/codegen_mlp.py, codegen_sample.py): the
+unrolled lines, their multiply-adds against the networks', the samplers' loads, and one golden
+WGSL snapshot.
 
 Regenerate the snapshot on purpose (after a deliberate change to the generated code, with the
 frame references still passing): ``VRNEURAL_UPDATE_GOLDEN=1 pytest tests/test_codegen.py``.
@@ -116,3 +117,13 @@ def test_golden_wgsl(name, make):
         path.write_text(got)
     want = path.read_text()
     assert got == want, f"{name} changed; see this module's docstring to regenerate it"
+
+
+@pytest.mark.parametrize("channels", [1, 2, 8, 12, 17])
+def test_sampler_loads_each_layer_once_and_writes_each_channel_once(channels):
+    from vrneural.runtime.codegen_sample import sampler_fn
+
+    code = "\n".join(sampler_fn("s", "tex", channels))
+    assert code.count("textureLoad(") == 4 * -(-channels // 8)  # 4 taps per 8-channel layer
+    writes = re.findall(r"out\[(\d+)\] = ", code)
+    assert sorted(map(int, writes)) == list(range(channels))

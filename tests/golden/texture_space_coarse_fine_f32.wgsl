@@ -141,6 +141,7 @@ fn dirs9_ext(wi: vec3<f32>, wo_ext: vec3<f32>) -> array<f32, 9> {
     return dirs9(to_range(wi, COS_I_MAX, SIN_I_MAX), wo_ext);
 }
 fn view_ext(wo: vec3<f32>) -> vec3<f32> { return to_range(wo, COS_O_MAX, SIN_O_MAX); }
+// Neural-texture samplers (generated in Python: runtime/codegen_sample.py).
 // Bilinear wrap lookup of 2 channels at material uv (texel centres at (i + 0.5) / W).
 fn sample_a(uv: vec2<f32>) -> array<f32, 2> {
     let dims = vec2<i32>(textureDimensions(tex_a));
@@ -167,7 +168,6 @@ fn sample_a(uv: vec2<f32>) -> array<f32, 2> {
     }
     return out;
 }
-
 // Bilinear wrap lookup of 2 channels at material uv (texel centres at (i + 0.5) / W).
 fn sample_b(uv: vec2<f32>) -> array<f32, 2> {
     let dims = vec2<i32>(textureDimensions(tex_b));
@@ -194,7 +194,6 @@ fn sample_b(uv: vec2<f32>) -> array<f32, 2> {
     }
     return out;
 }
-
 // Output transform of the last layer's raw value (material.apply_output).
 fn apply_output(r: vec3<f32>) -> vec3<f32> {
     return max(r, vec3<f32>(0.0));

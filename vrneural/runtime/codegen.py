@@ -30,6 +30,7 @@ from vrneural.grazing import boundary_consts
 from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.mlp import pack_weights, wgsl_type
 from vrneural.runtime.codegen_mlp import network_wgsl
+from vrneural.runtime.codegen_sample import samplers_wgsl
 from vrneural.runtime.interface import (
     LIGHT,
     SCREEN_PARAMS,
@@ -255,6 +256,7 @@ def texture_space_wgsl(
         T=T,
         mat=spec,
         nets=network_wgsl(spec, T),
+        samplers=samplers_wgsl(spec),
         structs=structs_wgsl(TEXTURE_PARAMS, LIGHT),
         bindings=texture_bindings(spec, n_lights, radiance_format).wgsl(),
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
@@ -278,6 +280,7 @@ def screen_space_wgsl(
         T=T,
         mat=spec,
         nets=network_wgsl(spec, T),
+        samplers=samplers_wgsl(spec),
         structs=structs_wgsl(SCREEN_PARAMS, LIGHT),
         bindings=screen_bindings(spec, n_lights).wgsl(),
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work

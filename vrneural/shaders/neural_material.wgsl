@@ -44,68 +44,6 @@ fn bilinear_taps(uv: vec2<f32>, dims: vec2<i32>) -> Taps {
 }
 {% endmacro %}
 
-{% macro sampler_fn(name, tex, channels, level=none) %}
-// Bilinear wrap lookup of {{ channels }} channels at material uv (texel centres at (i + 0.5) / W){{ ', at pyramid level `level`' if level is not none else '' }}.
-fn {{ name }}(uv: vec2<f32>{{ ', level: i32' if level is not none else '' }}) -> array<f32, {{ channels }}> {
-{% set lv = 'level' if level is not none else '0' %}
-{% if level is not none %}
-    // the level's size from level 0's: llvmpipe reads textureDimensions at a level that
-    // differs between the lanes of one SIMD group as if every lane had the first one's
-    let dims = max(vec2<i32>(textureDimensions({{ tex }}, 0)) >> vec2<u32>(u32(level)), vec2<i32>(1));
-{% else %}
-    let dims = vec2<i32>(textureDimensions({{ tex }}));
-{% endif %}
-    let tp = bilinear_taps(uv, dims);
-    let xi0 = tp.i0.x;
-    let yi0 = tp.i0.y;
-    let xi1 = tp.i1.x;
-    let yi1 = tp.i1.y;
-    let fx = tp.f.x;
-    let fy = tp.f.y;
-    var out: array<f32, {{ channels }}>;
-{% for layer in range((channels + 7) // 8) %}
-    {
-        let t00 = textureLoad({{ tex }}, vec2<i32>(xi0, yi0), {{ layer }}, {{ lv }});
-        let t10 = textureLoad({{ tex }}, vec2<i32>(xi1, yi0), {{ layer }}, {{ lv }});
-        let t01 = textureLoad({{ tex }}, vec2<i32>(xi0, yi1), {{ layer }}, {{ lv }});
-        let t11 = textureLoad({{ tex }}, vec2<i32>(xi1, yi1), {{ layer }}, {{ lv }});
-{% for q in range(4) %}
-{% if layer * 8 + 2 * q < channels %}
-        {
-            let top = unpack2x16float(t00[{{ q }}]) * (1.0 - fx) + unpack2x16float(t10[{{ q }}]) * fx;
-            let bot = unpack2x16float(t01[{{ q }}]) * (1.0 - fx) + unpack2x16float(t11[{{ q }}]) * fx;
-            let v = top * (1.0 - fy) + bot * fy;
-            out[{{ layer * 8 + 2 * q }}] = v.x;
-{% if layer * 8 + 2 * q + 1 < channels %}
-            out[{{ layer * 8 + 2 * q + 1 }}] = v.y;
-{% endif %}
-        }
-{% endif %}
-{% endfor %}
-    }
-{% endfor %}
-    return out;
-}
-{% endmacro %}
-
-{% macro lod_fn(name, channels, top) %}
-// Trilinear lookup in the prefiltered pyramid (levels 0..{{ top }}): levels floor(lod) and the
-// next blended by the fraction. Twin: vrneural/material.py:sample_lod.
-fn {{ name }}_lod(uv: vec2<f32>, lod_in: f32) -> array<f32, {{ channels }}> {
-    let lod = clamp(lod_in, 0.0, {{ top }}.0);
-    let l0 = floor(lod);
-    let t = lod - l0;
-    let a = {{ name }}_at(uv, i32(l0));
-    if (t == 0.0) { return a; }
-    let b = {{ name }}_at(uv, min(i32(l0) + 1, {{ top }}));
-    var out: array<f32, {{ channels }}>;
-{% for c in range(channels) %}
-    out[{{ c }}] = a[{{ c }}] * (1.0 - t) + b[{{ c }}] * t;
-{% endfor %}
-    return out;
-}
-{% endmacro %}
-
 {% macro parallax_fns(mat) %}
 {% if mat.parallax_steps > 0 %}
 // Height-field parallax: lookups where the view ray meets the height field, parallax-occlusion
@@ -182,7 +120,7 @@ fn apply_output(r: vec3<f32>) -> vec3<f32> {
 }
 {% endmacro %}
 
-{% macro material_fns(mat, T, nets) %}
+{% macro material_fns(mat, T, nets, samplers) %}
 {{ wrap_fn() }}
 // The training data's direction range (vrneural/grazing.py): cos and sin of theta_i_max and
 // theta_o_max, exact float32 values.
@@ -209,18 +147,8 @@ fn dirs9_ext(wi: vec3<f32>, wo_ext: vec3<f32>) -> array<f32, 9> {
     return dirs9(to_range(wi, COS_I_MAX, SIN_I_MAX), wo_ext);
 }
 fn view_ext(wo: vec3<f32>) -> vec3<f32> { return to_range(wo, COS_O_MAX, SIN_O_MAX); }
-{{ sampler_fn('sample_a', 'tex_a', mat.ca) }}
-{% if mat.arch == 'coarse_fine' %}
-{{ sampler_fn('sample_b', 'tex_b', mat.cb) }}
-{% endif %}
-{% if mat.lod_levels > 1 %}
-{{ sampler_fn('sample_a_at', 'tex_a', mat.ca, 'level') }}
-{{ lod_fn('sample_a', mat.ca, mat.lod_levels - 1) }}
-{% if mat.arch == 'coarse_fine' %}
-{{ sampler_fn('sample_b_at', 'tex_b', mat.cb, 'level') }}
-{{ lod_fn('sample_b', mat.cb, mat.lod_levels - 1) }}
-{% endif %}
-{% endif %}
+// Neural-texture samplers (generated in Python: runtime/codegen_sample.py).
+{{ samplers }}
 {{ output_fn(mat.output) }}
 {{ parallax_fns(mat) }}
 // Evaluation API (every weight variant; generated in Python: runtime/codegen_mlp.py). The first

@@ -19,7 +19,7 @@ enable f16;
 const EMPTY: u32 = 0xFFFFFFFFu;
 
 {{ nm.frame_fns() }}
-{{ nm.material_fns(mat, T, nets) }}
+{{ nm.material_fns(mat, T, nets, samplers) }}
 {{ nm.surface_fns() }}
 {{ nm.mesh_fns() }}
 

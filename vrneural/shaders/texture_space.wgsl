@@ -26,7 +26,7 @@ const EMPTY: u32 = 0xFFFFFFFFu;  // padding of the compacted list
 const OUT_MAX: f32 = {{ '1e30' if fmt == 'rgba32float' else '65504.0' }};
 
 {{ nm.frame_fns() }}
-{{ nm.material_fns(mat, T, nets) }}
+{{ nm.material_fns(mat, T, nets, samplers) }}
 {{ nm.surface_fns() }}
 
 fn tiled(uv: vec2<f32>) -> vec2<f32> { return uv * P.tiling.xy + P.tiling.zw; }
