@@ -64,12 +64,6 @@ def pack_frame_into(f: np.ndarray, view_proj, eye, n_lights: int) -> None:
     f["info"] = (n_lights, 0, 0, 0)
 
 
-def pack_frame(view_proj, eye, n_lights: int) -> bytes:
-    f = FRAME.zeros()
-    pack_frame_into(f, view_proj, eye, n_lights)
-    return f.tobytes()
-
-
 @functools.cache
 def _module(n_lights: int, n_active: int, display: bool, mips: bool = False):
     frame, obj = forward_bindings(n_lights)

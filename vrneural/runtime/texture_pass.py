@@ -66,13 +66,6 @@ def pack_lights_into(a: np.ndarray, light_pos, light_rgb, origin=None) -> None:
         a[k:] = np.zeros(1, a.dtype)
 
 
-def pack_lights(light_pos: np.ndarray, light_rgb: np.ndarray, n: int) -> bytes:
-    """``array<Light, n>``: (pos.xyz, 0), (colour * intensity, 0) per light; zero-padded."""
-    a = LIGHT.zeros(max(n, 1))
-    pack_lights_into(a, light_pos, light_rgb)
-    return a.tobytes()
-
-
 class CounterBuffer:
     """``slots x 4`` u32 atomic counters (zeroed on creation and by :meth:`clear`)."""
 
