@@ -20,6 +20,8 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping, Sequence
 
+import numpy as np
+
 from vrneural.gpu.shaders import wgsl_float
 from vrneural.mlp import ACT_CODE, LEAKY_SLOPE, Layer
 
@@ -41,6 +43,12 @@ def literal(x: float, T: str) -> str:
     return wgsl_float(x, "h" if T == "f16" else "")
 
 
+def _lists(layer: Layer) -> tuple[list, list]:
+    """``W`` and ``b`` as float32 values in Python lists (a zero in float32 is skipped)."""
+    w, b = (np.asarray(a, np.float32).tolist() for a in (layer.weight, layer.bias))
+    return w, b
+
+
 def _terms(w_row: list, cols, inputs, T: str) -> list[str]:
     """``w * input`` for the columns ``cols`` whose weight is not zero."""
     return [f"{literal(w_row[i], T)} * {inputs[i]}" for i in cols if w_row[i] != 0.0]
@@ -52,7 +60,7 @@ def affine_lines(
     """The pre-activation part of ``layer`` over input columns ``cols`` (``inputs[i]``: the
     WGSL name of column i), with or without the bias, as ``let {prefix}_{unit}``; no
     activation."""
-    w, b = layer.weight.tolist(), layer.bias.tolist()
+    w, b = _lists(layer)
     lines = []
     for o in range(layer.n_out):
         parts = ([literal(b[o], T)] if with_bias else []) + _terms(w[o], cols, inputs, T)
@@ -73,7 +81,7 @@ def mlp_lines(
     module)."""
     lines = []
     for li, layer in enumerate(layers, 1):
-        w, b = layer.weight.tolist(), layer.bias.tolist()
+        w, b = _lists(layer)
         hoisted = li == 1 and first_cols is not None
         cols = first_cols if hoisted else range(layer.n_in)
         src = inputs if li == 1 else [f"{prefix}{li - 1}_{i}" for i in range(layer.n_in)]
