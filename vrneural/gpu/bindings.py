@@ -124,7 +124,7 @@ def layout_of(t) -> _Layout:
     raise ValueError(f"WGSL type {t!r} has no host layout here")
 
 
-#: binding kinds -> (WGSL address space of the var, wgpu layout entry key)
+#: binding kinds -> the address space of their WGSL ``var`` (resources have none)
 KINDS = {
     "uniform": "<uniform>",
     "storage": "<storage, read>",
@@ -197,18 +197,6 @@ class Bindings:
         slots = [b.slot for b in self.items]
         if len(set(slots)) != len(slots) or len(self.by_name) != len(self.items):
             raise ValueError(f"bind group {group}: a slot or name twice in {self.items}")
-
-    def __getitem__(self, name: str) -> Binding:
-        return self.by_name[name]
-
-    def __contains__(self, name: str) -> bool:
-        return name in self.by_name
-
-    def __iter__(self):
-        return iter(self.items)
-
-    def slot(self, name: str) -> int:
-        return self.by_name[name].slot
 
     def wgsl(self, names=None) -> str:
         """The WGSL declarations (of ``names`` only, in list order, when given)."""
