@@ -54,8 +54,8 @@ def test_load_wgsl_and_cache():
     from vrneural.gpu.pipelines import pipeline_cache
     from vrneural.mlp import random_mlp
 
-    assert "macro mlp_body" in load_wgsl("mlp")
-    assert load_wgsl("mlp") is load_wgsl("mlp.wgsl") or load_wgsl("mlp") == load_wgsl("mlp.wgsl")
+    assert "macro material_fns" in load_wgsl("neural_material")
+    assert load_wgsl("neural_material") == load_wgsl("neural_material.wgsl")
     cache = pipeline_cache()
     code = mlp_wgsl(random_mlp([3, 4, 2], seed=0))
     c = {"N": 16, "WIDTH": 16, "STRIDE": 64}

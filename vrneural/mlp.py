@@ -15,6 +15,8 @@ import numpy as np
 from vrneural.errors import VrnError
 
 ACTIVATIONS = ("relu", "leaky_relu", "none")
+#: the one table of activation codes (the WGSL loops over buffer weights branch on them)
+ACT_CODE = {a: i for i, a in enumerate(ACTIVATIONS)}
 LEAKY_SLOPE = 0.01
 
 

@@ -7,31 +7,52 @@ import math
 
 import numpy as np
 
+from vrneural.gpu.bindings import Binding, Bindings
 from vrneural.gpu.device import get_device
 from vrneural.gpu.pipelines import compute_pipeline
 from vrneural.gpu.readback import read_texture, upload_buffer
 from vrneural.gpu.shaders import render_wgsl
 from vrneural.gpu.timing import GpuTimer
-from vrneural.mlp import Layer, pack_weights, wgsl_type
+from vrneural.gpu.unroll import IND, mlp_lines
+from vrneural.mlp import ACT_CODE, Layer, pack_weights, wgsl_type
 
-_ACT_CODE = {"relu": 0, "leaky_relu": 1, "none": 2}
 MAX_GROUPS_X = 32768
+#: the evaluator's bindings (``weights``: buffer weights only)
+BINDINGS = Bindings([
+    Binding(0, "inputs", "storage", "array<f32>", "[N, N_IN]"),
+    Binding(1, "out_tex", "storage_texture", "texture_storage_2d<rgba32float, write>"),
+    Binding(2, "weights", "storage", "array<f32>", "per layer W[out, in], b[out]"),
+])  # fmt: skip
 
 
 def mlp_wgsl(layers: list[Layer], precision: str = "f32", buffer_weights: bool = False) -> str:
     """Generate the evaluator's WGSL for ``layers``."""
     dims = [layers[0].n_in] + [lay.n_out for lay in layers]
+    T = wgsl_type(precision)
     return render_wgsl(
         "mlp_eval",
         layers=layers,
         n_in=dims[0],
         n_out=dims[-1],
-        T=wgsl_type(precision),
+        T=T,
         buffer_weights=buffer_weights,
         dims=dims,
-        acts=[_ACT_CODE[lay.act] for lay in layers],
+        acts=[ACT_CODE[lay.act] for lay in layers],
+        act_code=ACT_CODE,
         max_width=max(dims),
+        bindings=BINDINGS.wgsl(None if buffer_weights else ("inputs", "out_tex")),
+        body="" if buffer_weights else "\n".join(unrolled_body(layers, T)),
     )
+
+
+def unrolled_body(layers: list[Layer], T: str) -> list[str]:
+    """The constant-weight evaluator's body: inputs ``x0_k`` read from ``inputs[base + k]``,
+    the unrolled layers, ``let y`` (the first four outputs, zero-padded)."""
+    n_in, n_out, L = layers[0].n_in, layers[-1].n_out, len(layers)
+    lines = [f"{IND}let x0_{k} = {T}(inputs[base + {k}u]);" for k in range(n_in)]
+    lines += mlp_lines("x", [f"x0_{k}" for k in range(n_in)], layers, T)
+    outs = [f"f32(x{L}_{k})" if k < n_out else "0.0" for k in range(4)]
+    return [*lines, f"{IND}let y = vec4<f32>({', '.join(outs)});"]
 
 
 class MlpKernel:
@@ -75,12 +96,10 @@ class MlpKernel:
             format="rgba32float",
             usage=wgpu.TextureUsage.STORAGE_BINDING | wgpu.TextureUsage.COPY_SRC,
         )
-        entries = [
-            {"binding": 0, "resource": {"buffer": inp}},
-            {"binding": 1, "resource": out.create_view()},
-        ]
+        res = {"inputs": {"buffer": inp}, "out_tex": out.create_view()}
         if self._wbuf is not None:
-            entries.append({"binding": 2, "resource": {"buffer": self._wbuf}})
+            res["weights"] = {"buffer": self._wbuf}
+        entries = BINDINGS.entries(res)
         bg = self.dev.create_bind_group(layout=pipe.get_bind_group_layout(0), entries=entries)
         enc = self.dev.create_command_encoder()
         for _ in range(repeats):

@@ -1,7 +1,9 @@
 """WGSL lives in ``vrneural/shaders/*.wgsl`` (package data), loaded by name and cached.
 
-Templates use Jinja2 (``{{ }}`` and ``{% %}``), so generated code such as an unrolled MLP with
-constant weights comes from a file in ``shaders/``, not from strings spread through Python.
+Templates use Jinja2 (``{{ }}`` and ``{% %}``) for structure and includes; generated code (an
+unrolled MLP with constant weights, the samplers, the bindings and uniform structs) comes from
+Python functions that return WGSL lines (:mod:`vrneural.gpu.unroll`, :mod:`vrneural.gpu.bindings`,
+``vrneural/runtime/codegen_*.py``), which tests can check and a debugger can step through.
 Set ``VRNEURAL_DEBUG_WGSL=1`` to print generated WGSL with line numbers when compilation fails.
 """
 

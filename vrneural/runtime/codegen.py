@@ -1,8 +1,9 @@
 """Code generation: a :class:`~vrneural.material.NeuralMaterial` -> WGSL kernels.
 
 The templates live in ``vrneural/shaders/`` (``texture_space.wgsl``, ``screen_space.wgsl``, both
-importing ``neural_material.wgsl``, which reuses the ``mlp_body`` macro of ``mlp.wgsl``). The
-network weights become WGSL constants in fully unrolled code (zero weights skipped:
+importing ``neural_material.wgsl``); they hold the structure, and the networks come in as WGSL
+text generated in Python (:func:`vrneural.runtime.codegen_mlp.network_wgsl`). The network
+weights become WGSL constants in fully unrolled code (zero weights skipped:
 ``weights="constants"``), or they are read in loops from buffers:
 
 - ``"storage"``: one storage buffer, layer by layer over local arrays (the comparison baseline;
@@ -28,8 +29,17 @@ from vrneural.gpu.shaders import render_wgsl
 from vrneural.grazing import boundary_consts
 from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.mlp import pack_weights, wgsl_type
+from vrneural.runtime.codegen_mlp import network_wgsl
+from vrneural.runtime.codegen_sample import samplers_wgsl
+from vrneural.runtime.interface import (
+    LIGHT,
+    SCREEN_PARAMS,
+    TEXTURE_PARAMS,
+    screen_bindings,
+    structs_wgsl,
+    texture_bindings,
+)
 
-_ACT_CODE = {"relu": 0, "leaky_relu": 1, "none": 2}
 PRECISIONS = ("auto", "f16", "f32")
 WEIGHTS = ("constants", "storage", "uniform", "streamed")
 #: WebGPU's guaranteed uniform limits: bytes per binding, uniform buffers per shader stage; the
@@ -40,10 +50,6 @@ PASS_UNIFORMS = 2
 #: widest layer the "storage" variant takes: lavapipe computed wrong results for a 64-wide
 #: single-level net in the texture pass (dynamically indexed local arrays of 4 x 64 floats)
 STORAGE_MAX_WIDTH = 32
-#: first binding of the uniform weight buffers (one per layer, then the biases)
-UNIFORM_WEIGHTS_BINDING = 20
-#: binding of the height field of a parallax material (both passes)
-HEIGHT_BINDING = 18
 #: Unrolled code above this many multiply-adds per texel is refused (compile time explodes).
 MAX_UNROLLED_MACS = 20000
 
@@ -65,9 +71,8 @@ class MaterialSpec:
     buf_dims_in: list
     buf_dims_out: list
     buf_offsets: list
-    buf_acts: list
+    buf_acts: list  # activation names (vrneural.mlp.ACTIVATIONS)
     buf_bias_offsets: list  # per layer, into the uniform bias buffer (uniform weights)
-    uniform_binding: int
     #: WGSL literals of (cos, sin) of theta_i_max, then of theta_o_max (the data's direction
     #: range, vrneural.grazing); exact float32 values, as the numpy twin uses
     dir_consts: tuple = ()
@@ -78,7 +83,6 @@ class MaterialSpec:
     parallax_steps: int = 0
     parallax_march: str = "texel"
     height_consts: tuple = ()
-    height_binding: int = 18
 
     @property
     def buffer_weights(self) -> bool:
@@ -170,7 +174,7 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
     z = mat.networks["coarse"][-1].n_out if mat.arch == "coarse_fine" else 0
     return MaterialSpec(
         arch=mat.arch,
-        networks={k: [_plain(lay) for lay in v] for k, v in mat.networks.items()},
+        networks=dict(mat.networks),
         output=mat.output,
         ca=ca,
         cb=cb,
@@ -182,15 +186,13 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
         buf_dims_in=dims_in,
         buf_dims_out=dims_out,
         buf_offsets=offs,
-        buf_acts=[_ACT_CODE[lay.act] for lay in layers],
+        buf_acts=[lay.act for lay in layers],
         buf_bias_offsets=boffs,
-        uniform_binding=UNIFORM_WEIGHTS_BINDING,
         dir_consts=tuple(repr(float(c)) for t in mat.dir_range for c in boundary_consts(t)),
         lod_levels=mat.lod_levels,
         parallax_steps=mat.parallax_steps,
         parallax_march=mat.parallax_march,
         height_consts=_height_consts(mat),
-        height_binding=HEIGHT_BINDING,
     )
 
 
@@ -205,21 +207,6 @@ def _height_consts(mat: NeuralMaterial) -> tuple:
     H, W = mat.height.shape
     vals = (lo, hi, np.float32(W / H), mat.parallax_slope_max)
     return tuple(repr(float(v)) for v in vals)
-
-
-class _PlainLayer:
-    """A layer with list weights (fast Jinja indexing)."""
-
-    def __init__(self, lay):
-        self.weight = lay.weight.astype(np.float32).tolist()
-        self.bias = lay.bias.astype(np.float32).tolist()
-        self.act = lay.act
-        self.n_in = lay.n_in
-        self.n_out = lay.n_out
-
-
-def _plain(lay) -> _PlainLayer:
-    return _PlainLayer(lay)
 
 
 def packed_weights(mat: NeuralMaterial) -> np.ndarray:
@@ -263,11 +250,15 @@ def texture_space_wgsl(
     _check_weights(mat, weights)
     if radiance_format not in RADIANCE_FORMATS:
         raise VrnError(f"radiance format {radiance_format!r} not in {RADIANCE_FORMATS}")
+    T, spec = wgsl_type(precision), material_spec(mat, weights)
     return render_wgsl(
         "texture_space",
-        T=wgsl_type(precision),
-        mat=material_spec(mat, weights),
-        n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
+        T=T,
+        mat=spec,
+        nets=network_wgsl(spec, T),
+        samplers=samplers_wgsl(spec),
+        structs=structs_wgsl(TEXTURE_PARAMS, LIGHT),
+        bindings=texture_bindings(spec, n_lights, radiance_format).wgsl(),
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
         fmt=radiance_format,
         subgroups=subgroups,
@@ -283,11 +274,15 @@ def screen_space_wgsl(
 ) -> str:
     """WGSL of the per-pixel screen-space pass for ``mat`` (see shaders/screen_space.wgsl)."""
     _check_weights(mat, weights)
+    T, spec = wgsl_type(precision), material_spec(mat, weights)
     return render_wgsl(
         "screen_space",
-        T=wgsl_type(precision),
-        mat=material_spec(mat, weights),
-        n_lights=max(1, int(n_lights)),  # uniform array size (WGSL arrays are never empty)
+        T=T,
+        mat=spec,
+        nets=network_wgsl(spec, T),
+        samplers=samplers_wgsl(spec),
+        structs=structs_wgsl(SCREEN_PARAMS, LIGHT),
+        bindings=screen_bindings(spec, n_lights).wgsl(),
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
         subgroups=subgroups,
     )

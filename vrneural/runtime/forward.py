@@ -18,6 +18,7 @@ import numpy as np
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import upload_buffer
 from vrneural.gpu.shaders import render_wgsl
+from vrneural.runtime.interface import FRAME, LIGHT, OBJECT, forward_bindings, structs_wgsl
 from vrneural.runtime.reference import normal_matrix
 
 COLOUR_FORMAT = "rgba16float"
@@ -26,8 +27,8 @@ COLOUR_FORMAT = "rgba16float"
 TARGETS = {"hdr": "rgba16float", "display": "rgba8unorm-srgb"}
 DEPTH_FORMAT = "depth32float"
 VIS_FORMAT = "rg32uint"
-OBJECT_BYTES = 160
-FRAME_BYTES = 96
+OBJECT_BYTES = OBJECT.size  # 160
+FRAME_BYTES = FRAME.size  # 96
 
 
 def expanded_vertices(mesh, uv_atlas: np.ndarray | None) -> np.ndarray:
@@ -44,31 +45,36 @@ def expanded_vertices(mesh, uv_atlas: np.ndarray | None) -> np.ndarray:
 
 
 def pack_object(model, albedo=(0, 0, 0), specular=0.0, shininess=1.0, obj_id=0) -> bytes:
-    a = np.zeros(40, np.float32)
-    a[0:16] = np.asarray(model, np.float32).T.ravel()
-    a[16:32] = normal_matrix(np.asarray(model, np.float32)).T.ravel()
-    a[32:35] = albedo
-    a[36:39] = (specular, shininess, obj_id)
-    return a.tobytes()
+    """The ``Object`` uniform (:data:`~vrneural.runtime.interface.OBJECT`) as bytes."""
+    o = OBJECT.zeros()
+    m32 = np.asarray(model, np.float32)
+    o["model"] = m32.T
+    o["normal_mat"] = normal_matrix(m32).T
+    o["albedo"][:3] = albedo
+    o["spec"][:3] = (specular, shininess, obj_id)
+    return o.tobytes()
 
 
-def pack_frame_into(a: np.ndarray, view_proj, eye, n_lights: int) -> None:
-    """The ``Frame`` uniform into ``a: [24]`` float32 (the last 4 words u32)."""
-    a[0:16] = np.asarray(view_proj, np.float64).T.ravel()
-    a[16:19] = eye
-    a[19] = 0.0
-    a[20:24].view(np.uint32)[:] = (n_lights, 0, 0, 0)
-
-
-def pack_frame(view_proj, eye, n_lights: int) -> bytes:
-    a = np.zeros(24, np.float32)
-    pack_frame_into(a, view_proj, eye, n_lights)
-    return a.tobytes()
+def pack_frame_into(f: np.ndarray, view_proj, eye, n_lights: int) -> None:
+    """The ``Frame`` uniform into the record ``f``
+    (:data:`~vrneural.runtime.interface.FRAME`)."""
+    f["view_proj"] = np.asarray(view_proj, np.float64).T
+    f["eye"][:3] = eye
+    f["eye"][3] = 0.0
+    f["info"] = (n_lights, 0, 0, 0)
 
 
 @functools.cache
 def _module(n_lights: int, n_active: int, display: bool, mips: bool = False):
-    code = render_wgsl("forward", n_lights=n_lights, n_active=n_active, display=display, mips=mips)
+    frame, obj = forward_bindings(n_lights)
+    code = render_wgsl(
+        "forward",
+        structs=structs_wgsl(FRAME, LIGHT, OBJECT),
+        bindings=frame.wgsl() + "\n" + obj.wgsl(),
+        n_active=n_active,
+        display=display,
+        mips=mips,
+    )
     return get_device().create_shader_module(code=code, label="forward")
 
 
@@ -80,23 +86,13 @@ def _layouts():
     dev = get_device()
     vf = wgpu.ShaderStage.VERTEX | wgpu.ShaderStage.FRAGMENT
     fr = wgpu.ShaderStage.FRAGMENT
-    ub = {"type": wgpu.BufferBindingType.uniform}
-    frame = dev.create_bind_group_layout(
-        entries=[
-            {"binding": 0, "visibility": vf, "buffer": ub},
-            {"binding": 1, "visibility": fr, "buffer": ub},
-        ]
+    frame, obj = forward_bindings(1)  # the layouts leave the lights' size open
+    vis = {"F": vf, "lights": fr, "O": vf, "radiance": fr, "samp": fr}
+    return (
+        dev.create_bind_group_layout(entries=frame.layout_entries(vis)),
+        dev.create_bind_group_layout(entries=obj.layout_entries(vis)),
+        dev.create_bind_group_layout(entries=obj.layout_entries(vis, ["O"])),
     )
-    obj0 = {"binding": 0, "visibility": vf, "buffer": ub}
-    neural = dev.create_bind_group_layout(
-        entries=[
-            obj0,
-            {"binding": 1, "visibility": fr, "texture": {"sample_type": "float"}},
-            {"binding": 2, "visibility": fr, "sampler": {"type": "filtering"}},
-        ]
-    )
-    plain = dev.create_bind_group_layout(entries=[obj0])
-    return frame, neural, plain
 
 
 #: fragment entry points whose object group holds a radiance texture
@@ -195,7 +191,7 @@ class EyeTargets:
         self.n_lights = max(1, n_lights)
         self.arena = arena or UniformArena("eye", auto_flush=True)
         self.f_off = self.arena.alloc(FRAME_BYTES)
-        self.l_off = self.arena.alloc(32 * self.n_lights)
+        self.l_off = self.arena.alloc(LIGHT.size * self.n_lights)
         self._bind = None
 
     def update(self, view_proj, eye_pos, light_pos, light_rgb) -> None:
@@ -204,9 +200,10 @@ class EyeTargets:
         from vrneural.runtime.texture_pass import pack_lights_into
 
         ar = self.arena
-        pack_frame_into(ar.view(self.f_off, FRAME_BYTES), view_proj, eye_pos, len(light_pos))
-        pack_lights_into(ar.view(self.l_off, 32 * self.n_lights).reshape(-1, 2, 4), light_pos,
-                         light_rgb)  # fmt: skip
+        f = FRAME.view(ar.view(self.f_off, FRAME_BYTES, np.uint8))[0]
+        pack_frame_into(f, view_proj, eye_pos, len(light_pos))
+        lights = LIGHT.view(ar.view(self.l_off, LIGHT.size * self.n_lights, np.uint8))
+        pack_lights_into(lights, light_pos, light_rgb)
         ar.written()
 
     def formats(self) -> list[str]:
@@ -235,12 +232,10 @@ class DrawObject:
         if key in self.binds:
             return self.binds[key]
         layout = _layouts()[1 if radiance_view is not None else 2]
-        entries = [{"binding": 0, "resource": {"buffer": self.ubuf}}]
+        res = {"O": {"buffer": self.ubuf}}
         if radiance_view is not None:
-            entries += [
-                {"binding": 1, "resource": radiance_view},
-                {"binding": 2, "resource": _mip_sampler() if mips else _sampler()},
-            ]
+            res |= {"radiance": radiance_view, "samp": _mip_sampler() if mips else _sampler()}
+        entries = forward_bindings(1)[1].entries(res)
         bg = get_device().create_bind_group(layout=layout, entries=entries)
         self.binds[key] = bg
         return bg
@@ -279,10 +274,12 @@ def frame_bind_group(eye: EyeTargets):
     ar = eye.arena
     eye._bind = get_device().create_bind_group(
         layout=_layouts()[0],
-        entries=[
-            {"binding": 0, "resource": ar.binding(eye.f_off, FRAME_BYTES)},
-            {"binding": 1, "resource": ar.binding(eye.l_off, 32 * eye.n_lights)},
-        ],
+        entries=forward_bindings(eye.n_lights)[0].entries(
+            {
+                "F": ar.binding(eye.f_off, FRAME_BYTES),
+                "lights": ar.binding(eye.l_off, LIGHT.size * eye.n_lights),
+            }
+        ),
     )
     return eye._bind
 

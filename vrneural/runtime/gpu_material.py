@@ -24,12 +24,7 @@ from vrneural.atlas.types import Atlas, Mesh
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import upload_buffer
 from vrneural.material import ARCHS, NeuralMaterial
-from vrneural.runtime.codegen import (
-    HEIGHT_BINDING,
-    UNIFORM_WEIGHTS_BINDING,
-    packed_weights,
-    uniform_weights,
-)
+from vrneural.runtime.codegen import packed_weights, uniform_weights
 from vrneural.runtime.reference import block_geometry
 
 
@@ -100,15 +95,16 @@ class GpuMaterial:
             else []
         )
 
-    def entries(self, first_binding: int) -> list[dict]:
-        """Bind-group entries matching ``neural_material.wgsl:bindings(mat, first_binding)``."""
-        out = [{"binding": first_binding + i, "resource": v} for i, v in enumerate(self.views)]
+    def resources(self) -> dict:
+        """Its resources by binding name (runtime/interface.py:material_bindings)."""
+        out = dict(zip(("tex_a", "tex_b"), self.views, strict=False))
         if self.weights is not None:
-            out.append({"binding": first_binding + 2, "resource": {"buffer": self.weights}})
+            out["weights"] = {"buffer": self.weights}
         for i, b in enumerate(self.uniforms):
-            out.append({"binding": UNIFORM_WEIGHTS_BINDING + i, "resource": {"buffer": b}})
+            last = i == len(self.uniforms) - 1
+            out["wbias" if last else f"wl{i}"] = {"buffer": b}
         if self.height is not None:
-            out.append({"binding": HEIGHT_BINDING, "resource": self.height.create_view()})
+            out["height_tex"] = self.height.create_view()
         return out
 
 

@@ -42,9 +42,11 @@ def mip_chain(level0: np.ndarray, levels: int) -> list[np.ndarray]:
 
 def _pipeline():
     from vrneural.gpu.pipelines import compute_pipeline
-    from vrneural.gpu.shaders import load_wgsl
+    from vrneural.gpu.shaders import render_wgsl
+    from vrneural.runtime.interface import MIP_BINDINGS
 
-    return compute_pipeline(load_wgsl("radiance_mips.wgsl"), "main", label="radiance_mips")
+    code = render_wgsl("radiance_mips", bindings=MIP_BINDINGS.wgsl())
+    return compute_pipeline(code, "main", label="radiance_mips")
 
 
 class MipChain:
@@ -52,6 +54,7 @@ class MipChain:
 
     def __init__(self, texture, levels: int):
         from vrneural.gpu.device import get_device
+        from vrneural.runtime.interface import MIP_BINDINGS
 
         self.levels = levels
         pipe = _pipeline()
@@ -64,7 +67,7 @@ class MipChain:
                 (
                     dev.create_bind_group(
                         layout=pipe.get_bind_group_layout(0),
-                        entries=[{"binding": 0, "resource": src}, {"binding": 1, "resource": dst}],
+                        entries=MIP_BINDINGS.entries({"src": src, "dst": dst}),
                     ),
                     max(1, texture.size[0] >> k),
                 )

@@ -16,8 +16,9 @@ from vrneural.gpu.device import get_device, has_feature
 from vrneural.gpu.pipelines import compute_pipeline
 from vrneural.gpu.uniforms import UniformArena
 from vrneural.material import NeuralMaterial
-from vrneural.runtime.codegen import screen_space_wgsl
+from vrneural.runtime.codegen import material_spec, screen_space_wgsl
 from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial
+from vrneural.runtime.interface import LIGHT, SCREEN_PARAMS, screen_bindings
 from vrneural.runtime.reference import normal_matrix
 from vrneural.runtime.texture_pass import (
     ARGS_BINDINGS,
@@ -27,21 +28,25 @@ from vrneural.runtime.texture_pass import (
     pack_lights_into,
 )
 
-PARAMS_BYTES = 272
+PARAMS_BYTES = SCREEN_PARAMS.size  # 256
 
 
 def pack_screen_params(
     model, eye, tiling, inv_view_proj, width, height, slot, obj_id, rect=None
 ) -> bytes:
-    f = np.zeros(56, np.float32)
-    f[0:16] = np.asarray(model, np.float32).T.ravel()
-    f[16:32] = normal_matrix(np.asarray(model, np.float32)).T.ravel()
-    f[32:35] = np.asarray(eye, np.float32)[:3]
-    f[36:40] = np.asarray(tiling, np.float32)
-    f[40:56] = np.asarray(inv_view_proj, np.float32).T.ravel()
-    rect = rect or (0, 0, width, height)
-    u = np.array([width, height, slot, obj_id, *rect], np.uint32)
-    return f.tobytes() + u.tobytes()
+    """The ``Params`` uniform of screen_space.wgsl
+    (:data:`~vrneural.runtime.interface.SCREEN_PARAMS`) as bytes; ``rect``: the pixels to
+    cover (default: the whole eye)."""
+    p = SCREEN_PARAMS.zeros()
+    m32 = np.asarray(model, np.float32)
+    p["model"] = m32.T
+    p["normal_mat"] = normal_matrix(m32).T
+    p["eye"][:3] = np.asarray(eye, np.float32)[:3]
+    p["tiling"] = np.asarray(tiling, np.float32)
+    p["inv_view_proj"] = np.asarray(inv_view_proj, np.float32).T
+    p["screen"] = (width, height, slot, obj_id)
+    p["rect"] = rect or (0, 0, width, height)
+    return p.tobytes()
 
 
 def screen_rect(centre, radius, view_proj, width, height) -> tuple[int, int, int, int]:
@@ -71,6 +76,7 @@ class ScreenSpacePass:
         self.subgroups = has_feature("subgroup") if subgroups is None else subgroups
         self.code = screen_space_wgsl(mat, precision, n_lights, weights, self.subgroups)
         self.gmat = GpuMaterial(mat, weights)
+        self.bindings = screen_bindings(material_spec(mat, weights), n_lights)
         self.pipes = {
             e: compute_pipeline(self.code, e, label=f"screen_space/{e}")
             for e in ("cull", "args", "main")
@@ -100,17 +106,17 @@ class ScreenTarget:
         self.size = eye_targets.size
         self.arena = arena or UniformArena("screen target", auto_flush=True)
         self.p_off = self.arena.alloc(PARAMS_BYTES)
-        self.l_off = self.arena.alloc(32 * spass.n_lights)
+        self.l_off = self.arena.alloc(LIGHT.size * spass.n_lights)
         self.compact = _scratch(*self.size)
         self._res = {
-            2: {"buffer": gatlas.verts},
-            3: {"buffer": gatlas.faces},
-            4: eye_targets.vis.create_view(),
-            5: eye_targets.colour.create_view(),
-            6: {"buffer": counters.buf},
+            "verts": {"buffer": gatlas.verts},
+            "faces": {"buffer": gatlas.faces},
+            "vis": eye_targets.vis.create_view(),
+            "out_tex": eye_targets.colour.create_view(),
+            "counters": {"buffer": counters.buf},
             **self.compact.resources(),
+            **spass.gmat.resources(),
         }
-        self._res.update({e["binding"]: e["resource"] for e in spass.gmat.entries(7)})
         self._binds: dict | None = None
         self.rect = (0, 0, 0, 0)
 
@@ -119,17 +125,17 @@ class ScreenTarget:
         """The entry points' bind groups, made on first use (after the arena's last alloc)."""
         if self._binds is None:
             res = dict(self._res)
-            res[0] = self.arena.binding(self.p_off, PARAMS_BYTES)
-            res[1] = self.arena.binding(self.l_off, 32 * self.spass.n_lights)
-            used = {
-                "cull": (0, 4, 13, 14),
+            res["P"] = self.arena.binding(self.p_off, PARAMS_BYTES)
+            res["lights"] = self.arena.binding(self.l_off, LIGHT.size * self.spass.n_lights)
+            used = {  # an entry point's auto layout holds the bindings it uses, and only those
+                "cull": ("P", "vis", "todo", "todo_n"),
                 "args": ARGS_BINDINGS,
-                "main": tuple(k for k in res if k not in (14, 15)),
+                "main": tuple(k for k in res if k not in ("todo_n", "ind")),
             }
             self._binds = {
                 e: get_device().create_bind_group(
                     layout=self.spass.pipes[e].get_bind_group_layout(0),
-                    entries=[{"binding": k, "resource": res[k]} for k in keys],
+                    entries=self.spass.bindings.entries(res, keys),
                 )
                 for e, keys in used.items()
             }
@@ -142,7 +148,7 @@ class ScreenTarget:
         ar = self.arena
         packed = pack_screen_params(model, eye, tiling, inv_view_proj, w, h, slot, obj_id, rect)
         ar.view(self.p_off, len(packed), np.uint8)[:] = np.frombuffer(packed, np.uint8)
-        lights = ar.view(self.l_off, 32 * self.spass.n_lights).reshape(-1, 2, 4)
+        lights = LIGHT.view(ar.view(self.l_off, LIGHT.size * self.spass.n_lights, np.uint8))
         pack_lights_into(lights, light_pos, light_rgb)
         ar.written()
 

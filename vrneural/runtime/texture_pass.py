@@ -18,28 +18,32 @@ from vrneural.gpu.pipelines import compute_pipeline
 from vrneural.gpu.readback import read_buffer, read_texture, upload_buffer
 from vrneural.gpu.uniforms import UniformArena
 from vrneural.material import NeuralMaterial
-from vrneural.runtime.codegen import texture_space_wgsl
+from vrneural.runtime.codegen import material_spec, texture_space_wgsl
 from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial, new_radiance_texture
+from vrneural.runtime.interface import LIGHT, TEXTURE_PARAMS, texture_bindings
 from vrneural.runtime.reference import normal_matrix
 
-PARAMS_BYTES = 176  # mat4 model, mat4 normal_mat, vec4 eye, vec4 tiling, vec4<u32> sched
+PARAMS_BYTES = TEXTURE_PARAMS.size  # 176
 WORKGROUP_SIZE = 64  # 1D workgroups of the shading kernels
 
 
 def pack_params_into(
-    f: np.ndarray, model, eye, tiling, offset=0, count=0, slot=0, margin=0.0, base=None
+    p: np.ndarray, model, eye, tiling, offset=0, count=0, slot=0, margin=0.0, base=None
 ) -> None:
-    """Write the ``Params`` uniform of texture_space.wgsl into ``f: [44]`` float32 (matrices
-    column-major; the last 4 words are u32). ``model`` is taken relative to ``eye`` in float64
-    first (:func:`~vrneural.runtime.reference.camera_relative`: the shaded eye sits at the
-    origin); ``offset, count``: this dispatch's span of the atlas's candidate block list;
-    ``margin`` (m): blocks facing any point within it of ``eye`` are shaded (a radiance texture
-    shared by both eyes); ``base``: :func:`params_base` of ``model`` when the caller keeps it."""
-    f[0:32] = params_base(model) if base is None else base
-    f[12:15] = np.asarray(model, np.float64)[:3, 3] - np.asarray(eye, np.float64)[:3]
-    f[32:36] = (0.0, 0.0, 0.0, margin)
-    f[36:40] = tiling
-    f[40:44].view(np.uint32)[:] = (offset, count, slot, 0)
+    """Write the ``Params`` uniform of texture_space.wgsl into the record ``p``
+    (:data:`~vrneural.runtime.interface.TEXTURE_PARAMS`). ``model`` is taken relative to
+    ``eye`` in float64 first (:func:`~vrneural.runtime.reference.camera_relative`: the shaded
+    eye sits at the origin); ``offset, count``: this dispatch's span of the atlas's candidate
+    block list; ``margin`` (m): blocks facing any point within it of ``eye`` are shaded (a
+    radiance texture shared by both eyes); ``base``: :func:`params_base` of ``model`` when the
+    caller keeps it."""
+    b = params_base(model) if base is None else base
+    p["model"] = b[:16].reshape(4, 4)
+    p["normal_mat"] = b[16:32].reshape(4, 4)
+    p["model"][3, :3] = np.asarray(model, np.float64)[:3, 3] - np.asarray(eye, np.float64)[:3]
+    p["eye"] = (0.0, 0.0, 0.0, margin)
+    p["tiling"] = tiling
+    p["sched"] = (offset, count, slot, 0)
 
 
 def params_base(model) -> np.ndarray:
@@ -50,22 +54,16 @@ def params_base(model) -> np.ndarray:
 
 
 def pack_lights_into(a: np.ndarray, light_pos, light_rgb, origin=None) -> None:
-    """Write ``array<Light, n>`` into ``a: [n, 2, 4]`` float32: (pos.xyz - origin, 0),
-    (colour * intensity, 0) per light (positions shifted in float64); zero-padded (the w
-    components are never written: ``a`` comes zeroed)."""
+    """Write ``array<Light, n>`` into the records ``a: [n]``
+    (:data:`~vrneural.runtime.interface.LIGHT`): (pos.xyz - origin, 0), (colour * intensity,
+    0) per light (positions shifted in float64); zero-padded (the w components are never
+    written: ``a`` comes zeroed)."""
     k = len(light_pos)
     lp = np.asarray(light_pos, np.float64)
-    a[:k, 0, :3] = lp if origin is None else lp - np.asarray(origin, np.float64)[:3]
-    a[:k, 1, :3] = light_rgb
+    a["pos"][:k, :3] = lp if origin is None else lp - np.asarray(origin, np.float64)[:3]
+    a["radiance"][:k, :3] = light_rgb
     if k < len(a):
-        a[k:] = 0.0
-
-
-def pack_lights(light_pos: np.ndarray, light_rgb: np.ndarray, n: int) -> bytes:
-    """``array<Light, n>``: (pos.xyz, 0), (colour * intensity, 0) per light; zero-padded."""
-    a = np.zeros((max(n, 1), 2, 4), np.float32)
-    pack_lights_into(a, light_pos, light_rgb)
-    return a.tobytes()
+        a[k:] = np.zeros(1, a.dtype)
 
 
 class CounterBuffer:
@@ -114,6 +112,7 @@ class TextureSpacePass:
             mat, precision, n_lights, weights, radiance_format, self.subgroups
         )
         self.gmat = gmat or GpuMaterial(mat, weights)
+        self.bindings = texture_bindings(material_spec(mat, weights), n_lights, radiance_format)
 
     def pipeline(self, resolution: int | None = None, entry: str = "main"):
         """The compiled entry point (one for every texture side: the kernel takes its texels
@@ -130,7 +129,7 @@ def grid(n: int, size: int = WORKGROUP_SIZE) -> tuple[int, int]:
 
 
 class CompactionBuffers:
-    """The buffers of compact.wgsl (bindings 13-15) for up to ``n`` items: the list of items to
+    """The buffers of compact.wgsl (todo, todo_n, ind) for up to ``n`` items: the list of items to
     shade (padded to whole workgroups), its count (zero at creation; ``args`` re-zeroes it) and
     the indirect workgroup counts."""
 
@@ -145,11 +144,13 @@ class CompactionBuffers:
         self.ind = dev.create_buffer(size=16, usage=st | wgpu.BufferUsage.INDIRECT)
 
     def resources(self) -> dict:
-        return {13: {"buffer": self.todo}, 14: {"buffer": self.todo_n}, 15: {"buffer": self.ind}}
+        """By binding name (runtime/interface.py:COMPACT)."""
+        return {"todo": {"buffer": self.todo}, "todo_n": {"buffer": self.todo_n},
+                "ind": {"buffer": self.ind}}  # fmt: skip
 
 
 #: bindings of the ``args`` entry point (compact.wgsl)
-ARGS_BINDINGS = (13, 14, 15)
+ARGS_BINDINGS = ("todo", "todo_n", "ind")
 
 
 def dispatch_compacted(cp, pipes: dict, binds: dict, cull_grid, ind) -> None:
@@ -198,7 +199,7 @@ class TextureTarget:
         self.pipe = self.pipes["main"]
         self.arena = arena or UniformArena("texture target", auto_flush=True)
         self.p_off = self.arena.alloc(PARAMS_BYTES)
-        self.l_off = self.arena.alloc(32 * tpass.n_lights)
+        self.l_off = self.arena.alloc(LIGHT.size * tpass.n_lights)
         levels = mip_count(self.R) if mips else 1
         self.texture = new_radiance_texture(self.R, fmt=tpass.radiance_format, mips=levels)
         self.view = self.texture.create_view(base_mip_level=0, mip_level_count=1)  # written
@@ -219,31 +220,33 @@ class TextureTarget:
             g, tp, ar = self.gatlas, self.tpass, self.arena
             geo = g.geometry()
             res = {
-                0: ar.binding(self.p_off, PARAMS_BYTES),
-                1: ar.binding(self.l_off, 32 * tp.n_lights),
-                2: {"buffer": geo["pos"]},
-                3: {"buffer": geo["nrm"]},
-                4: {"buffer": geo["tan"]},
-                16: {"buffer": geo["uv01"]},
-                17: {"buffer": geo["uv23"]},
-                5: self.view,
-                6: {"buffer": self.counters.buf},
-                12: {"buffer": g.block_list(period)[0]},
+                "P": ar.binding(self.p_off, PARAMS_BYTES),
+                "lights": ar.binding(self.l_off, LIGHT.size * tp.n_lights),
+                "geo_pos": {"buffer": geo["pos"]},
+                "geo_nrm": {"buffer": geo["nrm"]},
+                "geo_tan": {"buffer": geo["tan"]},
+                "geo_uv01": {"buffer": geo["uv01"]},
+                "geo_uv23": {"buffer": geo["uv23"]},
+                "out_tex": self.view,
+                "counters": {"buffer": self.counters.buf},
+                "cand": {"buffer": g.block_list(period)[0]},
+                **tp.gmat.resources(),
             }
-            res.update({e["binding"]: e["resource"] for e in tp.gmat.entries(7)})
             if entry in ("cull", "args", "main_compacted"):
                 if self.compact is None:
                     self.compact = CompactionBuffers(g.non_empty_blocks)
                 res.update(self.compact.resources())
-            keys = {
-                "bare": (0, 2, 3, 4, 16, 17, 5, 12),
-                "cull": (0, 2, 3, 6, 12, 13, 14),
+            # an entry point's auto layout holds the bindings it uses, and only those
+            used = {
+                "bare": ("P", "geo_pos", "geo_nrm", "geo_tan", "geo_uv01", "geo_uv23", "out_tex",
+                         "cand"),
+                "cull": ("P", "geo_pos", "geo_nrm", "counters", "cand", "todo", "todo_n"),
                 "args": ARGS_BINDINGS,
-                "main_compacted": tuple(k for k in res if k not in (12, 14, 15)),
-            }.get(entry, tuple(res))
+                "main_compacted": tuple(k for k in res if k not in ("cand", "todo_n", "ind")),
+            }.get(entry)  # fmt: skip
             self.binds[key] = get_device().create_bind_group(
                 layout=self.pipes[entry].get_bind_group_layout(0),
-                entries=[{"binding": k, "resource": res[k]} for k in keys],
+                entries=tp.bindings.entries(res, used),
             )
         return self.binds[key]
 
@@ -259,9 +262,9 @@ class TextureTarget:
             self._base = (key, params_base(model))
         span = self.gatlas.block_list(period)[1][phase]
         ar = self.arena
-        f = ar.view(self.p_off, PARAMS_BYTES)
-        pack_params_into(f, model, eye, tiling, *span, slot, margin, self._base[1])
-        lights = ar.view(self.l_off, 32 * self.tpass.n_lights).reshape(-1, 2, 4)
+        p = TEXTURE_PARAMS.view(ar.view(self.p_off, PARAMS_BYTES, np.uint8))[0]
+        pack_params_into(p, model, eye, tiling, *span, slot, margin, self._base[1])
+        lights = LIGHT.view(ar.view(self.l_off, LIGHT.size * self.tpass.n_lights, np.uint8))
         pack_lights_into(lights, light_pos, light_rgb, eye)
         ar.written()
 

@@ -4,13 +4,9 @@
 // zeroing the count for the next use), and `main` shades todo[todo_index(...)] only
 // (dispatch_workgroups_indirect). Host side: runtime/texture_pass.py (CompactionBuffers,
 // dispatch_compacted). Needs a global `const EMPTY: u32 = 0xFFFFFFFFu;` and the
-// `counters: array<atomic<u32>>` storage binding.
+// `counters: array<atomic<u32>>` storage binding; its bindings (todo, todo_n, ind) are declared
+// by runtime/interface.py (COMPACT).
 
-{% macro bindings() %}
-@group(0) @binding(13) var<storage, read_write> todo: array<u32>;
-@group(0) @binding(14) var<storage, read_write> todo_n: array<atomic<u32>>;
-@group(0) @binding(15) var<storage, read_write> ind: array<u32>;  // (x, y, z) workgroups
-{% endmacro %}
 
 {% macro fns(subgroups=false) %}
 {% if subgroups %}

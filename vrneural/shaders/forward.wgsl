@@ -3,7 +3,7 @@
 // atlas uv, triangle index (u32). Colour target rgba16float (HDR), or with `display` an
 // rgba8unorm-srgb target holding Reinhard x / (1 + x) (the sRGB encoding is the target's);
 // depth32float, less-test.
-// Template parameters: n_lights (uniform array size, >= 1), n_active (lights shaded, a
+// Template parameters: n_active (lights shaded, a
 // compile-time loop count, 0 allowed), display (bool), mips (bool: neural objects sample
 // their radiance textures' mip chains).
 //   fs_neural: bilinear sample of this eye's radiance texture at the atlas uv (clamp-to-edge;
@@ -13,27 +13,11 @@
 //   *_vis:     screen-space modes: plain objects write colour, neural objects write (id + 1, tri)
 //              into an rg32uint visibility target and leave colour 0 for the compute pass.
 
-struct Frame {
-    view_proj: mat4x4<f32>,
-    eye: vec4<f32>,        // world eye position
-    info: vec4<u32>,       // (light count, unused...): the loops use n_active, fixed per pipeline
-}
-struct Light {
-    pos: vec4<f32>,
-    radiance: vec4<f32>,   // colour * intensity, W/sr
-}
-struct Object {
-    model: mat4x4<f32>,
-    normal_mat: mat4x4<f32>,
-    albedo: vec4<f32>,     // plain: diffuse albedo rgb
-    spec: vec4<f32>,       // plain: (specular albedo, shininess, object id, unused)
-}
+// The uniforms and bindings (declared once, in runtime/interface.py: FRAME, LIGHT, OBJECT,
+// forward_bindings).
+{{ structs }}
 
-@group(0) @binding(0) var<uniform> F: Frame;
-@group(0) @binding(1) var<uniform> lights: array<Light, {{ n_lights }}>;
-@group(1) @binding(0) var<uniform> O: Object;
-@group(1) @binding(1) var radiance: texture_2d<f32>;
-@group(1) @binding(2) var samp: sampler;
+{{ bindings }}
 
 struct VIn {
     @location(0) pos: vec3<f32>,

@@ -1,17 +1,14 @@
 // Batched small-MLP evaluator: one thread per texel, inputs from a storage buffer, the first
 // (up to) four outputs written to an rgba32float storage texture. Weights are either WGSL
 // constants in fully unrolled code (buffer_weights = false) or read from a storage buffer in
-// loops (buffer_weights = true; the slow baseline the codegen is measured against).
-{% import 'mlp.wgsl' as m %}
+// loops (buffer_weights = true; the slow baseline the codegen is measured against). The unrolled
+// body comes from Python (gpu/mlp_kernel.py:unrolled_body, gpu/unroll.py).
 {% if T == 'f16' %}
 enable f16;
 {% endif %}
 
-@group(0) @binding(0) var<storage, read> inputs: array<f32>;   // [N, N_IN]
-@group(0) @binding(1) var out_tex: texture_storage_2d<rgba32float, write>;
-{% if buffer_weights %}
-@group(0) @binding(2) var<storage, read> weights: array<f32>;  // per layer W[out, in], b[out]
-{% endif %}
+// Bindings: gpu/mlp_kernel.py:BINDINGS.
+{{ bindings }}
 
 override N: u32;        // number of evaluations
 override WIDTH: u32;    // output texture width
@@ -21,7 +18,7 @@ override STRIDE: u32;   // threads per dispatch row (workgroups in x * 64)
 const N_LAYERS: u32 = {{ layers|length }}u;
 const MAXW: u32 = {{ max_width }}u;
 const DIMS = array<u32, {{ layers|length + 1 }}>({{ dims|join('u, ') }}u);
-const ACTS = array<u32, {{ layers|length }}>({{ acts|join('u, ') }}u);  // 0 relu, 1 leaky, 2 none
+const ACTS = array<u32, {{ layers|length }}>({{ acts|join('u, ') }}u);  // vrneural.mlp.ACT_CODE
 {% endif %}
 
 @compute @workgroup_size(64)
@@ -30,18 +27,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (i >= N) { return; }
     let base = i * {{ n_in }}u;
 {% if not buffer_weights %}
-{% for k in range(n_in) %}
-    let x0_{{ k }} = {{ T }}(inputs[base + {{ k }}u]);
-{% endfor %}
-{% set ins = [] %}
-{% for k in range(n_in) %}{% set _ = ins.append('x0_' ~ k) %}{% endfor %}
-{{ m.mlp_body('x', ins, layers, T) }}
-{% set L = layers|length %}
-{% set outs = [] %}
-{% for k in range(4) %}
-{% set _ = outs.append(('f32(x' ~ L ~ '_' ~ k ~ ')') if k < n_out else '0.0') %}
-{% endfor %}
-    let y = vec4<f32>({{ outs|join(', ') }});
+{{ body }}
 {% else %}
     var a: array<{{ T }}, MAXW>;
     var b: array<{{ T }}, MAXW>;
@@ -55,8 +41,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             for (var k = 0u; k < n_in; k++) {
                 s += {{ T }}(weights[off + o * n_in + k]) * a[k];
             }
-            if (ACTS[l] == 0u) { s = max(s, {{ T }}(0)); }
-            else if (ACTS[l] == 1u) { s = max(s, {{ T }}(0.01) * s); }
+            if (ACTS[l] == {{ act_code['relu'] }}u) { s = max(s, {{ T }}(0)); }
+            else if (ACTS[l] == {{ act_code['leaky_relu'] }}u) { s = max(s, {{ T }}(0.01) * s); }
             b[o] = s;
         }
         off += n_out * n_in + n_out;

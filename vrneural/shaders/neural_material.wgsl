@@ -6,27 +6,10 @@
 // dirs = [wi, wo, h] in the local frame (9 floats). Neural textures are texture_2d_array<u32>
 // (rgba32uint: 8 float16 channels per texel and layer, two per u32, see gpu_material.py)
 // sampled by manual bilinear wrap (4 textureLoads per 8 channels, unpack2x16float),
-// exactly like sample_bilinear_wrap. Weights are WGSL constants in unrolled code, or read from
+// exactly like sample_bilinear_wrap. The bindings are declared by runtime/interface.py
+// (material_bindings). Weights are WGSL constants in unrolled code, or read from
 // buffers in loops (storage or uniform weights; wide teachers and the >=10x comparison).
-{% import 'mlp.wgsl' as m %}
 
-{% macro bindings(mat, first_binding) %}
-@group(0) @binding({{ first_binding }}) var tex_a: texture_2d_array<u32>;  // coarse / features
-{% if mat.parallax_steps > 0 %}
-@group(0) @binding({{ mat.height_binding }}) var height_tex: texture_2d<f32>;  // r32float, UV units
-{% endif %}
-{% if mat.arch == 'coarse_fine' %}
-@group(0) @binding({{ first_binding + 1 }}) var tex_b: texture_2d_array<u32>;  // fine
-{% endif %}
-{% if mat.weights in ('storage', 'streamed') %}
-@group(0) @binding({{ first_binding + 2 }}) var<storage, read> weights: array<f32>;
-{% elif mat.weights == 'uniform' %}
-{% for l in range(mat.buf_dims_in|length) %}
-@group(0) @binding({{ mat.uniform_binding + loop.index0 }}) var<uniform> wl{{ l }}: array<vec4<f32>, {{ (mat.buf_dims_in[l] * mat.buf_dims_out[l] + 3) // 4 }}>;
-{% endfor %}
-@group(0) @binding({{ mat.uniform_binding + mat.buf_dims_in|length }}) var<uniform> wbias: array<vec4<f32>, {{ (mat.buf_dims_out|sum + 3) // 4 }}>;
-{% endif %}
-{% endmacro %}
 
 {% macro wrap_fn() %}
 // i mod n in [0, n) for an integer-valued float i (|i| < 2^24), without an integer division:
@@ -58,68 +41,6 @@ fn bilinear_taps(uv: vec2<f32>, dims: vec2<i32>) -> Taps {
     let xi1 = select(xi0 + 1, 0, xi0 + 1 == dims.x);
     let yi1 = select(yi0 + 1, 0, yi0 + 1 == dims.y);
     return Taps(vec2<i32>(xi0, yi0), vec2<i32>(xi1, yi1), vec2<f32>(x - x0, y - y0));
-}
-{% endmacro %}
-
-{% macro sampler_fn(name, tex, channels, level=none) %}
-// Bilinear wrap lookup of {{ channels }} channels at material uv (texel centres at (i + 0.5) / W){{ ', at pyramid level `level`' if level is not none else '' }}.
-fn {{ name }}(uv: vec2<f32>{{ ', level: i32' if level is not none else '' }}) -> array<f32, {{ channels }}> {
-{% set lv = 'level' if level is not none else '0' %}
-{% if level is not none %}
-    // the level's size from level 0's: llvmpipe reads textureDimensions at a level that
-    // differs between the lanes of one SIMD group as if every lane had the first one's
-    let dims = max(vec2<i32>(textureDimensions({{ tex }}, 0)) >> vec2<u32>(u32(level)), vec2<i32>(1));
-{% else %}
-    let dims = vec2<i32>(textureDimensions({{ tex }}));
-{% endif %}
-    let tp = bilinear_taps(uv, dims);
-    let xi0 = tp.i0.x;
-    let yi0 = tp.i0.y;
-    let xi1 = tp.i1.x;
-    let yi1 = tp.i1.y;
-    let fx = tp.f.x;
-    let fy = tp.f.y;
-    var out: array<f32, {{ channels }}>;
-{% for layer in range((channels + 7) // 8) %}
-    {
-        let t00 = textureLoad({{ tex }}, vec2<i32>(xi0, yi0), {{ layer }}, {{ lv }});
-        let t10 = textureLoad({{ tex }}, vec2<i32>(xi1, yi0), {{ layer }}, {{ lv }});
-        let t01 = textureLoad({{ tex }}, vec2<i32>(xi0, yi1), {{ layer }}, {{ lv }});
-        let t11 = textureLoad({{ tex }}, vec2<i32>(xi1, yi1), {{ layer }}, {{ lv }});
-{% for q in range(4) %}
-{% if layer * 8 + 2 * q < channels %}
-        {
-            let top = unpack2x16float(t00[{{ q }}]) * (1.0 - fx) + unpack2x16float(t10[{{ q }}]) * fx;
-            let bot = unpack2x16float(t01[{{ q }}]) * (1.0 - fx) + unpack2x16float(t11[{{ q }}]) * fx;
-            let v = top * (1.0 - fy) + bot * fy;
-            out[{{ layer * 8 + 2 * q }}] = v.x;
-{% if layer * 8 + 2 * q + 1 < channels %}
-            out[{{ layer * 8 + 2 * q + 1 }}] = v.y;
-{% endif %}
-        }
-{% endif %}
-{% endfor %}
-    }
-{% endfor %}
-    return out;
-}
-{% endmacro %}
-
-{% macro lod_fn(name, channels, top) %}
-// Trilinear lookup in the prefiltered pyramid (levels 0..{{ top }}): levels floor(lod) and the
-// next blended by the fraction. Twin: vrneural/material.py:sample_lod.
-fn {{ name }}_lod(uv: vec2<f32>, lod_in: f32) -> array<f32, {{ channels }}> {
-    let lod = clamp(lod_in, 0.0, {{ top }}.0);
-    let l0 = floor(lod);
-    let t = lod - l0;
-    let a = {{ name }}_at(uv, i32(l0));
-    if (t == 0.0) { return a; }
-    let b = {{ name }}_at(uv, min(i32(l0) + 1, {{ top }}));
-    var out: array<f32, {{ channels }}>;
-{% for c in range(channels) %}
-    out[{{ c }}] = a[{{ c }}] * (1.0 - t) + b[{{ c }}] * t;
-{% endfor %}
-    return out;
 }
 {% endmacro %}
 
@@ -199,187 +120,7 @@ fn apply_output(r: vec3<f32>) -> vec3<f32> {
 }
 {% endmacro %}
 
-{% macro const_pre(fname, prefix, layer, T, arg_decl, n_arg, col0) %}
-{# The loop-invariant part of a first layer: bias + W[:, col0:col0+n_arg] f (see mlp.wgsl). #}
-fn {{ fname }}({{ arg_decl }}) -> array<{{ T }}, {{ layer.n_out }}> {
-{% set ins = {} %}
-{% for k in range(n_arg) %}
-    let in_{{ k }} = {{ T }}(f[{{ k }}]);
-{% set _ = ins.update({col0 + k: 'in_' ~ k}) %}
-{% endfor %}
-{{ m.affine(prefix ~ 'p', ins, layer, range(col0, col0 + n_arg), T, true) }}
-{% set outs = [] %}
-{% for o in range(layer.n_out) %}{% set _ = outs.append(prefix ~ 'p_' ~ o) %}{% endfor %}
-    return array<{{ T }}, {{ layer.n_out }}>({{ outs|join(', ') }});
-}
-{% endmacro %}
-
-{% macro const_net(fname, prefix, layers, T, arg_decls, input_exprs, first_cols, base_exprs, ret) %}
-{# input_exprs: one f32 expression per loop-varying input column (first_cols); base_exprs: the
-   first layer's hoisted part per unit; ret: 'latent' or 'rgb' #}
-fn {{ fname }}({{ arg_decls }}) -> {{ 'vec3<f32>' if ret == 'rgb' else 'array<' ~ T ~ ', ' ~ layers[-1].n_out ~ '>' }} {
-{% set ins = {} %}
-{% for e in input_exprs %}
-    let in_{{ loop.index0 }} = {{ T }}({{ e }});
-{% set _ = ins.update({first_cols[loop.index0]: 'in_' ~ loop.index0}) %}
-{% endfor %}
-{{ m.mlp_body(prefix, ins, layers, T, base_exprs, first_cols) }}
-{% set L = layers|length %}
-{% if ret == 'rgb' %}
-    return vec3<f32>(f32({{ prefix }}{{ L }}_0), f32({{ prefix }}{{ L }}_1), f32({{ prefix }}{{ L }}_2));
-{% else %}
-{% set outs = [] %}
-{% for k in range(layers[-1].n_out) %}{% set _ = outs.append(prefix ~ L ~ '_' ~ k) %}{% endfor %}
-    return array<{{ T }}, {{ layers[-1].n_out }}>({{ outs|join(', ') }});
-{% endif %}
-}
-{% endmacro %}
-
-{% macro buffer_net_lib(mat, T) %}
-// Storage-buffer weights, networks in order {{ mat.net_order|join(', ') }}: per layer W[out, in]
-// row-major then b[out] (mlp.pack_weights). The first layers are split
-// exactly as in the constant-weight code (loop-invariant part hoisted), so the two variants do
-// the same arithmetic and differ only in where the weights come from. Layer shapes, offsets
-// and activations are template constants; activations ping-pong between two local arrays. Only
-// for narrow networks: lavapipe computes wrong results once an invocation's dynamically indexed
-// arrays grow large (a 64-wide net in the texture pass; see streamed_single for wide ones).
-const MAXW: u32 = {{ mat.max_width }}u;
-{% endmacro %}
-
-{# An activation (codegen._ACT_CODE: 0 relu, 1 leaky relu, 2 none) applied to expression e. #}
-{% macro act_expr(a, e, T) -%}
-{% if a == 0 %}max({{ e }}, {{ T }}(0)){% elif a == 1 %}max({{ e }}, {{ T }}(0.01) * {{ e }}){% else %}{{ e }}{% endif %}
-{%- endmacro %}
-
-{# dst[o] = act(base + sum_k W_l[o, c0 + k] * src[k]) for o < n_out(l), k < n; base is the bias
-   (with_bias), or pre[o] when `pre` names an array, or 0. #}
-{% macro buf_layer(mat, T, l, dst, src, c0, n, with_bias, act=true, pre=none) %}
-{% set n_in = mat.buf_dims_in[l] %}
-{% set n_out = mat.buf_dims_out[l] %}
-{% set off = mat.buf_offsets[l] %}
-    for (var o = 0u; o < {{ n_out }}u; o++) {
-{% if pre is not none %}
-        var s = {{ pre }}[o];
-{% elif with_bias %}
-        var s = {{ T }}(weights[{{ off + n_out * n_in }}u + o]);
-{% else %}
-        var s = {{ T }}(0);
-{% endif %}
-        let row = {{ off + c0 }}u + o * {{ n_in }}u;
-        for (var k = 0u; k < {{ n }}u; k++) { s += {{ T }}(weights[row + k]) * {{ src }}[k]; }
-        {{ dst }}[o] = {{ act_expr(mat.buf_acts[l] if act else 2, 's', T) }};
-    }
-{% endmacro %}
-
-{# Layers first .. last - 1 on `a` (their input), ping-ponging between a and b; ends with
-   `let y = <the array holding the last output>;`. #}
-{% macro buf_rest(mat, T, first, last) %}
-    var b: array<{{ T }}, MAXW>;
-{% set names = ['a', 'b'] %}
-{% for l in range(first, last) %}
-{{ buf_layer(mat, T, l, names[(loop.index0 + 1) % 2], names[loop.index0 % 2], 0, mat.buf_dims_in[l], true) }}
-{% endfor %}
-    let y = {{ names[(last - first) % 2] }};
-{% endmacro %}
-
-{# First layer's direction part on top of its hoisted part `base`, with the activation -> a. #}
-{% macro dirs_first(mat, T, l) %}
-    var x: array<{{ T }}, 9>;
-    for (var k = 0u; k < 9u; k++) { x[k] = {{ T }}(d[k]); }
-    var a: array<{{ T }}, MAXW>;
-{{ buf_layer(mat, T, l, 'a', 'x', 0, 9, false, true, 'base') }}
-{% endmacro %}
-
-{# One weight / bias of layer l at a (dynamic) index expression, from the uniform buffers
-   (codegen.uniform_weights) or the storage buffer (mlp.pack_weights). #}
-{% macro wld(mat, l, idx) -%}
-{% if mat.weights == 'uniform' -%}
-wl{{ l }}[({{ idx }}) >> 2u][({{ idx }}) & 3u]
-{%- else -%}
-weights[{{ mat.buf_offsets[l] }}u + {{ idx }}]
-{%- endif %}
-{%- endmacro %}
-{% macro bld(mat, l, idx) -%}
-{% if mat.weights == 'uniform' -%}
-wbias[({{ mat.buf_bias_offsets[l] }}u + {{ idx }}) >> 2u][({{ mat.buf_bias_offsets[l] }}u + {{ idx }}) & 3u]
-{%- else -%}
-weights[{{ mat.buf_offsets[l] + mat.buf_dims_in[l] * mat.buf_dims_out[l] }}u + {{ idx }}]
-{%- endif %}
-{%- endmacro %}
-
-{# Streamed evaluation of a single-level net from buffer weights (weights "uniform" | "streamed"),
-   for wide networks (the 128-wide reference teacher). Layers are taken in pairs (A, B): one loop
-   over A's units o computes unit o from all of A's inputs, then adds its contribution to every
-   output of B (B's column o). Every activation is a named value with a constant index; the loops
-   index only the weights (the same index in every invocation: one scalar load per step from a
-   uniform buffer on a CPU adapter). An odd last layer is unrolled (it is 3 wide). No hoisting:
-   pre_a returns the features and the first layer reads all its inputs each time (for the teacher
-   8 x 128 more multiply-adds per light, 3%). #}
-{% macro streamed_single(mat, T) %}
-fn pre_a(f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, {{ mat.ca }}> {
-    var x: array<{{ T }}, {{ mat.ca }}>;
-{% for k in range(mat.ca) %}
-    x[{{ k }}] = {{ T }}(f[{{ k }}]);
-{% endfor %}
-    return x;
-}
-fn eval_single(d: array<f32, 9>, f: array<{{ T }}, {{ mat.ca }}>) -> vec3<f32> {
-{% set cur = [] %}
-{% for k in range(9) %}
-    let v0_{{ k }} = {{ T }}(d[{{ k }}]);
-{% set _ = cur.append('v0_' ~ k) %}
-{% endfor %}
-{% for k in range(mat.ca) %}
-    let v0_{{ 9 + k }} = f[{{ k }}];
-{% set _ = cur.append('v0_' ~ (9 + k)) %}
-{% endfor %}
-{% set L = mat.buf_dims_in|length %}
-{% set ns = namespace(l=0, cur=cur) %}
-{% for step in range(L) %}
-{% if ns.l < L %}
-{% set l = ns.l %}
-{% set nxt = [] %}
-{% if l + 1 < L %}
-{% set H = mat.buf_dims_out[l] %}
-{% set nb = mat.buf_dims_out[l + 1] %}
-{% for j in range(nb) %}
-    var acc{{ l }}_{{ j }} = {{ T }}({{ bld(mat, l + 1, j ~ 'u') }});
-{% endfor %}
-    for (var o = 0u; o < {{ H }}u; o++) {
-        let r = o * {{ mat.buf_dims_in[l] }}u;
-        var s = {{ T }}({{ bld(mat, l, 'o') }});
-{% for k in range(mat.buf_dims_in[l]) %}
-        s += {{ T }}({{ wld(mat, l, 'r + ' ~ k ~ 'u') }}) * {{ ns.cur[k] }};
-{% endfor %}
-        let h = {{ act_expr(mat.buf_acts[l], 's', T) }};
-{% for j in range(nb) %}
-        acc{{ l }}_{{ j }} += {{ T }}({{ wld(mat, l + 1, (j * H) ~ 'u + o') }}) * h;
-{% endfor %}
-    }
-{% for j in range(nb) %}
-    let v{{ l + 2 }}_{{ j }} = {{ act_expr(mat.buf_acts[l + 1], 'acc' ~ l ~ '_' ~ j, T) }};
-{% set _ = nxt.append('v' ~ (l + 2) ~ '_' ~ j) %}
-{% endfor %}
-{% set ns.l = l + 2 %}
-{% else %}
-{% for j in range(mat.buf_dims_out[l]) %}
-    var p{{ l }}_{{ j }} = {{ T }}({{ bld(mat, l, j ~ 'u') }});
-{% for k in range(mat.buf_dims_in[l]) %}
-    p{{ l }}_{{ j }} += {{ T }}({{ wld(mat, l, (j * mat.buf_dims_in[l] + k) ~ 'u') }}) * {{ ns.cur[k] }};
-{% endfor %}
-    let v{{ l + 1 }}_{{ j }} = {{ act_expr(mat.buf_acts[l], 'p' ~ l ~ '_' ~ j, T) }};
-{% set _ = nxt.append('v' ~ (l + 1) ~ '_' ~ j) %}
-{% endfor %}
-{% set ns.l = l + 1 %}
-{% endif %}
-{% set ns.cur = nxt %}
-{% endif %}
-{% endfor %}
-    return apply_output(vec3<f32>(f32({{ ns.cur[0] }}), f32({{ ns.cur[1] }}), f32({{ ns.cur[2] }})));
-}
-{% endmacro %}
-
-{% macro material_fns(mat, T) %}
+{% macro material_fns(mat, T, nets, samplers) %}
 {{ wrap_fn() }}
 // The training data's direction range (vrneural/grazing.py): cos and sin of theta_i_max and
 // theta_o_max, exact float32 values.
@@ -406,110 +147,19 @@ fn dirs9_ext(wi: vec3<f32>, wo_ext: vec3<f32>) -> array<f32, 9> {
     return dirs9(to_range(wi, COS_I_MAX, SIN_I_MAX), wo_ext);
 }
 fn view_ext(wo: vec3<f32>) -> vec3<f32> { return to_range(wo, COS_O_MAX, SIN_O_MAX); }
-{{ sampler_fn('sample_a', 'tex_a', mat.ca) }}
-{% if mat.arch == 'coarse_fine' %}
-{{ sampler_fn('sample_b', 'tex_b', mat.cb) }}
-{% endif %}
-{% if mat.lod_levels > 1 %}
-{{ sampler_fn('sample_a_at', 'tex_a', mat.ca, 'level') }}
-{{ lod_fn('sample_a', mat.ca, mat.lod_levels - 1) }}
-{% if mat.arch == 'coarse_fine' %}
-{{ sampler_fn('sample_b_at', 'tex_b', mat.cb, 'level') }}
-{{ lod_fn('sample_b', mat.cb, mat.lod_levels - 1) }}
-{% endif %}
-{% endif %}
+// Neural-texture samplers (generated in Python: runtime/codegen_sample.py).
+{{ samplers }}
 {{ output_fn(mat.output) }}
 {{ parallax_fns(mat) }}
-// Evaluation API (both variants). The first layer of every network is split into the part that
-// does not change with the light (bias + W_f features: pre_a, pre_b, computed once per texel or
-// block outside the light loop) and the part that does (W_d dirs, and for the fine network
-// W_z z_c, computed once per block per light by fine_z and shared by the block's 4 texels):
+// Evaluation API (every weight variant; generated in Python: runtime/codegen_mlp.py). The first
+// layer of every network is split into the part that does not change with the light (bias + W_f
+// features: pre_a, pre_b, computed once per texel or block outside the light loop) and the part
+// that does (W_d dirs, and for the fine network W_z z_c, computed once per block per light by
+// fine_z and shared by the block's 4 texels):
 //   coarse_fine: z = eval_coarse(dirs, pre_a(U_c(u_c))); zz = fine_z(z);
 //                rgb_k = eval_fine(zz, pre_b(U_f(u_k)))
 //   single:      rgb_k = eval_single(dirs, pre_a(U(u_k)))
-{% if mat.weights in ('uniform', 'streamed') %}
-{{ streamed_single(mat, T) }}
-{% elif mat.buffer_weights %}
-{{ buffer_net_lib(mat, T) }}
-fn pre_a(f: array<f32, {{ mat.ca }}>) -> array<{{ T }}, MAXW> {
-    var x: array<{{ T }}, {{ mat.ca }}>;
-    for (var k = 0u; k < {{ mat.ca }}u; k++) { x[k] = {{ T }}(f[k]); }
-    var p: array<{{ T }}, MAXW>;
-{{ buf_layer(mat, T, 0, 'p', 'x', 9, mat.ca, true, false) }}
-    return p;
-}
-{% if mat.arch == 'coarse_fine' %}
-{% set nc = mat.n_layers[0] %}
-{% set nf = mat.n_layers[1] %}
-fn eval_coarse(d: array<f32, 9>, base: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
-{{ dirs_first(mat, T, 0) }}
-{{ buf_rest(mat, T, 1, nc) }}
-    return y;
-}
-fn pre_b(f: array<f32, {{ mat.cb }}>) -> array<{{ T }}, MAXW> {
-    var x: array<{{ T }}, {{ mat.cb }}>;
-    for (var k = 0u; k < {{ mat.cb }}u; k++) { x[k] = {{ T }}(f[k]); }
-    var p: array<{{ T }}, MAXW>;
-{{ buf_layer(mat, T, nc, 'p', 'x', mat.z, mat.cb, true, false) }}
-    return p;
-}
-fn fine_z(z: array<{{ T }}, MAXW>) -> array<{{ T }}, MAXW> {
-    var p: array<{{ T }}, MAXW>;
-{{ buf_layer(mat, T, nc, 'p', 'z', 0, mat.z, false, false) }}
-    return p;
-}
-fn eval_fine(zz: array<{{ T }}, MAXW>, pb: array<{{ T }}, MAXW>) -> vec3<f32> {
-    var a: array<{{ T }}, MAXW>;
-    for (var o = 0u; o < {{ mat.buf_dims_out[nc] }}u; o++) {
-        let s = zz[o] + pb[o];
-        a[o] = {{ act_expr(mat.buf_acts[nc], 's', T) }};
-    }
-{{ buf_rest(mat, T, nc + 1, nc + nf) }}
-    return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
-}
-{% else %}
-fn eval_single(d: array<f32, 9>, base: array<{{ T }}, MAXW>) -> vec3<f32> {
-{{ dirs_first(mat, T, 0) }}
-{{ buf_rest(mat, T, 1, mat.n_layers[0]) }}
-    return apply_output(vec3<f32>(f32(y[0]), f32(y[1]), f32(y[2])));
-}
-{% endif %}
-{% else %}
-{% set dexprs = [] %}
-{% for k in range(9) %}{% set _ = dexprs.append('d[' ~ k ~ ']') %}{% endfor %}
-{% if mat.arch == 'coarse_fine' %}
-{% set cl = mat.networks['coarse'] %}
-{% set fl = mat.networks['fine'] %}
-{% set pab = [] %}
-{% for o in range(cl[0].n_out) %}{% set _ = pab.append('pa[' ~ o ~ ']') %}{% endfor %}
-{% set zzb = [] %}
-{% for o in range(fl[0].n_out) %}{% set _ = zzb.append('(zz[' ~ o ~ '] + pb[' ~ o ~ '])') %}{% endfor %}
-{{ const_pre('pre_a', 'c', cl[0], T, 'f: array<f32, ' ~ mat.ca ~ '>', mat.ca, 9) }}
-{{ const_pre('pre_b', 'q', fl[0], T, 'f: array<f32, ' ~ mat.cb ~ '>', mat.cb, mat.z) }}
-fn fine_z(z: array<{{ T }}, {{ mat.z }}>) -> array<{{ T }}, {{ fl[0].n_out }}> {
-{% set zin = {} %}
-{% for k in range(mat.z) %}{% set _ = zin.update({k: 'z[' ~ k ~ ']'}) %}{% endfor %}
-{{ m.affine('zz', zin, fl[0], range(mat.z), T, false) }}
-{% set outs = [] %}
-{% for o in range(fl[0].n_out) %}{% set _ = outs.append('zz_' ~ o) %}{% endfor %}
-    return array<{{ T }}, {{ fl[0].n_out }}>({{ outs|join(', ') }});
-}
-{{ const_net('eval_coarse', 'c', cl, T, 'd: array<f32, 9>, pa: array<' ~ T ~ ', ' ~ cl[0].n_out ~ '>', dexprs, range(9)|list, pab, 'latent') }}
-{{ const_net('fine_net', 'q', fl, T, 'zz: array<' ~ T ~ ', ' ~ fl[0].n_out ~ '>, pb: array<' ~ T ~ ', ' ~ fl[0].n_out ~ '>', [], [], zzb, 'rgb') }}
-fn eval_fine(zz: array<{{ T }}, {{ fl[0].n_out }}>, pb: array<{{ T }}, {{ fl[0].n_out }}>) -> vec3<f32> {
-    return apply_output(fine_net(zz, pb));
-}
-{% else %}
-{% set sl = mat.networks['mlp'] %}
-{% set pab = [] %}
-{% for o in range(sl[0].n_out) %}{% set _ = pab.append('pa[' ~ o ~ ']') %}{% endfor %}
-{{ const_pre('pre_a', 's', sl[0], T, 'f: array<f32, ' ~ mat.ca ~ '>', mat.ca, 9) }}
-{{ const_net('single_net', 's', sl, T, 'd: array<f32, 9>, pa: array<' ~ T ~ ', ' ~ sl[0].n_out ~ '>', dexprs, range(9)|list, pab, 'rgb') }}
-fn eval_single(d: array<f32, 9>, pa: array<{{ T }}, {{ sl[0].n_out }}>) -> vec3<f32> {
-    return apply_output(single_net(d, pa));
-}
-{% endif %}
-{% endif %}
+{{ nets }}
 {% endmacro %}
 
 {% macro frame_fns() %}

@@ -4,8 +4,8 @@
 // texels do not darken chart edges, and the forward pass divides by the filtered coverage.
 // numpy twin: runtime/radiance_mips.py:mip_chain. A source texel past an odd level's last
 // row or column is dropped (WebGPU's floor(R / 2^k) level sizes).
-@group(0) @binding(0) var src: texture_2d<f32>;
-@group(0) @binding(1) var dst: texture_storage_2d<rgba16float, write>;
+// Bindings (src, dst): runtime/radiance_mips.py:MIP_BINDINGS.
+{{ bindings }}
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {

@@ -11,34 +11,15 @@
 enable f16;
 {% endif %}
 
-struct Params {
-    model: mat4x4<f32>,
-    normal_mat: mat4x4<f32>,
-    eye: vec4<f32>,
-    tiling: vec4<f32>,
-    inv_view_proj: mat4x4<f32>,
-    screen: vec4<u32>,  // (width, height, counter slot, object id)
-    rect: vec4<u32>,    // dispatch origin (x0, y0) and size (w, h): the object's screen bounds
-}
-struct Light {
-    pos: vec4<f32>,
-    radiance: vec4<f32>,
-}
+// The uniforms and bindings (declared once, in runtime/interface.py: SCREEN_PARAMS, LIGHT,
+// screen_bindings).
+{{ structs }}
 
-@group(0) @binding(0) var<uniform> P: Params;
-@group(0) @binding(1) var<uniform> lights: array<Light, {{ n_lights }}>;
-@group(0) @binding(2) var<storage, read> verts: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> faces: array<u32>;
-@group(0) @binding(4) var vis: texture_2d<u32>;
-@group(0) @binding(5) var out_tex: texture_storage_2d<rgba16float, write>;
-@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
-{{ nm.bindings(mat, 7) }}
-// Compaction (compact.wgsl): the object's pixels of the rectangle, packed y << 16 | x.
-{{ cmp.bindings() }}
+{{ bindings }}
 const EMPTY: u32 = 0xFFFFFFFFu;
 
 {{ nm.frame_fns() }}
-{{ nm.material_fns(mat, T) }}
+{{ nm.material_fns(mat, T, nets, samplers) }}
 {{ nm.surface_fns() }}
 {{ nm.mesh_fns() }}
 

@@ -5,45 +5,19 @@
 // and hoist the light-independent part of the first layers, then per light: coarse MLP once at
 // the mean material uv, fine MLP 4 times, sum lights with inverse-square falloff, clamp
 // to the f16 range and store rgba16float (or, as an option, rgba32float). numpy twin: runtime/reference.py:shade_texture_space.
-// Template parameters: T (f32|f16), mat (runtime/codegen.py:MaterialSpec), n_lights (uniform
-// array size, >= 1), n_active (lights shaded, 0 allowed: black).
+// Template parameters: T (f32|f16), mat (runtime/codegen.py:MaterialSpec), n_active (lights
+// shaded, 0 allowed: black), the generated structs, bindings and networks.
 {% import 'neural_material.wgsl' as nm %}
 {% import 'compact.wgsl' as cmp %}
 {% if T == 'f16' %}
 enable f16;
 {% endif %}
 
-struct Params {
-    model: mat4x4<f32>,       // object -> world
-    normal_mat: mat4x4<f32>,  // inverse transpose of the model's 3x3 (upper-left)
-    eye: vec4<f32>,           // eye position, world, metres; w: facing margin, metres (a block
-                              // is front when it faces any point within w of the eye: the
-                              // shared radiance texture of both eyes, shaded from their centre)
-    tiling: vec4<f32>,        // material uv = uv * tiling.xy + tiling.zw
-    sched: vec4<u32>,         // (candidate list offset, candidate count, counter slot, unused)
-}
+// The uniforms and bindings (declared once, in runtime/interface.py: TEXTURE_PARAMS, LIGHT,
+// texture_bindings).
+{{ structs }}
 
-struct Light {
-    pos: vec4<f32>,       // world position, metres
-    radiance: vec4<f32>,  // colour * intensity, W/sr
-}
-
-@group(0) @binding(0) var<uniform> P: Params;
-@group(0) @binding(1) var<uniform> lights: array<Light, {{ n_lights }}>;
-// The geometry atlas (one vec4 per non-empty block in each array, see gpu_material.py):
-@group(0) @binding(2) var<storage, read> geo_pos: array<vec4<f32>>;   // object pos, bitcast(by << 16 | bx)
-@group(0) @binding(3) var<storage, read> geo_nrm: array<vec4<f32>>;   // object normal, tangent sign
-@group(0) @binding(4) var<storage, read> geo_tan: array<vec4<f32>>;   // object tangent, texel foot
-@group(0) @binding(16) var<storage, read> geo_uv01: array<vec4<f32>>; // untiled uv of texels 0, 1
-@group(0) @binding(17) var<storage, read> geo_uv23: array<vec4<f32>>; // untiled uv of texels 2, 3
-@group(0) @binding(5) var out_tex: texture_storage_2d<{{ fmt | default('rgba16float') }}, write>;
-@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;  // 4 per slot
-{{ nm.bindings(mat, 7) }}
-// Candidate blocks: indices into the geometry atlas of the non-empty blocks, grouped by block
-// row phase (gpu_material.GpuAtlas.block_list, built once per atlas and row period).
-@group(0) @binding(12) var<storage, read> cand: array<u32>;
-// Compaction (compact.wgsl; the large spans' path): the front-facing blocks to shade.
-{{ cmp.bindings() }}
+{{ bindings }}
 
 const EMPTY: u32 = 0xFFFFFFFFu;  // padding of the compacted list
 
@@ -52,7 +26,7 @@ const EMPTY: u32 = 0xFFFFFFFFu;  // padding of the compacted list
 const OUT_MAX: f32 = {{ '1e30' if fmt == 'rgba32float' else '65504.0' }};
 
 {{ nm.frame_fns() }}
-{{ nm.material_fns(mat, T) }}
+{{ nm.material_fns(mat, T, nets, samplers) }}
 {{ nm.surface_fns() }}
 
 fn tiled(uv: vec2<f32>) -> vec2<f32> { return uv * P.tiling.xy + P.tiling.zw; }
