@@ -51,6 +51,30 @@ def _probe_adapter() -> tuple[dict | None, str]:
 ADAPTER, ADAPTER_ERR = _probe_adapter()
 
 
+def pytest_addoption(parser):
+    g = parser.getgroup("extremes", "the extremes cases (tests/extremes, vrneural bench extremes)")
+    g.addoption(
+        "--extremes-full",
+        action="store_true",
+        help="run the extremes cases at full size (default: the --quick sizes)",
+    )
+    g.addoption(
+        "--extremes-report",
+        metavar="DIR",
+        help="write results.json, results.md and f16_error.png of the extremes cases that ran "
+        "into DIR (a new folder, or one of ours: replaced), as vrneural bench extremes does",
+    )
+
+
+def pytest_configure(config):
+    out = config.getoption("extremes_report")
+    if out:
+        from vrneural.bench.extremes import ReportPlugin
+
+        quick = not config.getoption("extremes_full")
+        config.pluginmanager.register(ReportPlugin(out, quick), "extremes-report")
+
+
 def pytest_report_header(config):
     if ADAPTER:
         return f"wgpu adapter: {ADAPTER['name']} ({ADAPTER['adapter_type']}, {ADAPTER['backend']})"

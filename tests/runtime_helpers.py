@@ -34,6 +34,6 @@ def quad_atlas(
 ) -> Atlas:
     """The quad mapped to atlas square ``[lo, hi]^2``; texels outside are EMPTY (a 1-texel
     gutter keeps the nearest triangle)."""
-    from vrneural.bench.extremes_fixtures import quad_atlas as fixture_quad_atlas
+    from extremes.fixtures import quad_atlas as fixture_quad_atlas
 
     return fixture_quad_atlas(res, lo, hi, mesh=quad_mesh(size, tilt))

@@ -5,11 +5,11 @@ from contextlib import nullcontext
 
 import numpy as np
 import pytest
+from extremes import geometry as geo
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vrneural.atlas import MeshWarning, make_mesh
-from vrneural.bench import extremes_geometry as geo
 from vrneural.errors import VrnError
 from vrneural.runtime import reference as ref
 
@@ -57,7 +57,8 @@ def test_nan_or_inf_vertices_are_rejected_in_one_line(i, k, v):
 @settings(max_examples=10)
 @given(o=st.tuples(*[st.floats(-1e5, 1e5)] * 3))
 def test_twin_is_translation_invariant_far_from_origin(o):
-    from vrneural.bench.extremes_fixtures import quad_atlas, translate
+    from extremes.fixtures import quad_atlas, translate
+
     from vrneural.material import random_material
 
     at, mat = quad_atlas(8), random_material(6)
@@ -66,25 +67,3 @@ def test_twin_is_translation_invariant_far_from_origin(o):
     far, _ = ref.shade_texture_space(at, mat, translate(*o), geo.EYE + o, geo.LIGHT + o, geo.LC)
     # camera-relative in float64: only the f64 rounding of EYE + o - o (1e-11 m) remains
     np.testing.assert_allclose(far, base, rtol=1e-4, atol=1e-7)
-
-
-@pytest.mark.gpu
-@pytest.mark.parametrize(
-    "case",
-    [
-        "case_geo_zero_area_3d",
-        "case_geo_zero_area_uv",
-        "case_geo_sliver",
-        "case_geo_one_triangle",
-        "case_geo_non_manifold",
-        "case_geo_far_origin",
-    ],
-)
-def test_atlas_and_kernel_cases(case):
-    r = getattr(geo, case)(True)
-    assert r["ok"], r
-
-
-def test_inf_vertex_in_a_file_is_rejected():
-    with pytest.raises(VrnError, match=r"inf\.obj"):
-        geo.case_geo_inf_vertex_file(True)

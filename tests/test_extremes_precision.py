@@ -3,12 +3,12 @@ that matter, the rgba32float option, and the scene loader's intensity limit."""
 
 import numpy as np
 import pytest
+from extremes import precision as prec
+from extremes.fixtures import quad_atlas
+from extremes.shading import GpuShade
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vrneural.bench import extremes_precision as prec
-from vrneural.bench.extremes_fixtures import quad_atlas
-from vrneural.bench.extremes_shading import GpuShade
 from vrneural.errors import VrnError
 from vrneural.formats.f16 import F16_MAX, F16_MIN_NORMAL
 from vrneural.material import random_material
@@ -33,16 +33,6 @@ def test_scene_intensity_limit(tmp_path):
         with pytest.raises(VrnError, match="intensity") as e:
             load_scene(p)
         assert "\n" not in str(e.value) and "hot.toml" in str(e.value)
-
-
-@pytest.mark.gpu
-def test_clamp_flush_and_wide_storage():
-    assert prec.case_prec_clamp(True)["ok"]
-    r = prec.case_prec_no_flush(True)
-    assert r["ok"], r
-    w = prec.case_prec_wide_storage(True)
-    assert w["ok"], w
-    assert w["rgba32float_bytes"] == 2 * w["rgba16float_bytes"]
 
 
 @pytest.fixture(scope="module")

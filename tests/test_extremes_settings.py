@@ -2,8 +2,8 @@
 0 and 16 lights, 1 eye, 1 frame — through RunConfig -> resolve -> Renderer."""
 
 import pytest
+from extremes import settings as sett
 
-from vrneural.bench import extremes_settings as sett
 from vrneural.errors import VrnError
 
 
@@ -15,34 +15,6 @@ def test_texture_resolution_rejections(res, msg):
     with pytest.raises(VrnError, match=msg) as e:
         sett.render(frames=1, texture_res=res)
     assert "--texture-res" in str(e.value) and "\n" not in str(e.value)
-
-
-@pytest.mark.gpu
-def test_above_adapter_maximum_is_rejected():
-    with pytest.raises(VrnError, match="--texture-res"):
-        sett.case_set_tex_res_above_max(True)
-
-
-@pytest.mark.gpu
-def test_kernel_works_at_resolution_2():
-    assert sett.case_set_kernel_res_2(True)["ok"]
-
-
-@pytest.mark.gpu
-@pytest.mark.parametrize(
-    "case",
-    [
-        "case_set_far_origin_render",
-        "case_set_lights_0",
-        "case_set_lights_16",
-        "case_set_reuse_0",
-        "case_set_reuse_1000",
-        "case_set_one_eye_one_frame",
-    ],
-)
-def test_run_settings(case):
-    r = getattr(sett, case)(True)
-    assert r["ok"], r
 
 
 @pytest.mark.gpu

@@ -3,10 +3,10 @@
 
 import numpy as np
 import pytest
+from extremes.fixtures import direction
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vrneural.bench.extremes_fixtures import direction
 from vrneural.errors import VrnError
 from vrneural.formats.vrnm import VRNM_VERSION, read_vrnm, write_vrnm
 from vrneural.grazing import (
@@ -185,31 +185,6 @@ def test_the_shading_twin_tapers_the_light(ti, to):
     np.testing.assert_allclose(rad, want, rtol=2e-3, atol=1e-6)
 
 
-@pytest.fixture(scope="module")
-def analytic():
-    from vrneural.bench.terminator import analytic_lambert
-
-    return analytic_lambert((480, 512))
-
-
-@pytest.mark.gpu
-@pytest.mark.parametrize("mode", ["texture", "screen", "reference"])
-def test_no_line_where_a_light_sets(mode, analytic):
-    """The Lambertian pack and each bundled pack on a sphere under one side light: the step at
-    the terminator is at most 1% of the peak on every row (before the extension the bundled
-    packs stepped by 4.7-19%: docs/quality-research.md), and the Lambertian pack matches the
-    analytic sphere inside the silhouette."""
-    from vrneural.bench import terminator as term
-
-    for name, desc in term.terminator_materials(quick=False).items():
-        img = term.render_sphere(desc, mode)
-        r = term.row_steps(img)
-        assert len(r["steps"]) > 100, name
-        assert r["max"] <= term.STEP_MAX, (name, mode, r["max"])
-        if name == "lambert":
-            assert term.interior_error(img, analytic) <= term.LAMBERT_TOL
-
-
 @pytest.mark.gpu
 @pytest.mark.parametrize("mode", ["texture", "screen"])
 def test_a_low_poly_sphere_sets_smoothly_along_its_shading_normals(tmp_path, mode):
@@ -217,8 +192,7 @@ def test_a_low_poly_sphere_sets_smoothly_along_its_shading_normals(tmp_path, mod
     (continuous across triangles), so the terminator is a smooth ramp with no line along the
     triangle edges where the geometric normal turns."""
     import trimesh
-
-    from vrneural.bench import terminator as term
+    from extremes import terminator as term
 
     mesh = tmp_path / "ico.obj"
     trimesh.creation.icosphere(subdivisions=1).export(mesh)

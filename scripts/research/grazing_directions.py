@@ -72,7 +72,9 @@ def score(pack: Path, btf) -> dict:
 
 
 def main() -> None:
-    from vrneural.bench import terminator as term
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
+    from extremes import terminator as term  # the terminator check (tests/extremes)
+
     from vrneural.btf import read_btf
     from vrneural.formats.vrnm import read_vrnm
     from vrneural.runtime.scene import MaterialDesc

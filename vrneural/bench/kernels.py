@@ -163,8 +163,8 @@ def _gpu_ms(parts, texels, precision, buffer_weights, repeats, rng) -> float:
 def _torch_ms(parts, texels, repeats, rng) -> float:
     import torch
 
-    from vrneural.runtime.measure import torch_net
-    from vrneural.runtime.measure_frames import median_ms
+    from vrneural.bench.runtime import torch_net
+    from vrneural.bench.runtime_frames import median_ms
 
     nets, xs = [], []
     for layers, f in parts:

@@ -91,8 +91,38 @@ def _run_extremes(args) -> int:
     return 1 if doc["n_fail"] else 0
 
 
+def _register_runtime(sub) -> None:
+    from vrneural.bench.runtime import RuntimeConfig
+
+    p = sub.add_parser(
+        "runtime",
+        help="the runtime's performance targets: texture vs screen space, constants vs "
+        "buffer, kernel vs PyTorch, the networks alone, burst vs staggered",
+        description="Measure the runtime's performance targets in one run on this adapter "
+        "(texture_vs_screen, constants_vs_buffer, vs_torch, mlp_only, schedules) and write "
+        "results.json and results.md.",
+    )
+    p.add_argument(
+        "--out", default="bench-runtime", help="output directory (default: bench-runtime)"
+    )
+    add_config_args(p, RuntimeConfig)
+    p.set_defaults(func=_run_runtime)
+
+
+def _run_runtime(args) -> int:
+    from vrneural.bench.runtime import HEADLINES, RuntimeConfig, headline, run_runtime
+
+    doc = run_runtime(config_from_args(RuntimeConfig, args), args.out)
+    print(f"bench runtime: {args.out}/ results.json, results.md ({doc['total_seconds']:.0f} s)")
+    for name, paths in HEADLINES.items():
+        if name in doc:
+            print(f"  {name}: {headline(doc[name], paths)}")
+    return 0
+
+
 BENCHMARKS = {
     "quality": _register_quality,
+    "runtime": _register_runtime,
     "widths": _register_widths,
     "extremes": _register_extremes,
 }

@@ -1,4 +1,4 @@
-"""The timing helpers of :mod:`vrneural.runtime.measure` and its ``schedules`` measurement:
+"""The timing helpers of :mod:`vrneural.bench.runtime` and its ``schedules`` measurement:
 the frame-time distribution of the burst and staggered schedules beside a constant-work
 control, and the quality each schedule shows."""
 

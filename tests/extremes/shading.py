@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vrneural.bench.extremes_fixtures import (
+from extremes.fixtures import (
     direction,
     finite_nonneg,
     quad_atlas,

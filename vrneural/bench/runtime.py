@@ -1,6 +1,5 @@
-"""Runtime performance targets, measured in one run on the adapter at hand; writes JSON.
-
-    python -m vrneural.runtime.measure out/runtime_measure.json [--quick]
+"""`vrneural bench runtime`: the runtime performance targets, measured in one run on the
+adapter at hand; writes results.json and results.md.
 
 1. ``texture_vs_screen``: neural shading GPU ms per displayed frame on the built-in scene, both
    eyes: texture space (full update at ``texture_res``^2 per eye per object, divided by N + 1)
@@ -9,7 +8,8 @@
    kernel reading weights from a storage buffer (target >= 10x).
 3. ``vs_torch``: the texture-space kernel vs PyTorch CPU evaluating only the networks (coarse per
    block, fine per texel, f32) on the same blocks (target >= 3x).
-4. ``schedules``: frame-time distribution (p99 / median; target <= 1.2 for staggered), by wall
+4. ``mlp_only``: the student's two networks alone: constants vs storage-buffer kernel vs torch.
+5. ``schedules``: frame-time distribution (p99 / median; target <= 1.2 for staggered), by wall
    clock and by process CPU time (on a CPU adapter the latter excludes the time other jobs take
    from the frame), beside a constant-work control of the same cost (a full update every frame
    of a texture with 1 / (N + 1) of the texels) that shows the machine's own noise; and the
@@ -20,16 +20,13 @@ GPU times are medians over repeats, from timestamps (one compute pass per measur
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
+from tqdm import tqdm
 
-from vrneural.outputs import write_json
-from vrneural.runtime.measure_frames import (
-    make_renderer,
-    median_ms,
-    schedules,  # noqa: F401 (run by name: measure_all)
-    wall_ms,
-)
+from vrneural.bench.runtime_frames import make_renderer, median_ms, schedules, wall_ms
+from vrneural.config import opt
 
 
 def texture_vs_screen(texture_res=1200, eye_res=(2064, 2208), reuse=4, frames=3) -> dict:
@@ -311,6 +308,13 @@ MEASUREMENTS = {
     "mlp_only": {"n_blocks": 4096, "repeats": 2},
     "schedules": {"texture_res": 64, "eye_res": (96, 96), "frames": 16, "quality_frames": 12},
 }
+RUN = {
+    "texture_vs_screen": texture_vs_screen,
+    "constants_vs_buffer": constants_vs_buffer,
+    "vs_torch": vs_torch,
+    "mlp_only": mlp_only,
+    "schedules": schedules,
+}
 
 #: The headline figures the console report prints per measurement (paths into its result).
 HEADLINES = {
@@ -322,76 +326,88 @@ HEADLINES = {
 }
 
 
-def measure_all(quick: bool = False, only: list[str] | None = None) -> dict:
-    """Run ``only`` (default: every measurement) at full size or, ``quick``, small sizes."""
-    from vrneural.gpu.device import adapter_summary
+@dataclass
+class RuntimeConfig:
+    """`vrneural bench runtime`."""
 
-    res = {"adapter": adapter_summary().to_dict(), "quick": quick}
-    t0 = time.perf_counter()
-    for name in only or MEASUREMENTS:
-        res[name] = globals()[name](**(MEASUREMENTS[name] if quick else {}))
-    res["seconds"] = time.perf_counter() - t0
-    return res
+    only: str = opt(",".join(MEASUREMENTS), f"comma-separated subset of: {', '.join(MEASUREMENTS)}")
+    quick: bool = opt(False, "small sizes (a smoke run)")
+    force: bool = opt(False, "overwrite an existing --out directory")
+    progress: bool = opt(True, "show a progress bar (--no-progress: none)")
 
 
-def _headlines(res: dict) -> list[str]:
-    lines = []
-    for name, paths in HEADLINES.items():
-        if name not in res:
-            continue
-        parts = []
-        for path in paths:
-            v = res[name]
-            for key in path.split("."):
-                v = v.get(key) if isinstance(v, dict) else None
-            if v is not None:
-                parts.append(f"{path} {_fmt(v)}")
-        lines.append(f"  {name}: " + ", ".join(parts))
-    return lines
+def selected(only: str) -> list[str]:
+    """The measurements ``--only`` names, in its order (one-line VrnError if one is unknown)."""
+    from vrneural.errors import VrnError
+
+    names = [k.strip() for k in only.split(",") if k.strip()]
+    if not names:
+        raise VrnError(f"--only is empty; choose from {', '.join(MEASUREMENTS)}")
+    for k in names:
+        if k not in MEASUREMENTS:
+            raise VrnError(
+                f"--only: unknown measurement {k!r}; choose from {', '.join(MEASUREMENTS)}"
+            )
+    return names
 
 
-def main(argv=None) -> int:
-    """The command line. Options and the output path are checked before any measurement (one
-    line and exit 2); an existing output needs ``--force``."""
-    import sys
+def measure_all(quick: bool = False, only: list[str] | None = None, progress: bool = False):
+    """Run ``only`` (default: every measurement) at full size or, ``quick``, small sizes:
+    ``{name: result}`` and ``{name: seconds}``."""
+    res, secs = {}, {}
+    for name in tqdm(only or MEASUREMENTS, desc="bench runtime", disable=not progress):
+        t0 = time.perf_counter()
+        res[name] = RUN[name](**(MEASUREMENTS[name] if quick else {}))
+        secs[name] = time.perf_counter() - t0
+    return res, secs
 
-    from vrneural.errors import ArgumentParser, VrnError
-    from vrneural.outputs import check_output
 
-    prog = "python -m vrneural.runtime.measure"
-    p = ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
-    p.add_argument("out", help="output JSON file (its folder is created)")
-    p.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
-    p.add_argument(
-        "--only", default=None, help=f"comma-separated subset of: {', '.join(MEASUREMENTS)}"
-    )
-    p.add_argument("--force", action="store_true", help="overwrite an existing output")
-    a = p.parse_args(argv)
-    only = None
-    if a.only is not None:
-        only = [k.strip() for k in a.only.split(",") if k.strip()]
-        if not only:
-            p.error(f"--only is empty; choose from {', '.join(MEASUREMENTS)}")
-        for k in only:
-            if k not in MEASUREMENTS:
-                p.error(f"--only: unknown measurement {k!r}; choose from {', '.join(MEASUREMENTS)}")
-    try:
-        out = check_output(a.out, a.force)
-        res = measure_all(a.quick, only)
-        write_json(out, res)
-    except VrnError as e:
-        print(f"{prog}: error: {e}", file=sys.stderr)
-        return e.exit_code
-    print(f"wrote {out} ({res['seconds']:.0f} s)")
-    print("\n".join(_headlines(res)))
-    return 0
+def headline(result: dict, paths) -> str:
+    """``path value, ...`` of the figures at ``paths`` (``a.b``: a nested key) in ``result``."""
+    parts = []
+    for path in paths:
+        v = result
+        for key in path.split("."):
+            v = v.get(key) if isinstance(v, dict) else None
+        if v is not None:
+            parts.append(f"{path} {_fmt(v)}")
+    return ", ".join(parts)
+
+
+def run_runtime(cfg: RuntimeConfig, out: str) -> dict:
+    """Check ``--only`` and the output folder, measure, write ``results.json`` (``quick``, one
+    key per measurement with its result, and one record per measurement: headline figures,
+    target, seconds) and ``results.md`` into ``out``; returns the document."""
+    from vrneural.bench.report import adapter_line, finish, header, prepare_out, table
+
+    names = selected(cfg.only)
+    with prepare_out(out, cfg.force, "runtime") as root:
+        t0 = time.perf_counter()
+        doc = header("runtime", cfg)
+        doc["quick"] = cfg.quick
+        res, secs = measure_all(cfg.quick, names, cfg.progress)
+        rows = []
+        for name in names:
+            doc[name] = res[name]
+            target = res[name].get("target", res[name].get("target_staggered_p99_over_median"))
+            line = headline(res[name], HEADLINES[name])
+            doc["records"].append(
+                {"measurement": name, "headline": line, "target": target, "seconds": secs[name]}
+            )
+            rows.append([name, line, "-" if target is None else target, secs[name]])
+        md = [
+            "# vrneural bench runtime",
+            "",
+            adapter_line(doc),
+            f"Mode: {'--quick (smoke sizes)' if cfg.quick else 'full'}. Targets: ratios >= "
+            "target, schedules: staggered p99 / median <= target. Every figure: results.json.",
+            "",
+            *table(["measurement", "headline", "target", "s"], rows),
+        ]
+        return finish(root, doc, md, t0)
 
 
 def _fmt(v) -> str:
     if isinstance(v, list):
         return "[" + ", ".join(_fmt(x) for x in v) + "]"
     return f"{v:.3g}" if isinstance(v, float) else str(v)
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

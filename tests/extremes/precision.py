@@ -1,7 +1,7 @@
 """f16 vs f32 shading, the clamps of the f16 path, flush-to-zero and the wide radiance format.
 
 All on the GPU texture-space kernel (``shaders/texture_space.wgsl``), on the small world-frame
-quad of :mod:`vrneural.bench.extremes_fixtures`. Units: radiance W/(m^2 sr), ``colour *
+quad of `tests/extremes/fixtures.py`. Units: radiance W/(m^2 sr), ``colour *
 intensity`` W/sr, distances m.
 """
 
@@ -11,8 +11,8 @@ import time
 
 import numpy as np
 
-from vrneural.bench.extremes_fixtures import direction, finite_nonneg, quad_atlas, quad_mesh
-from vrneural.bench.extremes_shading import GpuShade
+from extremes.fixtures import direction, finite_nonneg, quad_atlas, quad_mesh
+from extremes.shading import GpuShade
 from vrneural.formats.f16 import F16_MAX, F16_MIN_NORMAL
 from vrneural.material import lambertian_material, random_material
 from vrneural.runtime import reference as ref

@@ -10,8 +10,8 @@ import warnings
 
 import numpy as np
 
-from vrneural.bench.extremes_fixtures import finite_nonneg, quad_atlas, translate
-from vrneural.bench.extremes_shading import GpuShade
+from extremes.fixtures import finite_nonneg, quad_atlas, translate
+from extremes.shading import GpuShade
 from vrneural.material import random_material
 from vrneural.runtime import reference as ref
 

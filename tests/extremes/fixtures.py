@@ -1,52 +1,12 @@
-"""Small hand-made inputs and the outcome rule of ``vrneural bench extremes``.
-
-Every case is a function ``case(quick) -> dict`` of measured values (``ok`` says whether the
-documented behaviour held). :func:`run_case` turns it into a record with one outcome:
-
-- ``works``: the case ran and its documented behaviour held (``ok`` true);
-- ``rejected``: a one-line :class:`VrnError` was raised, which the case expected;
-- ``FAIL``: anything else (behaviour violated, unexpected rejection or acceptance, a crash, a
-  multi-line error message).
-"""
+"""Small hand-made inputs of the extremes cases and of the tests that use the same shapes:
+a quad whose local frame is the world frame and its atlas, directions, translations, and the
+continuity bound of a sweep of directions."""
 
 from __future__ import annotations
-
-import time
-import traceback
 
 import numpy as np
 
 from vrneural.atlas.types import EMPTY, Atlas, Mesh
-from vrneural.errors import VrnError
-
-
-def run_case(name: str, group: str, fn, expect: str = "works", quick: bool = True) -> dict:
-    """Run one case; see the module docstring for the outcome rule."""
-    t0 = time.perf_counter()
-    rec = {"case": name, "group": group, "expect": expect, "metrics": {}, "message": ""}
-    try:
-        m = fn(quick)
-    except VrnError as e:
-        msg = str(e)
-        rec["message"] = msg
-        one_line = "\n" not in msg and 0 < len(msg) < 400
-        rec["outcome"] = "rejected" if expect == "rejected" and one_line else "FAIL"
-        if expect != "rejected":
-            rec["message"] = f"unexpected rejection: {msg}"
-    except Exception as e:  # a crash is the finding: record it, keep running the others
-        tb = traceback.format_exception_only(type(e), e)[-1].strip()
-        rec["outcome"] = "FAIL"
-        rec["message"] = f"crash: {tb[:300]}"
-    else:
-        rec["metrics"] = {k: v for k, v in m.items() if k not in ("ok", "note")}
-        rec["message"] = str(m.get("note", ""))
-        if expect == "rejected":
-            rec["outcome"] = "FAIL"
-            rec["message"] = "accepted, but the documented behaviour is a rejection"
-        else:
-            rec["outcome"] = "works" if m.get("ok", False) else "FAIL"
-    rec["seconds"] = time.perf_counter() - t0
-    return rec
 
 
 def quad_mesh(size: float = 1.0, normal_scale: float = 1.0, tangent_scale: float = 1.0) -> Mesh:

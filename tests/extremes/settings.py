@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vrneural.bench.extremes_fixtures import finite_nonneg, quad_atlas
+from extremes.fixtures import finite_nonneg, quad_atlas
 from vrneural.material import random_material
 from vrneural.runtime import reference as ref
 
@@ -127,7 +127,7 @@ def case_set_tex_res_above_max(quick: bool) -> dict:
 
 def kernel_at_resolution(R: int) -> dict:
     """The texture-space kernel alone on a hand-made quad atlas of side R (R = 2: one block)."""
-    from vrneural.bench.extremes_shading import GpuShade
+    from extremes.shading import GpuShade
 
     at = quad_atlas(R, lo=0.0, hi=1.0) if R <= 4 else quad_atlas(R)
     mat = random_material(1)
@@ -146,8 +146,8 @@ def case_set_kernel_res_2(quick: bool) -> dict:
 def case_set_tex_res_max(quick: bool) -> dict:
     """The largest accepted radiance texture (``config.max_texture_res``: 5792 on lavapipe;
     1024 with --quick) on the built-in plane: atlas + kernel."""
+    from extremes.shading import GpuShade
     from vrneural.atlas import build_atlas, builtin_mesh
-    from vrneural.bench.extremes_shading import GpuShade
     from vrneural.gpu.device import adapter_summary
     from vrneural.runtime.config import max_texture_res
 
