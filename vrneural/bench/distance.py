@@ -24,7 +24,7 @@ import numpy as np
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench import tradeoff as tr
-from vrneural.config import opt, quick_defaults
+from vrneural.config import opt, resolved, unset
 from vrneural.scoring import metrics
 
 #: name -> (mips, screen_res, prefiltered neural textures)
@@ -42,20 +42,22 @@ class DistanceConfig:
     """`vrneural bench distance`."""
 
     out: str = opt("bench-distance", "output directory", cli=False)
-    distances: str = opt("0.3,1,3,10,20", "sphere distances (m)")
-    tilings: str = opt("1,4,8,16", "material tilings, at 1 m")
+    distances: str | None = unset("0.3,1,3,10,20", "sphere distances (m)")
+    tilings: str | None = unset("1,4,8,16", "material tilings, at 1 m")
     size: float = opt(0.5, "sphere diameter (m)")
-    texture_res: int = opt(1200, "radiance texture side (the cap screen-res chooses under)")
+    texture_res: int | None = unset(
+        1200, "radiance texture side (the cap screen-res chooses under)"
+    )
     reuse: int = opt(4, "N (staggered)")
-    crop: int = opt(128, "side (pixels) of the scored window of each quest3 eye image")
-    spp: int = opt(16, "reference samples per pixel")
-    scored: int = opt(6, "consecutive frames scored per condition")
+    crop: int | None = unset(128, "side (pixels) of the scored window of each quest3 eye image")
+    spp: int | None = unset(16, "reference samples per pixel")
+    scored: int | None = unset(6, "consecutive frames scored per condition")
     preset: str = opt("leather", "synthetic BTF preset of the trained packs")
-    btf_res: int = opt(32, "BTF texels per side (training budget)")
-    btf_dirs: int = opt(10, "BTF light and view directions")
-    teacher_width: int = opt(128, "teacher hidden width")
-    teacher_epochs: int = opt(4, "teacher epochs")
-    epochs: int = opt(4, "epochs of each student")
+    btf_res: int | None = unset(32, "BTF texels per side (training budget)")
+    btf_dirs: int | None = unset(10, "BTF light and view directions")
+    teacher_width: int | None = unset(128, "teacher hidden width")
+    teacher_epochs: int | None = unset(4, "teacher epochs")
+    epochs: int | None = unset(4, "epochs of each student")
     seed: int = opt(0, "training seed")
     quick: bool = opt(
         False,
@@ -66,12 +68,24 @@ class DistanceConfig:
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> DistanceConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(
-            self, distances="1,10", tilings="8", crop=48, spp=2, scored=3, texture_res=256,
-            btf_res=16, btf_dirs=6, teacher_width=32, teacher_epochs=1, epochs=1,
-        )  # fmt: skip
+        """The fields not given: ``--quick``'s (:data:`QUICK_DISTANCE`) or the defaults."""
+        return resolved(self, *([QUICK_DISTANCE] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_DISTANCE = DistanceConfig(
+    distances="1,10",
+    tilings="8",
+    crop=48,
+    spp=2,
+    scored=3,
+    texture_res=256,
+    btf_res=16,
+    btf_dirs=6,
+    teacher_width=32,
+    teacher_epochs=1,
+    epochs=1,
+)
 
 
 def conditions(c: DistanceConfig) -> list[ts.Condition]:

@@ -21,7 +21,7 @@ from vrneural.bench import extremes_shading as shd
 from vrneural.bench import extremes_training as trn
 from vrneural.bench import terminator as term
 from vrneural.bench.extremes_fixtures import run_case
-from vrneural.config import is_explicit, opt
+from vrneural.config import opt
 
 W, R = "works", "rejected"
 #: (case, group, function, expected outcome, what it checks)
@@ -79,8 +79,8 @@ class ExtremesConfig:
     quick: bool = opt(
         False, "small sizes for the heavy cases (1M triangles -> 20k, max texture -> 1024)"
     )
-    only: str = opt(
-        "",
+    only: str | None = opt(
+        None,
         "comma-separated case names or groups to run: "
         f"{', '.join(sorted({c[1] for c in CASES}))} (default: all)",
     )
@@ -116,7 +116,7 @@ def run_extremes(cfg: ExtremesConfig, out: str) -> dict:
     from vrneural.bench.extremes_report import write_report
     from vrneural.bench.report import header, prepare_out
 
-    cases = selected(cfg.only, is_explicit(cfg, "only"))
+    cases = selected(cfg.only or "", cfg.only is not None)
     with prepare_out(out, cfg.force, "extremes") as root:
         t0 = time.perf_counter()
         doc = header("extremes", cfg)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt, quick_defaults
+from vrneural.config import opt, resolved, unset
 from vrneural.errors import count
 
 
@@ -22,28 +22,31 @@ class FramesConfig:
     """`vrneural bench frames`."""
 
     out: str = opt("bench-frames", "output directory", cli=False)
-    texture_res: str = opt("800,1200,1600,2000", "radiance texture sides (comma-separated)")
-    reuse: str = opt("0,1,2,4,6", "update intervals N (comma-separated)")
+    texture_res: str | None = unset(
+        "800,1200,1600,2000", "radiance texture sides (comma-separated)"
+    )
+    reuse: str | None = unset("0,1,2,4,6", "update intervals N (comma-separated)")
     schedules: str = opt("burst,staggered", "reuse schedules (comma-separated)")
-    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
+    eye_res: str | None = unset("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
     eyes: int = opt(2, "eyes (1 or 2)")
     lights: int = opt(1, "point lights")
     cycles: int = opt(1, "update cycles measured per configuration (N + 1 frames each)")
     warmup: float = opt(
         0.5, "seconds of unmeasured frames before each configuration (GPU clocks; 0 = none)"
     )
-    min_frames: int = opt(3, "at least this many measured frames per configuration")
+    min_frames: int | None = unset(3, "at least this many measured frames per configuration")
     screen: bool = opt(True, "also measure per-pixel screen-space shading")
     quick: bool = opt(False, "CI-sized: textures 128,256; N 0,2,4; eyes 258x276; >= 2 frames")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> FramesConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(
-            self, texture_res="128,256", reuse="0,2,4", eye_res="258x276", min_frames=2
-        )
+        """The fields not given: ``--quick``'s (:data:`QUICK_FRAMES`) or the defaults."""
+        return resolved(self, *([QUICK_FRAMES] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_FRAMES = FramesConfig(texture_res="128,256", reuse="0,2,4", eye_res="258x276", min_frames=2)
 
 
 def run_frames(cfg: FramesConfig) -> dict:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt, quick_defaults
+from vrneural.config import opt, resolved, unset
 from vrneural.errors import count
 
 
@@ -24,11 +24,11 @@ class LightsConfig:
     """`vrneural bench lights`."""
 
     out: str = opt("bench-lights", "output directory", cli=False)
-    lights: str = opt("1,2,3,4,5,6,7,8", "light counts (comma-separated, 1..64)")
-    texture_res: int = opt(1200, "radiance texture side")
+    lights: str | None = unset("1,2,3,4,5,6,7,8", "light counts (comma-separated, 1..64)")
+    texture_res: int | None = unset(1200, "radiance texture side")
     reuse: int = opt(4, "update interval N")
     schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
-    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
+    eye_res: str | None = unset("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
     eyes: int = opt(2, "eyes (1 or 2)")
     cycles: int = opt(1, "update cycles measured per light count (N + 1 frames each)")
     warmup: float = opt(
@@ -39,9 +39,12 @@ class LightsConfig:
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> LightsConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(self, lights="1,2,4", texture_res=256, eye_res="258x276")
+        """The fields not given: ``--quick``'s (:data:`QUICK_LIGHTS`) or the defaults."""
+        return resolved(self, *([QUICK_LIGHTS] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_LIGHTS = LightsConfig(lights="1,2,4", texture_res=256, eye_res="258x276")
 
 
 def run_lights(cfg: LightsConfig) -> dict:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt, quick_defaults
+from vrneural.config import opt, resolved, unset
 from vrneural.errors import count
 
 
@@ -21,12 +21,12 @@ class MaterialsConfig:
     """`vrneural bench materials`."""
 
     out: str = opt("bench-materials", "output directory", cli=False)
-    materials: str = opt("1,2,3,4", "material counts (comma-separated, 1..8)")
-    texture_res: int = opt(1024, "radiance texture side per material")
+    materials: str | None = unset("1,2,3,4", "material counts (comma-separated, 1..8)")
+    texture_res: int | None = unset(1024, "radiance texture side per material")
     reuse: int = opt(7, "update interval N")
     schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
     lights: int = opt(3, "point lights")
-    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
+    eye_res: str | None = unset("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
     eyes: int = opt(2, "eyes (1 or 2)")
     cycles: int = opt(1, "update cycles measured per count (N + 1 frames each)")
     warmup: float = opt(
@@ -37,9 +37,12 @@ class MaterialsConfig:
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> MaterialsConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(self, materials="1,2,3", texture_res=256, eye_res="258x276")
+        """The fields not given: ``--quick``'s (:data:`QUICK_MATERIALS`) or the defaults."""
+        return resolved(self, *([QUICK_MATERIALS] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_MATERIALS = MaterialsConfig(materials="1,2,3", texture_res=256, eye_res="258x276")
 
 
 def squares_scene(k: int, n_lights: int):

@@ -30,7 +30,7 @@ from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench.trade_scene import reference, render, scheduled_candidates
 from vrneural.bench.tradeoff_report import finish_report, label
-from vrneural.config import is_explicit, opt, quick_defaults
+from vrneural.config import opt, resolved, unset
 from vrneural.scoring import metrics
 
 
@@ -39,37 +39,45 @@ class TradeoffConfig:
     """`vrneural bench tradeoff`."""
 
     out: str = opt("bench-tradeoff", "output directory", cli=False)
-    crop: int = opt(128, "side (pixels) of the scored window of each quest3 eye image")
-    spp: int = opt(16, "reference samples per pixel (stratified; its noise floor is measured)")
-    scored: int = opt(6, "consecutive frames scored per condition")
-    speeds: str = opt("0,100,200,300,400", "head-turn speeds (deg/s) of the built-in logs")
+    crop: int | None = unset(128, "side (pixels) of the scored window of each quest3 eye image")
+    spp: int | None = unset(
+        16, "reference samples per pixel (stratified; its noise floor is measured)"
+    )
+    scored: int | None = unset(6, "consecutive frames scored per condition")
+    speeds: str | None = unset("0,100,200,300,400", "head-turn speeds (deg/s) of the built-in logs")
     turn: float = opt(30.0, "yaw of each built-in head turn, degrees")
     near: float = opt(0.5, "distance (m) of the sphere in the head-turn conditions (arm's length)")
     poses: str = opt("", "more pose logs (CSV: t,x,y,z,qx,qy,qz,qw) scored as conditions")
-    light_speed: float = opt(120.0, "the moving light's speed about the sphere, deg/s (0: none)")
-    distances: str = opt(
+    light_speed: float | None = unset(
+        120.0, "the moving light's speed about the sphere, deg/s (0: none)"
+    )
+    distances: str | None = unset(
         "", "sphere distances (m) of a distance sweep (default none: `bench distance` has it)"
     )
-    tilings: str = opt("", "material tilings of a tiling sweep (default none: `bench distance`)")
-    texture_res: str = opt("256,512,1024", "texture sides compared")
-    base_res: int = opt(512, "texture side of the base setting (the sphere is ~105 px across)")
-    reuse: str = opt("0,2,4,8", "update intervals N compared")
+    tilings: str | None = unset(
+        "", "material tilings of a tiling sweep (default none: `bench distance`)"
+    )
+    texture_res: str | None = unset("256,512,1024", "texture sides compared")
+    base_res: int | None = unset(
+        512, "texture side of the base setting (the sphere is ~105 px across)"
+    )
+    reuse: str | None = unset("0,2,4,8", "update intervals N compared")
     base_reuse: int = opt(4, "N of the base setting")
     lights: int = opt(2, "point lights (the key light moves in the moving-light condition)")
-    presets: str = opt(
+    presets: str | None = unset(
         "leather,metal",
         "synthetic BTF presets of the trained packs: the first for every condition, the others "
         "(glossy metal: staleness and eye disparity show on highlights) for the base and the "
         "fastest turn",
     )
-    btf_res: int = opt(32, "BTF texels per side (training budget)")
-    btf_dirs: int = opt(10, "BTF light and view directions (dirs^2 slices)")
-    teacher_width: int = opt(128, "teacher hidden width (the paper's)")
-    teacher_epochs: int = opt(4, "teacher epochs")
-    epochs: int = opt(4, "epochs of each small network")
+    btf_res: int | None = unset(32, "BTF texels per side (training budget)")
+    btf_dirs: int | None = unset(10, "BTF light and view directions (dirs^2 slices)")
+    teacher_width: int | None = unset(128, "teacher hidden width (the paper's)")
+    teacher_epochs: int | None = unset(4, "teacher epochs")
+    epochs: int | None = unset(4, "epochs of each small network")
     seed: int = opt(0, "training seed")
-    packs: str = opt(
-        "",
+    packs: str | None = opt(
+        None,
         "directory with teacher/student/student_nodistill/single8/neumip.vrnm (skips training; "
         "each must be what its name says, all from one BTF and its teacher); replaces --presets",
     )
@@ -82,27 +90,29 @@ class TradeoffConfig:
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> TradeoffConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(
-            self,
-            crop=48,
-            spp=2,
-            scored=3,
-            speeds="0,300",
-            light_speed=0.0,
-            distances="",
-            tilings="",
-            texture_res="128,256",
-            base_res=256,
-            reuse="0,4",
-            presets="leather",
-            btf_res=16,
-            btf_dirs=6,
-            teacher_width=32,
-            teacher_epochs=1,
-            epochs=1,
-        )
+        """The fields not given: ``--quick``'s (:data:`QUICK_TRADEOFF`) or the defaults."""
+        return resolved(self, *([QUICK_TRADEOFF] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_TRADEOFF = TradeoffConfig(
+    crop=48,
+    spp=2,
+    scored=3,
+    speeds="0,300",
+    light_speed=0.0,
+    distances="",
+    tilings="",
+    texture_res="128,256",
+    base_res=256,
+    reuse="0,4",
+    presets="leather",
+    btf_res=16,
+    btf_dirs=6,
+    teacher_width=32,
+    teacher_epochs=1,
+    epochs=1,
+)
 
 
 #: the full quest3 eye image the crops are cut from (pixels) and its pixels per degree
@@ -364,7 +374,7 @@ def check(c) -> None:
         from vrneural.runtime.camera import PoseLogPath
 
         PoseLogPath(p)  # its one-line errors: missing, columns, time order, quaternion
-    if is_explicit(c, "packs") and not c.packs.strip():  # "" trains; typed, it was a slip
+    if c.packs is not None and not c.packs.strip():  # "" trains; typed, it was a slip
         raise VrnError("--packs is empty; name the folder of packs, or leave it out to train them")
     if c.packs:  # every pack what its name says, before any work or output
         from vrneural.bench.packs import load_packs, pack_paths
