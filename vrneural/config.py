@@ -27,6 +27,17 @@ def opt(default, help: str, **kw):
     return dataclasses.field(default=default, metadata={"help": help, **kw})
 
 
+def part(cls):
+    """A field holding a sub-config that several commands share (a training budget, the
+    scored window of a bench): its fields are options of their own (``--crop``, not
+    ``--score-crop``) and flat keys of :func:`config_dict`."""
+    return dataclasses.field(default_factory=cls, metadata={"part": True})
+
+
+def _parts(cfg) -> list:
+    return [f for f in dataclasses.fields(cfg) if f.metadata.get("part")]
+
+
 def add_config_args(
     parser: argparse.ArgumentParser,
     cls,
@@ -44,6 +55,9 @@ def add_config_args(
     hints = typing.get_type_hints(cls)
     for f in dataclasses.fields(cls):
         if f.name in skip or f.metadata.get("cli") is False:
+            continue
+        if f.metadata.get("part"):
+            add_config_args(parser, hints[f.name], skip, prefix, helps)
             continue
         flag = "--" + prefix + f.name.replace("_", "-")
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
@@ -69,7 +83,9 @@ def add_config_args(
 def config_from_args(cls, args: argparse.Namespace, **overrides):
     """Build ``cls`` from parsed args (fields absent from ``args`` keep their defaults; an
     :func:`unset` field the user did not give stays None for :func:`resolved`)."""
-    kw = {f.name: getattr(args, f.name) for f in dataclasses.fields(cls) if hasattr(args, f.name)}
+    hints = typing.get_type_hints(cls)
+    kw = {f.name: config_from_args(hints[f.name], args) for f in _parts(cls)}
+    kw |= {f.name: getattr(args, f.name) for f in dataclasses.fields(cls) if hasattr(args, f.name)}
     return cls(**(kw | overrides))
 
 
@@ -94,6 +110,9 @@ def resolved(cfg, *layers):
     (preset instances or dicts: a checkpoint's config) that has it, else its default. Fields
     given win over every layer: a preset applies under the user's flags."""
     changes = {}
+    for f in _parts(cfg):  # a preset's part is the layer of the part; a dict holds flat keys
+        under = [x if isinstance(x, dict) else getattr(x, f.name) for x in layers]
+        changes[f.name] = resolved(getattr(cfg, f.name), *under)
     for f in dataclasses.fields(cfg):
         if "default" not in f.metadata or getattr(cfg, f.name) is not None:
             continue
@@ -108,8 +127,11 @@ def resolved(cfg, *layers):
 
 
 def config_dict(cfg) -> dict:
-    """A JSON-ready dict of a config, with its type name."""
+    """A JSON-ready dict of a config, with its type name (the fields of its parts flat, as
+    their options are)."""
     d = dataclasses.asdict(cfg)
+    for f in _parts(cfg):
+        d |= d.pop(f.name)
     return {"config": type(cfg).__name__, **json.loads(json.dumps(d, default=str))}
 
 

@@ -221,7 +221,7 @@ def _distill_configs(
         for seed in range(cfg.seed, cfg.seed + cfg.repeats):
             # the first seed keeps the plain name, so a one-seed run's checkpoints are reused
             stem = name if seed == cfg.seed else f"{name}.seed{seed}"
-            neumip = name == "neumip"  # 4 x 25, never pruned
+            neumip = kw.get("method") == "neumip"  # 4 x 25 (and its parallax variant), never pruned
             out += network_runs(
                 cfg,
                 d,
@@ -286,6 +286,8 @@ def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
 
     kw = dict(kw)
     kw.setdefault("parallax", "off")  # the bench's networks: parallax only where it asks
+    if kw.get("method") == "neumip":  # given to the others, it would be refused as unused
+        kw["neumip_dirs"] = cfg.neumip_dirs
     dcfg = resolve_method(
         DistillConfig(
             teacher=str(d / f"{kw.pop('teacher', 'teacher')}.pt"),
@@ -293,7 +295,6 @@ def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
             btf=str(btf_path),  # not the teacher's record: OUT may have moved
             ema=cfg.ema,
             lr_patience=cfg.lr_patience,
-            neumip_dirs=cfg.neumip_dirs,
             **kw,
             **_common(cfg),
         )
@@ -460,12 +461,14 @@ def validate(cfg: QualityConfig) -> list[str]:
     presets = presets + list(given)  # the given BTFs, labelled by file name
     check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
     check_train_config(  # --ema and the like, as `distill` checks them
-        DistillConfig(
-            epochs=cfg.epochs,
-            seed=cfg.seed,
-            ema=cfg.ema,
-            lr_patience=cfg.lr_patience,
-            device=cfg.device,
+        resolved(
+            DistillConfig(
+                epochs=cfg.epochs,
+                seed=cfg.seed,
+                ema=cfg.ema,
+                lr_patience=cfg.lr_patience,
+                device=cfg.device,
+            )
         )
     )
     train_device(cfg.device)

@@ -92,7 +92,7 @@ def _job(kind: str, job_cfg) -> str:
 
     reused = _finished(job_cfg)
     run = run_teach if kind == "teach" else run_distill
-    ck = run(job_cfg, on_step=_stop_check, epochs_flag=epochs_flag(job_cfg))
+    ck = run(as_given(job_cfg), on_step=_stop_check, epochs_flag=epochs_flag(job_cfg))
     return took(ck, reused)
 
 
@@ -262,10 +262,20 @@ def set_resume(cfg, resume: bool, **hashes) -> None:
             )
     cfg.resume = resume and exists
     cfg.force = not cfg.resume
-    if cfg.resume:  # matched above: the checkpoint's settings, the bench's epochs
-        for f in dataclasses.fields(cfg):
-            if "default" in f.metadata and f.name not in ("epochs", "init_from", *RESUME_FREE):
-                setattr(cfg, f.name, None)
+
+
+def as_given(cfg):
+    """What the bench gives the stage for ``cfg``: a resumed network only its epochs and where
+    it trains (the rest is its checkpoint's, which :func:`set_resume` matched: a moved
+    ``--out`` keeps the paths it recorded)."""
+    if not cfg.resume:
+        return cfg
+    keep = ("epochs", *RESUME_FREE)
+    return dataclasses.replace(
+        cfg,
+        **{f.name: None for f in dataclasses.fields(cfg) if "default" in f.metadata}
+        | {k: getattr(cfg, k) for k in keep if hasattr(cfg, k)},
+    )
 
 
 def train_in_process(preset: str, tcfg, runs, log, more=()) -> tuple[dict, list]:
@@ -277,18 +287,18 @@ def train_in_process(preset: str, tcfg, runs, log, more=()) -> tuple[dict, list]
     from vrneural.distill.teach import run_teach
 
     reused = _finished(tcfg)
-    tck = run_teach(tcfg, epochs_flag="--teacher-epochs")
+    tck = run_teach(as_given(tcfg), epochs_flag="--teacher-epochs")
     log(f"{preset}: teacher  {took(tck, reused)}")
     done = []
     for c in more:  # further teachers (the parallax variant's), before the networks they teach
         reused = _finished(c)
-        ck = run_teach(c, epochs_flag="--teacher-epochs")
+        ck = run_teach(as_given(c), epochs_flag="--teacher-epochs")
         stem = Path(c.output).stem
         log(f"{preset}: {stem}  {took(ck, reused)}")
         done.append((stem, ck, ""))
     for key, stem, c in runs():
         reused = _finished(c)
-        ck = run_distill(c, epochs_flag=epochs_flag(c))
+        ck = run_distill(as_given(c), epochs_flag=epochs_flag(c))
         log(f"{preset}: {stem}  {took(ck, reused)}")
         if key is not None:
             done.append((key, ck, c.init_from))

@@ -148,7 +148,7 @@ def validate(cfg: WidthsConfig) -> Plan:
         progress=cfg.progress,
         force=cfg.force,
         resume=cfg.resume,
-    )
+    ).resolved()
     try:  # --out, --resume/--force, the seeds and the ranges of the options both share
         quality_validate(q)
     except VrnError as e:
