@@ -106,28 +106,26 @@ def test_stats_percentiles():
 
 
 def test_quick_keeps_explicit_flags():
-    from vrneural.bench.frames import FramesConfig
+    from vrneural.bench.frames import QUICK_FRAMES, FramesConfig
     from vrneural.bench.quality import QualityConfig
 
     c = FramesConfig(quick=True, texture_res="64").resolved()
-    assert c.texture_res == "64" and c.reuse == "0,2,4"  # given: kept; left at default: quick
+    assert c.texture_res == "64" and c.reuse == QUICK_FRAMES.reuse == "0,2,4"  # given: kept
     q = QualityConfig(quick=True, epochs=3).resolved()
     assert (q.epochs, q.res, q.teacher_epochs) == (3, 16, 2)
-    assert FramesConfig(texture_res="64").resolved().reuse == FramesConfig().reuse
+    assert FramesConfig(texture_res="64").resolved().reuse == FramesConfig().resolved().reuse
 
 
 def test_quick_keeps_explicit_flags_even_at_their_default_value():
     from vrneural.bench.quality import QualityConfig
-    from vrneural.cli import build_parser, explicit_dests
+    from vrneural.cli import build_parser
     from vrneural.config import config_from_args
 
-    default = QualityConfig().epochs
+    default = QualityConfig().resolved().epochs
     argv = ["bench", "quality", "--quick", "--epochs", str(default)]
-    args = build_parser().parse_args(argv)
-    args._explicit = explicit_dests(argv)
-    q = config_from_args(QualityConfig, args).resolved()
+    q = config_from_args(QualityConfig, build_parser().parse_args(argv)).resolved()
     assert q.epochs == default and q.teacher_epochs == 2  # typed: kept; not typed: --quick
-    args._explicit = explicit_dests(argv[:3])  # the same values, --epochs not typed
+    args = build_parser().parse_args(argv[:3])  # --epochs not typed
     assert config_from_args(QualityConfig, args).resolved().epochs == 2
 
 

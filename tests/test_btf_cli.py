@@ -277,9 +277,8 @@ def test_header_keeps_the_configured_grid_and_its_hash(small_btf):
 def test_grid_help_matches_the_check(vrn_inproc, tmp_path, capsys):
     from vrneural.cli import build_parser
 
-    sub = build_parser()._subparsers._group_actions[0].choices["btf"]
-    synth = sub._subparsers._group_actions[0].choices["synth"]
-    grid = next(a for a in synth._actions if a.dest == "grid")
+    synth = build_parser().subcommands["btf"][0].subcommands["synth"][0]
+    grid = next(a for a in synth.arguments if a.dest == "grid")
     assert "8 to 4096" in grid.help
     args = ["btf", "synth", "--res", "4", "--dirs", "3", "-o", str(tmp_path / "g.btf")]
     _one_line_error(vrn_inproc(*args, "--grid", "7"), "--grid = 7", "allowed 0 (auto) or [8, 4096]")

@@ -11,7 +11,8 @@ import pytest
 from docs_helpers import article, built_site, plain
 
 from vrneural.cli import build_parser
-from vrneural.cli.reference import PAGE, arguments, markdown, walk
+from vrneural.cli.reference import PAGE, markdown, walk
+from vrneural.errors import ArgumentParser
 
 
 def _anchor(words: tuple[str, ...]) -> str:
@@ -61,7 +62,8 @@ def missing(parser: argparse.ArgumentParser, page_html: str) -> list[str]:
         table = rows(body)
         flags = {f for r in table for f in re.findall(r"(?<![\w-])--?[A-Za-z][\w-]*", r[0])}
         lacks += [f"{name} {o}: not in the reference" for o in sorted(help_options(p) - flags)]
-        for a in arguments(p):
+        shown = "".join(p.format_help().split())  # what --help prints, wrapping undone
+        for a in p.arguments:
             if not a.option_strings:  # a positional: its name heads a row
                 if not any(r[0].split()[0] == (a.metavar or a.dest) for r in table):
                     lacks.append(f"{name} {a.dest}: positional not in the reference")
@@ -69,12 +71,12 @@ def missing(parser: argparse.ArgumentParser, page_html: str) -> list[str]:
             row = next((r for r in table if a.option_strings[0] in r[0].split()), None)
             if row is None:
                 continue  # counted above
-            want = " ".join(p._get_formatter()._expand_help(a).split()) if a.help else ""
-            if row[1] != want:
-                lacks.append(f"{name} {a.option_strings[0]}: help {row[1]!r}, --help {want!r}")
-            if isinstance(a.default, (int, float, str)) and not isinstance(a.default, bool):
-                if a.default not in ("", argparse.SUPPRESS) and str(a.default) not in row[2]:
-                    lacks.append(f"{name} {a.option_strings[0]}: default {a.default!r} missing")
+            if "".join(row[1].split()) not in shown or bool(row[1]) != bool(a.help):
+                lacks.append(f"{name} {a.option_strings[0]}: help {row[1]!r} not as --help has it")
+            default = getattr(a, "shown_default", a.default)  # an unset field's: it parses to None
+            if isinstance(default, (int, float, str)) and not isinstance(default, bool):
+                if default not in ("", argparse.SUPPRESS) and str(default) not in row[2]:
+                    lacks.append(f"{name} {a.option_strings[0]}: default {default!r} missing")
     return lacks
 
 
@@ -106,13 +108,12 @@ def test_a_new_option_is_caught(page_html):
 def test_a_new_subcommand_is_caught(page_html):
     parser = build_parser()
     bench = dict((w, p) for w, p, _ in walk(parser))[("vrneural", "bench")]
-    group = next(a for a in bench._actions if isinstance(a, argparse._SubParsersAction))
-    group.add_parser("brand-new", help="a bench nobody documented")
+    bench.subcommand_group.add_parser("brand-new", help="a bench nobody documented")
     assert missing(parser, page_html) == ["vrneural bench brand-new: no section"]
 
 
 def test_help_text_is_escaped_for_markdown():
-    p = argparse.ArgumentParser(prog="vrneural")
+    p = ArgumentParser(prog="vrneural")
     p.add_argument("--out", default="a|b", help="writes <output>.json, *not* __init__ [x]")
     md = markdown(p)
     assert "\\<output\\>" not in md and "&lt;output&gt;.json" in md

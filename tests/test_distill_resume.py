@@ -209,23 +209,17 @@ def test_ema_average_and_swap():
 
 def test_resume_messages_name_the_option_that_set_the_field():
     """`bench quality` sets its teachers' epochs with --teacher-epochs: the resume errors say so."""
-    from vrneural.config import mark_explicit, name_flag, replace_config
     from vrneural.distill.teach import resumed_config
 
-    cfg = mark_explicit(TeachConfig(output="t.pt", epochs=1), "epochs")
+    cfg = TeachConfig(output="t.pt", epochs=1)
     with pytest.raises(VrnError, match=r"^--epochs = 1, but t\.pt already has 2 epochs"):
         resumed_config(cfg, {"epochs": 3}, {"epoch": 2})
-    bench = replace_config(name_flag(cfg, "epochs", "--teacher-epochs"), seed=1)
     with pytest.raises(VrnError, match="pass --teacher-epochs 2 or more") as e:
-        resumed_config(bench, {"epochs": 3}, {"epoch": 2})
+        resumed_config(cfg, {"epochs": 3}, {"epoch": 2}, epochs_flag="--teacher-epochs")
     assert str(e.value).startswith("--teacher-epochs = 1, but t.pt")
     # stopped partway through epoch 3: the least --epochs that continues it is 3, not 2
     with pytest.raises(VrnError, match="pass --epochs 3 or more to continue it"):
-        resumed_config(
-            mark_explicit(TeachConfig(output="t.pt", epochs=1), "epochs"),
-            {"epochs": 3},
-            {"epoch": 2, "step": 5},
-        )
+        resumed_config(cfg, {"epochs": 3}, {"epoch": 2, "step": 5})
 
 
 def test_unfinished_teacher_warns_and_exported_unfinished_student_resumes(btf, tmp_path):
@@ -260,16 +254,11 @@ def test_unfinished_teacher_warns_and_exported_unfinished_student_resumes(btf, t
 def test_finished_run_resumed_names_the_benchs_flag(btf, tmp_path, capsys):
     """`bench quality --resume` on a finished teacher: the "nothing left" note names
     --teacher-epochs, the flag that sets it there (kept through the resumed config)."""
-    from vrneural.config import mark_explicit, name_flag
-
     t = tmp_path / "t.pt"
     kw = dict(btf=str(btf), output=str(t), epochs=1, width=32, progress=False, export=False)
     run_teach(TeachConfig(**kw))
     capsys.readouterr()
-    cfg = name_flag(
-        mark_explicit(TeachConfig(**kw, resume=True), "epochs"), "epochs", "--teacher-epochs"
-    )
-    run_teach(cfg)
+    run_teach(TeachConfig(**kw, resume=True), epochs_flag="--teacher-epochs")
     err = capsys.readouterr().err
     assert "already trained for 1 epoch, nothing left" in err
     assert "(--teacher-epochs N with N > 1 continues it)" in err
@@ -278,11 +267,9 @@ def test_finished_run_resumed_names_the_benchs_flag(btf, tmp_path, capsys):
 def test_finished_run_resumed_where_no_flag_sets_its_epochs_shows_nothing(btf, tmp_path, capsys):
     """A finished `bench quality --wide-start` half resumed (no option sets a half's epochs,
     so no "nothing left" note): no empty progress bar either."""
-    from vrneural.config import mark_explicit, name_flag
-
     t = tmp_path / "t.pt"
     kw = dict(btf=str(btf), output=str(t), epochs=1, width=32, export=False)
     run_teach(TeachConfig(**kw, progress=False))
     capsys.readouterr()
-    run_teach(name_flag(mark_explicit(TeachConfig(**kw, resume=True), "epochs"), "epochs", ""))
+    run_teach(TeachConfig(**kw, resume=True), epochs_flag="")
     assert capsys.readouterr().err == ""

@@ -166,13 +166,14 @@ def test_reference_noise_falls_with_the_sample_count():
     """Two references with different sample positions differ less at 16 samples per pixel
     than at 1: the floor the bench reads every difference against is the sampling noise."""
     from vrneural.bench import trade_scene as ts
+    from vrneural.bench.parts import Scored
     from vrneural.bench.supersample import SupersampledReference
     from vrneural.bench.tradeoff import TradeoffConfig, settings_for, variant
     from vrneural.material import random_material
     from vrneural.runtime.profiles import get_profile
 
     prof = get_profile("quest3")
-    c = TradeoffConfig(crop=32)
+    c = TradeoffConfig(score=Scored(crop=32)).resolved()
     cond = ts.Condition("rest", "rest", 0.0, 2, [1])
     teacher = random_material(7, "single", 16)
     scene = ts.scene_for(cond, random_material(3), teacher)
@@ -181,7 +182,7 @@ def test_reference_noise_falls_with_the_sample_count():
     for spp in (1, 16):
         a, b = (SupersampledReference(scene, s, spp, seed) for seed in (0, 1))
         for r in (a, b):
-            ts.track(r.r, cond, c.crop, prof.eye_res)
+            ts.track(r.r, cond, c.score.crop, prof.eye_res)
         floors.append(float(np.abs(a.frame(1) - b.frame(1)).mean()))
     assert floors[1] < 0.6 * floors[0], floors
 

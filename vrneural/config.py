@@ -27,108 +27,111 @@ def opt(default, help: str, **kw):
     return dataclasses.field(default=default, metadata={"help": help, **kw})
 
 
+def part(cls):
+    """A field holding a sub-config that several commands share (a training budget, the
+    scored window of a bench): its fields are options of their own (``--crop``, not
+    ``--score-crop``) and flat keys of :func:`config_dict`."""
+    return dataclasses.field(default_factory=cls, metadata={"part": True})
+
+
+def _parts(cfg) -> list:
+    return [f for f in dataclasses.fields(cfg) if f.metadata.get("part")]
+
+
 def add_config_args(
-    parser: argparse.ArgumentParser, cls, skip: tuple[str, ...] = (), prefix: str = ""
+    parser: argparse.ArgumentParser,
+    cls,
+    skip: tuple[str, ...] = (),
+    prefix: str = "",
+    helps: dict[str, str] | None = None,
 ) -> None:
-    """Add one ``--field-name`` option per dataclass field of ``cls``.
+    """Add one ``--field-name`` option per dataclass field of ``cls`` (``helps``: a command's
+    own help for some of them, as the viewer's defaults).
 
     A bool that is off by default becomes a switch (``--force``); one that is on by default
-    also gets ``--no-<name>`` (``--no-progress``).
+    also gets ``--no-<name>`` (``--no-progress``). An :func:`unset` field not given parses to
+    None; its help shows the default it resolves to.
     """
     hints = typing.get_type_hints(cls)
     for f in dataclasses.fields(cls):
         if f.name in skip or f.metadata.get("cli") is False:
             continue
+        if f.metadata.get("part"):
+            add_config_args(parser, hints[f.name], skip, prefix, helps)
+            continue
         flag = "--" + prefix + f.name.replace("_", "-")
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
+        shown = f.metadata.get("default", default)
         tp = hints[f.name]
-        help_ = f.metadata.get("help", "")
-        if tp is bool and not default:  # an off switch: --force, not --force/--no-force
-            parser.add_argument(flag, dest=f.name, action="store_true", help=help_)
-            continue
-        if not re.search(r"default\s*[:)]", help_):  # a help that explains its default: once
-            shown = "none" if default in ("", None) else default
-            help_ += f" (default: {shown})"
-        if tp is bool:  # on by default: --no-<name> turns it off
-            parser.add_argument(
-                flag,
-                dest=f.name,
-                action=argparse.BooleanOptionalAction,
-                default=default,
-                help=help_,
-            )
-            continue
         if typing.get_origin(tp) in (typing.Union, types.UnionType):  # X | None -> X
             tp = next(a for a in typing.get_args(tp) if a is not type(None))
-        kw = {"type": f.metadata.get("type") or (tp if tp in (int, float, str) else str)}
+        help_ = (helps or {}).get(f.name) or f.metadata.get("help", "")
+        if tp is bool and not shown:  # an off switch: --force, not --force/--no-force
+            parser.add_argument(flag, dest=f.name, action="store_true", default=default, help=help_)
+            continue
+        if not re.search(r"default\s*[:)]", help_):  # a help that explains its default: once
+            help_ += f" (default: {'none' if shown in ('', None) else shown})"
+        kw = {"action": argparse.BooleanOptionalAction}  # on by default: --no-<name> too
+        if tp is not bool:
+            kw = {"type": f.metadata.get("type") or (tp if tp in (int, float, str) else str)}
         if "choices" in f.metadata:
             kw["choices"] = f.metadata["choices"]
-        parser.add_argument(flag, dest=f.name, default=default, help=help_, **kw)
+        action = parser.add_argument(flag, dest=f.name, default=default, help=help_, **kw)
+        action.shown_default = shown  # for the CLI reference: an unset field's parses to None
 
 
 def config_from_args(cls, args: argparse.Namespace, **overrides):
-    """Build ``cls`` from parsed args (fields absent from ``args`` keep their defaults).
-
-    The fields given on the command line (``args._explicit``, set by the CLI) and the
-    ``overrides`` are recorded as explicit (:func:`is_explicit`).
-    """
-    kw = {f.name: getattr(args, f.name) for f in dataclasses.fields(cls) if hasattr(args, f.name)}
-    kw.update(overrides)
-    cfg = cls(**kw)
-    given = getattr(args, "_explicit", None)
-    if given is not None:
-        names = {f.name for f in dataclasses.fields(cls)}
-        mark_explicit(cfg, *(set(given) & names), *overrides)
-    return cfg
+    """Build ``cls`` from parsed args (fields absent from ``args`` keep their defaults; an
+    :func:`unset` field the user did not give stays None for :func:`resolved`)."""
+    hints = typing.get_type_hints(cls)
+    kw = {f.name: config_from_args(hints[f.name], args) for f in _parts(cls)}
+    kw |= {f.name: getattr(args, f.name) for f in dataclasses.fields(cls) if hasattr(args, f.name)}
+    return cls(**(kw | overrides))
 
 
-def mark_explicit(cfg, *names: str):
-    """Record ``names`` as fields the user chose (not defaults); returns ``cfg``."""
-    cfg.__dict__["_explicit"] = frozenset(cfg.__dict__.get("_explicit", ())) | set(names)
-    return cfg
+def unset(default, help: str, **kw):
+    """A field whose default depends on context (a preset such as ``--quick``, a resumed
+    checkpoint, the viewer): None ("not given") until :func:`resolved` fills it in; ``default``
+    is the value it takes where nothing else sets it (and what ``--help`` shows)."""
+    return dataclasses.field(default=None, metadata={"help": help, "default": default, **kw})
 
 
-def is_explicit(cfg, name: str) -> bool:
-    """Whether the user chose ``cfg.<name>``: given on the command line (or marked with
-    :func:`mark_explicit`). A config built in code without marks counts a field as chosen
-    when it differs from the default."""
-    given = cfg.__dict__.get("_explicit")
-    if given is None:
-        return getattr(cfg, name) != getattr(type(cfg)(), name)
-    return name in given
+def given(cfg) -> set[str]:
+    """The :func:`unset` fields of ``cfg`` that were given (not None)."""
+    return {
+        f.name
+        for f in dataclasses.fields(cfg)
+        if "default" in f.metadata and getattr(cfg, f.name) is not None
+    }
 
 
-def name_flag(cfg, name: str, flag: str):
-    """Record that the user sets ``cfg.<name>`` with the option ``flag`` (``bench quality``'s
-    ``--teacher-epochs`` for its teachers' epochs), for messages; returns ``cfg``."""
-    cfg.__dict__["_flags"] = dict(cfg.__dict__.get("_flags", {}), **{name: flag})
-    return cfg
-
-
-def flag(cfg, name: str) -> str:
-    """The option that sets ``cfg.<name>``: ``--<name>`` unless :func:`name_flag` said else."""
-    return cfg.__dict__.get("_flags", {}).get(name, "--" + name.replace("_", "-"))
-
-
-def keep_flag_names(old, new):
-    """``new`` with the flag names :func:`name_flag` recorded on ``old``; returns ``new``."""
-    if "_flags" in old.__dict__:
-        new.__dict__["_flags"] = dict(old.__dict__["_flags"])
-    return new
-
-
-def replace_config(cfg, **changes):
-    """``dataclasses.replace`` that keeps the explicit-field and flag-name records."""
-    new = dataclasses.replace(cfg, **changes)
-    for k in ("_explicit", "_flags"):
-        if k in cfg.__dict__:
-            new.__dict__[k] = cfg.__dict__[k]
-    return new
+def resolved(cfg, *layers):
+    """``cfg`` with each :func:`unset` field that is None taken from the first of ``layers``
+    (preset instances or dicts: a checkpoint's config) that has it, else its default. Fields
+    given win over every layer: a preset applies under the user's flags."""
+    changes = {}
+    for f in _parts(cfg):  # a preset's part is the layer of the part; a dict holds flat keys
+        under = [x if isinstance(x, dict) else getattr(x, f.name) for x in layers]
+        changes[f.name] = resolved(getattr(cfg, f.name), *under)
+    for f in dataclasses.fields(cfg):
+        if "default" not in f.metadata or getattr(cfg, f.name) is not None:
+            continue
+        for layer in layers:
+            v = layer.get(f.name) if isinstance(layer, dict) else getattr(layer, f.name, None)
+            if v is not None:
+                changes[f.name] = v
+                break
+        else:
+            changes[f.name] = f.metadata["default"]
+    return dataclasses.replace(cfg, **changes) if changes else cfg
 
 
 def config_dict(cfg) -> dict:
-    """A JSON-ready dict of a config, with its type name."""
+    """A JSON-ready dict of a config, with its type name (the fields of its parts flat, as
+    their options are)."""
     d = dataclasses.asdict(cfg)
+    for f in _parts(cfg):
+        d |= d.pop(f.name)
     return {"config": type(cfg).__name__, **json.loads(json.dumps(d, default=str))}
 
 
@@ -142,10 +145,3 @@ def config_path(output: str | Path) -> Path:
 def write_config(output: str | Path, cfg, extra: dict | None = None) -> Path:
     """Write ``<output>.config.json`` beside an output file (or ``config.json`` in a dir)."""
     return write_json(config_path(output), {**config_dict(cfg), **(extra or {})})
-
-
-def quick_defaults(cfg, **quick):
-    """``cfg`` with the ``--quick`` sizes in ``quick``, for the fields the user did not set:
-    a flag given explicitly wins over ``--quick`` (and is validated as usual)."""
-    keep = {k: v for k, v in quick.items() if not is_explicit(cfg, k)}
-    return replace_config(cfg, **keep)

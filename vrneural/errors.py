@@ -18,7 +18,38 @@ class VrnError(Exception):
 
 class ArgumentParser(argparse.ArgumentParser):
     """argparse with a one-line error (the problem and where the help is) instead of the
-    command's whole usage, exit code 2; subcommand parsers inherit it."""
+    command's whole usage, exit code 2; subcommand parsers inherit it.
+
+    It keeps what it was given, for the CLI reference (:mod:`vrneural.cli.reference`) and the
+    error of an unknown option: ``arguments``, the actions of its ``add_argument`` calls (not
+    ``--help``), and ``subcommands``, ``{name: (parser, help)}`` of its ``add_subparsers``
+    group; ``args.command_parser`` is the innermost (sub)command's parser.
+    """
+
+    def __init__(self, *args, **kw):
+        super().__init__(*args, **kw)
+        self.arguments: list[argparse.Action] = []
+        self.subcommands: dict[str, tuple[ArgumentParser, str]] = {}
+        self.set_defaults(command_parser=self)
+
+    def add_argument(self, *args, **kw) -> argparse.Action:
+        action = super().add_argument(*args, **kw)
+        if hasattr(self, "arguments"):  # after __init__, which adds --help
+            self.arguments.append(action)
+        return action
+
+    def add_subparsers(self, **kw):
+        group = super().add_subparsers(**kw)
+        add = group.add_parser
+
+        def add_parser(name: str, **kw) -> ArgumentParser:
+            p = add(name, **kw)
+            self.subcommands[name] = (p, kw.get("help") or "")
+            return p
+
+        group.add_parser = add_parser
+        self.subcommand_group = group  # where a test adds a subcommand
+        return group
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")

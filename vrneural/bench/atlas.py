@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.bench import report as rp
-from vrneural.config import opt, quick_defaults
+from vrneural.config import opt, resolved, unset
 
 
 @dataclass
@@ -34,15 +34,18 @@ class AtlasBenchConfig:
         "ico6,ico7,torus,knot,cloth,fan,field,lightmap", "meshes to run (comma-separated)"
     )
     seams: bool = opt(True, "render each atlas (Lambertian, texture vs screen) for the seam error")
-    eye: int = opt(384, "seam renders: image side in pixels")
+    eye: int | None = unset(384, "seam renders: image side in pixels")
     quick: bool = opt(False, "CI-sized: each mesh a few thousand triangles, 128-256^2, 128 px")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> AtlasBenchConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(self, eye=128)
+        """The fields not given: ``--quick``'s (:data:`QUICK_ATLAS_BENCH`) or the defaults."""
+        return resolved(self, *([QUICK_ATLAS_BENCH] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_ATLAS_BENCH = AtlasBenchConfig(eye=128)
 
 
 def _resolution(name: str, quick: bool) -> int:

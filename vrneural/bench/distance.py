@@ -24,7 +24,8 @@ import numpy as np
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench import tradeoff as tr
-from vrneural.config import opt, quick_defaults
+from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored
+from vrneural.config import opt, part, resolved, unset
 from vrneural.scoring import metrics
 
 #: name -> (mips, screen_res, prefiltered neural textures)
@@ -42,21 +43,16 @@ class DistanceConfig:
     """`vrneural bench distance`."""
 
     out: str = opt("bench-distance", "output directory", cli=False)
-    distances: str = opt("0.3,1,3,10,20", "sphere distances (m)")
-    tilings: str = opt("1,4,8,16", "material tilings, at 1 m")
+    distances: str | None = unset("0.3,1,3,10,20", "sphere distances (m)")
+    tilings: str | None = unset("1,4,8,16", "material tilings, at 1 m")
     size: float = opt(0.5, "sphere diameter (m)")
-    texture_res: int = opt(1200, "radiance texture side (the cap screen-res chooses under)")
+    texture_res: int | None = unset(
+        1200, "radiance texture side (the cap screen-res chooses under)"
+    )
     reuse: int = opt(4, "N (staggered)")
-    crop: int = opt(128, "side (pixels) of the scored window of each quest3 eye image")
-    spp: int = opt(16, "reference samples per pixel")
-    scored: int = opt(6, "consecutive frames scored per condition")
+    score: Scored = part(Scored)
     preset: str = opt("leather", "synthetic BTF preset of the trained packs")
-    btf_res: int = opt(32, "BTF texels per side (training budget)")
-    btf_dirs: int = opt(10, "BTF light and view directions")
-    teacher_width: int = opt(128, "teacher hidden width")
-    teacher_epochs: int = opt(4, "teacher epochs")
-    epochs: int = opt(4, "epochs of each student")
-    seed: int = opt(0, "training seed")
+    budget: PackBudget = part(PackBudget)
     quick: bool = opt(
         False,
         "CI-sized: distances 1,10, tiling 8, 48-pixel crops, 2 spp, 3 frames, texture 256, tiny "
@@ -66,17 +62,23 @@ class DistanceConfig:
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> DistanceConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(
-            self, distances="1,10", tilings="8", crop=48, spp=2, scored=3, texture_res=256,
-            btf_res=16, btf_dirs=6, teacher_width=32, teacher_epochs=1, epochs=1,
-        )  # fmt: skip
+        """The fields not given: ``--quick``'s (:data:`QUICK_DISTANCE`) or the defaults."""
+        return resolved(self, *([QUICK_DISTANCE] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_DISTANCE = DistanceConfig(
+    distances="1,10",
+    tilings="8",
+    score=QUICK_SCORED,
+    texture_res=256,
+    budget=QUICK_BUDGET,
+)
 
 
 def conditions(c: DistanceConfig) -> list[ts.Condition]:
     first = 8
-    window = list(range(first, first + c.scored))
+    window = list(range(first, first + c.score.scored))
     out = []
     for d in tr._floats("--distances", c.distances, 0.2, 100.0):
         out.append(ts.Condition(f"{d:g} m", "distance", d, window[-1] + 1, window, d,
@@ -88,34 +90,25 @@ def conditions(c: DistanceConfig) -> list[ts.Condition]:
 
 
 def check(c: DistanceConfig) -> None:
-    from vrneural.bench.supersample import SPP_MAX
-    from vrneural.btf.synth import BtfConfig
     from vrneural.errors import VrnError, check_range
     from vrneural.runtime.config import REUSE_MAX
 
     check_range("--size", c.size, 0.001, 10.0)
     rp.check_texture_res(c.texture_res, "--texture-res")
     check_range("--reuse", c.reuse, 0, REUSE_MAX)
-    check_range("--crop", c.crop, 16, 2064)
-    check_range("--spp", c.spp, 1, SPP_MAX)
-    check_range("--scored", c.scored, 2, 1000)
+    c.score.check()
     if not (c.distances.strip() or c.tilings.strip()):
         raise VrnError("--distances and --tilings are both empty; give at least one condition")
     tr._floats("--distances", c.distances, 0.2, 100.0)
     tr._floats("--tilings", c.tilings, 0.01, 1000.0)
-    BtfConfig(preset=c.preset, res=c.btf_res, dirs=c.btf_dirs, seed=c.seed).validate(
-        flags={"res": "--btf-res", "dirs": "--btf-dirs"}
-    )
-    check_range("--teacher-width", c.teacher_width, 4, 512)
-    for k in ("teacher_epochs", "epochs"):
-        check_range(f"--{k.replace('_', '-')}", getattr(c, k), 1, 10_000)
+    c.budget.check([c.preset])
 
 
 def settings(c: DistanceConfig, cond, prof, mips: bool, screen: bool, mode="texture", ref=None):
     from vrneural.runtime.renderer import Settings
 
     return Settings(
-        eyes=2, reuse=c.reuse, texture_res=c.texture_res, eye_res=(c.crop, c.crop),
+        eyes=2, reuse=c.reuse, texture_res=c.texture_res, eye_res=(c.score.crop, c.score.crop),
         frames=cond.frames, fps=prof.fps, fov_y=prof.fov_y, ipd=prof.ipd, n_lights=2,
         mode=mode, precision="f32", reference=ref, crop=(0, 0, *prof.eye_res), mips=mips,
         screen_res=screen,
@@ -133,9 +126,7 @@ def run_distance(cfg: DistanceConfig) -> dict:
     with rp.prepare_out(cfg.out, cfg.force, "distance") as root:
         t0 = time.perf_counter()
         doc = rp.header("distance", c)
-        budget = dict(preset=c.preset, res=c.btf_res, dirs=c.btf_dirs,
-                      teacher_width=c.teacher_width, teacher_epochs=c.teacher_epochs,
-                      epochs=c.epochs, seed=c.seed)  # fmt: skip
+        budget = c.budget.of(c.preset)
         tt = time.perf_counter()
         paths = train_packs(root / "packs", budget, c.progress, lambda m: None,
                             only=("student", "student_lod"))  # fmt: skip
@@ -152,9 +143,9 @@ def run_distance(cfg: DistanceConfig) -> dict:
             rs = settings(c, cond, prof, False, False, "reference", teacher)
             rscene = ts.scene_for(cond, mats["student"], teacher)
             bar.set_postfix_str(f"{cond.name}: reference")
-            ref = tr.reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
+            ref = tr.reference(rscene, rs, cond, c.score.crop, full, cond.scored, c.score.spp, 0)
             nf = cond.scored[:2]
-            ref2 = tr.reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
+            ref2 = tr.reference(rscene, rs, cond, c.score.crop, full, nf, c.score.spp, 1)
             bar.update()
             rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
                    "noise_floor": float(np.mean([metrics.flip_hdr_eyes(ref[f], ref2[f], ppd)
@@ -166,15 +157,15 @@ def run_distance(cfg: DistanceConfig) -> dict:
                 bar.set_postfix_str(f"{cond.name}: {key} supersampled")
                 lvl0 = dataclasses.replace(mats[key], levels={})
                 os_ = settings(c, cond, prof, False, False, "reference", lvl0)
-                own[key] = ts.reference(ts.scene_for(cond, lvl0, lvl0), os_, cond, c.crop,
-                                        full, cond.scored, c.spp, 0)  # fmt: skip
+                own[key] = ts.reference(ts.scene_for(cond, lvl0, lvl0), os_, cond, c.score.crop,
+                                        full, cond.scored, c.score.spp, 0)  # fmt: skip
             for name, (mips, screen, lod) in VARIANTS.items():
                 bar.set_postfix_str(f"{cond.name}: {name}")
                 key = "student_lod" if lod else "student"
                 mat = mats[key]
                 s = settings(c, cond, prof, mips, screen)
                 imgs, st = ts.render(
-                    ts.scene_for(cond, mat), s, cond, c.crop, full, set(cond.scored)
+                    ts.scene_for(cond, mat), s, cond, c.score.crop, full, set(cond.scored)
                 )
                 sc = tr.scores(ref, imgs, None, ppd, cond.scored, cache)
                 own_f = [metrics.flip_hdr_eyes(own[key][f], imgs[f], ppd) for f in cond.scored]

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-from vrneural.config import is_explicit, opt
+from vrneural.config import opt
 from vrneural.errors import VrnError
 
 W, R = "works", "rejected"
@@ -138,8 +138,8 @@ class ExtremesConfig:
     quick: bool = opt(
         False, "small sizes for the heavy cases (1M triangles -> 20k, max texture -> 1024)"
     )
-    only: str = opt(
-        "",
+    only: str | None = opt(
+        None,
         "comma-separated case names or groups to run: "
         f"{', '.join(sorted({c[1] for c in CASES}))} (default: all)",
     )
@@ -295,7 +295,7 @@ def run_extremes(cfg: ExtremesConfig, out: str) -> dict:
     from vrneural.bench.extremes_report import write_report
     from vrneural.bench.report import header, prepare_out
 
-    cases = selected(cfg.only, is_explicit(cfg, "only"))
+    cases = selected(cfg.only or "", cfg.only is not None)
     pytest = find_pytest()
     with prepare_out(out, cfg.force, "extremes") as root:
         t0 = time.perf_counter()

@@ -32,7 +32,7 @@ import numpy as np
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt, quick_defaults
+from vrneural.config import opt, resolved, unset
 
 TARGETS = {
     "forward_vs_sample_floor": 1.15,
@@ -48,13 +48,13 @@ class FrameConfig:
     """`vrneural bench frame`."""
 
     out: str = opt("bench-frame", "output directory", cli=False)
-    texture_res: int = opt(1200, "radiance texture side")
+    texture_res: int | None = unset(1200, "radiance texture side")
     reuse: int = opt(4, "update interval N (staggered)")
-    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
+    eye_res: str | None = unset("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
     lights: int = opt(1, "point lights")
-    frames: int = opt(20, "frames per loop measurement (after one cycle of warm-up)")
-    repeats: int = opt(3, "passes timed alone per round (the median is kept)")
-    rounds: int = opt(3, "interleaved rounds (the median over rounds is reported)")
+    frames: int | None = unset(20, "frames per loop measurement (after one cycle of warm-up)")
+    repeats: int | None = unset(3, "passes timed alone per round (the median is kept)")
+    rounds: int | None = unset(3, "interleaved rounds (the median over rounds is reported)")
     parallax_steps: int = opt(
         0,
         "also time the texture-space update of the same materials with height-field parallax "
@@ -65,9 +65,12 @@ class FrameConfig:
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> FrameConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(self, texture_res=128, eye_res="96x96", frames=6, repeats=2, rounds=2)
+        """The fields not given: ``--quick``'s (:data:`QUICK_FRAME`) or the defaults."""
+        return resolved(self, *([QUICK_FRAME] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_FRAME = FrameConfig(texture_res=128, eye_res="96x96", frames=6, repeats=2, rounds=2)
 
 
 def _wait(r) -> None:

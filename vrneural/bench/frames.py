@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt, quick_defaults
+from vrneural.bench.parts import QUICK_LOOP, Loop
+from vrneural.config import opt, part, resolved, unset
 from vrneural.errors import count
 
 
@@ -22,33 +23,31 @@ class FramesConfig:
     """`vrneural bench frames`."""
 
     out: str = opt("bench-frames", "output directory", cli=False)
-    texture_res: str = opt("800,1200,1600,2000", "radiance texture sides (comma-separated)")
-    reuse: str = opt("0,1,2,4,6", "update intervals N (comma-separated)")
-    schedules: str = opt("burst,staggered", "reuse schedules (comma-separated)")
-    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
-    eyes: int = opt(2, "eyes (1 or 2)")
-    lights: int = opt(1, "point lights")
-    cycles: int = opt(1, "update cycles measured per configuration (N + 1 frames each)")
-    warmup: float = opt(
-        0.5, "seconds of unmeasured frames before each configuration (GPU clocks; 0 = none)"
+    texture_res: str | None = unset(
+        "800,1200,1600,2000", "radiance texture sides (comma-separated)"
     )
-    min_frames: int = opt(3, "at least this many measured frames per configuration")
+    reuse: str | None = unset("0,1,2,4,6", "update intervals N (comma-separated)")
+    schedules: str = opt("burst,staggered", "reuse schedules (comma-separated)")
+    loop: Loop = part(Loop)
+    lights: int = opt(1, "point lights")
+    min_frames: int | None = unset(3, "at least this many measured frames per configuration")
     screen: bool = opt(True, "also measure per-pixel screen-space shading")
     quick: bool = opt(False, "CI-sized: textures 128,256; N 0,2,4; eyes 258x276; >= 2 frames")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> FramesConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(
-            self, texture_res="128,256", reuse="0,2,4", eye_res="258x276", min_frames=2
-        )
+        """The fields not given: ``--quick``'s (:data:`QUICK_FRAMES`) or the defaults."""
+        return resolved(self, *([QUICK_FRAMES] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_FRAMES = FramesConfig(texture_res="128,256", reuse="0,2,4", loop=QUICK_LOOP, min_frames=2)
 
 
 def run_frames(cfg: FramesConfig) -> dict:
     from vrneural.errors import check_range
-    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
+    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
     from vrneural.runtime.profiles import get_profile
     from vrneural.runtime.schedule import SCHEDULES
 
@@ -56,19 +55,20 @@ def run_frames(cfg: FramesConfig) -> dict:
     texs = rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True)
     reuses = rp.int_list("--reuse", c.reuse, 0, REUSE_MAX)
     scheds = rp.choice_list("--schedules", c.schedules, SCHEDULES)
-    eye_res = parse_res(c.eye_res)
-    check_range("--eyes", c.eyes, 1, 2)
+    eye_res = c.loop.check()
     check_range("--lights", c.lights, 1, LIGHTS_MAX)
-    check_range("--cycles", c.cycles, 1, 100)
-    check_range("--warmup", c.warmup, 0.0, 60.0)
     check_range("--min-frames", c.min_frames, 1, 1000)
     with rp.prepare_out(cfg.out, cfg.force, "frames") as root:
         t0 = time.perf_counter()
         prof = get_profile("quest3")
         doc = rp.header("frames", c)
         scene = timing.bench_scene(c.lights)
-        kw = dict(eye_res=eye_res, eyes=c.eyes, n_lights=c.lights, fps=prof.fps, fov_y=prof.fov_y)
-        per_res = sum(timing.frames_for(n, c.cycles, c.min_frames) for n in reuses) * len(scheds)
+        kw = dict(
+            eye_res=eye_res, eyes=c.loop.eyes, n_lights=c.lights, fps=prof.fps, fov_y=prof.fov_y
+        )
+        per_res = sum(timing.frames_for(n, c.loop.cycles, c.min_frames) for n in reuses) * len(
+            scheds
+        )
         total = per_res * len(texs) + (c.min_frames if c.screen else 0)
         bar = timing.progress(total, "bench frames", c.progress)
         for res in texs:
@@ -76,14 +76,14 @@ def run_frames(cfg: FramesConfig) -> dict:
             for sched in scheds:
                 for n in reuses:
                     rec = timing.measured_record(
-                        r, n, sched, c.cycles, c.min_frames, bar.update, c.warmup
+                        r, n, sched, c.loop.cycles, c.min_frames, bar.update, c.loop.warmup
                     )
                     rec["schedule"], rec["reuse"] = sched, n
                     doc["records"].append(rec)
             del r
         if c.screen:
             r = timing.make_renderer(scene, mode="screen", texture_res=texs[0], **kw)
-            rec = timing.measured_record(r, 0, "burst", 1, c.min_frames, bar.update, c.warmup)
+            rec = timing.measured_record(r, 0, "burst", 1, c.min_frames, bar.update, c.loop.warmup)
             doc["records"].append(rec)
         bar.close()
         md = markdown(doc)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrneural.bench import report as rp
-from vrneural.config import opt, quick_defaults
+from vrneural.config import opt, resolved, unset
 from vrneural.errors import count
 
 NETWORKS = ("student", "single8", "neumip")
@@ -35,15 +35,17 @@ class KernelsConfig:
     """`vrneural bench kernels`."""
 
     out: str = opt("bench-kernels", "output directory", cli=False)
-    texels: int = opt(1 << 18, "texels per evaluation (the student's coarse net runs on 1/4)")
-    repeats: int = opt(3, "timed repeats (median)")
-    networks: str = opt(
+    texels: int | None = unset(
+        1 << 18, "texels per evaluation (the student's coarse net runs on 1/4)"
+    )
+    repeats: int | None = unset(3, "timed repeats (median)")
+    networks: str | None = unset(
         "student,single8,neumip",
         "networks (comma-separated): student, single8, neumip, or student:W / single8:W (W "
         "wide, as distill --width W)",
     )
     precisions: str = opt("f32,f16", "GPU precisions (f16 needs shader-f16)")
-    sgemm_n: int = opt(1024, "matrix side of the numpy sgemm roofline")
+    sgemm_n: int | None = unset(1024, "matrix side of the numpy sgemm roofline")
     threads: int = opt(
         0,
         "CPU threads of PyTorch and of numpy's sgemm (0: their default, every core; 1 avoids "
@@ -54,9 +56,12 @@ class KernelsConfig:
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> KernelsConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(self, texels=16384, repeats=2, sgemm_n=256, networks="student,neumip")
+        """The fields not given: ``--quick``'s (:data:`QUICK_KERNELS`) or the defaults."""
+        return resolved(self, *([QUICK_KERNELS] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_KERNELS = KernelsConfig(texels=16384, repeats=2, sgemm_n=256, networks="student,neumip")
 
 
 #: the networks ``--networks`` also takes at another width, ``NAME:W`` (distill --width W)

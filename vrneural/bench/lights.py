@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt, quick_defaults
+from vrneural.bench.parts import QUICK_LOOP, Loop
+from vrneural.config import opt, part, resolved, unset
 from vrneural.errors import count
 
 
@@ -24,39 +25,34 @@ class LightsConfig:
     """`vrneural bench lights`."""
 
     out: str = opt("bench-lights", "output directory", cli=False)
-    lights: str = opt("1,2,3,4,5,6,7,8", "light counts (comma-separated, 1..64)")
-    texture_res: int = opt(1200, "radiance texture side")
+    lights: str | None = unset("1,2,3,4,5,6,7,8", "light counts (comma-separated, 1..64)")
+    texture_res: int | None = unset(1200, "radiance texture side")
     reuse: int = opt(4, "update interval N")
     schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
-    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
-    eyes: int = opt(2, "eyes (1 or 2)")
-    cycles: int = opt(1, "update cycles measured per light count (N + 1 frames each)")
-    warmup: float = opt(
-        0.5, "seconds of unmeasured frames before each configuration (GPU clocks; 0 = none)"
-    )
+    loop: Loop = part(Loop)
     quick: bool = opt(False, "CI-sized: lights 1,2,4; texture 256; eyes 258x276")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> LightsConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(self, lights="1,2,4", texture_res=256, eye_res="258x276")
+        """The fields not given: ``--quick``'s (:data:`QUICK_LIGHTS`) or the defaults."""
+        return resolved(self, *([QUICK_LIGHTS] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_LIGHTS = LightsConfig(lights="1,2,4", texture_res=256, loop=QUICK_LOOP)
 
 
 def run_lights(cfg: LightsConfig) -> dict:
     from vrneural.errors import check_range
-    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
+    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
     from vrneural.runtime.profiles import get_profile
 
     c = cfg.resolved()
     counts = rp.int_list("--lights", c.lights, 1, LIGHTS_MAX)
     rp.check_texture_res(c.texture_res)
     check_range("--reuse", c.reuse, 0, REUSE_MAX)
-    check_range("--eyes", c.eyes, 1, 2)
-    check_range("--cycles", c.cycles, 1, 100)
-    check_range("--warmup", c.warmup, 0.0, 60.0)
-    eye_res = parse_res(c.eye_res)
+    eye_res = c.loop.check()
     with rp.prepare_out(cfg.out, cfg.force, "lights") as root:
         t0 = time.perf_counter()
         prof = get_profile("quest3")
@@ -64,21 +60,23 @@ def run_lights(cfg: LightsConfig) -> dict:
         scene = timing.bench_scene(
             max(8, *counts)
         )  # light k stays where it is for any list up to 8
-        n = timing.frames_for(c.reuse, c.cycles, 1)
+        n = timing.frames_for(c.reuse, c.loop.cycles, 1)
         bar = timing.progress(n * len(counts), "bench lights", c.progress)
         for k in counts:
             r = timing.make_renderer(
                 scene,
                 texture_res=c.texture_res,
                 eye_res=eye_res,
-                eyes=c.eyes,
+                eyes=c.loop.eyes,
                 n_lights=k,
                 reuse=c.reuse,
                 schedule=c.schedule,
                 fps=prof.fps,
                 fov_y=prof.fov_y,
             )
-            rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update, c.warmup)
+            rec = timing.measured_record(
+                r, c.reuse, c.schedule, c.loop.cycles, 1, bar.update, c.loop.warmup
+            )
             doc["records"].append(rec)
             del r
         bar.close()
@@ -91,9 +89,10 @@ def run_lights(cfg: LightsConfig) -> dict:
             "# Lights: frame time over the number of point lights (paper Fig. 10)",
             "",
             rp.adapter_line(doc),
-            f"Benchmark scene, {count(c.eyes, 'eye')} at {c.eye_res}, texture {c.texture_res}^2, "
+            f"Benchmark scene, {count(c.loop.eyes, 'eye')} at {c.loop.eye_res}, "
+            f"texture {c.texture_res}^2, "
             f"N = {c.reuse} ({c.schedule}), {n} frames per light count after frame 0 "
-            f"and {c.warmup} s of unmeasured frames."
+            f"and {c.loop.warmup} s of unmeasured frames."
             + (" **Quick run: reduced grid.**" if c.quick else ""),
             "",
         ]

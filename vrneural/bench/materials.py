@@ -12,7 +12,8 @@ from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt, quick_defaults
+from vrneural.bench.parts import QUICK_LOOP, Loop
+from vrneural.config import opt, part, resolved, unset
 from vrneural.errors import count
 
 
@@ -21,25 +22,23 @@ class MaterialsConfig:
     """`vrneural bench materials`."""
 
     out: str = opt("bench-materials", "output directory", cli=False)
-    materials: str = opt("1,2,3,4", "material counts (comma-separated, 1..8)")
-    texture_res: int = opt(1024, "radiance texture side per material")
+    materials: str | None = unset("1,2,3,4", "material counts (comma-separated, 1..8)")
+    texture_res: int | None = unset(1024, "radiance texture side per material")
     reuse: int = opt(7, "update interval N")
     schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
     lights: int = opt(3, "point lights")
-    eye_res: str = opt("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
-    eyes: int = opt(2, "eyes (1 or 2)")
-    cycles: int = opt(1, "update cycles measured per count (N + 1 frames each)")
-    warmup: float = opt(
-        0.5, "seconds of unmeasured frames before each configuration (GPU clocks; 0 = none)"
-    )
+    loop: Loop = part(Loop)
     quick: bool = opt(False, "CI-sized: materials 1,2,3; texture 256; eyes 258x276")
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> MaterialsConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(self, materials="1,2,3", texture_res=256, eye_res="258x276")
+        """The fields not given: ``--quick``'s (:data:`QUICK_MATERIALS`) or the defaults."""
+        return resolved(self, *([QUICK_MATERIALS] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_MATERIALS = MaterialsConfig(materials="1,2,3", texture_res=256, loop=QUICK_LOOP)
 
 
 def squares_scene(k: int, n_lights: int):
@@ -59,7 +58,7 @@ def squares_scene(k: int, n_lights: int):
 
 def run_materials(cfg: MaterialsConfig) -> dict:
     from vrneural.errors import check_range
-    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
+    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
     from vrneural.runtime.profiles import get_profile
 
     c = cfg.resolved()
@@ -67,30 +66,29 @@ def run_materials(cfg: MaterialsConfig) -> dict:
     rp.check_texture_res(c.texture_res)
     check_range("--reuse", c.reuse, 0, REUSE_MAX)
     check_range("--lights", c.lights, 1, LIGHTS_MAX)
-    check_range("--eyes", c.eyes, 1, 2)
-    check_range("--cycles", c.cycles, 1, 100)
-    check_range("--warmup", c.warmup, 0.0, 60.0)
-    eye_res = parse_res(c.eye_res)
+    eye_res = c.loop.check()
     with rp.prepare_out(cfg.out, cfg.force, "materials") as root:
         t0 = time.perf_counter()
         prof = get_profile("quest3")
         doc = rp.header("materials", c)
-        n = timing.frames_for(c.reuse, c.cycles, 1)
+        n = timing.frames_for(c.reuse, c.loop.cycles, 1)
         bar = timing.progress(n * len(counts), "bench materials", c.progress)
         for k in counts:
             r = timing.make_renderer(
                 squares_scene(k, c.lights),
                 texture_res=c.texture_res,
                 eye_res=eye_res,
-                eyes=c.eyes,
+                eyes=c.loop.eyes,
                 n_lights=c.lights,
                 reuse=c.reuse,
                 schedule=c.schedule,
                 fps=prof.fps,
                 fov_y=prof.fov_y,
             )
-            rec = timing.measured_record(r, c.reuse, c.schedule, c.cycles, 1, bar.update, c.warmup)
-            per = c.texture_res**2 * 8 * c.eyes / 2**20  # rgba16float, per eye
+            rec = timing.measured_record(
+                r, c.reuse, c.schedule, c.loop.cycles, 1, bar.update, c.loop.warmup
+            )
+            per = c.texture_res**2 * 8 * c.loop.eyes / 2**20  # rgba16float, per eye
             rec["radiance_texture_mb_per_material"] = per
             rec["radiance_texture_mb"] = per * k  # every material's textures, as the table shows
             doc["records"].append(rec)
@@ -102,9 +100,9 @@ def run_materials(cfg: MaterialsConfig) -> dict:
             "",
             rp.adapter_line(doc),
             f"k squares with distinct materials, {count(c.lights, 'light')}, "
-            f"{count(c.eyes, 'eye')} at {c.eye_res}, "
+            f"{count(c.loop.eyes, 'eye')} at {c.loop.eye_res}, "
             f"texture {c.texture_res}^2 per material, N = {c.reuse} ({c.schedule}), {n} frames per "
-            f"count after frame 0 and {c.warmup} s of unmeasured frames."
+            f"count after frame 0 and {c.loop.warmup} s of unmeasured frames."
             + (" **Quick run: reduced grid.**" if c.quick else ""),
             "",
         ]

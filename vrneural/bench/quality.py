@@ -57,14 +57,7 @@ from vrneural.bench.quality_train import (
     wide_start_record,
     with_wide_start,
 )
-from vrneural.config import (
-    config_dict,
-    is_explicit,
-    mark_explicit,
-    name_flag,
-    opt,
-    quick_defaults,
-)
+from vrneural.config import config_dict, opt, resolved, unset
 from vrneural.distill.config import COMPILE_MODES, NEUMIP_DIRS
 from vrneural.errors import VrnError, check_range, check_seed
 from vrneural.outputs import check_resume_force, file_sha256
@@ -96,7 +89,7 @@ def labels(width: int = 8) -> dict[str, str]:
 class QualityConfig:
     """`vrneural bench quality`."""
 
-    presets: str = opt(
+    presets: str | None = unset(
         "leather,fabric,wood",
         "comma-separated synthetic BTF presets (none by default when --btf is given)",
     )
@@ -106,11 +99,11 @@ class QualityConfig:
         "(--res and --dirs apply to the presets only)",
     )
     out: str = opt("bench-quality", "output directory", cli=False)
-    res: int = opt(32, "BTF texels per side")
-    dirs: int = opt(30, "light and view directions (dirs^2 slices)")
-    teacher_epochs: int = opt(12, "teacher epochs")
-    epochs: int = opt(12, "epochs of every student and baseline network")
-    lafortune_iters: int = opt(30, "Levenberg-Marquardt iterations of the Lafortune fit")
+    res: int | None = unset(32, "BTF texels per side")
+    dirs: int | None = unset(30, "light and view directions (dirs^2 slices)")
+    teacher_epochs: int | None = unset(12, "teacher epochs")
+    epochs: int | None = unset(12, "epochs of every student and baseline network")
+    lafortune_iters: int | None = unset(30, "Levenberg-Marquardt iterations of the Lafortune fit")
     seed: int = opt(0, "seed of synthesis, initialisation and data order")
     repeats: int = opt(
         1, "train every network but the teacher with this many seeds (seed, seed+1, ...)"
@@ -167,9 +160,14 @@ class QualityConfig:
     )
 
     def resolved(self) -> QualityConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(self, res=16, dirs=8, teacher_epochs=2, epochs=2, lafortune_iters=5)
+        """The fields not given: ``--quick``'s (:data:`QUICK_QUALITY`) or the defaults; no
+        presets by default when ``--btf`` names files."""
+        only_btf = {"presets": ""} if any(b.strip() for b in self.btf.split(",")) else {}
+        return resolved(self, *([QUICK_QUALITY] if self.quick else []), only_btf)
+
+
+#: ``--quick``: a CI-sized run, under the flags given
+QUICK_QUALITY = QualityConfig(res=16, dirs=8, teacher_epochs=2, epochs=2, lafortune_iters=5)
 
 
 RUNS = {
@@ -205,8 +203,6 @@ def _teach_config(
         parallax=parallax,
         **_common(cfg),
     )
-    mark_explicit(tcfg, "epochs")  # a resumed run goes to the bench's epochs, not its own
-    name_flag(tcfg, "epochs", "--teacher-epochs")
     set_resume(tcfg, cfg.resume, btf_sha=btf_sha)
     return tcfg
 
@@ -225,7 +221,7 @@ def _distill_configs(
         for seed in range(cfg.seed, cfg.seed + cfg.repeats):
             # the first seed keeps the plain name, so a one-seed run's checkpoints are reused
             stem = name if seed == cfg.seed else f"{name}.seed{seed}"
-            neumip = name == "neumip"  # 4 x 25, never pruned
+            neumip = kw.get("method") == "neumip"  # 4 x 25 (and its parallax variant), never pruned
             out += network_runs(
                 cfg,
                 d,
@@ -262,7 +258,6 @@ def network_runs(
             width=wide_start,
             export=False,
         )
-        name_flag(wide, "epochs", "")  # no option sets its epochs directly
         set_resume(wide, cfg.resume, teacher_sha=tsha)
         out.append((None, f"{stem}.wide", wide))
         if cfg.resume:
@@ -277,7 +272,6 @@ def network_runs(
             init_from=str(d / f"{stem}.wide.pt"),
             **size,
         )
-        name_flag(dcfg, "epochs", "")
     else:
         dcfg = _network_config(cfg, d, btf_path, d / f"{stem}.pt", **kw, epochs=cfg.epochs, **size)
     set_resume(dcfg, cfg.resume, teacher_sha=tsha)
@@ -292,6 +286,8 @@ def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
 
     kw = dict(kw)
     kw.setdefault("parallax", "off")  # the bench's networks: parallax only where it asks
+    if kw.get("method") == "neumip":  # given to the others, it would be refused as unused
+        kw["neumip_dirs"] = cfg.neumip_dirs
     dcfg = resolve_method(
         DistillConfig(
             teacher=str(d / f"{kw.pop('teacher', 'teacher')}.pt"),
@@ -299,12 +295,10 @@ def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
             btf=str(btf_path),  # not the teacher's record: OUT may have moved
             ema=cfg.ema,
             lr_patience=cfg.lr_patience,
-            neumip_dirs=cfg.neumip_dirs,
             **kw,
             **_common(cfg),
         )
     )
-    mark_explicit(dcfg, "epochs")
     return dcfg
 
 
@@ -437,8 +431,6 @@ def validate(cfg: QualityConfig) -> list[str]:
     check_resume_force(cfg.resume, cfg.force)
     given = check_given(cfg)
     presets = [p.strip() for p in cfg.presets.split(",") if p.strip()]
-    if given and not is_explicit(cfg, "presets"):
-        presets = []  # --btf alone: only those files
     if not presets and not given:
         raise VrnError("--presets is empty (and no --btf file given)")
     twice = sorted({p for p in presets if presets.count(p) > 1})
@@ -469,12 +461,14 @@ def validate(cfg: QualityConfig) -> list[str]:
     presets = presets + list(given)  # the given BTFs, labelled by file name
     check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
     check_train_config(  # --ema and the like, as `distill` checks them
-        DistillConfig(
-            epochs=cfg.epochs,
-            seed=cfg.seed,
-            ema=cfg.ema,
-            lr_patience=cfg.lr_patience,
-            device=cfg.device,
+        resolved(
+            DistillConfig(
+                epochs=cfg.epochs,
+                seed=cfg.seed,
+                ema=cfg.ema,
+                lr_patience=cfg.lr_patience,
+                device=cfg.device,
+            )
         )
     )
     train_device(cfg.device)

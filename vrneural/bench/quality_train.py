@@ -16,8 +16,8 @@ from pathlib import Path
 
 from vrneural.bench.quality_btf import is_given
 from vrneural.bench.quality_parallax import resolved_parallax
-from vrneural.config import config_dict
-from vrneural.distill.config import BEFORE_FIELD
+from vrneural.config import config_dict, resolved
+from vrneural.distill.config import BEFORE_FIELD, RESUME_FREE
 from vrneural.errors import VrnError, count
 from vrneural.outputs import OutputDir, file_sha256
 
@@ -91,8 +91,17 @@ def _job(kind: str, job_cfg) -> str:
     from vrneural.distill.teach import run_teach
 
     reused = _finished(job_cfg)
-    ck = (run_teach if kind == "teach" else run_distill)(job_cfg, on_step=_stop_check)
+    run = run_teach if kind == "teach" else run_distill
+    ck = run(as_given(job_cfg), on_step=_stop_check, epochs_flag=epochs_flag(job_cfg))
     return took(ck, reused)
+
+
+def epochs_flag(cfg) -> str:
+    """The bench's option that sets a network's epochs, for the stage's messages: a teacher's
+    ``--teacher-epochs``; none for a ``--wide-start`` half (its share of ``--epochs``)."""
+    if not hasattr(cfg, "teacher"):
+        return "--teacher-epochs"
+    return "" if cfg.init_from or cfg.output.endswith(".wide.pt") else "--epochs"
 
 
 def _stop_check(epoch: int, step: int) -> None:
@@ -205,12 +214,13 @@ def _reuse_problem(cfg, btf_sha: str | None = None, teacher_sha: str | None = No
         ck = load_checkpoint(cfg.output)
     except VrnError as e:
         return str(e).removeprefix(f"{cfg.output}: ")
-    want, have = dataclasses.asdict(cfg), ck["config"]
+    want, have = dataclasses.asdict(resolved(cfg)), ck["config"]
     if "parallax" in have:  # --parallax auto: what it chose (a teach run's default)
         have = have | {"parallax": resolved_parallax(ck)}
     # a field newer than the checkpoint counts as what that run used: its default, or
     # BEFORE_FIELD where the default changed the behaviour
-    default = {f.name: f.default for f in dataclasses.fields(cfg)} | BEFORE_FIELD
+    default = {f.name: f.metadata.get("default", f.default) for f in dataclasses.fields(cfg)}
+    default |= BEFORE_FIELD
     free = _FREE if want.get("method") == "neumip" else _FREE | {"neumip_dirs"}
     diff = [
         f"{k} {have.get(k, default[k])!r} there, {v!r} here"
@@ -254,6 +264,20 @@ def set_resume(cfg, resume: bool, **hashes) -> None:
     cfg.force = not cfg.resume
 
 
+def as_given(cfg):
+    """What the bench gives the stage for ``cfg``: a resumed network only its epochs and where
+    it trains (the rest is its checkpoint's, which :func:`set_resume` matched: a moved
+    ``--out`` keeps the paths it recorded)."""
+    if not cfg.resume:
+        return cfg
+    keep = ("epochs", *RESUME_FREE)
+    return dataclasses.replace(
+        cfg,
+        **{f.name: None for f in dataclasses.fields(cfg) if "default" in f.metadata}
+        | {k: getattr(cfg, k) for k in keep if hasattr(cfg, k)},
+    )
+
+
 def train_in_process(preset: str, tcfg, runs, log, more=()) -> tuple[dict, list]:
     """``--jobs 1``: train the teacher, then each ``(key, stem, DistillConfig)`` of ``runs()``
     (called once the teacher exists) in order, in this process; log each. Returns the
@@ -263,18 +287,18 @@ def train_in_process(preset: str, tcfg, runs, log, more=()) -> tuple[dict, list]
     from vrneural.distill.teach import run_teach
 
     reused = _finished(tcfg)
-    tck = run_teach(tcfg)
+    tck = run_teach(as_given(tcfg), epochs_flag="--teacher-epochs")
     log(f"{preset}: teacher  {took(tck, reused)}")
     done = []
     for c in more:  # further teachers (the parallax variant's), before the networks they teach
         reused = _finished(c)
-        ck = run_teach(c)
+        ck = run_teach(as_given(c), epochs_flag="--teacher-epochs")
         stem = Path(c.output).stem
         log(f"{preset}: {stem}  {took(ck, reused)}")
         done.append((stem, ck, ""))
     for key, stem, c in runs():
         reused = _finished(c)
-        ck = run_distill(c)
+        ck = run_distill(as_given(c), epochs_flag=epochs_flag(c))
         log(f"{preset}: {stem}  {took(ck, reused)}")
         if key is not None:
             done.append((key, ck, c.init_from))

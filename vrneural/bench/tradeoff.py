@@ -28,9 +28,10 @@ import numpy as np
 
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
+from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored
 from vrneural.bench.trade_scene import reference, render, scheduled_candidates
 from vrneural.bench.tradeoff_report import finish_report, label
-from vrneural.config import is_explicit, opt, quick_defaults
+from vrneural.config import opt, part, resolved, unset
 from vrneural.scoring import metrics
 
 
@@ -39,37 +40,36 @@ class TradeoffConfig:
     """`vrneural bench tradeoff`."""
 
     out: str = opt("bench-tradeoff", "output directory", cli=False)
-    crop: int = opt(128, "side (pixels) of the scored window of each quest3 eye image")
-    spp: int = opt(16, "reference samples per pixel (stratified; its noise floor is measured)")
-    scored: int = opt(6, "consecutive frames scored per condition")
-    speeds: str = opt("0,100,200,300,400", "head-turn speeds (deg/s) of the built-in logs")
+    score: Scored = part(Scored)
+    speeds: str | None = unset("0,100,200,300,400", "head-turn speeds (deg/s) of the built-in logs")
     turn: float = opt(30.0, "yaw of each built-in head turn, degrees")
     near: float = opt(0.5, "distance (m) of the sphere in the head-turn conditions (arm's length)")
     poses: str = opt("", "more pose logs (CSV: t,x,y,z,qx,qy,qz,qw) scored as conditions")
-    light_speed: float = opt(120.0, "the moving light's speed about the sphere, deg/s (0: none)")
-    distances: str = opt(
+    light_speed: float | None = unset(
+        120.0, "the moving light's speed about the sphere, deg/s (0: none)"
+    )
+    distances: str | None = unset(
         "", "sphere distances (m) of a distance sweep (default none: `bench distance` has it)"
     )
-    tilings: str = opt("", "material tilings of a tiling sweep (default none: `bench distance`)")
-    texture_res: str = opt("256,512,1024", "texture sides compared")
-    base_res: int = opt(512, "texture side of the base setting (the sphere is ~105 px across)")
-    reuse: str = opt("0,2,4,8", "update intervals N compared")
+    tilings: str | None = unset(
+        "", "material tilings of a tiling sweep (default none: `bench distance`)"
+    )
+    texture_res: str | None = unset("256,512,1024", "texture sides compared")
+    base_res: int | None = unset(
+        512, "texture side of the base setting (the sphere is ~105 px across)"
+    )
+    reuse: str | None = unset("0,2,4,8", "update intervals N compared")
     base_reuse: int = opt(4, "N of the base setting")
     lights: int = opt(2, "point lights (the key light moves in the moving-light condition)")
-    presets: str = opt(
+    presets: str | None = unset(
         "leather,metal",
         "synthetic BTF presets of the trained packs: the first for every condition, the others "
         "(glossy metal: staleness and eye disparity show on highlights) for the base and the "
         "fastest turn",
     )
-    btf_res: int = opt(32, "BTF texels per side (training budget)")
-    btf_dirs: int = opt(10, "BTF light and view directions (dirs^2 slices)")
-    teacher_width: int = opt(128, "teacher hidden width (the paper's)")
-    teacher_epochs: int = opt(4, "teacher epochs")
-    epochs: int = opt(4, "epochs of each small network")
-    seed: int = opt(0, "training seed")
-    packs: str = opt(
-        "",
+    budget: PackBudget = part(PackBudget)
+    packs: str | None = opt(
+        None,
         "directory with teacher/student/student_nodistill/single8/neumip.vrnm (skips training; "
         "each must be what its name says, all from one BTF and its teacher); replaces --presets",
     )
@@ -82,27 +82,23 @@ class TradeoffConfig:
     force: bool = opt(False, "overwrite an existing output directory")
 
     def resolved(self) -> TradeoffConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(
-            self,
-            crop=48,
-            spp=2,
-            scored=3,
-            speeds="0,300",
-            light_speed=0.0,
-            distances="",
-            tilings="",
-            texture_res="128,256",
-            base_res=256,
-            reuse="0,4",
-            presets="leather",
-            btf_res=16,
-            btf_dirs=6,
-            teacher_width=32,
-            teacher_epochs=1,
-            epochs=1,
-        )
+        """The fields not given: ``--quick``'s (:data:`QUICK_TRADEOFF`) or the defaults."""
+        return resolved(self, *([QUICK_TRADEOFF] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_TRADEOFF = TradeoffConfig(
+    score=QUICK_SCORED,
+    speeds="0,300",
+    light_speed=0.0,
+    distances="",
+    tilings="",
+    texture_res="128,256",
+    base_res=256,
+    reuse="0,4",
+    presets="leather",
+    budget=QUICK_BUDGET,
+)
 
 
 #: the full quest3 eye image the crops are cut from (pixels) and its pixels per degree
@@ -159,13 +155,13 @@ def conditions(c, fps: float, d: Path) -> list[ts.Condition]:
     out = []
     speeds = _floats("--speeds", c.speeds, 0.0, 2000.0)
     for v in speeds:
-        out.append(ts.turn_condition(v, c.turn, fps, c.scored, d, c.near))
+        out.append(ts.turn_condition(v, c.turn, fps, c.score.scored, d, c.near))
     for p in [x.strip() for x in c.poses.split(",")] if c.poses.strip() else []:
         if not p:
             raise VrnError(f"--poses = {c.poses!r} has an empty item")
-        out.append(ts.log_condition(Path(p), fps, c.scored, c.near))
+        out.append(ts.log_condition(Path(p), fps, c.score.scored, c.near))
     first = 8  # frames before scoring: every staggered phase of N <= 7 has run once
-    window = list(range(first, first + c.scored))
+    window = list(range(first, first + c.score.scored))
     frames = window[-1] + 1
     out.append(ts.Condition("smooth orbit", "smooth", 0.0, frames, window))
     if c.light_speed:
@@ -205,7 +201,7 @@ def settings_for(c, v: dict, cond: ts.Condition, prof, ref=None):
         eyes=2,
         reuse=c.base_reuse if v["reuse"] is None else v["reuse"],
         texture_res=v["texture_res"] or c.base_res,
-        eye_res=(c.crop, c.crop),
+        eye_res=(c.score.crop, c.score.crop),
         frames=cond.frames,
         fps=prof.fps,
         fov_y=prof.fov_y,
@@ -338,14 +334,10 @@ def work(stats) -> dict:
 
 def check(c) -> None:
     """Every option, before any output exists."""
-    from vrneural.bench.supersample import SPP_MAX
-    from vrneural.btf.synth import BtfConfig
     from vrneural.errors import VrnError, check_range
     from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 
-    check_range("--crop", c.crop, 16, 2064)
-    check_range("--spp", c.spp, 1, SPP_MAX)
-    check_range("--scored", c.scored, 2, 1000)
+    c.score.check()
     check_range("--turn", c.turn, 1.0, 180.0)
     check_range("--near", c.near, 0.2, 100.0)
     check_range("--lights", c.lights, 1, LIGHTS_MAX)
@@ -364,7 +356,7 @@ def check(c) -> None:
         from vrneural.runtime.camera import PoseLogPath
 
         PoseLogPath(p)  # its one-line errors: missing, columns, time order, quaternion
-    if is_explicit(c, "packs") and not c.packs.strip():  # "" trains; typed, it was a slip
+    if c.packs is not None and not c.packs.strip():  # "" trains; typed, it was a slip
         raise VrnError("--packs is empty; name the folder of packs, or leave it out to train them")
     if c.packs:  # every pack what its name says, before any work or output
         from vrneural.bench.packs import load_packs, pack_paths
@@ -374,13 +366,7 @@ def check(c) -> None:
         presets = [p.strip() for p in c.presets.split(",")]
         if not all(presets):
             raise VrnError(f"--presets = {c.presets!r} has an empty item")
-        for p in presets:
-            BtfConfig(preset=p, res=c.btf_res, dirs=c.btf_dirs, seed=c.seed).validate(
-                flags={"res": "--btf-res", "dirs": "--btf-dirs", "preset": "--presets"}
-            )
-        for k in ("teacher_epochs", "epochs"):
-            check_range(f"--{k.replace('_', '-')}", getattr(c, k), 1, 10_000)
-        check_range("--teacher-width", c.teacher_width, 4, 512)
+        c.budget.check(presets, "--presets")
 
 
 def load_materials(c, root: Path) -> dict:
@@ -391,9 +377,7 @@ def load_materials(c, root: Path) -> dict:
         return {Path(c.packs).name: load_packs(pack_paths(c.packs))}
     out = {}
     for i, preset in enumerate(p.strip() for p in c.presets.split(",")):
-        budget = dict(preset=preset, res=c.btf_res, dirs=c.btf_dirs,
-                      teacher_width=c.teacher_width, teacher_epochs=c.teacher_epochs,
-                      epochs=c.epochs, seed=c.seed)  # fmt: skip
+        budget = c.budget.of(preset)
         d = root / "packs" / (preset if i else "")  # the first where earlier releases kept it
         only = None if i == 0 else ("student",)  # other presets: teacher and student
         out[preset] = load_packs(train_packs(d, budget, c.progress, log=lambda m: None, only=only))
@@ -454,9 +438,9 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
             rs = settings_for(c, variant(mode="reference"), cond, prof, teacher)
             rscene = ts.scene_for(cond, pm["student"], teacher, c.lights)
             bar.set_postfix_str(f"{cond.name} / {preset}: reference")
-            ref = reference(rscene, rs, cond, c.crop, full, cond.scored, c.spp, 0)
+            ref = reference(rscene, rs, cond, c.score.crop, full, cond.scored, c.score.spp, 0)
             nf = cond.scored[: max(2, len(cond.scored) // 2)]
-            ref2 = reference(rscene, rs, cond, c.crop, full, nf, c.spp, 1)
+            ref2 = reference(rscene, rs, cond, c.score.crop, full, nf, c.score.spp, 1)
             floor = [metrics.flip_hdr_eyes(ref[f], ref2[f], ppd) for f in nf]
             rec["noise_floor"] = {"flip": float(np.mean(floor)), "frames": nf}
             cache: dict = {}
@@ -465,7 +449,7 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
                 bar.set_postfix_str(f"{cond.name} / {preset}: {label(v)}")
                 mat = pm.get(v["material"], pm["student"])
                 scene = ts.scene_for(cond, mat, None, c.lights)
-                imgs, st = render(scene, settings_for(c, v, cond, prof), cond, c.crop, full,
+                imgs, st = render(scene, settings_for(c, v, cond, prof), cond, c.score.crop, full,
                                   set(cond.scored))  # fmt: skip
                 if v["knob"] == "reuse" and v["value"] == 0:
                     n0 = imgs

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from vrneural.bench.widths_report import METHODS, STARTS, within, write_report
 from vrneural.btf.presets import PRESETS
-from vrneural.config import config_dict, opt, quick_defaults
+from vrneural.config import config_dict, opt, resolved, unset
 from vrneural.distill.config import COMPILE_MODES
 from vrneural.errors import VrnError, check_range, check_seed
 from vrneural.versions import package_versions
@@ -47,11 +47,13 @@ class WidthsConfig:
         "leather", "synthetic BTF preset: " + ", ".join(sorted(PRESETS)) + " (btf synth)"
     )
     out: str = opt("bench-widths", "output directory", cli=False)
-    res: int = opt(32, "BTF texels per side")
-    dirs: int = opt(16, "light and view directions (dirs^2 slices)")
-    teacher_epochs: int = opt(24, "teacher epochs")
-    epochs: int = opt(24, "epochs of every other network (a wide start takes half of them)")
-    widths: str = opt(
+    res: int | None = unset(32, "BTF texels per side")
+    dirs: int | None = unset(16, "light and view directions (dirs^2 slices)")
+    teacher_epochs: int | None = unset(24, "teacher epochs")
+    epochs: int | None = unset(
+        24, "epochs of every other network (a wide start takes half of them)"
+    )
+    widths: str | None = unset(
         "4,8,12,16", "comma-separated hidden widths W, each in [1, 64] (at most 32 with wide)"
     )
     methods: str = opt(
@@ -67,7 +69,7 @@ class WidthsConfig:
         "pruned to W for the rest: distill --wide-start 2W)",
     )
     seed: int = opt(0, "seed of synthesis, initialisation and data order")
-    repeats: int = opt(3, "seeds of every network but the teacher (seed, seed+1, ...)")
+    repeats: int | None = unset(3, "seeds of every network but the teacher (seed, seed+1, ...)")
     device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
     compile: str = opt(
         "off", "torch.compile the networks (teach/distill --compile)", choices=COMPILE_MODES
@@ -87,11 +89,12 @@ class WidthsConfig:
     )
 
     def resolved(self) -> WidthsConfig:
-        if not self.quick:
-            return self
-        return quick_defaults(
-            self, res=16, dirs=8, teacher_epochs=2, epochs=2, widths="4,8", repeats=1
-        )
+        """The fields not given: ``--quick``'s (:data:`QUICK_WIDTHS`) or the defaults."""
+        return resolved(self, *([QUICK_WIDTHS] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_WIDTHS = WidthsConfig(res=16, dirs=8, teacher_epochs=2, epochs=2, widths="4,8", repeats=1)
 
 
 @dataclass(frozen=True)
@@ -145,7 +148,7 @@ def validate(cfg: WidthsConfig) -> Plan:
         progress=cfg.progress,
         force=cfg.force,
         resume=cfg.resume,
-    )
+    ).resolved()
     try:  # --out, --resume/--force, the seeds and the ranges of the options both share
         quality_validate(q)
     except VrnError as e:

@@ -43,38 +43,6 @@ def command_name(args: argparse.Namespace) -> str:
     return " ".join(words)
 
 
-def explicit_dests(argv: list[str], parser: argparse.ArgumentParser | None = None) -> set[str]:
-    """The ``dest`` of every option given in ``argv``: parsed again with every default
-    suppressed, so only what was typed lands in the namespace (argparse's own matching,
-    abbreviations included). ``parser``, a :func:`build_parser` that has done its parse, is
-    reused (its defaults are cleared); without one a new parser is built."""
-
-    def suppress(parser: argparse.ArgumentParser) -> None:
-        parser._defaults.clear()
-        for a in parser._actions:
-            if isinstance(a, argparse._SubParsersAction):
-                for sp in a.choices.values():
-                    suppress(sp)
-            else:
-                a.default = argparse.SUPPRESS
-
-    p = parser or build_parser()
-    suppress(p)
-    return set(vars(p.parse_args(argv)))
-
-
-def _command_parser(
-    parser: argparse.ArgumentParser, args: argparse.Namespace
-) -> argparse.ArgumentParser:
-    """The parser of the (sub)command in ``args`` (``vrneural bench quality``'s own)."""
-    names = [args.command] + [getattr(args, d) for d in SUBCOMMAND_DEST if getattr(args, d, None)]
-    p = parser
-    for name in names:
-        sub = next(a for a in p._actions if isinstance(a, argparse._SubParsersAction))
-        p = sub.choices[name]
-    return p
-
-
 def main(argv: list[str] | None = None) -> int:
     """The command line (``argv``: default ``sys.argv[1:]``, the process's own; a list given
     here is an in-process call, as the tests make, and gets its signal handlers back)."""
@@ -107,8 +75,7 @@ def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
     (each command's :class:`vrneural.outputs.OutputDir` seals its output however it ends)."""
     args, extra = parser.parse_known_args(argv)
     if extra:  # named by the subcommand's parser: its usage line, not the top level's
-        _command_parser(parser, args).error(f"unrecognized arguments: {' '.join(extra)}")
-    args._explicit = explicit_dests(argv, parser)  # "--epochs 20" counts even at the default
+        args.command_parser.error(f"unrecognized arguments: {' '.join(extra)}")
     try:
         code = int(args.func(args) or 0)
         sys.stdout.flush()  # a closed pipe (`| head`) shows here, not at interpreter exit

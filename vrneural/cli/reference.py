@@ -4,8 +4,10 @@ Every command and subcommand of :func:`vrneural.cli.build_parser` gets a section
 description and usage) and a table of its arguments and options: each option's flags, its
 help as ``--help`` prints it and its default. The stage options come from the config
 dataclasses (:func:`vrneural.config.add_config_args`), so a new field shows up here without a
-hand-written line. The site's build hook (``scripts/docs_hooks.py``) calls :func:`markdown`;
-``tests/test_cli_reference.py`` checks that every option ``--help`` shows is on the built page.
+hand-written line. The parsers are walked through what :class:`vrneural.errors.ArgumentParser`
+records (``arguments``, ``subcommands``), not argparse's private attributes. The site's build
+hook (``scripts/docs_hooks.py``) calls :func:`markdown`; ``tests/test_cli_reference.py``
+checks that every option ``--help`` shows is on the built page.
 
 Not a command (absent from :data:`vrneural.cli.COMMANDS`): ``python -m vrneural.cli.reference``
 prints the page.
@@ -17,31 +19,20 @@ import argparse
 import html
 from collections.abc import Iterator
 
+from vrneural.errors import ArgumentParser
+
 #: the page's path inside the site (``docs/`` relative)
 PAGE = "reference/cli.md"
 
 
 def walk(
-    parser: argparse.ArgumentParser, words: tuple[str, ...] = ("vrneural",)
-) -> Iterator[tuple[tuple[str, ...], argparse.ArgumentParser, str]]:
+    parser: ArgumentParser, words: tuple[str, ...] = ("vrneural",), help_: str = ""
+) -> Iterator[tuple[tuple[str, ...], ArgumentParser, str]]:
     """Every (sub)command parser, depth first in ``--help`` order: ``(words, parser, help)``
     with ``words`` the command as typed (``("vrneural", "bench", "quality")``)."""
-    yield words, parser, ""
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            helps = {a.dest: a.help or "" for a in action._choices_actions}
-            for name, sub in action.choices.items():
-                for w, p, h in walk(sub, (*words, name)):
-                    yield w, p, h or helps.get(name, "")
-
-
-def arguments(parser: argparse.ArgumentParser) -> list[argparse.Action]:
-    """The parser's own arguments and options (not ``--help``, not a subcommand group)."""
-    return [
-        a
-        for a in parser._actions
-        if not isinstance(a, (argparse._HelpAction, argparse._SubParsersAction))
-    ]
+    yield words, parser, help_
+    for name, (sub, h) in parser.subcommands.items():
+        yield from walk(sub, (*words, name), h)
 
 
 def _cell(text: str) -> str:
@@ -54,29 +45,46 @@ def _cell(text: str) -> str:
 
 
 def _default(action: argparse.Action) -> str:
-    if isinstance(action, argparse._VersionAction):
+    if hasattr(action, "version"):  # --version
         return ""
-    if isinstance(action, (argparse._StoreTrueAction, argparse._StoreFalseAction)):
-        return "off" if action.default is False else "on"
+    default = getattr(action, "shown_default", action.default)  # an unset field's resolved one
+    if action.nargs == 0 and action.const in (True, False):  # store_true / store_false
+        return "off" if action.const else "on"
     if action.required:
         return "required"
-    if action.default in (None, "", argparse.SUPPRESS):
+    if default in (None, "", argparse.SUPPRESS):
         return "none"
-    if isinstance(action.default, bool):
-        return "on" if action.default else "off"
-    return f"`{action.default}`"
+    if isinstance(default, bool):
+        return "on" if default else "off"
+    return f"`{default}`"
 
 
-def _row(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
-    fmt = parser._get_formatter()
-    flags = fmt._format_action_invocation(action)
+def _flags(action: argparse.Action) -> str:
+    """The flags as ``--help`` lists them: ``-o OUTPUT, --output OUTPUT``, ``scene``."""
+    if action.metavar is not None:
+        meta = action.metavar if isinstance(action.metavar, str) else " ".join(action.metavar)
+    elif action.choices is not None:
+        meta = "{" + ",".join(map(str, action.choices)) + "}"
+    else:
+        meta = action.dest.upper() if action.option_strings else action.dest
+    if not action.option_strings:
+        return meta
+    if action.nargs == 0:
+        return ", ".join(action.option_strings)
+    if isinstance(action.nargs, int) and isinstance(action.metavar, (str, type(None))):
+        meta = " ".join([meta] * action.nargs)
+    return ", ".join(f"{o} {meta}" for o in action.option_strings)
+
+
+def _row(parser: ArgumentParser, action: argparse.Action) -> str:
+    flags = _flags(action)
     if not action.option_strings and action.nargs == "?":
         flags += " (optional)"
-    help_ = fmt._expand_help(action) if action.help else ""
+    help_ = action.help % {**vars(action), "prog": parser.prog} if action.help else ""
     return f"| `{flags.replace('|', '/')}` | {_cell(help_)} | {_default(action)} |"
 
 
-def section(words: tuple[str, ...], parser: argparse.ArgumentParser, help_: str) -> str:
+def section(words: tuple[str, ...], parser: ArgumentParser, help_: str) -> str:
     """One command's section: heading, summary, usage, table of arguments."""
     level = "#" * min(max(len(words), 2), 4)  # vrneural and its commands ##, subcommands ###
     out = [f"{level} {' '.join(words)}", ""]
@@ -86,17 +94,16 @@ def section(words: tuple[str, ...], parser: argparse.ArgumentParser, help_: str)
         out += [_cell(parser.description), ""]
     usage = " ".join(parser.format_usage().split())
     out += ["```text", usage, "```", ""]
-    rows = [_row(parser, a) for a in arguments(parser)]
+    rows = [_row(parser, a) for a in parser.arguments]
     if rows:
         out += ["| argument / option | help | default |", "|---|---|---|", *rows, ""]
-    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
-    for group in subs:
-        names = ", ".join(f"[{n}](#{'-'.join((*words, n))})" for n in group.choices)
+    if parser.subcommands:
+        names = ", ".join(f"[{n}](#{'-'.join((*words, n))})" for n in parser.subcommands)
         out += [f"Subcommands: {names}.", ""]
     return "\n".join(out)
 
 
-def markdown(parser: argparse.ArgumentParser | None = None) -> str:
+def markdown(parser: ArgumentParser | None = None) -> str:
     """The whole reference page (Markdown) for ``parser`` (default: the `vrneural` command)."""
     if parser is None:
         from vrneural.cli import build_parser

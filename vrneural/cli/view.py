@@ -19,20 +19,20 @@ def register(sub) -> None:
         "view extra: pip install 'vrneural[view]'.",
     )
     p.add_argument("scene", nargs="?", default=None, help="scene file (TOML)")
-    add_config_args(p, RunConfig, skip=RUN_ONLY)
+    helps = {  # the viewer's own defaults for two of run's options
+        "eyes": "number of eyes (1 or 2) (default: 1)",
+        "profile": "device profile: preview (default), quest3, quest2, tiny",
+    }
+    add_config_args(p, RunConfig, skip=RUN_ONLY, helps=helps)
     add_config_args(p, ViewConfig)
-    for a in p._actions:  # the viewer's own defaults for two of run's options
-        if a.dest == "eyes":
-            a.help = "number of eyes (1 or 2) (default: 1)"
-        elif a.dest == "profile":
-            a.help = "device profile: preview (default), quest3, quest2, tiny"
     p.set_defaults(func=main)
 
 
 def main(args) -> int:
+    import dataclasses
     import sys
 
-    from vrneural.config import config_from_args, replace_config
+    from vrneural.config import config_from_args
     from vrneural.runtime.config import RunConfig
     from vrneural.viewer.backends import check_display, import_glfw
     from vrneural.viewer.config import ViewConfig
@@ -41,7 +41,7 @@ def main(args) -> int:
     check_display()  # before the scene and its shaders take their seconds
     import_glfw()
     cfg = config_from_args(RunConfig, args)
-    cfg = replace_config(cfg, frames=RunConfig().frames)  # --frames is the viewer's own
+    cfg = dataclasses.replace(cfg, frames=RunConfig().frames)  # --frames is the viewer's own
     vc = config_from_args(ViewConfig, args)
     view = View(args.scene, cfg, vc)
     try:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from vrneural.config import opt
+from vrneural.config import opt, unset
 from vrneural.errors import VrnError
 
 SPACES = ("linear", "log")
@@ -24,60 +24,75 @@ BEFORE_FIELD = {
     "parallax": "off",  # no parallax before issue #44
 }
 
+# What a --resume takes from the command line; every other field comes from the checkpoint.
+RESUME_FREE = ("epochs", "output", "resume", "progress", "device", "compile", "threads")
+
 
 @dataclass
 class TrainConfig:
     """Fields shared by every trainer (optimizer, schedule, data split, workflow)."""
 
-    epochs: int = opt(20, "training epochs (one epoch = every training (wi, wo) slice once)")
-    seed: int = opt(0, "seed of initialisation, data order and texture-lookup jitter")
-    lr: float = opt(5e-4, "initial Adam learning rate")
-    lr_min: float = opt(1e-7, "ReduceLROnPlateau floor")
-    lr_factor: float = opt(0.5, "ReduceLROnPlateau decay factor")
-    lr_threshold: float = opt(
+    epochs: int | None = unset(
+        20, "training epochs (one epoch = every training (wi, wo) slice once)"
+    )
+    seed: int | None = unset(0, "seed of initialisation, data order and texture-lookup jitter")
+    lr: float | None = unset(5e-4, "initial Adam learning rate")
+    lr_min: float | None = unset(1e-7, "ReduceLROnPlateau floor")
+    lr_factor: float | None = unset(0.5, "ReduceLROnPlateau decay factor")
+    lr_threshold: float | None = unset(
         5e-3, "halve lr when the test L1 improves by less than this (see docs/training.md)"
     )
-    lr_threshold_mode: str = opt(
+    lr_threshold_mode: str | None = unset(
         "rel",
         "threshold mode: rel (fraction of the best L1) or abs (L1 units)",
         choices=("abs", "rel"),
     )
-    lr_patience: int = opt(2, "epochs without enough improvement before halving")
-    tex_lr_scale: float = opt(10.0, "learning-rate multiplier for neural textures")
-    ema: float = opt(
+    lr_patience: int | None = unset(2, "epochs without enough improvement before halving")
+    tex_lr_scale: float | None = unset(10.0, "learning-rate multiplier for neural textures")
+    ema: float | None = unset(
         0.0,
         "decay of an exponential moving average of the weights, evaluated and exported "
         "instead of the last step (0 = off; see docs/training.md)",
     )
-    test_fraction: float = opt(0.1, "held-out fraction of (wi, wo) pairs (distill: teacher's)")
-    split_seed: int = opt(0, "seed of the train/test split (distill reuses the teacher's split)")
-    max_test_slices: int = opt(64, "test slices used for the per-epoch test L1 (0 = all)")
-    jitter: bool = opt(True, "stratified (jittered within the texel) neural-texture lookups")
-    space: str = opt("linear", "output and loss space: linear, or log (log(1+y))", choices=SPACES)
-    device: str = opt(
+    test_fraction: float | None = unset(
+        0.1, "held-out fraction of (wi, wo) pairs (distill: teacher's)"
+    )
+    split_seed: int | None = unset(
+        0, "seed of the train/test split (distill reuses the teacher's split)"
+    )
+    max_test_slices: int | None = unset(64, "test slices used for the per-epoch test L1 (0 = all)")
+    jitter: bool | None = unset(
+        True, "stratified (jittered within the texel) neural-texture lookups"
+    )
+    space: str | None = unset(
+        "linear", "output and loss space: linear, or log (log(1+y))", choices=SPACES
+    )
+    device: str | None = unset(
         "cpu",
         "train on cpu, cuda or cuda:N (CUDA: same result to float tolerance, not bit-exact; "
         "see docs/training.md)",
     )
-    compile: str = opt(
+    compile: str | None = unset(
         "off",
         "torch.compile the networks: off, default, or reduce-overhead (adds CUDA graphs); "
         "fewer kernel launches per step, paid for with a compile at the start (see "
         "docs/training.md)",
         choices=COMPILE_MODES,
     )
-    threads: int = opt(1, "torch CPU threads (1 was 15-70x faster than 2 on the shared 2-core box)")
-    parallax: str = opt(
+    threads: int | None = unset(
+        1, "torch CPU threads (1 was 15-70x faster than 2 on the shared 2-core box)"
+    )
+    parallax: str | None = unset(
         "auto",
         "look the neural textures up where the view ray meets the BTF's height field: auto "
         "(height where its relief reaches a texel, else off), height, neural (NeuMIP's offset "
         "module: not built yet) or off (see docs/parallax.md)",
         choices=PARALLAX,
     )
-    parallax_steps: int = opt(
+    parallax_steps: int | None = unset(
         16, "march steps of height-field parallax at the data's steepest view (fewer below), 1-64"
     )
-    parallax_march: str = opt(
+    parallax_march: str | None = unset(
         "texel",
         "march per texel, or once per 2x2 block (a quarter of the height lookups)",
         choices=("texel", "block"),
@@ -93,10 +108,10 @@ class TeachConfig(TrainConfig):
 
     btf: str = opt("", "input BTF file", cli=False)
     output: str = opt("teacher.pt", "output checkpoint", cli=False)
-    width: int = opt(128, "hidden width of the teacher MLP")
-    layers: int = opt(4, "linear layers of the teacher MLP (layers - 1 hidden)")
-    channels: int = opt(8, "neural-texture channels (full BTF resolution)")
-    export: bool = opt(
+    width: int | None = unset(128, "hidden width of the teacher MLP")
+    layers: int | None = unset(4, "linear layers of the teacher MLP (layers - 1 hidden)")
+    channels: int | None = unset(8, "neural-texture channels (full BTF resolution)")
+    export: bool | None = unset(
         True, "also write the .vrnm beside the checkpoint (t.pt -> t.vrnm; the per-pixel reference)"
     )
 
@@ -108,29 +123,31 @@ class DistillConfig(TrainConfig):
     teacher: str = opt("", "teacher checkpoint (from vrneural teach)", cli=False)
     output: str = opt("student.pt", "output checkpoint", cli=False)
     btf: str = opt("", "BTF file (default: the path recorded in the teacher)")
-    method: str = opt("student", "student (coarse_fine), single8 or neumip", choices=METHODS)
-    distill: bool = opt(True, "use the teacher (Eq. 5); --no-distill: ground truth only")
-    sigma: float = opt(0.1, "weight of L1(y_s, y_t)")
-    lambda1: float = opt(0.1, "weight of L2(z_s1, T1 z_t1)")
-    lambda2: float = opt(0.1, "weight of L2(z_s2, T2 z_t2)")
-    neumip_dirs: str = opt(
+    method: str | None = unset(
+        "student", "student (coarse_fine), single8 or neumip", choices=METHODS
+    )
+    distill: bool | None = unset(True, "use the teacher (Eq. 5); --no-distill: ground truth only")
+    sigma: float | None = unset(0.1, "weight of L1(y_s, y_t)")
+    lambda1: float | None = unset(0.1, "weight of L2(z_s1, T1 z_t1)")
+    lambda2: float | None = unset(0.1, "weight of L2(z_s2, T2 z_t2)")
+    neumip_dirs: str | None = unset(
         "xy",
         "NeuMIP's direction inputs: xy (wi.xy, wo.xy, as NeuMIP has them) or full (wi, wo, h "
         "like the student; a stronger baseline than the paper's, see docs/training.md)",
         choices=NEUMIP_DIRS,
     )
-    width: int = opt(
+    width: int | None = unset(
         8,
         "hidden width of the student's M_c and M_f, and of single8 (NeuMIP is always 25); the "
         "paper's 8, or 12 with --wide-start 24 to come within a tenth of NeuMIP's L1 on our "
         "presets (see docs/quality.md)",
     )
-    init_from: str = opt(
+    init_from: str | None = unset(
         "",
         "start from this run of the same method and teacher (trained at this --width or wider), "
         "its hidden units pruned to --width; see docs/training.md",
     )
-    wide_start: int = opt(
+    wide_start: int | None = unset(
         0,
         "train this wide for --epochs // 2 epochs (into <output>.wide.pt), then prune to "
         "--width and train on for the rest: --width and --init-from in one run; --resume of "
@@ -141,22 +158,26 @@ class DistillConfig(TrainConfig):
     # whole run was started with, so that --resume of either half continues that run
     wide_start_epochs: int = opt(0, "with --wide-start: the epochs of both halves", cli=False)
     wide_start_width: int = opt(0, "with --wide-start: the width it is pruned to", cli=False)
-    lod_levels: int = opt(
+    lod_levels: int | None = unset(
         1,
         "prefiltered neural textures: pyramid levels (1 = level 0 alone), each trained against "
         "the BTF averaged over its texels' footprint (see "
         "docs/lod.md)",
     )
-    lod_kind: str = opt(
+    lod_kind: str | None = unset(
         "filter",
         "filter: the levels are box averages of level 0 (linear latent downsampling, no "
         "parameters added); levels: each level a texture of its own (NeuMIP's)",
         choices=LOD_KINDS,
     )
-    lod_weight: float = opt(1.0, "weight of the prefiltered levels' L1, shared by the levels")
-    coarse_channels: int = opt(8, "student U_c channels (one texel per 2x2 block)")
-    fine_channels: int = opt(8, "student U_f channels (full BTF resolution)")
-    export: bool = opt(True, "also write the runtime pack beside the checkpoint (s.pt -> s.vrnm)")
+    lod_weight: float | None = unset(
+        1.0, "weight of the prefiltered levels' L1, shared by the levels"
+    )
+    coarse_channels: int | None = unset(8, "student U_c channels (one texel per 2x2 block)")
+    fine_channels: int | None = unset(8, "student U_f channels (full BTF resolution)")
+    export: bool | None = unset(
+        True, "also write the runtime pack beside the checkpoint (s.pt -> s.vrnm)"
+    )
 
 
 def check_lod_levels(cfg, res: tuple[int, int], btf_path) -> None:

@@ -21,11 +21,8 @@ import torch.distributed as dist
 from vrneural.btf.format import read_btf
 from vrneural.btf.identity import btf_fingerprint, check_btf_record
 from vrneural.config import (
-    is_explicit,
-    keep_flag_names,
-    mark_explicit,
-    name_flag,
-    replace_config,
+    given,
+    resolved,
 )
 from vrneural.distill.checkpoint import (
     UnfinishedRunWarning,
@@ -59,33 +56,33 @@ from vrneural.outputs import (
 from vrneural.parallax import setup_parallax
 
 
-def resolve_method(cfg: DistillConfig) -> DistillConfig:
+def resolve_method(cfg: DistillConfig, chosen=()) -> DistillConfig:
     """The config as trained: NeuMIP always uses log(1 + y) output, as the paper modified it
-    (a --space linear typed with it is an error, not silently changed)."""
+    (a --space linear given with it, ``"space" in chosen``, is an error, not silently changed)."""
     if cfg.method != "neumip":
         return cfg
-    if cfg.space != "log" and is_explicit(cfg, "space"):
+    if cfg.space != "log" and "space" in chosen:
         raise VrnError(
             f"--space {cfg.space} conflicts with --method neumip, which always trains in log "
             "space (log(1 + y), as the paper modified NeuMIP); drop --space"
         )
-    return replace_config(cfg, space="log")
+    return dataclasses.replace(cfg, space="log")
 
 
-def teacher_split(cfg: DistillConfig, tck: dict, resume: bool) -> DistillConfig:
+def teacher_split(cfg: DistillConfig, tck: dict, resume: bool, chosen=()) -> DistillConfig:
     """The config with the teacher's split settings, the split every student trains on. A
-    ``--split-seed``/``--test-fraction`` typed with another value is an error."""
+    ``--split-seed``/``--test-fraction`` given (in ``chosen``) with another value is an error."""
     tc = tck["config"]
     for k in ("split_seed", "test_fraction"):
         if k not in tc or getattr(cfg, k) == tc[k]:
             continue
-        if is_explicit(cfg, k) and not resume:
+        if k in chosen and not resume:
             raise VrnError(
                 f"--{k.replace('_', '-')} = {getattr(cfg, k)!r}, but the teacher {cfg.teacher} "
                 f"was trained with {tc[k]!r}; distill reuses the teacher's train/test split "
                 "(drop the flag, or train a teacher with it)"
             )
-        cfg = replace_config(cfg, **{k: tc[k]})
+        cfg = dataclasses.replace(cfg, **{k: tc[k]})
     return cfg
 
 
@@ -156,9 +153,10 @@ def run_wide_start(cfg: DistillConfig, on_step=None, stored: dict | None = None)
             f"{wide_output(cfg.output)} exists; drop --resume to start a new run"
         )
     if stored is not None:  # the run's own settings; a flag that contradicts one is an error
+        kind = resolved(cfg)
         for name, key in WIDE_START_RECORD:
-            now, was = getattr(cfg, name), type(getattr(cfg, name))(stored[key])
-            if is_explicit(cfg, name) and now != was:
+            now, was = getattr(cfg, name), type(getattr(kind, name))(stored[key])
+            if now is not None and now != was:
                 why = (
                     "its epochs were split between the halves when it began"
                     if name == "epochs"
@@ -169,9 +167,10 @@ def run_wide_start(cfg: DistillConfig, on_step=None, stored: dict | None = None)
                     f"run with --{name.replace('_', '-')} {was}; {why} (drop the flag, or start "
                     "over: --force instead of --resume)"
                 )
-        cfg = replace_config(
-            cfg, **{name: type(getattr(cfg, name))(stored[key]) for name, key in WIDE_START_RECORD}
+        cfg = dataclasses.replace(
+            cfg, **{name: type(getattr(kind, name))(stored[key]) for name, key in WIDE_START_RECORD}
         )
+    asked, cfg = cfg, resolved(cfg)  # the halves resolve the fields left open themselves
     w = cfg.wide_start
     if cfg.method == "neumip":
         raise VrnError(
@@ -201,11 +200,11 @@ def run_wide_start(cfg: DistillConfig, on_step=None, stored: dict | None = None)
         )
     wide_path, wide_epochs = wide_output(cfg.output), cfg.epochs // 2
     record = dict(wide_start_epochs=cfg.epochs, wide_start_width=cfg.width)
-    wide = replace_config(cfg, output=wide_path, width=w, epochs=wide_epochs, **record)
-    narrow = replace_config(cfg, epochs=cfg.epochs - wide_epochs, init_from=wide_path, **record)
-    for c in (wide, narrow):
-        mark_explicit(c, "epochs")  # a half goes to its share, not its stored target
-        name_flag(c, "epochs", "")  # no option sets one half's epochs directly
+    # each half goes to its share of the epochs, not its stored target
+    wide = dataclasses.replace(asked, output=wide_path, width=w, epochs=wide_epochs, **record)
+    narrow = dataclasses.replace(
+        asked, epochs=cfg.epochs - wide_epochs, init_from=wide_path, **record
+    )
     outs = outputs_of(cfg.output, cfg.export)
     try:
         if cfg.resume and Path(cfg.output).exists():  # the pruned half began: continue it
@@ -224,7 +223,7 @@ def run_wide_start(cfg: DistillConfig, on_step=None, stored: dict | None = None)
             prepare_outputs(wide, wide_outs, inputs=[cfg.teacher, cfg.btf])
             if cfg.force and _rank() == 0:  # the old run's halves go (see clear_outputs)
                 clear_outputs(outs + wide_outs)
-        wck = _train(wide, on_step)
+        wck = _train(wide, on_step, epochs_flag="")  # no option sets a half's epochs
         if cfg.progress and _rank() == 0:
             test = wck["history"][-1]["test_l1"] if wck["history"] else float("nan")
             print(
@@ -234,7 +233,7 @@ def run_wide_start(cfg: DistillConfig, on_step=None, stored: dict | None = None)
             )
         if dist.is_initialized():
             dist.barrier()  # rank 0 wrote the wide half; every rank prunes it
-        return _train(replace_config(narrow, resume=False, force=False), on_step)
+        return _train(dataclasses.replace(narrow, resume=False, force=False), on_step, "")
     except Interrupted as e:
         e.resume = f"-o {cfg.output} --resume"  # the whole run, not the half's file
         raise
@@ -262,14 +261,16 @@ def _resume_pruned_half(cfg, narrow, wide_path: str, on_step) -> dict:
             "wide start cannot be extended (--force retrains both halves)",
             file=sys.stderr,
         )
-    return _train(narrow, on_step)
+    return _train(narrow, on_step, epochs_flag="")
 
 
-def run_distill(cfg: DistillConfig, on_step=None) -> dict:
+def run_distill(cfg: DistillConfig, on_step=None, epochs_flag: str = "--epochs") -> dict:
     """Train (or resume) a student/baseline; returns the final checkpoint dict. Holds a lock on its
-    outputs while it trains (:func:`vrneural.outputs.output_lock`)."""
+    outputs while it trains (:func:`vrneural.outputs.output_lock`). Fields left None take
+    their defaults, or on ``--resume`` the checkpoint's; ``epochs_flag``: the option that
+    sets ``cfg.epochs``, for messages."""
     with output_lock(cfg.output):
-        return _run_distill(cfg, on_step)
+        return _run_distill(cfg, on_step, epochs_flag)
 
 
 #: options that shape one method only: (field, the methods it applies to, what it is)
@@ -280,20 +281,19 @@ METHOD_OPTIONS = (
 )
 
 
-def check_method_options(cfg: DistillConfig, given=None) -> None:
-    """An option typed on the command line (``given``, default: ``cfg``'s record) that the run
+def check_method_options(cfg: DistillConfig, chosen) -> None:
+    """An option given (named in ``chosen``: the fields not left None) that the run
     would not use is a one-line error (it was recorded in the config as if it had been, and
     did nothing): the student's texture channels for single8 or NeuMIP, ``--neumip-dirs`` for
     the others, Eq. 5's weights with ``--no-distill``. ``cfg``: the run's config as trained
     (a resumed run's method is its checkpoint's)."""
-    given = (cfg.__dict__.get("_explicit") or ()) if given is None else given
     for name, methods, what in METHOD_OPTIONS:
-        if name in given and cfg.method not in methods:
+        if name in chosen and cfg.method not in methods:
             raise VrnError(
                 f"--{name.replace('_', '-')} sets {what}; it does nothing for --method "
                 f"{cfg.method} (drop the flag)"
             )
-    unused = [f"--{k}" for k in ("sigma", "lambda1", "lambda2") if k in given]
+    unused = [f"--{k}" for k in ("sigma", "lambda1", "lambda2") if k in chosen]
     if unused and not cfg.distill:
         raise VrnError(
             f"{', '.join(unused)} {'weighs' if len(unused) == 1 else 'weigh'} the teacher's "
@@ -302,10 +302,10 @@ def check_method_options(cfg: DistillConfig, given=None) -> None:
         )
 
 
-def _run_distill(cfg: DistillConfig, on_step=None) -> dict:
+def _run_distill(cfg: DistillConfig, on_step, epochs_flag: str) -> dict:
     check_resume_force(cfg.resume, cfg.force)
     if not cfg.resume:  # a resumed run's method is its checkpoint's: checked in _train
-        check_method_options(cfg)
+        check_method_options(resolved(cfg), given(cfg))
     stored = stored_wide_start(cfg.output) if cfg.resume else None
     if cfg.wide_start or stored:
         with output_lock(wide_output(cfg.output)):  # its wide half's outputs too
@@ -323,11 +323,13 @@ def _run_distill(cfg: DistillConfig, on_step=None) -> dict:
                 UnfinishedRunWarning,
                 stacklevel=2,
             )
-    return _train(cfg, on_step)
+    return _train(cfg, on_step, epochs_flag)
 
 
-def _train(cfg: DistillConfig, on_step=None) -> dict:
-    """One training run (a whole ``distill`` run, or one half of a ``--wide-start`` run)."""
+def _train(asked: DistillConfig, on_step=None, epochs_flag: str = "--epochs") -> dict:
+    """One training run (a whole ``distill`` run, or one half of a ``--wide-start`` run):
+    ``asked`` as given (None: not given), ``epochs_flag`` the option that sets its epochs."""
+    cfg, chosen = resolved(asked), given(asked)
     check_train_config(cfg)
     for k in ("sigma", "lambda1", "lambda2", "lod_weight"):
         check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 0.0, 100.0)
@@ -335,9 +337,9 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
     check_range("--coarse-channels", cfg.coarse_channels, 1, 64)
     check_range("--fine-channels", cfg.fine_channels, 1, 64)
     check_range("--width", cfg.width, 1, 64)
-    if cfg.method == "neumip" and is_explicit(cfg, "width"):
+    if cfg.method == "neumip" and "width" in chosen:
         raise VrnError("--width: NeuMIP is always 4 x 25 (the paper's baseline); drop --width")
-    cfg = resolve_method(cfg)
+    cfg = resolve_method(cfg, chosen)
     if cfg.init_from and not cfg.resume and not Path(cfg.init_from).is_file():  # named first
         raise VrnError(f"--init-from {cfg.init_from}: no such checkpoint")
     export = cfg.export and not is_wide_half(dataclasses.asdict(cfg))  # a wide half: no pack
@@ -348,15 +350,15 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
             raise VrnError(f"{cfg.output}: is not a student checkpoint; cannot --resume distill")
         was = resume["config"].get("init_from") or ""
         if cfg.init_from and was and same_file(cfg.init_from, was):  # ./wide.pt == wide.pt
-            cfg = replace_config(cfg, init_from=was)
+            asked = dataclasses.replace(asked, init_from=was)
         # output and teacher: where they are now (the directory may have moved)
-        old = resumed_config(cfg, BEFORE_FIELD | resume["config"], resume)
+        stored = BEFORE_FIELD | resume["config"]
+        old = resumed_config(asked, stored, resume, epochs_flag=epochs_flag)
         old["teacher"] = cfg.teacher
         if cfg.btf:
             old["btf"] = cfg.btf
-        given = cfg.__dict__.get("_explicit") or ()
-        cfg = keep_flag_names(cfg, DistillConfig(**old))
-        check_method_options(cfg, given)
+        cfg = resolved(DistillConfig(**old))
+        check_method_options(cfg, chosen)
     tck = load_checkpoint(cfg.teacher, kind="teacher")
     if resume is None and not tck.get("finished", True):
         warnings.warn(
@@ -369,7 +371,7 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
     tsha = file_sha256(cfg.teacher)
     if resume is not None and resume["teacher"]["sha256"] != tsha:
         raise VrnError(f"{cfg.teacher}: teacher differs from the one {cfg.output} was trained with")
-    cfg = teacher_split(cfg, tck, resume is not None)
+    cfg = teacher_split(cfg, tck, resume is not None, chosen)
     btf_path = cfg.btf or recorded_btf(tck, cfg.teacher)
     check_not_input(outs, [btf_path])
     btf = read_btf(btf_path)
@@ -451,6 +453,7 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
         resume,
         tex_params=list(model.tex.parameters()),
         on_step=on_step,
+        epochs_flag=epochs_flag,
     )
     if rank == 0:
         finish_outputs(ck, cfg, data, export, missing_only=ck is resume)

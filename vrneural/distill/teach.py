@@ -9,8 +9,8 @@ from torch import nn
 
 from vrneural.btf.format import read_btf
 from vrneural.btf.identity import btf_fingerprint, check_btf_record, split_pairs
-from vrneural.config import flag, is_explicit, keep_flag_names
-from vrneural.distill.config import TeachConfig
+from vrneural.config import given, resolved
+from vrneural.distill.config import RESUME_FREE, TeachConfig
 from vrneural.distill.data import SliceData
 from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
@@ -60,35 +60,38 @@ def check_train_config(cfg) -> None:
     check_range("--threads", cfg.threads, 1, 1024)
 
 
-# What a --resume takes from the command line; every other field comes from the checkpoint.
-RESUME_FREE = ("epochs", "output", "resume", "progress", "device", "compile", "threads")
+def resumed_config(
+    cfg,
+    stored: dict,
+    ck: dict,
+    free: tuple[str, ...] = RESUME_FREE,
+    epochs_flag: str = "--epochs",
+) -> dict:
+    """The checkpoint's config with the ``free`` fields taken from ``cfg`` (an unresolved
+    config: a field left None was not given).
 
-
-def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_FREE) -> dict:
-    """The checkpoint's config with the ``free`` fields taken from ``cfg``.
-
-    A flag the user set to something else than the checkpoint used (a value that is neither
-    the checkpoint's nor the default) is an error, not silently ignored; so is an ``--epochs``
-    below the epochs already trained.
+    A field given with another value than the checkpoint used (even the default) is an
+    error, not silently ignored; so is an ``--epochs`` below the epochs already trained.
+    ``epochs_flag`` names the option that sets ``epochs`` in messages ("": none does).
     """
 
-    def shown(k: str) -> str:  # name_flag(cfg, k, "") (no option sets it): the field's own
-        return flag(cfg, k) or "--" + k.replace("_", "-")
+    def shown(k: str) -> str:
+        return (epochs_flag if k == "epochs" else "") or "--" + k.replace("_", "-")
 
-    for f in dataclasses.fields(cfg):
-        k = f.name
+    chosen = given(cfg)
+    for k in (f.name for f in dataclasses.fields(cfg) if f.name in chosen):
         if k in free or k in ("force", "btf", "teacher") or k not in stored:
             continue
         now = getattr(cfg, k)
-        if now != stored[k] and is_explicit(cfg, k):
+        if now != stored[k]:
             raise VrnError(
                 f"{shown(k)} = {now!r}, but {cfg.output} was trained with "
                 f"{stored[k]!r}; --resume continues the checkpoint's settings (drop the flag, "
                 "or start over: --force instead of --resume)"
             )
-    merged = dict(stored) | {k: getattr(cfg, k) for k in free}
-    if not is_explicit(cfg, "epochs") and "epochs" in stored:  # no --epochs: the run's target
-        merged["epochs"] = stored["epochs"]
+    now = resolved(cfg)  # no --epochs: the run's own target (when it has one)
+    merged = dict(stored) | {k: getattr(now, k) for k in free if k != "epochs"}
+    merged["epochs"] = cfg.epochs if cfg.epochs is not None else stored.get("epochs", now.epochs)
     done = int(ck["epoch"])
     if merged["epochs"] < done:
         least = done + 1 if int(ck.get("step", 0)) else done  # partway through the next one
@@ -105,16 +108,19 @@ def resumed_config(cfg, stored: dict, ck: dict, free: tuple[str, ...] = RESUME_F
     return merged
 
 
-def run_teach(cfg: TeachConfig, on_step=None) -> dict:
+def run_teach(cfg: TeachConfig, on_step=None, epochs_flag: str = "--epochs") -> dict:
     """Train (or resume) a teacher; returns the final checkpoint dict. Holds a lock on its
-    outputs while it trains (:func:`vrneural.outputs.output_lock`)."""
+    outputs while it trains (:func:`vrneural.outputs.output_lock`). Fields left None take
+    their defaults, or on ``--resume`` the checkpoint's; ``epochs_flag``: the option that
+    sets ``cfg.epochs``, for messages."""
     from vrneural.outputs import output_lock
 
     with output_lock(cfg.output):
-        return _run_teach(cfg, on_step)
+        return _run_teach(cfg, on_step, epochs_flag)
 
 
-def _run_teach(cfg: TeachConfig, on_step=None) -> dict:
+def _run_teach(asked: TeachConfig, on_step, epochs_flag: str) -> dict:
+    cfg = resolved(asked)
     check_train_config(cfg)
     check_range("--width", cfg.width, 1, 4096)
     check_range("--layers", cfg.layers, 3, 16)
@@ -124,8 +130,9 @@ def _run_teach(cfg: TeachConfig, on_step=None) -> dict:
     if resume is not None:
         if resume.get("kind") != "teacher":
             raise VrnError(f"{cfg.output}: is not a teacher checkpoint; cannot --resume teach")
-        old = resumed_config(cfg, {"parallax": "off"} | resume["config"], resume)
-        cfg = keep_flag_names(cfg, TeachConfig(**(old | {"btf": cfg.btf})))
+        stored = {"parallax": "off"} | resume["config"]
+        old = resumed_config(asked, stored, resume, epochs_flag=epochs_flag)
+        cfg = resolved(TeachConfig(**(old | {"btf": cfg.btf})))
     btf = read_btf(cfg.btf)
     fp = btf_fingerprint(btf)
     if resume is not None:
@@ -168,6 +175,7 @@ def _run_teach(cfg: TeachConfig, on_step=None) -> dict:
         resume,
         tex_params=list(model.tex.parameters()),
         on_step=on_step,
+        epochs_flag=epochs_flag,
     )
     if rank == 0:
         finish_outputs(ck, cfg, data, missing_only=ck is resume)

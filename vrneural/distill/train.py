@@ -25,7 +25,6 @@ import torch
 import torch.distributed as dist
 from torch import nn
 
-from vrneural.config import flag
 from vrneural.distill.checkpoint import save_checkpoint
 from vrneural.distill.core import Ema, NonFiniteLossError, epoch_order, epoch_steps
 from vrneural.distill.data import SliceData
@@ -125,12 +124,15 @@ def fit(
     resume: dict | None = None,
     tex_params: list | None = None,
     on_step=None,
+    epochs_flag: str = "--epochs",
 ) -> dict:
     """Train ``net`` (``net(wi, wo, uv, pair) -> (loss, parts)``) and return the final payload.
 
     ``on_step(epoch, step)`` is called after every step (tests use it to send Ctrl-C).
     ``test_l1()`` evaluates the held-out L1 (linear space); ``payload`` holds the fixed
-    checkpoint fields (kind, spec, config, btf, split, ...); ``resume`` a loaded checkpoint.
+    checkpoint fields (kind, spec, config, btf, split, ...); ``resume`` a loaded checkpoint;
+    ``epochs_flag`` the option that sets ``cfg.epochs``, for messages (``bench quality``'s
+    ``--teacher-epochs``; "": none does, a ``--wide-start`` half).
     """
     torch.set_num_threads(max(1, int(cfg.threads)))
     rank, world = (dist.get_rank(), dist.get_world_size()) if dist.is_initialized() else (0, 1)
@@ -193,12 +195,12 @@ def fit(
 
     n = len(data.train)
     bar = None
-    if rank == 0 and epoch >= cfg.epochs and flag(cfg, "epochs"):
+    if rank == 0 and epoch >= cfg.epochs and epochs_flag:
         # a finished run resumed without more --epochs (no hint where no option sets its
         # epochs directly: bench quality's --wide-start halves)
         print(
             f"{out}: already trained for {count(epoch, 'epoch')}, nothing left to train "
-            f"({flag(cfg, 'epochs')} N with N > {epoch} continues it)",
+            f"({epochs_flag} N with N > {epoch} continues it)",
             file=sys.stderr,
         )
     elif rank == 0 and cfg.progress and epoch < cfg.epochs:  # no empty bar for a finished run

@@ -7,7 +7,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from vrneural.config import opt
+from vrneural.config import opt, resolved, unset
 from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.runtime.lights import LIGHTS_MAX
 from vrneural.runtime.profiles import PROFILES, get_profile
@@ -18,23 +18,23 @@ from vrneural.runtime.settings import FRAMES_IN_FLIGHT_MAX, MODES, RADIANCE, Set
 @dataclass
 class RunConfig:
     scene: str | None = opt(None, "scene file (TOML); the built-in scene when omitted", cli=False)
-    eyes: int = opt(2, "number of eyes (1 or 2)")
-    reuse: int | str | None = opt(
+    eyes: int | None = unset(2, "number of eyes (1 or 2)")
+    reuse: int | str | None = unset(
         None,
         "N: frames reusing one update (profile default: 4), or 'auto': refresh each object "
         "when its view or light directions have turned by --reuse-budget degrees",
         type=lambda text: int(text) if re.fullmatch(r"\s*[+-]?[0-9]+\s*", text) else text,
     )
-    reuse_budget: float = opt(
+    reuse_budget: float | None = unset(
         2.0, "--reuse auto: degrees a view or light direction may turn before a refresh"
     )
-    mips: bool = opt(
+    mips: bool | None = unset(
         False,
         "radiance textures with mip chains (coverage-weighted, rebuilt after each update), "
         "sampled trilinearly and anisotropically: far or grazing surfaces average instead of "
         "aliasing",
     )
-    screen_res: bool = opt(
+    screen_res: bool | None = unset(
         False,
         "each object's radiance-texture side from its size on screen (about one texel per "
         "pixel; a power of two up to its own side)",
@@ -44,7 +44,7 @@ class RunConfig:
         "sample a pack's prefiltered neural-texture pyramid at each block's footprint "
         "(packs without one: level 0 alone); off: level 0 everywhere",
     )
-    radiance: str = opt(
+    radiance: str | None = unset(
         "per-eye",
         "radiance textures per object: per-eye, or shared by both eyes (shaded from their "
         "centre: half the texture-space work)",
@@ -65,7 +65,9 @@ class RunConfig:
         None, "point lights: the first N of the scene (default: the profile's, at most the scene's)"
     )
     mode: str = opt("texture", "texture | screen | reference", choices=MODES)
-    schedule: str = opt("staggered", "reuse schedule: staggered | burst", choices=SCHEDULES)
+    schedule: str | None = unset(
+        "staggered", "reuse schedule: staggered | burst", choices=SCHEDULES
+    )
     precision: str = opt("auto", "auto | f16 | f32", choices=("auto", "f16", "f32"))
     reference: str | None = opt(
         None,
@@ -77,9 +79,9 @@ class RunConfig:
         "runtime pack (.vrnm, from `vrneural distill` or `export`) shown on the built-in "
         "scene's three neural objects instead of the bundled materials (default: none)",
     )
-    out: str = opt("", "output directory (default: a new out/run-YYYYmmdd-HHMMSS per run)")
+    out: str | None = opt(None, "output directory (default: a new out/run-YYYYmmdd-HHMMSS per run)")
     video: bool = opt(True, "write OUT/stereo.mp4, both eyes side by side (imageio-ffmpeg)")
-    video_scale: int = opt(4, "video downscale factor (integer)")
+    video_scale: int | None = unset(4, "video downscale factor (integer)")
     save_frames: str = opt(
         "first,last", "frames saved as PNG + EXR: 'first,last', 'all', 'none', '0,45'"
     )
@@ -131,6 +133,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         )
     if not hasattr(adapter, "limits"):
         raise VrnError("resolve: adapter must be adapter_summary() (vrneural.gpu.device)")
+    cfg = resolved(cfg)  # the fields not given: their defaults
     for name, allowed in (("mode", MODES), ("schedule", SCHEDULES)):
         if getattr(cfg, name) not in allowed:
             raise VrnError(

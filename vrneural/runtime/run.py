@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.config import config_dict, is_explicit, replace_config
+from vrneural.config import config_dict, given, resolved
 from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.interrupt import Stop
 from vrneural.outputs import OUTPUT_MARK, OutputDir, write_json
@@ -147,7 +147,7 @@ def percentiles(x) -> dict:
 
 def run(cfg: RunConfig, progress: bool = True) -> dict:
     """Render ``cfg``; returns the summary (also written to ``OUT/summary.json``)."""
-    if is_explicit(cfg, "out") and not cfg.out.strip():
+    if cfg.out is not None and not cfg.out.strip():
         raise VrnError("--out is empty; name a directory, or leave --out out for out/run-<time>")
     if cfg.out:
         with OutputDir(cfg.out, "run", force=cfg.force) as od:
@@ -172,7 +172,8 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
     from vrneural.runtime.scene import builtin_lights, builtin_scene, load_scene
 
     out = od.path
-    cfg = replace_config(cfg, out=str(out))
+    chosen = given(cfg)  # the fields given (None: not given): a knob that does nothing is named
+    cfg = resolved(dataclasses.replace(cfg, out=str(out)))
     n_builtin = len(builtin_lights())
     if cfg.scene and cfg.pack:
         raise VrnError(
@@ -189,13 +190,13 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
         if cfg.pack:
             use_pack(scene, cfg.pack)
     adapter = adapter_summary()
-    s = resolve(replace_config(cfg, scene=None, pack=None), scene, adapter)  # both applied
+    s = resolve(dataclasses.replace(cfg, scene=None, pack=None), scene, adapter)  # both applied
     save = selected_frames(cfg.save_frames, s.frames)
     video = None
     if cfg.video:  # every eye keeps at least 2 x 2 pixels (libx264's minimum, 2x2 blocks)
         top = max(1, min(s.eye_res) // 2)
-        if not is_explicit(cfg, "video_scale"):  # the default adapts to small eyes
-            cfg = replace_config(cfg, video_scale=min(cfg.video_scale, top))
+        if "video_scale" not in chosen:  # the default adapts to small eyes
+            cfg = dataclasses.replace(cfg, video_scale=min(cfg.video_scale, top))
         check_range("--video-scale", cfg.video_scale, 1, top)
         check_video()
     od.check()
@@ -235,14 +236,14 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
             "file has only the lights it defines)"
         )
     knobs = ("reuse", "schedule", "radiance", "reuse_budget", "mips", "screen_res")
-    unused = [f"--{k.replace('_', '-')}" for k in knobs if is_explicit(cfg, k)]
+    unused = [f"--{k.replace('_', '-')}" for k in knobs if k in chosen]
     if s.mode != "texture" and unused:  # texture space's knobs: say they do nothing here
         r.warnings.append(
             f"{' and '.join(unused)} only {'apply' if len(unused) > 1 else 'applies'} to "
             f"--mode texture; --mode {s.mode} shades "
             "every pixel every frame"
         )
-    if not cfg.video and is_explicit(cfg, "video_scale"):  # does nothing: say so
+    if not cfg.video and "video_scale" in chosen:  # does nothing: say so
         r.warnings.append("--video-scale only applies to the video, and --no-video writes none")
     for w in r.warnings:
         print(f"warning: {w}", file=sys.stderr)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from vrneural.config import is_explicit, mark_explicit, replace_config
+from vrneural.config import resolved
 from vrneural.errors import VrnError, check_int
 from vrneural.runtime.config import RunConfig
 from vrneural.viewer.config import RUN_ONLY, ViewConfig
@@ -19,8 +19,8 @@ def configs(config=None, view=None, options: dict | None = None) -> tuple[RunCon
     """``(RunConfig, ViewConfig)`` from ``config`` / ``view`` (None: defaults) and keyword
     ``options`` naming fields of either; `run`'s options the viewer has no use for (``out``,
     ``video``...) are refused. The viewer's defaults (:data:`VIEW_DEFAULTS`) apply to the
-    fields nobody set: with ``config=None``, or to a config from the command line (which
-    records what was typed); a RunConfig built in code is taken as it is."""
+    fields nobody set (left None, in code as on the command line); the RunConfig returned
+    is resolved (no field left None but those whose None means "the profile's")."""
     options = dict(options or {})
     run_names = {f.name for f in dataclasses.fields(RunConfig)} - set(RUN_ONLY)
     view_names = {f.name for f in dataclasses.fields(ViewConfig)}
@@ -34,15 +34,10 @@ def configs(config=None, view=None, options: dict | None = None) -> tuple[RunCon
         raise VrnError(f"View: config is a {type(config).__name__}, expected a RunConfig")
     if view is not None and not isinstance(view, ViewConfig):
         raise VrnError(f"View: view is a {type(view).__name__}, expected a ViewConfig")
-    cfg = config if config is not None else mark_explicit(RunConfig())
-    if "_explicit" not in cfg.__dict__:  # built in code: used as given, every field chosen
-        cfg = mark_explicit(cfg, *(f.name for f in dataclasses.fields(RunConfig)))
-    run_opts = {k: v for k, v in options.items() if k in run_names}
-    if run_opts:
-        cfg = mark_explicit(replace_config(cfg, **run_opts), *run_opts)
-    defaults = {k: v for k, v in VIEW_DEFAULTS.items() if not is_explicit(cfg, k)}
-    if defaults:
-        cfg = replace_config(cfg, **defaults)
+    cfg = config if config is not None else RunConfig()
+    cfg = dataclasses.replace(cfg, **{k: v for k, v in options.items() if k in run_names})
+    defaults = {k: v for k, v in VIEW_DEFAULTS.items() if getattr(cfg, k) is None}
+    cfg = resolved(dataclasses.replace(cfg, **defaults))
     vc = view if view is not None else ViewConfig()
     view_opts = {k: v for k, v in options.items() if k in view_names}
     if view_opts:
@@ -86,16 +81,16 @@ def start_live(renderers, vc: ViewConfig):
     from vrneural.runtime.config import resolve
     from vrneural.viewer.state import Live
 
-    cfg = renderers.cfg = replace_config(renderers.cfg, scene=None, pack=None)
+    cfg = renderers.cfg = dataclasses.replace(renderers.cfg, scene=None, pack=None)
     if cfg.reference and not Path(cfg.reference).is_file():
         raise VrnError(f"--reference = {cfg.reference!r}: file not found")
     s = resolve(
-        replace_config(cfg, reference=cfg.reference if cfg.mode == "reference" else None),
+        dataclasses.replace(cfg, reference=cfg.reference if cfg.mode == "reference" else None),
         renderers.scene,
         renderers.adapter,
     )
     if s.mode == "reference":  # the precision the other modes run at
-        ref_free = replace_config(cfg, mode="texture", reference=None, precision="auto")
+        ref_free = dataclasses.replace(cfg, mode="texture", reference=None, precision="auto")
         precision = resolve(ref_free, renderers.scene, renderers.adapter).precision
     else:
         precision = s.precision

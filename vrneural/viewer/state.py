@@ -15,7 +15,6 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
-from vrneural.config import replace_config
 from vrneural.errors import VrnError
 from vrneural.runtime.config import REUSE_MAX, max_texture_res
 from vrneural.runtime.settings import MODES
@@ -72,7 +71,7 @@ class Renderers:
         from vrneural.runtime.config import resolve
 
         mode = mode or live.mode
-        cfg = replace_config(
+        cfg = dataclasses.replace(
             self.cfg,
             mode=mode,
             reuse=live.reuse,

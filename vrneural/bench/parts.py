@@ -1,0 +1,97 @@
+"""Sub-configs several benches share (:func:`vrneural.config.part`): their fields are the
+benches' options, declared and checked once here instead of copied into every bench.
+
+- :class:`Loop`: the frame loop of the frame benches (``frames``, ``lights``, ``materials``).
+- :class:`Scored`: the scored window of the quality-versus-cost benches (``tradeoff``,
+  ``distance``).
+- :class:`PackBudget`: the training budget of the packs those two train.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from vrneural.config import opt, unset
+
+
+@dataclass
+class Loop:
+    """How a frame bench renders: eyes, their size, and the frames measured."""
+
+    eye_res: str | None = unset("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
+    eyes: int = opt(2, "eyes (1 or 2)")
+    cycles: int = opt(1, "update cycles measured per configuration (N + 1 frames each)")
+    warmup: float = opt(
+        0.5, "seconds of unmeasured frames before each configuration (GPU clocks; 0 = none)"
+    )
+
+    def check(self) -> tuple[int, int]:
+        """One-line errors for bad values; returns ``--eye-res`` as ``(width, height)``."""
+        from vrneural.errors import check_range
+        from vrneural.runtime.config import parse_res
+
+        check_range("--eyes", self.eyes, 1, 2)
+        check_range("--cycles", self.cycles, 1, 100)
+        check_range("--warmup", self.warmup, 0.0, 60.0)
+        return parse_res(self.eye_res)
+
+
+#: ``--quick`` of every frame bench: small eyes
+QUICK_LOOP = Loop(eye_res="258x276")
+
+
+@dataclass
+class Scored:
+    """The window scored against the supersampled reference."""
+
+    crop: int | None = unset(128, "side (pixels) of the scored window of each quest3 eye image")
+    spp: int | None = unset(
+        16, "reference samples per pixel (stratified; its noise floor is measured)"
+    )
+    scored: int | None = unset(6, "consecutive frames scored per condition")
+
+    def check(self) -> None:
+        from vrneural.bench.supersample import SPP_MAX
+        from vrneural.errors import check_range
+
+        check_range("--crop", self.crop, 16, 2064)
+        check_range("--spp", self.spp, 1, SPP_MAX)
+        check_range("--scored", self.scored, 2, 1000)
+
+
+@dataclass
+class PackBudget:
+    """What the packs a bench trains cost: the synthetic BTF's size, the teacher, the epochs."""
+
+    btf_res: int | None = unset(32, "BTF texels per side (training budget)")
+    btf_dirs: int | None = unset(10, "BTF light and view directions (dirs^2 slices)")
+    teacher_width: int | None = unset(128, "teacher hidden width (the paper's)")
+    teacher_epochs: int | None = unset(4, "teacher epochs")
+    epochs: int | None = unset(4, "epochs of each small network")
+    seed: int = opt(0, "training seed")
+
+    def check(self, presets: list[str], preset_flag: str = "--preset") -> None:
+        """Each preset's BTF and the training sizes, with their options' names."""
+        from vrneural.btf.synth import BtfConfig
+        from vrneural.errors import check_range
+
+        flags = {"res": "--btf-res", "dirs": "--btf-dirs", "preset": preset_flag}
+        for p in presets:
+            BtfConfig(preset=p, res=self.btf_res, dirs=self.btf_dirs, seed=self.seed).validate(
+                flags=flags
+            )
+        check_range("--teacher-width", self.teacher_width, 4, 512)
+        for k in ("teacher_epochs", "epochs"):
+            check_range(f"--{k.replace('_', '-')}", getattr(self, k), 1, 10_000)
+
+    def of(self, preset: str) -> dict:
+        """The budget of one preset's packs (:func:`vrneural.bench.packs.train_packs`)."""
+        return dict(preset=preset, res=self.btf_res, dirs=self.btf_dirs,
+                    teacher_width=self.teacher_width, teacher_epochs=self.teacher_epochs,
+                    epochs=self.epochs, seed=self.seed)  # fmt: skip
+
+
+#: ``--quick``: 16^2 texels, 6 directions, a 32-wide teacher, one epoch each
+QUICK_BUDGET = PackBudget(btf_res=16, btf_dirs=6, teacher_width=32, teacher_epochs=1, epochs=1)
+#: ``--quick``: 48-pixel crops, 2 spp, 3 frames
+QUICK_SCORED = Scored(crop=48, spp=2, scored=3)
