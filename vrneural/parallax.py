@@ -35,7 +35,7 @@ from vrneural.sampling import sample_bilinear_wrap
 #: parallax kinds of ``distill --parallax`` (``auto`` resolves to one of the others)
 PARALLAX_CHOICES = ("auto", "height", "neural", "off")
 #: the kinds a pack can carry
-PACK_KINDS = ("height", "off")
+PACK_KINDS = ("height", "neural", "off")
 #: where the march runs: per texel, or once per 2x2 block
 MARCHES = ("texel", "block")
 DEFAULT_STEPS = 16
@@ -44,6 +44,10 @@ MAX_STEPS = 64
 #: texels: below one texel the shift at the steepest measured view (``tan 75 deg`` ~ 3.7 texels
 #: per texel of relief) stays within the few texels a texel-local network absorbs
 AUTO_MIN_RELIEF_TEXELS = 1.0
+#: ``auto`` gives a material without a height field the neural offset when the relief its
+#: views show (:func:`vrneural.relief.apparent_relief`) reaches this many texels: higher than
+#: the height field's threshold, as the estimate is noisier and the module costs MACs
+AUTO_NEURAL_RELIEF_TEXELS = 2.0
 
 
 def height_at_texels(height: np.ndarray, res: tuple[int, int], where: str = "height") -> np.ndarray:
@@ -73,27 +77,37 @@ def relief_texels(height: np.ndarray) -> float:
     return float((hi - lo) * h.shape[1])
 
 
-def choose_kind(requested: str, height: np.ndarray | None, where: str) -> tuple[str, str]:
+def choose_kind(
+    requested: str, height: np.ndarray | None, where: str, seen=None
+) -> tuple[str, str]:
     """``(kind, why)``: the parallax a pack gets for ``--parallax requested`` and the BTF's
     height field on the texel grid (None: it has none). ``auto``: ``height`` where the relief
-    reaches :data:`AUTO_MIN_RELIEF_TEXELS`, else ``off``. VrnError for ``height`` without a
-    height field and for ``neural`` (NeuMIP's offset module is not built yet)."""
+    reaches :data:`AUTO_MIN_RELIEF_TEXELS`, else ``off``; without a height field ``neural``
+    where the relief the data show (``seen``: :func:`vrneural.relief.apparent_relief`, texels,
+    called only then) reaches :data:`AUTO_NEURAL_RELIEF_TEXELS`, else ``off``. ``neural``
+    needs no height field. VrnError for ``height`` without one."""
     if requested not in PARALLAX_CHOICES:
         raise VrnError(f"--parallax = {requested!r}; choose one of {', '.join(PARALLAX_CHOICES)}")
-    if requested == "neural":
-        raise VrnError(
-            "--parallax neural: NeuMIP's neural offset module is not implemented yet; use "
-            "--parallax height (needs a BTF with a height field) or off"
-        )
-    if requested == "off":
-        return "off", "--parallax off"
+    if requested in ("off", "neural"):
+        return requested, f"--parallax {requested}"
     if height is None:
         if requested == "height":
             raise VrnError(
                 f"--parallax height: {where} has no height field (BTF format version 1); use "
-                "--parallax auto or off, or a BTF with one (btf synth, btf render)"
+                "--parallax neural, auto or off, or a BTF with one (btf synth, btf render)"
             )
-        return "off", f"{where} has no height field"
+        r = seen() if seen is not None else None
+        if r is None:
+            return "off", f"{where} has no height field"
+        if r >= AUTO_NEURAL_RELIEF_TEXELS:
+            return "neural", (
+                f"no height field; apparent relief {r:.2f} texels >= "
+                f"{AUTO_NEURAL_RELIEF_TEXELS:g} (neural offset)"
+            )
+        return (
+            "off",
+            f"no height field; apparent relief {r:.2f} texels < {AUTO_NEURAL_RELIEF_TEXELS:g}",
+        )
     r = relief_texels(height)
     if requested == "height":
         return "height", f"--parallax height (relief {r:.2f} texels)"
@@ -231,10 +245,33 @@ def setup_parallax(cfg, spec: dict, btf, where: str) -> tuple[np.ndarray | None,
     height = None
     if btf.height is not None:
         height = height_at_texels(btf.height, btf.resolution, f"{where}: height")
-    kind, why = choose_kind(cfg.parallax, height, where)
+    seen: list[float] = []
+
+    def apparent() -> float:
+        from vrneural.relief import apparent_relief
+
+        seen.append(apparent_relief(btf))
+        return seen[-1]
+
+    kind, why = choose_kind(cfg.parallax, height, where, apparent)
     record = {"kind": kind, "why": why, "relief_texels": None}
     if height is not None:
         record["relief_texels"] = round(relief_texels(height), 4)
+    if seen:
+        record["apparent_relief_texels"] = round(seen[-1], 4)
+    if kind == "neural":
+        from vrneural.neural_offset import OFFSET_SIZES
+
+        channels, hidden = OFFSET_SIZES[getattr(cfg, "method", "teacher")]
+        spec["parallax"] = {
+            "kind": "neural",
+            "march": cfg.parallax_march,
+            "res": list(btf.resolution),
+            "channels": channels,
+            "hidden": list(hidden),
+        }
+        record["march"] = cfg.parallax_march
+        return None, record
     if kind != "height":
         return None, record
     from vrneural.grazing import directions_range

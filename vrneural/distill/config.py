@@ -69,9 +69,11 @@ class TrainConfig:
     threads: int = opt(1, "torch CPU threads (1 was 15-70x faster than 2 on the shared 2-core box)")
     parallax: str = opt(
         "auto",
-        "look the neural textures up where the view ray meets the BTF's height field: auto "
-        "(height where its relief reaches a texel, else off), height, neural (NeuMIP's offset "
-        "module: not built yet) or off (see docs/parallax.md)",
+        "move the neural textures' lookup along the view ray: auto (height where the BTF's "
+        "height field has a texel of relief; without one neural where its views show 2 "
+        "texels; else off), height (where the ray meets the height field), neural (NeuMIP's "
+        "learned offset module, no height field needed; renders in a later version) or off "
+        "(see docs/parallax.md)",
         choices=PARALLAX,
     )
     parallax_steps: int = opt(
@@ -79,7 +81,8 @@ class TrainConfig:
     )
     parallax_march: str = opt(
         "texel",
-        "march per texel, or once per 2x2 block (a quarter of the height lookups)",
+        "march per texel, or once per 2x2 block (a quarter of the height lookups; with "
+        "--parallax neural: the offset module once per block)",
         choices=("texel", "block"),
     )
     progress: bool = opt(True, "show a tqdm progress bar")

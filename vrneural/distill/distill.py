@@ -449,7 +449,7 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
         cfg.output,
         payload,
         resume,
-        tex_params=list(model.tex.parameters()),
+        tex_params=model.texture_parameters(),
         on_step=on_step,
     )
     if rank == 0:

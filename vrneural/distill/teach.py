@@ -166,7 +166,7 @@ def _run_teach(cfg: TeachConfig, on_step=None) -> dict:
         cfg.output,
         payload,
         resume,
-        tex_params=list(model.tex.parameters()),
+        tex_params=model.texture_parameters(),
         on_step=on_step,
     )
     if rank == 0:
