@@ -72,6 +72,30 @@ def test_depth_to_offset_stage_is_neumips_eq6():
     assert np.allclose(s[1], [0.0, 0.96 / 0.6 / 16])
 
 
+def test_depth_distillation_pulls_the_students_depth_to_the_teachers():
+    from types import SimpleNamespace
+
+    from vrneural.distill.core import DistillNet
+
+    teacher = _model("neumip", "texel", seed=3)
+    student = _model("student", "texel", seed=0)
+    uv, wi, wo = _views(16)
+    wi, wo, uv = torch.from_numpy(wi), torch.from_numpy(wo), torch.from_numpy(uv)
+    data = SimpleNamespace(target=lambda pair: torch.zeros(16, 4, 3))
+    base = dict(distill=True, space="linear", sigma=0.1, lambda1=0.1, lambda2=0.1, lod_weight=1)
+    cfg = SimpleNamespace(**base, offset_weight=1.0)
+    torch.manual_seed(0)  # the same T maps in both nets
+    net = DistillNet(student, teacher, data, cfg)
+    loss, parts = net(wi, wo, uv, 0)
+    gap = (student.depth(wi, wo, uv) - teacher.depth(wi, wo, uv)).abs().mean().detach()
+    assert float(parts["depth"]) == pytest.approx(float(gap)) and float(gap) > 0
+    torch.manual_seed(0)
+    off = DistillNet(student, teacher, data, SimpleNamespace(**base, offset_weight=0.0))
+    loss0, parts0 = off(wi, wo, uv, 0)
+    assert "depth" not in parts0
+    assert float((loss - loss0).detach()) == pytest.approx(float(gap), rel=1e-5)
+
+
 def test_offset_trains_from_zero_and_costs_macs():
     torch.manual_seed(0)
     m = _model("neumip", "texel", scale=0.0)  # starts as no offset
@@ -147,8 +171,12 @@ def test_auto_neural_only_without_a_height_field_and_with_relief(tmp_path):
     code, err = run_cli("teach", plain, "-o", tmp_path / "n.pt", "--parallax", "neural", *FAST)
     assert code == 0, err
     code, err = run_cli("distill", tmp_path / "n.pt", "-o", tmp_path / "s.pt",
-                        "--parallax", "neural", *FAST)  # fmt: skip
+                        "--parallax", "neural", "--offset-weight", "0.1", *FAST)  # fmt: skip
     assert code == 0, err
+    expect_one_line_error(
+        ["distill", tmp_path / "n.pt", "-o", tmp_path / "e.pt", "--offset-weight", "-1", *FAST],
+        "--offset-weight",
+    )  # fmt: skip
     for p in ("n.vrnm", "s.vrnm"):
         mat = read_vrnm(tmp_path / p)
         assert mat.parallax_kind == "neural" and mat.offset_net is not None

@@ -199,6 +199,26 @@ def markdown_bins(doc: dict) -> list[str]:
                     )
                     + " |"
                 )
+        ref = methods.get("neumip_neural")
+        rivals = [k for k in ("student_parallax", "student_neural", "student") if k in methods]
+        if ref is not None and rivals:  # the target: within 10% of NeuMIP with offset
+            lines += [
+                "",
+                f"Against {lab.get('neumip_neural')} (ratio of L1; at most 1.1: within 10%):",
+                "",
+                "| Method | whole | " + " | ".join(head) + " |",
+                "|---" * (len(head) + 2) + "|",
+            ]
+            for k in rivals:
+                m = methods[k]
+                lines.append(
+                    f"| {lab.get(k, k)} | {_ratio(m['whole_l1'], ref['whole_l1'])} | "
+                    + " | ".join(
+                        _ratio(x, y)
+                        for x, y in zip(m["view_bins_l1"], ref["view_bins_l1"], strict=True)
+                    )
+                    + " |"
+                )
         lines.append("")
     return lines
 

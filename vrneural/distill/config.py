@@ -22,6 +22,7 @@ PARALLAX = ("auto", "height", "neural", "off")  # vrneural.parallax.PARALLAX_CHO
 BEFORE_FIELD = {
     "neumip_dirs": "full",  # NeuMIP read wi, wo and h before the option existed
     "parallax": "off",  # no parallax before issue #44
+    "offset_weight": 0.0,  # no depth distillation before it existed
 }
 
 
@@ -144,6 +145,11 @@ class DistillConfig(TrainConfig):
     # whole run was started with, so that --resume of either half continues that run
     wide_start_epochs: int = opt(0, "with --wide-start: the epochs of both halves", cli=False)
     wide_start_width: int = opt(0, "with --wide-start: the width it is pruned to", cli=False)
+    offset_weight: float = opt(
+        0.0,
+        "with --parallax neural from a teacher with one: weight of L1(r_s, r_t), the student's "
+        "neural-offset ray depth against the teacher's (texels; 0 = off; see docs/parallax.md)",
+    )
     lod_levels: int = opt(
         1,
         "prefiltered neural textures: pyramid levels (1 = level 0 alone), each trained against "

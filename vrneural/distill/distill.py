@@ -329,7 +329,7 @@ def _run_distill(cfg: DistillConfig, on_step=None) -> dict:
 def _train(cfg: DistillConfig, on_step=None) -> dict:
     """One training run (a whole ``distill`` run, or one half of a ``--wide-start`` run)."""
     check_train_config(cfg)
-    for k in ("sigma", "lambda1", "lambda2", "lod_weight"):
+    for k in ("sigma", "lambda1", "lambda2", "lod_weight", "offset_weight"):
         check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 0.0, 100.0)
     check_range("--lod-levels", cfg.lod_levels, 1, 12)
     check_range("--coarse-channels", cfg.coarse_channels, 1, 64)

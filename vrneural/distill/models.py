@@ -116,23 +116,28 @@ def march_hits(height, u: torch.Tensor, d: torch.Tensor, steps: int, t_max: floa
     return hit
 
 
-def offset_uv(
-    mlp: "MLP", tex: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor, march: str = "texel"
-) -> torch.Tensor:
+def offset_depth(mlp, tex: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor, march: str = "texel"):
+    """The neural offset's ray depth (texels) per texel ``[N, 4, 1]`` of the blocks ``uv:
+    [N, 4, 2]`` seen along ``wo: [3]`` (once per block and repeated for ``march = "block"``)."""
+    from vrneural.neural_offset import VIEW_INPUTS
+
+    u = uv.mean(1, keepdim=True) if march == "block" else uv  # [N, 1 or 4, 2]
+    psi = sample_bilinear_wrap(tex, u)
+    view = wo[:VIEW_INPUTS].to(psi.dtype).expand(*psi.shape[:-1], VIEW_INPUTS)
+    r, _ = mlp(torch.cat([psi, view], -1))
+    return r.expand(uv.shape[0], 4, 1)
+
+
+def offset_uv(mlp, tex: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor, march: str = "texel"):
     """Twin of :func:`vrneural.neural_offset.offset_uv` for one view ``wo: [3]``: the blocks'
     UVs ``uv: [N, 4, 2]`` moved by NeuMIP's neural offset (offset texture ``tex: [H, W, C]``,
     offset MLP ``mlp``) -> ``[N, 4, 2]``; differentiable in both (trained with the rest)."""
-    from vrneural.neural_offset import MIN_COS, VIEW_INPUTS
+    from vrneural.neural_offset import MIN_COS
 
     H, W = tex.shape[:2]
     c = torch.clamp(wo[2], min=MIN_COS)
     s = torch.stack([wo[0] / W / c, wo[1] / H / c]).to(uv.dtype)  # [2]
-    u = uv.mean(1) if march == "block" else uv  # [N, 2] or [N, 4, 2]
-    psi = sample_bilinear_wrap(tex, u)
-    view = wo[:VIEW_INPUTS].to(psi.dtype).expand(*psi.shape[:-1], VIEW_INPUTS)
-    r, _ = mlp(torch.cat([psi, view], -1))  # [..., 1] texels
-    shift = r * s
-    return uv + (shift[:, None, :] if march == "block" else shift)
+    return uv + offset_depth(mlp, tex, wo, uv, march) * s
 
 
 def avg_pool_levels(t: torch.Tensor, level: int) -> torch.Tensor:
@@ -264,6 +269,13 @@ class NeuralModel(nn.Module):
         textures and their levels, and the neural offset's texture where it has one."""
         extra = [self.offset_tex] if self.parallax_kind == "neural" else []
         return [*self.tex.parameters(), *extra]
+
+    def depth(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor) -> torch.Tensor:
+        """The neural offset's ray depth ``[N, 4, 1]`` (texels) at the blocks ``uv`` along the
+        (extended) view ``wo`` (distillation matches the student's to the teacher's)."""
+        wo = self._extended(wi, wo)[1]
+        tex = f16_round(self.offset_tex)
+        return offset_depth(self.offset_mlp, tex, wo, uv, self.parallax_march)
 
     def set_height(self, height: np.ndarray) -> None:
         """The height field ``[H, W]`` (UV units) parallax marches, rounded to float16 (the
