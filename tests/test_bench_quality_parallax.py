@@ -75,3 +75,5 @@ def test_neural_offset_variants_need_no_height_field(tmp_path):
     assert ck["teacher"].endswith("teacher_neural.pt") and ck["parallax"] == "neural"
     md = (out / "results.md").read_text()
     assert "| NeuMIP with offset (4x25) / NeuMIP (4x25) |" in md
+    assert "Against NeuMIP with offset (4x25)" in md
+    assert "| Ours (distilled) + neural offset | " in md.split("Against NeuMIP with offset")[1]
