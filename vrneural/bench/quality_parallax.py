@@ -238,13 +238,14 @@ def bins_png(doc: dict, path) -> None:
     fig, axes = plt.subplots(1, len(shown), figsize=(6 * len(shown), 4.2), squeeze=False)
     x = [f"{lo:g}-{hi:g}" for lo, hi in VIEW_BINS]
     for ax, preset in zip(axes[0], shown, strict=True):
-        for k, m in res[preset]["methods"].items():
+        colors = plt.get_cmap("tab20").colors  # 20 distinct: a method per colour
+        for i, (k, m) in enumerate(res[preset]["methods"].items()):
             y = m.get("view_bins_l1")
             if not y:
                 continue
             style = "--" if plain_twin(k) is None else "-"
             ax.plot(x, [float("nan") if v is None else v for v in y], style, marker="o",
-                    label=lab.get(k, k))  # fmt: skip
+                    label=lab.get(k, k), color=colors[i % len(colors)])  # fmt: skip
         ax.set_title(preset)
         ax.set_xlabel("view polar angle (degrees)")
         ax.set_ylabel("L1 (linear BTF units)")
