@@ -205,3 +205,22 @@ def test_bad_neural_input_is_one_line(tmp_path):
         ["teach", h, "-o", tmp_path / "e.pt", "--parallax", "neural", *FAST],
         "h.btf: height", "height field 24x24 does not fit the 16x16 texels",
     )  # fmt: skip
+
+
+def test_resume_keeps_what_auto_chose(tmp_path, monkeypatch):
+    """A run resumed after auto's rule changed (or its measure moved) keeps its own choice."""
+    import vrneural.relief
+
+    plain = analytic_btf(tmp_path / "plain.btf", res=16, n_dirs=4)
+    fast = ("--no-progress", "--max-test-slices", "4")
+    code, err = run_cli("teach", plain, "-o", tmp_path / "t.pt", "--epochs", "1", *fast)
+    assert code == 0, err
+    assert read_vrnm(tmp_path / "t.vrnm").parallax_kind == "off"
+    monkeypatch.setattr(vrneural.relief, "apparent_relief", lambda btf: 5.0)
+    code, err = run_cli("teach", plain, "-o", tmp_path / "t.pt", "--epochs", "2", "--resume",
+                        *fast)  # fmt: skip
+    assert code == 0, err
+    assert read_vrnm(tmp_path / "t.vrnm").parallax_kind == "off"
+    code, err = run_cli("teach", plain, "-o", tmp_path / "n.pt", "--epochs", "1", *fast)
+    assert code == 0, err  # a new run follows the (patched) measure
+    assert read_vrnm(tmp_path / "n.vrnm").parallax_kind == "neural"

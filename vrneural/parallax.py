@@ -234,11 +234,15 @@ def max_shift_texels(height: np.ndarray, theta_deg: float) -> float:
     return relief_texels(height) * math.tan(math.radians(theta_deg))
 
 
-def setup_parallax(cfg, spec: dict, btf, where: str) -> tuple[np.ndarray | None, dict]:
+def setup_parallax(
+    cfg, spec: dict, btf, where: str, recorded: dict | None = None
+) -> tuple[np.ndarray | None, dict]:
     """Resolve ``cfg.parallax`` for a training run on ``btf`` (a :class:`~vrneural.btf.format.Btf`
     named ``where`` in messages): sets ``spec["parallax"]`` when the choice is ``height`` and
     returns ``(height on the texel grid [H, W] float32 or None, record)``, the record
-    ``{"kind", "why", "relief_texels"}`` kept in the checkpoint and the pack's meta."""
+    ``{"kind", "why", "relief_texels"}`` kept in the checkpoint and the pack's meta.
+    ``recorded``: that record of the checkpoint a ``--resume`` continues (``auto`` keeps its
+    choice, which an older version may have made otherwise)."""
     from vrneural.errors import check_range
 
     check_range("--parallax-steps", cfg.parallax_steps, 1, MAX_STEPS)
@@ -253,7 +257,10 @@ def setup_parallax(cfg, spec: dict, btf, where: str) -> tuple[np.ndarray | None,
         seen.append(apparent_relief(btf))
         return seen[-1]
 
-    kind, why = choose_kind(cfg.parallax, height, where, apparent)
+    if recorded and cfg.parallax == "auto":  # a resumed run keeps what auto chose then
+        kind, why = recorded["kind"], recorded["why"]
+    else:
+        kind, why = choose_kind(cfg.parallax, height, where, apparent)
     record = {"kind": kind, "why": why, "relief_texels": None}
     if height is not None:
         record["relief_texels"] = round(relief_texels(height), 4)

@@ -398,7 +398,8 @@ def _train(cfg: DistillConfig, on_step=None) -> dict:
     if cfg.lod_levels > 1:
         check_lod_levels(cfg, (H, W), btf_path)
         spec["lod"] = {"levels": cfg.lod_levels, "kind": cfg.lod_kind}
-    height, parallax = setup_parallax(cfg, spec, btf, btf_path)
+    recorded = resume.get("parallax") if resume is not None else None
+    height, parallax = setup_parallax(cfg, spec, btf, btf_path, recorded)
     model = NeuralModel(spec, cfg.seed)
     init = None
     if cfg.init_from and resume is None:  # a resumed run has its weights already

@@ -139,7 +139,8 @@ def _run_teach(cfg: TeachConfig, on_step=None) -> dict:
     spec = make_spec(
         "teacher", (H, W), cfg.space, width=cfg.width, layers=cfg.layers, channels=cfg.channels
     )
-    height, parallax = setup_parallax(cfg, spec, btf, cfg.btf)
+    recorded = resume.get("parallax") if resume is not None else None
+    height, parallax = setup_parallax(cfg, spec, btf, cfg.btf, recorded)
     model = NeuralModel(spec, cfg.seed)
     if height is not None:
         model.set_height(height)
