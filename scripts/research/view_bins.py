@@ -1,9 +1,10 @@
 """Research script (docs/quality-research.md, "NeuMIP's neural offset module"): whole-BTF L1
 and L1 by view-angle bin of trained checkpoints, with ``bench quality``'s own definitions
 (``mean_l1`` of vrneural.distill.evaluate, ``parallax_record`` of
-vrneural.bench.quality_parallax), without the bench's PSNR/SSIM pass (which takes most of its evaluation time). Seconds per
-network. The JSON holds one record per checkpoint (``whole_l1``, ``view_bins_l1``,
-``view_bin_pairs``, ``macs_per_texel``, ``fetches_per_texel``, ``parallax``).
+vrneural.bench.quality_parallax), without the bench's PSNR/SSIM pass (which takes most of
+its evaluation time). Seconds per network. The JSON holds one record per checkpoint
+(``whole_l1``, ``view_bins_l1``, ``view_bin_pairs``, ``macs_per_texel``,
+``fetches_per_texel``, ``parallax``).
 
     .venv/bin/python scripts/research/view_bins.py BTF OUT.json CHECKPOINT...
 """
