@@ -54,3 +54,26 @@ def test_parallax_needs_height_fields(tmp_path, capsys):
     err = _one_line(capsys, [*base, "--presets", "leather"])
     assert "synthetic presets (leather) carry no height field" in err
     assert not out.exists()
+
+
+def test_neural_offset_variants_need_no_height_field(tmp_path):
+    f = _btf(tmp_path / "plain.btf", res=16)  # no height field: NeuMIP's module needs none
+    out = tmp_path / "bq"
+    argv = ["bench", "quality", "--btf", str(f), "--parallax", "neural", "--quick",
+            "--no-progress", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    r = json.loads((out / "results.json").read_text())["results"]["plain.btf"]
+    assert {"teacher_neural", "student_neural", "neumip_neural"} <= set(r["methods"])
+    assert not {"teacher_parallax", "neumip_parallax"} & set(r["methods"])
+    for name, m in r["methods"].items():
+        if name != "lafortune":
+            assert m["parallax"]["kind"] == ("neural" if name.endswith("_neural") else "off")
+    neu, plain = r["methods"]["neumip_neural"], r["methods"]["neumip"]
+    assert neu["macs_per_texel"] > plain["macs_per_texel"]  # the offset MLP's share
+    assert neu["fetches_per_texel"] == plain["fetches_per_texel"] + 4  # the offset texture
+    ck = json.loads((out / "plain.btf" / "student_neural.pt.config.json").read_text())
+    assert ck["teacher"].endswith("teacher_neural.pt") and ck["parallax"] == "neural"
+    md = (out / "results.md").read_text()
+    assert "| NeuMIP with offset (4x25) / NeuMIP (4x25) |" in md
+    assert "Against NeuMIP with offset (4x25)" in md
+    assert "| Ours (distilled) + neural offset | " in md.split("Against NeuMIP with offset")[1]

@@ -205,8 +205,17 @@ def test_relief_measure_and_the_auto_choice():
     assert choose_kind("auto", None, "v1.btf") == ("off", "v1.btf has no height field")
     with pytest.raises(VrnError, match=r"--parallax height: v1\.btf has no height field"):
         choose_kind("height", None, "v1.btf")
-    with pytest.raises(VrnError, match="neural offset module is not implemented"):
-        choose_kind("neural", rough, "r.btf")
+    # the neural offset needs no height field; auto names it where there is none and the
+    # views show relief (the measure is called only then), but keeps off while the runtime
+    # cannot draw it
+    assert choose_kind("neural", None, "v1.btf")[0] == "neural"
+    assert choose_kind("neural", rough, "r.btf")[0] == "neural"
+    kind, why = choose_kind("auto", None, "v1.btf", lambda: 3.0)
+    assert kind == "off" and "3.00 texels >= 2: --parallax neural would model it" in why
+    kind, why = choose_kind("auto", None, "v1.btf", lambda: 1.5)
+    assert kind == "off" and "apparent relief 1.50 texels < 2" in why
+    assert choose_kind("auto", rough, "r.btf", lambda: 1 / 0)[0] == "height"
+    assert choose_kind("auto", flat, "f.btf", lambda: 1 / 0)[0] == "off"
     with pytest.raises(VrnError, match=r"height field 48x48 does not fit the 32x32 texels"):
         height_at_texels(np.zeros((48, 48)), (32, 32))
     bad = np.zeros((64, 64))

@@ -71,10 +71,6 @@ def test_bad_parallax_input_is_one_line(btfs):
         "--parallax height", "plain.btf has no height field",
     )  # fmt: skip
     expect_one_line_error(
-        ["teach", btfs["relief"], "-o", d / "e2.pt", "--parallax", "neural", *FAST],
-        "--parallax neural", "not implemented yet",
-    )  # fmt: skip
-    expect_one_line_error(
         ["teach", btfs["odd"], "-o", d / "e3.pt", *FAST],
         "odd.btf: height", "height field 24x24 does not fit the 16x16 texels",
     )  # fmt: skip

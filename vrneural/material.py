@@ -66,6 +66,10 @@ class NeuralMaterial:
     parallax: dict = field(default_factory=dict)
     #: ``[H, W]`` float16 height field, UV units, on the full-resolution texel grid (or None)
     height: np.ndarray | None = None
+    #: NeuMIP's neural offset (vrneural.neural_offset; parallax kind ``"neural"``): the offset
+    #: MLP's layers and the offset texture ``[H, W, C]`` float16 on the full-resolution grid
+    offset_net: list | None = None
+    offset_tex: np.ndarray | None = None
 
     def __post_init__(self):
         self.dir_range = check_dir_range(self.dir_range)
@@ -118,15 +122,27 @@ class NeuralMaterial:
             raise ValueError(f"parallax kind {kind!r} not in {PACK_KINDS}")
         if kind == "height" and self.height is None:
             raise ValueError("parallax kind 'height' needs a height field, and it has none")
+        res = self.textures[ARCHS[self.arch][1][-1]].shape[:2]  # fine / features
+        if (kind == "neural") != (self.offset_net is not None and self.offset_tex is not None):
+            raise ValueError(
+                "parallax kind 'neural' needs the offset MLP and the offset texture, and only it "
+                f"carries them (kind {kind!r})"
+            )
+        if kind == "neural":
+            from vrneural.neural_offset import check_offset
+            from vrneural.parallax import MARCHES
+
+            if self.parallax_march not in MARCHES:
+                raise ValueError(f"parallax march {self.parallax_march!r} not in {MARCHES}")
+            self.offset_tex = check_offset(self.offset_net, self.offset_tex, res)
         if self.height is not None:
-            res = self.textures[ARCHS[self.arch][1][-1]].shape[:2]  # fine / features
             steps = self.parallax.get("steps", 1) if kind == "height" else 1
             march = self.parallax.get("march", "texel")
             self.height = check_pack_height(self.height, res, steps, march)
 
     @property
     def parallax_kind(self) -> str:
-        """``"height"`` or ``"off"``."""
+        """``"height"``, ``"neural"`` or ``"off"``."""
         return self.parallax.get("kind", "off")
 
     @property
@@ -158,19 +174,24 @@ class NeuralMaterial:
         """Multiply-adds per shaded texel (the coarse net counts a quarter: once per block)."""
         from vrneural.mlp import macs
 
+        extra = 0.0
+        if self.parallax_kind == "neural":
+            from vrneural.neural_offset import offset_macs
+
+            extra = offset_macs(self.offset_net, self.parallax_march)
         if self.arch == "coarse_fine":
-            return macs(self.networks["coarse"]) / 4 + macs(self.networks["fine"])
-        return float(macs(self.networks["mlp"]))
+            return macs(self.networks["coarse"]) / 4 + macs(self.networks["fine"]) + extra
+        return float(macs(self.networks["mlp"])) + extra
 
     @property
     def weight_bytes(self) -> int:
-        return sum(
-            4 * (lay.weight.size + lay.bias.size) for net in self.networks.values() for lay in net
-        )
+        nets = [*self.networks.values(), self.offset_net or []]
+        return sum(4 * (lay.weight.size + lay.bias.size) for net in nets for lay in net)
 
     @property
     def texture_bytes(self) -> int:
-        return sum(t.nbytes for t in self.textures.values())
+        extra = 0 if self.offset_tex is None else self.offset_tex.nbytes
+        return sum(t.nbytes for t in self.textures.values()) + extra
 
 
 def half_vector(wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
@@ -236,7 +257,8 @@ def material_forward(
     below the horizon. ``lod: [N]``: each block's level of detail in the neural textures'
     pyramids (None: level 0; see :func:`sample_lod`). A material with height-field parallax
     looks its textures up at :func:`vrneural.parallax.parallax_uv` of ``uv`` along the
-    extended ``wo`` (the coarse texture at the corrected texels' mean).
+    extended ``wo`` (the coarse texture at the corrected texels' mean); one with a neural
+    offset at :func:`vrneural.neural_offset.offset_uv`'s.
     """
     wi = np.asarray(wi, np.float32)
     wo = np.asarray(wo, np.float32)
@@ -262,6 +284,10 @@ def material_forward(
         uv = parallax_uv(
             mat.height, wo, uv, mat.parallax_steps, mat.parallax_slope_max, mat.parallax_march
         )
+    elif mat.parallax_kind == "neural":  # NeuMIP's offset module moves the lookups
+        from vrneural.neural_offset import offset_uv
+
+        uv = offset_uv(mat.offset_net, mat.offset_tex, wo, uv, mat.parallax_march, precision)
     dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)  # [N, 9]
     if mat.arch == "coarse_fine":
         uc = uv.mean(axis=1)

@@ -35,7 +35,7 @@ from vrneural.sampling import sample_bilinear_wrap
 #: parallax kinds of ``distill --parallax`` (``auto`` resolves to one of the others)
 PARALLAX_CHOICES = ("auto", "height", "neural", "off")
 #: the kinds a pack can carry
-PACK_KINDS = ("height", "off")
+PACK_KINDS = ("height", "neural", "off")
 #: where the march runs: per texel, or once per 2x2 block
 MARCHES = ("texel", "block")
 DEFAULT_STEPS = 16
@@ -44,6 +44,11 @@ MAX_STEPS = 64
 #: texels: below one texel the shift at the steepest measured view (``tan 75 deg`` ~ 3.7 texels
 #: per texel of relief) stays within the few texels a texel-local network absorbs
 AUTO_MIN_RELIEF_TEXELS = 1.0
+#: the relief a material without a height field shows in its views
+#: (:func:`vrneural.relief.apparent_relief`) from which the neural offset would pay: higher
+#: than the height field's threshold, as the estimate is noisier and the module costs MACs.
+#: ``auto`` names it in its reason but keeps ``off`` until the runtime draws neural offsets
+AUTO_NEURAL_RELIEF_TEXELS = 2.0
 
 
 def height_at_texels(height: np.ndarray, res: tuple[int, int], where: str = "height") -> np.ndarray:
@@ -73,27 +78,39 @@ def relief_texels(height: np.ndarray) -> float:
     return float((hi - lo) * h.shape[1])
 
 
-def choose_kind(requested: str, height: np.ndarray | None, where: str) -> tuple[str, str]:
+def choose_kind(
+    requested: str, height: np.ndarray | None, where: str, seen=None
+) -> tuple[str, str]:
     """``(kind, why)``: the parallax a pack gets for ``--parallax requested`` and the BTF's
     height field on the texel grid (None: it has none). ``auto``: ``height`` where the relief
-    reaches :data:`AUTO_MIN_RELIEF_TEXELS`, else ``off``. VrnError for ``height`` without a
-    height field and for ``neural`` (NeuMIP's offset module is not built yet)."""
+    reaches :data:`AUTO_MIN_RELIEF_TEXELS`, else ``off``; without a height field ``off``, and
+    the reason says when the relief the data show (``seen``: :func:`vrneural.relief.
+    apparent_relief`, texels, called only then) reaches :data:`AUTO_NEURAL_RELIEF_TEXELS`,
+    where ``neural`` would model it (auto picks it once the runtime draws it). ``neural``
+    needs no height field. VrnError for ``height`` without one."""
     if requested not in PARALLAX_CHOICES:
         raise VrnError(f"--parallax = {requested!r}; choose one of {', '.join(PARALLAX_CHOICES)}")
-    if requested == "neural":
-        raise VrnError(
-            "--parallax neural: NeuMIP's neural offset module is not implemented yet; use "
-            "--parallax height (needs a BTF with a height field) or off"
-        )
-    if requested == "off":
-        return "off", "--parallax off"
+    if requested in ("off", "neural"):
+        return requested, f"--parallax {requested}"
     if height is None:
         if requested == "height":
             raise VrnError(
                 f"--parallax height: {where} has no height field (BTF format version 1); use "
-                "--parallax auto or off, or a BTF with one (btf synth, btf render)"
+                "--parallax neural, auto or off, or a BTF with one (btf synth, btf render)"
             )
-        return "off", f"{where} has no height field"
+        r = seen() if seen is not None else None
+        if r is None:
+            return "off", f"{where} has no height field"
+        if r >= AUTO_NEURAL_RELIEF_TEXELS:  # the runtime cannot draw neural offsets yet
+            return "off", (
+                f"no height field; apparent relief {r:.2f} texels >= "
+                f"{AUTO_NEURAL_RELIEF_TEXELS:g}: --parallax neural would model it, but its "
+                "packs do not render yet, so auto leaves it off"
+            )
+        return (
+            "off",
+            f"no height field; apparent relief {r:.2f} texels < {AUTO_NEURAL_RELIEF_TEXELS:g}",
+        )
     r = relief_texels(height)
     if requested == "height":
         return "height", f"--parallax height (relief {r:.2f} texels)"
@@ -220,21 +237,51 @@ def max_shift_texels(height: np.ndarray, theta_deg: float) -> float:
     return relief_texels(height) * math.tan(math.radians(theta_deg))
 
 
-def setup_parallax(cfg, spec: dict, btf, where: str) -> tuple[np.ndarray | None, dict]:
+def setup_parallax(
+    cfg, spec: dict, btf, where: str, recorded: dict | None = None
+) -> tuple[np.ndarray | None, dict]:
     """Resolve ``cfg.parallax`` for a training run on ``btf`` (a :class:`~vrneural.btf.format.Btf`
     named ``where`` in messages): sets ``spec["parallax"]`` when the choice is ``height`` and
     returns ``(height on the texel grid [H, W] float32 or None, record)``, the record
-    ``{"kind", "why", "relief_texels"}`` kept in the checkpoint and the pack's meta."""
+    ``{"kind", "why", "relief_texels"}`` kept in the checkpoint and the pack's meta.
+    ``recorded``: that record of the checkpoint a ``--resume`` continues (``auto`` keeps its
+    choice, which an older version may have made otherwise)."""
     from vrneural.errors import check_range
 
     check_range("--parallax-steps", cfg.parallax_steps, 1, MAX_STEPS)
     height = None
     if btf.height is not None:
         height = height_at_texels(btf.height, btf.resolution, f"{where}: height")
-    kind, why = choose_kind(cfg.parallax, height, where)
+    seen: list[float] = []
+
+    def apparent() -> float:
+        from vrneural.relief import apparent_relief
+
+        seen.append(apparent_relief(btf))
+        return seen[-1]
+
+    if recorded and cfg.parallax == "auto":  # a resumed run keeps what auto chose then
+        kind, why = recorded["kind"], recorded["why"]
+    else:
+        kind, why = choose_kind(cfg.parallax, height, where, apparent)
     record = {"kind": kind, "why": why, "relief_texels": None}
     if height is not None:
         record["relief_texels"] = round(relief_texels(height), 4)
+    if seen:
+        record["apparent_relief_texels"] = round(seen[-1], 4)
+    if kind == "neural":
+        from vrneural.neural_offset import OFFSET_SIZES
+
+        channels, hidden = OFFSET_SIZES[getattr(cfg, "method", "teacher")]
+        spec["parallax"] = {
+            "kind": "neural",
+            "march": cfg.parallax_march,
+            "res": list(btf.resolution),
+            "channels": channels,
+            "hidden": list(hidden),
+        }
+        record["march"] = cfg.parallax_march
+        return None, record
     if kind != "height":
         return None, record
     from vrneural.grazing import directions_range

@@ -35,8 +35,10 @@ from vrneural.bench.quality_btf import btf_path as btf_file
 from vrneural.bench.quality_btf import check_given
 from vrneural.bench.quality_lafortune import img, lafortune, slice_pairs
 from vrneural.bench.quality_parallax import (
+    BENCH_PARALLAX,
     PARALLAX_LABELS,
     VIEW_BINS,
+    bench_kinds,
     check_parallax_data,
     parallax_record,
     runs_table,
@@ -123,8 +125,10 @@ class QualityConfig:
         "off",
         "height: also train the height-field parallax variants (a teacher, the distilled "
         "student and NeuMIP, each with --parallax height) beside the others, which train "
-        "without parallax (see docs/parallax.md)",
-        choices=("off", "height"),
+        "without parallax; neural: the neural-offset variants (NeuMIP with offset, the paper's "
+        "full model, and a teacher and student with the module); both: all of them (see "
+        "docs/parallax.md)",
+        choices=BENCH_PARALLAX,
     )
     width: int = opt(
         8,
@@ -456,8 +460,8 @@ def validate(cfg: QualityConfig) -> list[str]:
         BtfConfig(preset=p, res=cfg.res, dirs=cfg.dirs, seed=cfg.seed).validate(
             {"preset": "--presets"}
         )
-    if cfg.parallax == "height":
-        check_parallax_data(presets, given)
+    if "height" in bench_kinds(cfg):
+        check_parallax_data(presets, given, cfg.parallax)
     presets = presets + list(given)  # the given BTFs, labelled by file name
     check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
     check_train_config(  # --ema and the like, as `distill` checks them

@@ -22,6 +22,7 @@ PARALLAX = ("auto", "height", "neural", "off")  # vrneural.parallax.PARALLAX_CHO
 BEFORE_FIELD = {
     "neumip_dirs": "full",  # NeuMIP read wi, wo and h before the option existed
     "parallax": "off",  # no parallax before issue #44
+    "offset_weight": 0.0,  # no depth distillation before it existed
 }
 
 # What a --resume takes from the command line; every other field comes from the checkpoint.
@@ -84,9 +85,10 @@ class TrainConfig:
     )
     parallax: str | None = unset(
         "auto",
-        "look the neural textures up where the view ray meets the BTF's height field: auto "
-        "(height where its relief reaches a texel, else off), height, neural (NeuMIP's offset "
-        "module: not built yet) or off (see docs/parallax.md)",
+        "move the neural textures' lookup along the view ray: auto (height where the BTF's "
+        "height field has a texel of relief, else off), height (where the ray meets the "
+        "height field), neural (NeuMIP's learned offset module, no height field needed; "
+        "renders in a later version) or off (see docs/parallax.md)",
         choices=PARALLAX,
     )
     parallax_steps: int | None = unset(
@@ -94,7 +96,8 @@ class TrainConfig:
     )
     parallax_march: str | None = unset(
         "texel",
-        "march per texel, or once per 2x2 block (a quarter of the height lookups)",
+        "march per texel, or once per 2x2 block (a quarter of the height lookups; with "
+        "--parallax neural: the offset module once per block)",
         choices=("texel", "block"),
     )
     progress: bool = opt(True, "show a tqdm progress bar")
@@ -158,6 +161,11 @@ class DistillConfig(TrainConfig):
     # whole run was started with, so that --resume of either half continues that run
     wide_start_epochs: int = opt(0, "with --wide-start: the epochs of both halves", cli=False)
     wide_start_width: int = opt(0, "with --wide-start: the width it is pruned to", cli=False)
+    offset_weight: float | None = unset(
+        0.0,
+        "with --parallax neural from a teacher with one: weight of L1(r_s, r_t), the student's "
+        "neural-offset ray depth against the teacher's (texels; 0 = off; see docs/parallax.md)",
+    )
     lod_levels: int | None = unset(
         1,
         "prefiltered neural textures: pyramid levels (1 = level 0 alone), each trained against "

@@ -77,7 +77,19 @@ class DistillNet(nn.Module):
         l2 = ((zs[1] - self.T2(zt[1])) ** 2).mean()
         c = self.cfg
         loss = gt_total + c.sigma * out + c.lambda1 * l1 + c.lambda2 * l2
-        return loss, {"gt": gt.detach(), "teacher": out.detach()}
+        parts = {"gt": gt.detach(), "teacher": out.detach()}
+        if getattr(c, "offset_weight", 0.0) and self._both_neural():
+            # the student's neural-offset depth against the teacher's (texels, L1)
+            with torch.no_grad():
+                rt = teacher.depth(wi, wo, uv)
+            depth = (self.model.depth(wi, wo, uv) - rt).abs().mean()
+            loss = loss + c.offset_weight * depth
+            parts["depth"] = depth.detach()
+        return loss, parts
+
+    def _both_neural(self) -> bool:
+        """Whether student and teacher both have a neural offset (its depth is distilled)."""
+        return self.model.parallax_kind == "neural" == self.teacher[0].parallax_kind
 
 
 class NonFiniteLossError(ArithmeticError):

@@ -331,7 +331,7 @@ def _train(asked: DistillConfig, on_step=None, epochs_flag: str = "--epochs") ->
     ``asked`` as given (None: not given), ``epochs_flag`` the option that sets its epochs."""
     cfg, chosen = resolved(asked), given(asked)
     check_train_config(cfg)
-    for k in ("sigma", "lambda1", "lambda2", "lod_weight"):
+    for k in ("sigma", "lambda1", "lambda2", "lod_weight", "offset_weight"):
         check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 0.0, 100.0)
     check_range("--lod-levels", cfg.lod_levels, 1, 12)
     check_range("--coarse-channels", cfg.coarse_channels, 1, 64)
@@ -400,7 +400,8 @@ def _train(asked: DistillConfig, on_step=None, epochs_flag: str = "--epochs") ->
     if cfg.lod_levels > 1:
         check_lod_levels(cfg, (H, W), btf_path)
         spec["lod"] = {"levels": cfg.lod_levels, "kind": cfg.lod_kind}
-    height, parallax = setup_parallax(cfg, spec, btf, btf_path)
+    recorded = resume.get("parallax") if resume is not None else None
+    height, parallax = setup_parallax(cfg, spec, btf, btf_path, recorded)
     model = NeuralModel(spec, cfg.seed)
     init = None
     if cfg.init_from and resume is None:  # a resumed run has its weights already
@@ -451,7 +452,7 @@ def _train(asked: DistillConfig, on_step=None, epochs_flag: str = "--epochs") ->
         cfg.output,
         payload,
         resume,
-        tex_params=list(model.tex.parameters()),
+        tex_params=model.texture_parameters(),
         on_step=on_step,
         epochs_flag=epochs_flag,
     )

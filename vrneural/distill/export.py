@@ -48,6 +48,13 @@ def activation_ranges(mat: NeuralMaterial, wi: np.ndarray, wo: np.ndarray, uv: n
     """Ranges of every layer's input and pre-activation for ``wi, wo: [N, 3]``, ``uv: [N, 4, 2]``
     (the computation of :func:`~vrneural.material.material_forward`, float32)."""
     out: dict = {}
+    if mat.parallax_kind == "neural":  # the offset MLP at the unmoved texels, then the shift
+        from vrneural.neural_offset import VIEW_INPUTS, offset_uv
+
+        psi = sample_bilinear_wrap(mat.offset_tex, uv.reshape(-1, 2))
+        x = np.concatenate([psi, np.repeat(wo[:, :VIEW_INPUTS], 4, 0)], -1)
+        _run_layers(x, mat.offset_net, "offset", out)
+        uv = offset_uv(mat.offset_net, mat.offset_tex, wo, uv, mat.parallax_march)
     dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)
     if mat.arch == "coarse_fine":
         fc = sample_bilinear_wrap(mat.textures["coarse"], uv.mean(1))
@@ -69,6 +76,10 @@ def material_ranges(mat: NeuralMaterial, data: SliceData, pairs: list[int]) -> d
             r[f"weight.{name}.{i}"] = value_range(np.concatenate([lay.weight.ravel(), lay.bias]))
     for name, t in mat.textures.items():
         r[f"texture.{name}"] = value_range(np.asarray(t, np.float32))
+    if mat.offset_net is not None:
+        for i, lay in enumerate(mat.offset_net):
+            r[f"weight.offset.{i}"] = value_range(np.concatenate([lay.weight.ravel(), lay.bias]))
+        r["texture.offset"] = value_range(np.asarray(mat.offset_tex, np.float32))
     uv = data.uv(None, shard=False).numpy()
     n = uv.shape[0]
     wi = np.concatenate([np.repeat(data.dirs(p)[0].numpy()[None], n, 0) for p in pairs])
@@ -160,7 +171,7 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None, lod_leve
             "macs_per_texel": mat.macs_per_texel,
         },
         "ranges": ranges,
-        # height-field parallax: the kind chosen and why (vrneural.parallax.setup_parallax)
+        # parallax (height field or neural offset): the kind chosen and why (setup_parallax)
         "parallax": ck.get("parallax") or {"kind": "off", "why": "trained before parallax"},
     }
     return mat, diff

@@ -116,6 +116,30 @@ def march_hits(height, u: torch.Tensor, d: torch.Tensor, steps: int, t_max: floa
     return hit
 
 
+def offset_depth(mlp, tex: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor, march: str = "texel"):
+    """The neural offset's ray depth (texels) per texel ``[N, 4, 1]`` of the blocks ``uv:
+    [N, 4, 2]`` seen along ``wo: [3]`` (once per block and repeated for ``march = "block"``)."""
+    from vrneural.neural_offset import VIEW_INPUTS
+
+    u = uv.mean(1, keepdim=True) if march == "block" else uv  # [N, 1 or 4, 2]
+    psi = sample_bilinear_wrap(tex, u)
+    view = wo[:VIEW_INPUTS].to(psi.dtype).expand(*psi.shape[:-1], VIEW_INPUTS)
+    r, _ = mlp(torch.cat([psi, view], -1))
+    return r.expand(uv.shape[0], 4, 1)
+
+
+def offset_uv(mlp, tex: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor, march: str = "texel"):
+    """Twin of :func:`vrneural.neural_offset.offset_uv` for one view ``wo: [3]``: the blocks'
+    UVs ``uv: [N, 4, 2]`` moved by NeuMIP's neural offset (offset texture ``tex: [H, W, C]``,
+    offset MLP ``mlp``) -> ``[N, 4, 2]``; differentiable in both (trained with the rest)."""
+    from vrneural.neural_offset import MIN_COS
+
+    H, W = tex.shape[:2]
+    c = torch.clamp(wo[2], min=MIN_COS)
+    s = torch.stack([wo[0] / W / c, wo[1] / H / c]).to(uv.dtype)  # [2]
+    return uv + offset_depth(mlp, tex, wo, uv, march) * s
+
+
 def avg_pool_levels(t: torch.Tensor, level: int) -> torch.Tensor:
     """``t: [H, W, C]`` averaged over ``2^level x 2^level`` texel squares -> ``[H >> level,
     W >> level, C]`` (the box prefilter of a tileable texture; twin of
@@ -218,6 +242,16 @@ class NeuralModel(nn.Module):
         par = spec.get("parallax") or {"kind": "off"}
         self.parallax_steps = int(par["steps"]) if par["kind"] == "height" else 0
         self.parallax_march = par.get("march", "texel")
+        self.parallax_kind = par["kind"]
+        if par["kind"] == "neural":  # NeuMIP's offset module (vrneural.neural_offset)
+            from vrneural.neural_offset import VIEW_INPUTS
+
+            oc = int(par["channels"])
+            self.offset_mlp = MLP([oc + VIEW_INPUTS, *par["hidden"], 1])
+            self.offset_tex = tex(tuple(par["res"]), oc)
+            with torch.no_grad():  # starts as no offset: the depth is trained up from 0
+                self.offset_mlp.layers[-1].weight.zero_()
+                self.offset_mlp.layers[-1].bias.zero_()
         if self.parallax_steps:
             self.register_buffer("height", torch.zeros(tuple(par["res"])))
             from vrneural.grazing import boundary_consts
@@ -229,6 +263,19 @@ class NeuralModel(nn.Module):
         #: (:func:`vrneural.distill.checkpoint.model_from_checkpoint`); None while training on
         #: the BTF's own directions, where the extension beyond them is the identity
         self.dir_range: tuple[float, float] | None = None
+
+    def texture_parameters(self) -> list[nn.Parameter]:
+        """The neural textures' parameters (trained at the texture learning rate): the
+        textures and their levels, and the neural offset's texture where it has one."""
+        extra = [self.offset_tex] if self.parallax_kind == "neural" else []
+        return [*self.tex.parameters(), *extra]
+
+    def depth(self, wi: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor) -> torch.Tensor:
+        """The neural offset's ray depth ``[N, 4, 1]`` (texels) at the blocks ``uv`` along the
+        (extended) view ``wo`` (distillation matches the student's to the teacher's)."""
+        wo = self._extended(wi, wo)[1]
+        tex = f16_round(self.offset_tex)
+        return offset_depth(self.offset_mlp, tex, wo, uv, self.parallax_march)
 
     def set_height(self, height: np.ndarray) -> None:
         """The height field ``[H, W]`` (UV units) parallax marches, rounded to float16 (the
@@ -274,6 +321,8 @@ class NeuralModel(nn.Module):
             uv = parallax_uv(
                 self.height, wo, uv, self.parallax_steps, self.parallax_t_max, self.parallax_march
             )
+        elif self.parallax_kind == "neural":
+            uv = offset_uv(self.offset_mlp, f16_round(self.offset_tex), wo, uv, self.parallax_march)
         dirs = torch.cat([wi, wo, half_vector(wi, wo)]) * self.dir_mask  # [9]
         if self.arch == "single":
             f = sample_bilinear_wrap(self.texture("features", level), uv)  # [N, 4, C]
@@ -317,6 +366,10 @@ class NeuralModel(nn.Module):
                 "march": self.parallax_march,
             }
             rng["height"] = self.height.cpu().numpy().astype(np.float16)
+        if self.parallax_kind == "neural":
+            rng["parallax"] = {"kind": "neural", "march": self.parallax_march}
+            rng["offset_net"] = self.offset_mlp.to_layers()
+            rng["offset_tex"] = self.offset_tex.detach().cpu().half().numpy()
         return NeuralMaterial(self.arch, nets, texs, self.output, meta or {}, **rng)
 
 

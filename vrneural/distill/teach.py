@@ -146,7 +146,8 @@ def _run_teach(asked: TeachConfig, on_step, epochs_flag: str) -> dict:
     spec = make_spec(
         "teacher", (H, W), cfg.space, width=cfg.width, layers=cfg.layers, channels=cfg.channels
     )
-    height, parallax = setup_parallax(cfg, spec, btf, cfg.btf)
+    recorded = resume.get("parallax") if resume is not None else None
+    height, parallax = setup_parallax(cfg, spec, btf, cfg.btf, recorded)
     model = NeuralModel(spec, cfg.seed)
     if height is not None:
         model.set_height(height)
@@ -173,7 +174,7 @@ def _run_teach(asked: TeachConfig, on_step, epochs_flag: str) -> dict:
         cfg.output,
         payload,
         resume,
-        tex_params=list(model.tex.parameters()),
+        tex_params=model.texture_parameters(),
         on_step=on_step,
         epochs_flag=epochs_flag,
     )

@@ -1,13 +1,15 @@
 """The runtime pack (``.vrnm``): one neural material, readable with numpy alone. No pickle.
 
-Container (:mod:`vrneural.formats.container`), magic ``b"VRNM"``, version 4. Header::
+Container (:mod:`vrneural.formats.container`), magic ``b"VRNM"``, version 5. Header::
 
     {"arch": "coarse_fine" | "single", "output": "linear" | "log1p",
      "networks": {name: [{"n_in": int, "n_out": int, "act": str}, ...]},
      "textures": {name: [H, W, C]},
      "dir_range": [theta_i_max, theta_o_max],   # degrees, each in (0, 90); since version 2
      "levels": {name: n},   # pyramid levels 1..n-1 of each neural texture; since version 3
-     "parallax": {"kind": "height", "steps": n} | {"kind": "off"},   # since version 4
+     "parallax": {"kind": "height", "steps": n, "march": m} | {"kind": "off"},   # since 4
+                 | {"kind": "neural", "march": m},   # since version 5
+     "offset": [{"n_in", "n_out", "act"}, ...],   # the neural offset's MLP (kind neural)
      "meta": {"name": ..., "provenance": {...}, "metrics": {...}, "ranges": {...}}}
 
 Version 1 packs (no ``dir_range``) load with the default 75 degrees, said once per file;
@@ -16,8 +18,9 @@ packs before version 4 (no height field) load with parallax off, said once per f
 Arrays: ``net.<name>.<i>.weight`` ``[out, in]`` float32, ``net.<name>.<i>.bias`` ``[out]``
 float32, ``tex.<name>`` ``[H, W, C]`` float16 and its levels ``tex.<name>.<k>`` ``[H >> k,
 W >> k, C]``, ``height`` ``[H, W]`` float16 (UV units, the fine / features texels; present
-when the material has one, :mod:`vrneural.parallax`), each with a CRC32. Writing refuses
-NaN/Inf.
+when the material has one, :mod:`vrneural.parallax`), ``offset.<i>.weight`` / ``.bias`` and
+``tex.offset`` ``[H, W, C]`` float16 (NeuMIP's neural offset, :mod:`vrneural.neural_offset`;
+kind ``neural`` only), each with a CRC32. Writing refuses NaN/Inf.
 """
 
 from __future__ import annotations
@@ -34,10 +37,10 @@ from vrneural.material import NeuralMaterial
 from vrneural.mlp import Layer
 
 VRNM_MAGIC = b"VRNM"
-VRNM_VERSION = 4
+VRNM_VERSION = 5
 #: versions this reader takes (1: before the recorded direction range; 2: before pyramids;
-#: 3: before height fields)
-VRNM_READS = (1, 2, 3, 4)
+#: 3: before height fields; 4: before the neural offset)
+VRNM_READS = (1, 2, 3, 4, 5)
 _said_default_range: set[str] = set()
 _said_no_parallax: set[str] = set()
 
@@ -59,6 +62,13 @@ def write_vrnm(path, mat: NeuralMaterial) -> Path:
             arrays[f"tex.{name}.{k}"] = np.asarray(lv, np.float16)
     if mat.height is not None:
         arrays["height"] = np.asarray(mat.height, np.float16)
+    offset = None
+    if mat.offset_net is not None:
+        offset = [{"n_in": lay.n_in, "n_out": lay.n_out, "act": lay.act} for lay in mat.offset_net]
+        for i, lay in enumerate(mat.offset_net):
+            arrays[f"offset.{i}.weight"] = np.asarray(lay.weight, np.float32)
+            arrays[f"offset.{i}.bias"] = np.asarray(lay.bias, np.float32)
+        arrays["tex.offset"] = np.asarray(mat.offset_tex, np.float16)
     for k, a in arrays.items():
         if not np.isfinite(a).all():
             raise VrnError(f"{path}: refusing to write non-finite values in '{k}'")
@@ -72,6 +82,8 @@ def write_vrnm(path, mat: NeuralMaterial) -> Path:
         "parallax": dict(mat.parallax),
         "meta": mat.meta,
     }
+    if offset is not None:
+        header["offset"] = offset
     return write_container(path, VRNM_MAGIC, VRNM_VERSION, header, arrays)
 
 
@@ -79,19 +91,14 @@ def read_vrnm(path) -> NeuralMaterial:
     """Read and validate a ``.vrnm`` pack into a :class:`NeuralMaterial`."""
     header, arrays, version = read_container(path, VRNM_MAGIC, VRNM_READS, what="runtime pack")
     try:
-        nets = {}
-        for name, specs in header["networks"].items():
-            layers = []
-            for i, s in enumerate(specs):
-                w = np.array(arrays[f"net.{name}.{i}.weight"], np.float32)
-                b = np.array(arrays[f"net.{name}.{i}.bias"], np.float32)
-                if w.shape != (s["n_out"], s["n_in"]):
-                    raise VrnError(
-                        f"{path}: net.{name}.{i}.weight has shape {list(w.shape)}, "
-                        f"header says [{s['n_out']}, {s['n_in']}]"
-                    )
-                layers.append(Layer(w, b, s["act"]))
-            nets[name] = layers
+        nets = {
+            name: _layers(path, arrays, f"net.{name}", specs)
+            for name, specs in header["networks"].items()
+        }
+        offset_net = offset_tex = None
+        if version >= 5 and "offset" in header:
+            offset_net = _layers(path, arrays, "offset", header["offset"])
+            offset_tex = np.array(arrays["tex.offset"], np.float16)
         texs = {name: np.array(arrays[f"tex.{name}"], np.float16) for name in header["textures"]}
         dir_range = header["dir_range"] if version >= 2 else _default_range(path)
         counts = header["levels"] if version >= 3 else {}
@@ -110,13 +117,28 @@ def read_vrnm(path) -> NeuralMaterial:
                 raise VrnError(f"{path}: '{k}' contains NaN/Inf")
         mat = NeuralMaterial(
             header["arch"], nets, texs, header["output"], header.get("meta", {}), dir_range,
-            levels, parallax, height,
+            levels, parallax, height, offset_net, offset_tex,
         )  # fmt: skip
     except KeyError as e:
         raise VrnError(f"{path}: runtime pack lacks {e}") from None
     except (ValueError, TypeError, AttributeError) as e:
         raise VrnError(f"{path}: invalid runtime pack: {e}") from None
     return mat
+
+
+def _layers(path, arrays: dict, prefix: str, specs: list) -> list[Layer]:
+    """The layers ``<prefix>.<i>.weight`` / ``.bias`` of a pack, checked against the header."""
+    layers = []
+    for i, s in enumerate(specs):
+        w = np.array(arrays[f"{prefix}.{i}.weight"], np.float32)
+        b = np.array(arrays[f"{prefix}.{i}.bias"], np.float32)
+        if w.shape != (s["n_out"], s["n_in"]):
+            raise VrnError(
+                f"{path}: {prefix}.{i}.weight has shape {list(w.shape)}, "
+                f"header says [{s['n_out']}, {s['n_in']}]"
+            )
+        layers.append(Layer(w, b, s["act"]))
+    return layers
 
 
 def _no_parallax(path) -> dict:
