@@ -112,7 +112,7 @@ def validate(cfg: WidthsConfig) -> Plan:
     """Every option, before anything is synthesised, trained or written."""
     from vrneural.bench import report as rp
     from vrneural.bench.quality import QualityConfig
-    from vrneural.bench.quality import validate as quality_validate
+    from vrneural.bench.quality_checks import validate as quality_validate
     from vrneural.btf.synth import BtfConfig
 
     check_seed("--seed", cfg.seed)
