@@ -128,3 +128,26 @@ def test_gpu_screen_space_offset_agrees_with_the_texture_space_pass(tmp_path):
     d_offset = np.abs(scr_plain - scr)[seen].mean()
     # llvmpipe: 0.0011 between the modes, 0.038 between the offset and none
     assert d_offset > 5 * d_modes, (d_offset, d_modes)
+
+
+@pytest.mark.gpu
+def test_bench_frame_times_the_update_with_the_neural_offset(tmp_path):
+    """``bench frame --neural-offset`` times the texture-space update of the benchmark's
+    materials with the student's offset module, per texel and per block, beside the update
+    without it (the ratios of docs/parallax.md)."""
+    import json
+
+    from vrneural.bench.timing import offset_materials
+    from vrneural.cli import main
+
+    for march in ("texel", "block"):
+        mats = offset_materials(march=march)
+        assert all(m.parallax_kind == "neural" and m.parallax_march == march for m in mats)
+    argv = ["bench", "frame", "--quick", "--neural-offset", "--rounds", "1", "--no-progress",
+            "--out", str(tmp_path / "b")]  # fmt: skip
+    assert main(argv) == 0
+    sm = json.loads((tmp_path / "b" / "results.json").read_text())["summary"]
+    for name in ("texture_full_offset", "texture_full_offset_block", "texture_slice_offset"):
+        assert sm["passes"][name]["wall_ms"] > 0
+    for name in ("offset_vs_texture", "offset_block_vs_texture"):
+        assert np.isfinite(sm["ratios"][name]["median"]) and sm["ratios"][name]["median"] > 0
