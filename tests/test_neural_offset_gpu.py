@@ -151,3 +151,22 @@ def test_bench_frame_times_the_update_with_the_neural_offset(tmp_path):
         assert sm["passes"][name]["wall_ms"] > 0
     for name in ("offset_vs_texture", "offset_block_vs_texture"):
         assert np.isfinite(sm["ratios"][name]["median"]) and sm["ratios"][name]["median"] > 0
+
+
+@pytest.mark.gpu
+def test_gpu_texture_space_offset_in_f16_follows_the_f16_twin():
+    """In f16 kernels the offset MLP runs in f16 like the twin's ``precision="f16"``; the
+    kernel compiles and follows it within the f16 tolerance of tests/test_runtime_texture.py."""
+    from runtime_helpers import quad_atlas
+
+    from vrneural.runtime import reference as ref
+    from vrneural.runtime.texture_pass import shade_texture_space
+
+    m = _offset_material("student", "texel")
+    args = (quad_atlas(32), m, np.eye(4, dtype=np.float32), np.float32([2.5, -1.0, 0.4]),
+            np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3)), (2.0, 2.0, 0, 0), "f16")  # fmt: skip
+    got, _ = shade_texture_space(*args)
+    want, _ = ref.shade_texture_space(*args)
+    w16 = want.astype(np.float16).astype(np.float32)
+    err = np.abs(got[..., :3] - w16[..., :3]) / (np.abs(w16[..., :3]) + 1e-2)
+    assert err.max() <= 0.25  # llvmpipe: 0.0027
