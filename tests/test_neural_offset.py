@@ -1,6 +1,6 @@
 """NeuMIP's neural offset module (issue #44): the numpy reference against the trained torch
-model, the pack that carries it, its cost, the apparent-relief measure of ``auto`` and the
-renderer's refusal."""
+model, the pack that carries it, its cost, the apparent-relief measure of ``auto`` (the
+rendering: test_neural_offset_gpu.py)."""
 
 import numpy as np
 import pytest
@@ -9,10 +9,9 @@ from distill_helpers import analytic_btf, expect_one_line_error, run_cli
 
 from vrneural.btf.format import read_btf, write_btf
 from vrneural.distill.models import NeuralModel, make_spec
-from vrneural.errors import VrnError
 from vrneural.formats.vrnm import read_vrnm, write_vrnm
 from vrneural.material import material_forward
-from vrneural.neural_offset import check_renderable, offset_scale, offset_uv
+from vrneural.neural_offset import offset_scale, offset_uv
 from vrneural.relief import apparent_relief, pair_relief
 
 FAST = ("--no-progress", "--max-test-slices", "4", "--epochs", "1")
@@ -132,19 +131,6 @@ def test_pack_without_its_offset_is_refused(tmp_path):
     mat.offset_net = None
     with pytest.raises(ValueError, match="parallax kind 'neural' needs the offset MLP"):
         mat.__post_init__()
-
-
-def test_the_renderer_refuses_a_neural_offset_pack(tmp_path):
-    mat = _model("student", "texel").to_material({"name": "n"})
-    with pytest.raises(VrnError, match="neural-offset packs render in a later version"):
-        check_renderable(mat, "p.vrnm")
-    check_renderable(NeuralModel(make_spec("student", (16, 16))).to_material(), "plain")
-    write_vrnm(tmp_path / "n.vrnm", mat)
-    expect_one_line_error(
-        ["run", "--pack", tmp_path / "n.vrnm", "--frames", "1", "--out", tmp_path / "o"],
-        "n.vrnm: neural-offset packs render in a later version",
-        "use --parallax height or off",
-    )  # fmt: skip
 
 
 def test_apparent_relief_sees_a_shifted_pattern_and_not_a_flat_one():

@@ -16,15 +16,14 @@ supervised by nothing but the BTF values:
 ``wo`` is the extended view of :mod:`vrneural.grazing` (as for height-field parallax). The
 module runs per texel (``march = "texel"``) or once per 2x2 block at the block's mean UV, the
 block's four lookups shifted alike (``"block"``: a quarter of the offset MLP's work). Twins:
-:func:`vrneural.distill.models.offset_uv` (torch, trained); no WGSL yet (a pack with a neural
-offset is refused by the renderer, see :func:`check_renderable`).
+:func:`vrneural.distill.models.offset_uv` (torch, trained) and the WGSL stage of both render
+passes (:mod:`vrneural.runtime.codegen_offset`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from vrneural.errors import VrnError
 from vrneural.mlp import Layer, macs, mlp_forward
 from vrneural.sampling import sample_bilinear_wrap
 
@@ -117,12 +116,3 @@ def offset_fetches(tex: np.ndarray, march: str = "texel") -> float:
     channels; a quarter once per block)."""
     n = 4.0 * -(-int(tex.shape[2]) // 8)
     return n / 4 if march == "block" else n
-
-
-def check_renderable(mat, where: str) -> None:
-    """The renderer's refusal of a pack it cannot draw yet: a neural offset has no WGSL twin
-    (one-line VrnError naming ``where``)."""
-    if mat is not None and mat.parallax_kind == "neural":
-        raise VrnError(
-            f"{where}: neural-offset packs render in a later version; use --parallax height or off"
-        )

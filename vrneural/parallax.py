@@ -86,7 +86,7 @@ def choose_kind(
     reaches :data:`AUTO_MIN_RELIEF_TEXELS`, else ``off``; without a height field ``off``, and
     the reason says when the relief the data show (``seen``: :func:`vrneural.relief.
     apparent_relief`, texels, called only then) reaches :data:`AUTO_NEURAL_RELIEF_TEXELS`,
-    where ``neural`` would model it (auto picks it once the runtime draws it). ``neural``
+    where ``neural`` would model it (auto leaves it to ``--parallax neural``). ``neural``
     needs no height field. VrnError for ``height`` without one."""
     if requested not in PARALLAX_CHOICES:
         raise VrnError(f"--parallax = {requested!r}; choose one of {', '.join(PARALLAX_CHOICES)}")
@@ -101,11 +101,11 @@ def choose_kind(
         r = seen() if seen is not None else None
         if r is None:
             return "off", f"{where} has no height field"
-        if r >= AUTO_NEURAL_RELIEF_TEXELS:  # the runtime cannot draw neural offsets yet
+        if r >= AUTO_NEURAL_RELIEF_TEXELS:  # the neural offset is chosen explicitly
             return "off", (
                 f"no height field; apparent relief {r:.2f} texels >= "
-                f"{AUTO_NEURAL_RELIEF_TEXELS:g}: --parallax neural would model it, but its "
-                "packs do not render yet, so auto leaves it off"
+                f"{AUTO_NEURAL_RELIEF_TEXELS:g}: --parallax neural would model it; auto "
+                "leaves it off"
             )
         return (
             "off",

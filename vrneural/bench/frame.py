@@ -16,7 +16,9 @@ spell of a shared machine hits every condition:
 
 With ``--parallax-steps S`` the same rounds also time the texture-space update of the same two
 materials with height-field parallax of up to S steps, marched per texel and once per 2x2 block
-(a renderer each; issue #44's target: at most 1.5x the update without it).
+(a renderer each; issue #44's target: at most 1.5x the update without it); with
+``--neural-offset`` those materials with NeuMIP's neural offset module instead of a height
+field, per texel and per block.
 
 Ratios: forward / one-sample floor (target <= 1.15), full update / bare kernel (<= 1.5),
 wall per frame / max(host CPU, GPU) with frames in flight (<= 1.1; GPU = the passes' times
@@ -59,6 +61,11 @@ class FrameConfig:
         0,
         "also time the texture-space update of the same materials with height-field parallax "
         "of this many march steps, 1 to 64 (0 = off; see docs/parallax.md)",
+    )
+    neural_offset: bool = opt(
+        False,
+        "also time the texture-space update of the same materials with NeuMIP's neural offset "
+        "(the student's module: 4 channels, 6 -> 8 -> 8 -> 1), per texel and per 2x2 block",
     )
     quick: bool = opt(False, "CI-sized: texture 128, eyes 96x96, 6 frames, 2 rounds")
     progress: bool = opt(True, "show progress bars")
@@ -206,10 +213,15 @@ def run_frame(cfg: FrameConfig) -> dict:
         hdr = _renderer(scene, c, eye_res, "hdr")
         disp = _renderer(scene, c, eye_res, "display")
         doc["timestamp_check"] = hdr.timestamp_check
-        par = {}  # march -> renderer of the materials with parallax
+        par = {}  # (kind, march) -> renderer of the materials with parallax of that kind
         for march in ("texel", "block") if c.parallax_steps else ():
             mats = timing.parallax_materials(c.parallax_steps, march=march)
-            par[march] = _renderer(timing.bench_scene(c.lights, mats), c, eye_res, "hdr")
+            par["parallax", march] = _renderer(
+                timing.bench_scene(c.lights, mats), c, eye_res, "hdr"
+            )
+        for march in ("texel", "block") if c.neural_offset else ():
+            mats = timing.offset_materials(march=march)
+            par["offset", march] = _renderer(timing.bench_scene(c.lights, mats), c, eye_res, "hdr")
         floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_constant", "fs_floor_sample")}
         n1 = c.reuse + 1
         bar = timing.progress(c.rounds, "bench frame (rounds)", c.progress)
@@ -230,12 +242,10 @@ def run_frame(cfg: FrameConfig) -> dict:
             p["texture_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, 1, f), rep)
             p["texture_slice"] = time_passes(hdr, texture_update(hdr, "main", 0, n1, f), rep)
             p["texture_slice_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, n1, f), rep)
-            for march, rr in par.items():  # the same update, the materials with parallax
-                sfx = "" if march == "texel" else "_block"
-                p[f"texture_full_parallax{sfx}"] = time_passes(
-                    rr, texture_update(rr, "main", 0, 1, f), rep
-                )
-                p[f"texture_slice_parallax{sfx}"] = time_passes(
+            for (kind, march), rr in par.items():  # the same update, with parallax
+                sfx = kind + ("" if march == "texel" else "_block")
+                p[f"texture_full_{sfx}"] = time_passes(rr, texture_update(rr, "main", 0, 1, f), rep)
+                p[f"texture_slice_{sfx}"] = time_passes(
                     rr, texture_update(rr, "main", 0, n1, f), rep
                 )
             hdr.frame(f)  # the eyes' uniforms and radiance textures of a real frame

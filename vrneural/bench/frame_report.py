@@ -19,6 +19,11 @@ PASS_RATIOS = (
     ("parallax_slice_vs_texture_slice", "texture_slice_parallax", "texture_slice"),
     ("parallax_block_vs_texture", "texture_full_parallax_block", "texture_full"),
     ("parallax_block_slice_vs_texture_slice", "texture_slice_parallax_block", "texture_slice"),
+    # --neural-offset: the same update with NeuMIP's neural offset module
+    ("offset_vs_texture", "texture_full_offset", "texture_full"),
+    ("offset_slice_vs_texture_slice", "texture_slice_offset", "texture_slice"),
+    ("offset_block_vs_texture", "texture_full_offset_block", "texture_full"),
+    ("offset_block_slice_vs_texture_slice", "texture_slice_offset_block", "texture_slice"),
 )
 
 

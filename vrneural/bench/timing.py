@@ -184,6 +184,29 @@ def parallax_materials(steps: int, seeds=(3, 4), tex_res: int = 16, march: str =
     return out
 
 
+def offset_materials(seeds=(3, 4), tex_res: int = 16, march: str = "texel"):
+    """The benchmark scene's two random students with NeuMIP's neural offset module of the
+    student's size (:data:`vrneural.neural_offset.OFFSET_SIZES`: a random offset texture and
+    a random dense offset MLP; the cost does not depend on the values)."""
+    import numpy as np
+
+    from vrneural.material import NeuralMaterial, random_material
+    from vrneural.mlp import random_mlp
+    from vrneural.neural_offset import OFFSET_SIZES, VIEW_INPUTS
+
+    ch, hidden = OFFSET_SIZES["student"]
+    out = []
+    for s in seeds:
+        m = random_material(s, tex_res=tex_res)
+        rng = np.random.default_rng(s)
+        tex = rng.normal(0.0, 0.5, (tex_res, tex_res, ch)).astype(np.float16)
+        net = random_mlp([ch + VIEW_INPUTS, *hidden, 1], s)
+        par = {"kind": "neural", "march": march}
+        args = (m.arch, m.networks, m.textures, m.output, m.meta, m.dir_range, {}, par)
+        out.append(NeuralMaterial(*args, offset_net=net, offset_tex=tex))
+    return out
+
+
 def bench_scene(n_lights: int, materials=None):
     """The benchmark scene, independent of the bundled packs: a neural sphere (0.8 m) and a
     neural tile (0.45 m) on a plain 6 m floor, ``n_lights`` circling point lights

@@ -87,8 +87,8 @@ class TrainConfig:
         "auto",
         "move the neural textures' lookup along the view ray: auto (height where the BTF's "
         "height field has a texel of relief, else off), height (where the ray meets the "
-        "height field), neural (NeuMIP's learned offset module, no height field needed; "
-        "renders in a later version) or off (see docs/parallax.md)",
+        "height field), neural (NeuMIP's learned offset module, no height field needed) "
+        "or off (see docs/parallax.md)",
         choices=PARALLAX,
     )
     parallax_steps: int | None = unset(

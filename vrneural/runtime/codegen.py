@@ -83,6 +83,11 @@ class MaterialSpec:
     parallax_steps: int = 0
     parallax_march: str = "texel"
     height_consts: tuple = ()
+    #: NeuMIP's neural offset (parallax kind "neural"): the offset MLP's layers (None: off),
+    #: the offset texture's channels and the WGSL literals (W, H) of its texel grid
+    offset_net: list | None = None
+    offset_ch: int = 0
+    offset_consts: tuple = ()
 
     @property
     def buffer_weights(self) -> bool:
@@ -193,7 +198,20 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
         parallax_steps=mat.parallax_steps,
         parallax_march=mat.parallax_march,
         height_consts=_height_consts(mat),
+        **_offset_fields(mat),
     )
+
+
+def _offset_fields(mat: NeuralMaterial) -> dict:
+    """The spec's neural-offset fields of ``mat`` (none without a neural offset)."""
+    if mat.parallax_kind != "neural":
+        return {}
+    H, W = mat.offset_tex.shape[:2]
+    return {
+        "offset_net": list(mat.offset_net),
+        "offset_ch": int(mat.offset_tex.shape[2]),
+        "offset_consts": (repr(float(np.float32(W))), repr(float(np.float32(H)))),
+    }
 
 
 def _height_consts(mat: NeuralMaterial) -> tuple:

@@ -21,20 +21,22 @@ per light, shared by the block's 4 texels)::
 from __future__ import annotations
 
 from vrneural.gpu.unroll import IND, act_expr, affine_lines, mlp_lines
+from vrneural.runtime.codegen_offset import offset_wgsl
 
 I2 = IND * 2
 
 
 def network_wgsl(spec, T: str) -> str:
     """The evaluation API of ``spec`` (a :class:`~vrneural.runtime.codegen.MaterialSpec`) in
-    scalar type ``T``, as WGSL text."""
+    scalar type ``T``, as WGSL text; with a neural offset also its stage
+    (:mod:`vrneural.runtime.codegen_offset`)."""
     if spec.weights in ("uniform", "streamed"):
         lines = streamed_single(spec, T)
     elif spec.buffer_weights:
         lines = storage_nets(spec, T)
     else:
         lines = constant_nets(spec, T)
-    return "\n".join(lines)
+    return "\n".join(lines + offset_wgsl(spec, T))  # the neural offset: constants in any variant
 
 
 # --- weights as constants -------------------------------------------------------------------

@@ -88,7 +88,7 @@ def lod_fn(name: str, channels: int, top: int) -> list[str]:
 def samplers_wgsl(spec) -> str:
     """Every sampler of ``spec``'s material (:class:`~vrneural.runtime.codegen.MaterialSpec`):
     ``sample_a`` (and ``sample_b`` for coarse-to-fine), with a pyramid their ``*_at`` level
-    lookups and ``*_lod`` blends."""
+    lookups and ``*_lod`` blends; with a neural offset ``sample_off`` (the offset texture)."""
     texs = [("sample_a", "tex_a", spec.ca)]
     if spec.arch == "coarse_fine":
         texs.append(("sample_b", "tex_b", spec.cb))
@@ -97,4 +97,6 @@ def samplers_wgsl(spec) -> str:
         for n, t, c in texs:
             lines += sampler_fn(n + "_at", t, c, level=True)
             lines += lod_fn(n, c, spec.lod_levels - 1)
+    if spec.offset_net:  # NeuMIP's offset texture: level 0 only, at the unmoved uv
+        lines += sampler_fn("sample_off", "off_tex", spec.offset_ch)
     return "\n".join(lines)

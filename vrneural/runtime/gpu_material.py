@@ -81,6 +81,12 @@ class GpuMaterial:
         self.views = [t.create_view(dimension="2d-array") for t in self.textures]
         #: the height field of a parallax material (r32float ``[H, W]``), else None
         self.height = upload_height_texture(mat.height) if mat.parallax_steps else None
+        #: the offset texture of a neural-offset material (as the neural textures), else None
+        self.offset = (
+            upload_feature_texture(mat.offset_tex, "neural.offset")
+            if mat.parallax_kind == "neural"
+            else None
+        )
         self.weights = (
             upload_buffer(packed_weights(mat), wgpu.BufferUsage.STORAGE, "weights")
             if weights in ("storage", "streamed")
@@ -105,6 +111,8 @@ class GpuMaterial:
             out["wbias" if last else f"wl{i}"] = {"buffer": b}
         if self.height is not None:
             out["height_tex"] = self.height.create_view()
+        if self.offset is not None:
+            out["off_tex"] = self.offset.create_view(dimension="2d-array")
         return out
 
 

@@ -61,6 +61,8 @@ OBJECT = Struct(
 MATERIAL_BINDING = 7
 #: binding of the height field of a parallax material (both passes)
 HEIGHT_BINDING = 18
+#: binding of the offset texture of a neural-offset material (both passes)
+OFFSET_BINDING = 19
 #: first binding of the uniform weight buffers (one per layer, then the biases)
 UNIFORM_WEIGHTS_BINDING = 20
 
@@ -72,7 +74,8 @@ def lights_binding(n_lights: int, slot: int = 1) -> Binding:
 
 def material_bindings(spec) -> list[Binding]:
     """A material's resources (:class:`~vrneural.runtime.codegen.MaterialSpec`): neural
-    textures, the height field of parallax, buffer weights; read by neural_material.wgsl and
+    textures, the height field of parallax or the offset texture of a neural offset, buffer
+    weights; read by neural_material.wgsl and
     bound from :meth:`~vrneural.runtime.gpu_material.GpuMaterial.resources`."""
     first = MATERIAL_BINDING
     tex = "texture_2d_array<u32>"
@@ -80,6 +83,8 @@ def material_bindings(spec) -> list[Binding]:
     if spec.parallax_steps > 0:
         out.append(Binding(HEIGHT_BINDING, "height_tex", "texture", "texture_2d<f32>",
                            "r32float, UV units", sample_type="unfilterable-float"))  # fmt: skip
+    if spec.offset_net:
+        out.append(Binding(OFFSET_BINDING, "off_tex", "texture", tex, "neural offset texture"))
     if spec.arch == "coarse_fine":
         out.append(Binding(first + 1, "tex_b", "texture", tex, "fine"))
     if spec.weights in ("storage", "streamed"):

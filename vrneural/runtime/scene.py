@@ -65,12 +65,6 @@ class MaterialDesc:
     reference_source: str = ""  # the teacher pack's path, when there is one
     reference_hint: str = ""  # where a missing reference was looked for (``--pack``)
 
-    def __post_init__(self):
-        from vrneural.neural_offset import check_renderable
-
-        check_renderable(self.neural, self.source or "pack")  # no WGSL for a neural offset yet
-        check_renderable(self.reference, self.reference_source or "reference pack")
-
 
 @dataclass
 class ObjectDesc:

@@ -61,6 +61,12 @@ fn shade_pixel(px: vec2<u32>) -> vec4<u32> {
     // height-field parallax (neural_material.parallax_uv): the pixel's lookup where its view
     // ray meets the height field
     let uv = parallax_uv(material_uv_l(id.y, l), parallax_d(view_ext(wo)));
+{% elif mat.offset_net %}
+    // NeuMIP's neural offset (neural_material offset_r, offset_d): the pixel's lookup moved
+    // along its (extended) view by the offset MLP's depth at the unmoved uv
+    let ow = view_ext(wo);
+    let u0 = material_uv_l(id.y, l);
+    let uv = u0 + offset_r(u0, ow) * offset_d(ow);
 {% else %}
     let uv = material_uv_l(id.y, l);
 {% endif %}

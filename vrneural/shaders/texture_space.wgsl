@@ -68,6 +68,28 @@ fn shade_block(k: u32) -> vec4<u32> {
     let uv2 = parallax_uv(tiled(q23.xy), pd);
     let uv3 = parallax_uv(tiled(q23.zw), pd);
 {% endif %}
+{% elif mat.offset_net %}
+    // NeuMIP's neural offset: each texel's lookups moved along this eye's (extended) view by
+    // the offset MLP's depth at the unmoved uv (neural_material offset_r, offset_d)
+    let ow = view_ext(wo);
+    let od = offset_d(ow);
+    let t0 = tiled(q01.xy);
+    let t1 = tiled(q01.zw);
+    let t2 = tiled(q23.xy);
+    let t3 = tiled(q23.zw);
+{% if mat.parallax_march == 'block' %}
+    // once per block, at the texels' mean (neural_offset.offset_uv, march "block")
+    let shift = offset_r((t0 + t1 + t2 + t3) * 0.25, ow) * od;
+    let uv0 = t0 + shift;
+    let uv1 = t1 + shift;
+    let uv2 = t2 + shift;
+    let uv3 = t3 + shift;
+{% else %}
+    let uv0 = t0 + offset_r(t0, ow) * od;
+    let uv1 = t1 + offset_r(t1, ow) * od;
+    let uv2 = t2 + offset_r(t2, ow) * od;
+    let uv3 = t3 + offset_r(t3, ow) * od;
+{% endif %}
 {% else %}
     let uv0 = tiled(q01.xy);
     let uv1 = tiled(q01.zw);
