@@ -205,13 +205,12 @@ def test_relief_measure_and_the_auto_choice():
     assert choose_kind("auto", None, "v1.btf") == ("off", "v1.btf has no height field")
     with pytest.raises(VrnError, match=r"--parallax height: v1\.btf has no height field"):
         choose_kind("height", None, "v1.btf")
-    # the neural offset needs no height field; auto names it where there is none and the
-    # views show relief (the measure is called only then), but keeps off while the runtime
-    # cannot draw it
+    # the neural offset needs no height field; auto gives it only where there is none and the
+    # views show relief (the measure is called only then)
     assert choose_kind("neural", None, "v1.btf")[0] == "neural"
     assert choose_kind("neural", rough, "r.btf")[0] == "neural"
     kind, why = choose_kind("auto", None, "v1.btf", lambda: 3.0)
-    assert kind == "off" and "3.00 texels >= 2: --parallax neural would model it" in why
+    assert kind == "neural" and "apparent relief 3.00 texels >= 2 (neural offset)" in why
     kind, why = choose_kind("auto", None, "v1.btf", lambda: 1.5)
     assert kind == "off" and "apparent relief 1.50 texels < 2" in why
     assert choose_kind("auto", rough, "r.btf", lambda: 1 / 0)[0] == "height"

@@ -45,9 +45,9 @@ MAX_STEPS = 64
 #: per texel of relief) stays within the few texels a texel-local network absorbs
 AUTO_MIN_RELIEF_TEXELS = 1.0
 #: the relief a material without a height field shows in its views
-#: (:func:`vrneural.relief.apparent_relief`) from which the neural offset would pay: higher
-#: than the height field's threshold, as the estimate is noisier and the module costs MACs.
-#: ``auto`` names it in its reason but keeps ``off`` until the runtime draws neural offsets
+#: (:func:`vrneural.relief.apparent_relief`) from which ``auto`` gives it the neural offset:
+#: higher than the height field's threshold, as the estimate is noisier and the module costs
+#: MACs (1.32x the texture-space update per texel at quest3, docs/parallax.md)
 AUTO_NEURAL_RELIEF_TEXELS = 2.0
 
 
@@ -83,10 +83,9 @@ def choose_kind(
 ) -> tuple[str, str]:
     """``(kind, why)``: the parallax a pack gets for ``--parallax requested`` and the BTF's
     height field on the texel grid (None: it has none). ``auto``: ``height`` where the relief
-    reaches :data:`AUTO_MIN_RELIEF_TEXELS`, else ``off``; without a height field ``off``, and
-    the reason says when the relief the data show (``seen``: :func:`vrneural.relief.
-    apparent_relief`, texels, called only then) reaches :data:`AUTO_NEURAL_RELIEF_TEXELS`,
-    where ``neural`` would model it (auto leaves it to ``--parallax neural``). ``neural``
+    reaches :data:`AUTO_MIN_RELIEF_TEXELS`, else ``off``; without a height field ``neural``
+    where the relief the data show (``seen``: :func:`vrneural.relief.apparent_relief`, texels,
+    called only then) reaches :data:`AUTO_NEURAL_RELIEF_TEXELS`, else ``off``. ``neural``
     needs no height field. VrnError for ``height`` without one."""
     if requested not in PARALLAX_CHOICES:
         raise VrnError(f"--parallax = {requested!r}; choose one of {', '.join(PARALLAX_CHOICES)}")
@@ -101,11 +100,10 @@ def choose_kind(
         r = seen() if seen is not None else None
         if r is None:
             return "off", f"{where} has no height field"
-        if r >= AUTO_NEURAL_RELIEF_TEXELS:  # the neural offset is chosen explicitly
-            return "off", (
+        if r >= AUTO_NEURAL_RELIEF_TEXELS:
+            return "neural", (
                 f"no height field; apparent relief {r:.2f} texels >= "
-                f"{AUTO_NEURAL_RELIEF_TEXELS:g}: --parallax neural would model it; auto "
-                "leaves it off"
+                f"{AUTO_NEURAL_RELIEF_TEXELS:g} (neural offset)"
             )
         return (
             "off",

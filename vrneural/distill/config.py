@@ -86,7 +86,8 @@ class TrainConfig:
     parallax: str | None = unset(
         "auto",
         "move the neural textures' lookup along the view ray: auto (height where the BTF's "
-        "height field has a texel of relief, else off), height (where the ray meets the "
+        "height field has a texel of relief; without one neural where its views show 2 "
+        "texels; else off), height (where the ray meets the "
         "height field), neural (NeuMIP's learned offset module, no height field needed) "
         "or off (see docs/parallax.md)",
         choices=PARALLAX,
