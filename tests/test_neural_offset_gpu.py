@@ -58,10 +58,7 @@ def test_packs_without_an_offset_generate_no_offset_stage():
 def test_gpu_texture_space_offset_follows_the_twin(method, march):
     """The texture-space kernel moves each texel's lookups as neural_offset.offset_uv does
     (per eye: a grazing and a near-normal eye), within the height route's tolerance."""
-    from runtime_helpers import quad_atlas
-
-    from vrneural.runtime import reference as ref
-    from vrneural.runtime.texture_pass import shade_texture_space
+    from runtime_helpers import assert_moved_lookup_parity, quad_atlas
 
     m = _offset_material(method, march)
     plain = NeuralMaterial(m.arch, m.networks, m.textures, m.output, m.meta)
@@ -69,16 +66,7 @@ def test_gpu_texture_space_offset_follows_the_twin(method, march):
     lp, lc = np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
     tl = (2.0, 2.0, 0, 0)
     for eye in (np.float32([0.2, 0.1, 1.5]), np.float32([2.5, -1.0, 0.4])):
-        want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
-        got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
-        np.testing.assert_array_equal(gc, wc)
-        w16 = want.astype(np.float16).astype(np.float32)
-        scale = 1e-2 * max(w16.max(), 1e-12)
-        rel = np.abs(got - w16) / (np.abs(w16) + scale)
-        assert np.quantile(rel, 0.999) <= 2 * 2.0**-10
-        assert rel.max() < 0.05
-        base, _ = ref.shade_texture_space(at, plain, np.eye(4), eye, lp, lc, tiling=tl)
-        assert np.abs(base - want).max() > 50 * np.abs(got - w16).max()  # the offset shows
+        assert_moved_lookup_parity(at, m, plain, eye, lp, lc, tl)
 
 
 @pytest.mark.gpu
