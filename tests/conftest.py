@@ -4,17 +4,10 @@ The adapter is probed once, in a subprocess with a timeout (a broken driver must
 run). Without an adapter GPU tests skip on a developer machine; under ``CI=true`` the run fails
 instead, and it also fails when the adapter is not lavapipe/llvmpipe (``EXPECT_LAVAPIPE``,
 default on in CI), so GPU tests can never silently skip in CI.
-
-When pytest is the program (not a ``pytest.main`` inside ``vrneural bench extremes``), the
-process ends with ``os._exit(status)`` once the session is over and the other exit handlers
-have run: interpreter teardown after a whole-suite run (wgpu-native, torch, Mitsuba and glfw
-objects all alive) segfaulted once in CI after every test had passed, and the order in which
-native objects die at teardown is not ours to fix (docs/quality-research.md, "Notes").
 """
 
 from __future__ import annotations
 
-import atexit
 import json
 import os
 import subprocess
@@ -73,33 +66,7 @@ def pytest_addoption(parser):
     )
 
 
-#: the outermost session's config and, once it finished, its exit status (see the docstring)
-_HARD_EXIT: dict = {}
-
-
-def _main_is_pytest() -> bool:
-    spec = getattr(sys.modules.get("__main__"), "__spec__", None)
-    return (getattr(spec, "name", "") or "").startswith("pytest") or os.path.basename(
-        sys.argv[0]
-    ) in ("pytest", "py.test")
-
-
-def _exit_now() -> None:
-    if "status" in _HARD_EXIT:
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(_HARD_EXIT["status"])
-
-
-def pytest_sessionfinish(session, exitstatus):
-    if _HARD_EXIT.get("config") is session.config:
-        _HARD_EXIT["status"] = int(exitstatus)
-
-
 def pytest_configure(config):
-    if not _HARD_EXIT and _main_is_pytest():
-        _HARD_EXIT["config"] = config
-        atexit.register(_exit_now)  # registered first of ours: runs after the later ones
     out = config.getoption("extremes_report")
     if out:
         from vrneural.bench.extremes import ReportPlugin

@@ -55,16 +55,24 @@ def test_every_pass_is_timed_truly_or_reported_untimed(mode):
         pytest.skip("no timestamp-query on this adapter")
     r.frame(0)
     frames = range(1, 4)
-    wall = _times(r, frames, "wall")
     shading = "texture" if mode == "texture" else "screen"
-    assert {shading, "forward"} <= set(wall) and min(wall.values()) > 1.0
     untimed = r.untimed
-    stamps = _times(r, frames, "timestamps")
-    for name in ("forward", shading):
-        if name in untimed:
-            assert name not in stamps
-        else:
-            assert LOW <= stamps[name] / wall[name] <= HIGH, (name, stamps[name], wall[name])
+    # up to three rounds of (wall, timestamps): a pass that other processes' load slowed in
+    # one wall-clock round (a 2.4 ms pass read as 7.3 ms, once in CI) agrees in the next; a
+    # pass whose timestamps do not cover it (0.1 ms against 100 ms) disagrees in every round
+    for _ in range(3):
+        wall = _times(r, frames, "wall")
+        assert {shading, "forward"} <= set(wall) and min(wall.values()) > 1.0
+        stamps = _times(r, frames, "timestamps")
+        off = []
+        for name in ("forward", shading):
+            if name in untimed:
+                assert name not in stamps
+            elif not LOW <= stamps[name] / wall[name] <= HIGH:
+                off.append((name, stamps[name], wall[name]))
+        if not off:
+            break
+    assert not off, off
     r.untimed = ()  # read every timestamp, covered or not
     raw = _times(r, frames, "timestamps")
     for name in set(untimed) & {"forward", shading}:
