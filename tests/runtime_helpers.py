@@ -58,3 +58,51 @@ def assert_moved_lookup_parity(at, mat, unmoved, eye, lp, lc, tiling) -> None:
     assert rel.max() < 0.05
     base, _ = ref.shade_texture_space(at, unmoved, np.eye(4), eye, lp, lc, tiling=tiling)
     assert np.abs(base - want).max() > 50 * np.abs(got - w16).max()  # the move shows
+
+
+def render_grazing_plane(tmp_path, pack, mode):
+    """One eye (128^2, 70 deg) of a 1 m plane carrying ``pack`` (a file in ``tmp_path``), seen
+    at 50-75 degrees, rendered in ``mode``; ``[128, 128, 3]`` float32."""
+    import tomllib
+
+    from vrneural.runtime.renderer import Renderer, Settings
+    from vrneural.runtime.scene import parse_scene
+
+    # a head 0.5 m above a 1 m plane, 1.2 m off to the side: views of 50-75 degrees
+    pose = "t,x,y,z,qx,qy,qz,qw\n0,0,0.5,1.2,-0.3826834,0,0,0.9238795\n"
+    (tmp_path / "pose.csv").write_text(pose)
+    toml = f"""
+[head]
+path = "pose.csv"
+[[objects]]
+mesh = "plane"
+[objects.material]
+pack = "{pack}"
+scale = 1.0
+[[lights]]
+position = [0.2, 0.8, 0.3]
+intensity = 2.0
+"""
+    scene = parse_scene(tomllib.loads(toml), "t.toml", tmp_path)
+    s = Settings(eyes=1, reuse=0, texture_res=512, eye_res=(128, 128), fov_y=70.0, n_lights=1,
+                 mode=mode)  # fmt: skip
+    r = Renderer(scene, s)
+    r.frame(0)
+    return r.read_eyes()[0][..., :3].astype(np.float32)
+
+
+def mode_and_move_gaps(tmp_path, moved, unmoved) -> tuple[float, float]:
+    """``(modes, move)``: the mean difference on the grazing plane between the texture-space
+    and the screen-space render of ``moved`` (a pack whose lookups move), and between its
+    screen-space render and that of ``unmoved``, over the pixels the plane covers (at least
+    5% of the image)."""
+    from vrneural.formats.vrnm import write_vrnm
+
+    write_vrnm(tmp_path / "moved.vrnm", moved)
+    write_vrnm(tmp_path / "unmoved.vrnm", unmoved)
+    tex = render_grazing_plane(tmp_path, "moved.vrnm", "texture")
+    scr = render_grazing_plane(tmp_path, "moved.vrnm", "screen")
+    scr_unmoved = render_grazing_plane(tmp_path, "unmoved.vrnm", "screen")
+    seen = scr.sum(-1) > 0
+    assert seen.mean() > 0.05
+    return float(np.abs(tex - scr)[seen].mean()), float(np.abs(scr_unmoved - scr)[seen].mean())

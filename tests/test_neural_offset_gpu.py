@@ -102,18 +102,11 @@ def test_run_renders_a_neural_offset_pack(tmp_path, mode):
 def test_gpu_screen_space_offset_agrees_with_the_texture_space_pass(tmp_path):
     """Per pixel (screen space) and per radiance texel the lookups move the same way: the two
     modes agree far better with each other than with the pack without its offset."""
-    from test_parallax import _render
+    from runtime_helpers import mode_and_move_gaps
 
     m = _offset_material("student", "texel", scale=1.0)
-    write_vrnm(tmp_path / "n.vrnm", m)
-    write_vrnm(tmp_path / "p.vrnm", NeuralMaterial(m.arch, m.networks, m.textures, m.output))
-    tex = _render(tmp_path, "n.vrnm", "texture")
-    scr = _render(tmp_path, "n.vrnm", "screen")
-    scr_plain = _render(tmp_path, "p.vrnm", "screen")
-    seen = scr.sum(-1) > 0
-    assert seen.mean() > 0.05
-    d_modes = np.abs(tex - scr)[seen].mean()
-    d_offset = np.abs(scr_plain - scr)[seen].mean()
+    plain = NeuralMaterial(m.arch, m.networks, m.textures, m.output)
+    d_modes, d_offset = mode_and_move_gaps(tmp_path, m, plain)
     # llvmpipe: 0.0011 between the modes, 0.038 between the offset and none
     assert d_offset > 5 * d_modes, (d_offset, d_modes)
 

@@ -258,52 +258,15 @@ def test_flat_packs_generate_the_same_kernels_as_before():
         assert "var height_tex: texture_2d<f32>" in code and "clamp(i32(n), 1, 16)" in code
 
 
-def _render(tmp_path, pack, mode):
-    import tomllib
-
-    from vrneural.runtime.renderer import Renderer, Settings
-    from vrneural.runtime.scene import parse_scene
-
-    # a head 0.5 m above a 1 m plane, 1.2 m off to the side: views of 50-75 degrees
-    pose = "t,x,y,z,qx,qy,qz,qw\n0,0,0.5,1.2,-0.3826834,0,0,0.9238795\n"
-    (tmp_path / "pose.csv").write_text(pose)
-    toml = f"""
-[head]
-path = "pose.csv"
-[[objects]]
-mesh = "plane"
-[objects.material]
-pack = "{pack}"
-scale = 1.0
-[[lights]]
-position = [0.2, 0.8, 0.3]
-intensity = 2.0
-"""
-    scene = parse_scene(tomllib.loads(toml), "t.toml", tmp_path)
-    s = Settings(eyes=1, reuse=0, texture_res=512, eye_res=(128, 128), fov_y=70.0, n_lights=1,
-                 mode=mode)  # fmt: skip
-    r = Renderer(scene, s)
-    r.frame(0)
-    return r.read_eyes()[0][..., :3].astype(np.float32)
-
-
 @pytest.mark.gpu
 def test_gpu_screen_space_parallax_agrees_with_the_texture_space_pass(tmp_path):
     """Per pixel (screen space) and per texel of the radiance texture the lookups move the
     same way: the two modes agree far better with each other than with the pack without
     parallax (the texture-space twin is checked texel for texel above)."""
-    from vrneural.formats.vrnm import write_vrnm
+    from runtime_helpers import mode_and_move_gaps
 
     par = parallax_material(16, amp=0.08)
-    write_vrnm(tmp_path / "par.vrnm", par)
     flat = NeuralMaterial(par.arch, par.networks, par.textures, par.output, par.meta)
-    write_vrnm(tmp_path / "flat.vrnm", flat)
-    tex = _render(tmp_path, "par.vrnm", "texture")
-    scr = _render(tmp_path, "par.vrnm", "screen")
-    scr_flat = _render(tmp_path, "flat.vrnm", "screen")
-    seen = scr.sum(-1) > 0
-    assert seen.mean() > 0.05
-    d_modes = np.abs(tex - scr)[seen].mean()
-    d_parallax = np.abs(scr_flat - scr)[seen].mean()
+    d_modes, d_parallax = mode_and_move_gaps(tmp_path, par, flat)
     # llvmpipe: 0.0042 between the modes, 0.0485 between parallax and none
     assert d_parallax > 5 * d_modes, (d_parallax, d_modes)
