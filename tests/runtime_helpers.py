@@ -60,6 +60,27 @@ def assert_moved_lookup_parity(at, mat, unmoved, eye, lp, lc, tiling) -> None:
     assert np.abs(base - want).max() > 50 * np.abs(got - w16).max()  # the move shows
 
 
+def assert_auto_march_parity(mat, unmoved) -> None:
+    """March ``"auto"`` of ``mat`` (a pack whose lookups move) on the sphere's atlas at a
+    tiling where some blocks span at most half a texel of the march's grid per atlas texel and
+    others more: both routes run in one dispatch, and the kernel follows the twin
+    (:func:`assert_moved_lookup_parity`) at a grazing and a near-normal eye."""
+    import dataclasses
+
+    from vrneural.parallax import auto_blocks
+    from vrneural.runtime.assets import get_atlas, get_mesh
+    from vrneural.runtime.reference import block_geometry
+
+    auto = dataclasses.replace(mat, parallax={**mat.parallax, "march": "auto"})
+    at = get_atlas(get_mesh("sphere"), 64)
+    tl = (0.3, 0.3, 0.0, 0.0)
+    per_block = auto_blocks(block_geometry(at)["foot"] * np.float32(0.3), auto.march_grid)
+    assert 0.2 < per_block.mean() < 0.8, per_block.mean()  # both routes are taken
+    lp, lc = np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
+    for eye in (np.float32([0.0, 1.5, 0.8]), np.float32([1.2, 0.3, 0.5])):
+        assert_moved_lookup_parity(at, auto, unmoved, eye, lp, lc, tl)
+
+
 def render_grazing_plane(tmp_path, pack, mode):
     """One eye (128^2, 70 deg) of a 1 m plane carrying ``pack`` (a file in ``tmp_path``), seen
     at 50-75 degrees, rendered in ``mode``; ``[128, 128, 3]`` float32."""

@@ -136,11 +136,14 @@ def test_kernels_threads_sets_torch_and_sgemm_threads(tmp_path):
     import torch
 
     before = torch.get_num_threads()
-    argv = ["bench", "kernels", "--quick", "--threads", "1", "--networks", "student"]
+    argv = ["bench", "kernels", "--quick", "--threads", "1", "--networks", "student,student_offset"]
     argv += ["--precisions", "f32", "--no-progress", "--out", str(tmp_path / "k")]
     assert main(argv) == 0
     doc = json.loads((tmp_path / "k" / "results.json").read_text())
     assert doc["torch_threads"] == 1 and doc["sgemm_threads"] == 1
+    # the student with its neural offset module: + the offset MLP (4 + 2 -> 8 -> 8 -> 1) per texel
+    macs = {r["network"]: r["macs_per_texel"] for r in doc["records"]}
+    assert macs["student_offset"] == macs["student"] + 6 * 8 + 8 * 8 + 8 == 322
     assert all(g > 0 for g in doc["sgemm_gflops_runs"])
     assert "torch threads: 1, sgemm threads: 1." in (tmp_path / "k" / "results.md").read_text()
     assert torch.get_num_threads() == before

@@ -162,12 +162,16 @@ def test_kernels_time_the_networks_distill_trains():
     reading wi.xy and wo.xy), and student:W as distill --width W."""
     from vrneural.errors import VrnError
 
-    names = ("student", "single8", "neumip", "student:16", "single8:12", "single8:8")
+    names = ("student", "single8", "neumip", "student:16", "single8:12", "single8:8",
+             "student_offset", "neumip_offset")  # fmt: skip
     macs = {n: kernels.network(n)[1] for n in names}
     assert macs == {
         "student": 202,
         "single8": 288,
         "neumip": 1600,
+        # + the offset MLP of its size per texel: (4 + 2) -> 8 -> 8 -> 1, (7 + 2) -> 25 x 3 -> 1
+        "student_offset": 202 + 6 * 8 + 8 * 8 + 8,
+        "neumip_offset": 1600 + 9 * 25 + 2 * 25 * 25 + 25,
         "student:16": 564,
         "single8:12": 17 * 12 + 2 * 12 * 12 + 12 * 3,
         "single8:8": 288,
@@ -185,7 +189,7 @@ def test_kernels_time_the_networks_distill_trains():
         ("student:8,student:8", "--networks names student:8 more than once"),
         ("single8:65", "single8:W needs a width W in [1, 64]"),
         ("single8,single8:8", "--networks names single8 and single8:8, the same network"),
-        ("resnet", "choose one of: neumip, single8, single8:W, student, student:W"),
+        ("resnet", "choose one of: neumip, neumip_offset, single8, single8:W, student, student:W"),
         (" , ", "--networks is empty"),
     ):
         with pytest.raises(VrnError, match=re.escape(msg)):

@@ -239,7 +239,7 @@ def test_synth_refuses_a_file_larger_than_the_free_disk_space(tmp_path, vrn_inpr
     monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(10**9, 0, 10**6))
     out = tmp_path / "huge.btf"
     r = vrn_inproc("btf", "synth", "--res", "4", "--dirs", "300", "-o", str(out), "--no-progress")
-    _one_line_error(r, "needs 8.6 MB", "only 1.0 MB is free")
+    _one_line_error(r, "needs 8.7 MB", "only 1.0 MB is free")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -266,12 +266,13 @@ def test_header_keeps_the_configured_grid_and_its_hash(small_btf):
     """The header's SHA-256 is the BTF's identity in every checkpoint trained on it: the same
     settings must keep writing the same header bytes, or `bench quality --resume` and
     `distill` stop matching the teachers of older runs (recording the resolved grid in the
-    header once did exactly that). The sidecar records the size used."""
+    header once did exactly that). The sidecar records the size used. (Changed once, on
+    purpose: since issue #44 the file carries the tile's height field.)"""
     gen = read_btf(small_btf).meta["generator"]
     cfg = json.loads(small_btf.with_name("leather.btf.config.json").read_text())
     assert gen["grid"] == 0 and cfg["grid"] == 64
     fp = btf_fingerprint(read_btf(small_btf))
-    assert fp["sha256"] == "b33a632e82e3823525c55e69ec367fbb1efa6c0f7a651d4852df7f55b7205acb"
+    assert fp["sha256"] == "0d0790a4551cfed27644b42ad0ed25a4dde439277ac8e2d2b254622780b820f0"
 
 
 def test_grid_help_matches_the_check(vrn_inproc, tmp_path, capsys):
@@ -521,3 +522,23 @@ def test_show_brdf_panel_ticks_are_whole_indices(tmp_path):
     for ticks in (fig.axes[-1].get_xticks(), fig.axes[-1].get_yticks()):
         assert len(ticks) and all(float(t).is_integer() for t in ticks), ticks
     plt.close(fig)
+
+
+def test_synth_writes_the_tiles_height_field(small_btf, tmp_path):
+    """The height field the slices were rendered from travels with them (issue #44): the
+    preset's grid where it nests in the texels, else its bilinear surface resampled to the
+    nearest multiple of them; ``distill --parallax auto`` reads it (docs/parallax.md)."""
+    from vrneural.btf.heightfield import bilinear_wrap, texel_height
+    from vrneural.btf.synth import BtfConfig, build_maps
+    from vrneural.parallax import height_at_texels
+
+    b = read_btf(small_btf)
+    maps = build_maps(BtfConfig(preset="leather", res=8, dirs=6, seed=0))
+    np.testing.assert_array_equal(b.height, maps.height.astype(np.float32))  # 64 = 8 x 8
+    assert height_at_texels(b.height, b.resolution).shape == (8, 8)
+    h = maps.height.astype(np.float32)  # [64, 64] onto 24 texels: 72 = 3 x 24 cells
+    r = texel_height(h, 24)
+    c = (np.arange(72) + 0.5) / 72
+    assert r.shape == (72, 72)
+    np.testing.assert_allclose(r[5, 7], bilinear_wrap(h, np.array(c[7]), np.array(c[5])), atol=1e-7)
+    assert abs(float(r.mean()) - float(h.mean())) < 1e-4

@@ -227,3 +227,66 @@ def test_existing_output_kept_and_interrupted_import_resumes(tmp_path, capsys, m
         capsys, ["btf", "import", str(out), "-o", str(tmp_path / "x.btf"), "--table", "t.csv"]
     )
     assert code == 2 and "--table is for a folder of images" in err
+
+
+def _square_set(folder):
+    """An image set of 4x4 texels (a height field needs square texels)."""
+    return make_set(folder, values=_values()[:, :, :, :4])
+
+
+def test_a_measured_height_field_travels_into_the_btf(tmp_path):
+    """``--height`` (a one-channel EXR in the folder, or a .npy outside it) with
+    ``--height-scale``: stored mean-free in UV units, resampled to a multiple of the texels
+    where it is not one, recorded in the header; ``distill --parallax auto`` can then see the
+    relief (docs/parallax.md)."""
+    from vrneural.parallax import height_at_texels
+
+    d = tmp_path / "set"
+    _square_set(d)
+    rng = np.random.default_rng(3)
+    h = rng.uniform(0.0, 2.0, (8, 8, 1)).astype(np.float32)  # e.g. millimetres
+    _write(d / "height.exr", h)  # in the folder, without a row in the table
+    out = tmp_path / "a.btf"
+    argv = ["btf", "import", str(d), "-o", str(out), "--no-progress", "--height"]
+    assert main([*argv, str(d / "height.exr"), "--height-scale", "0.05"]) == 0
+    b = read_btf(out)
+    np.testing.assert_allclose(b.height, (h[..., 0] - h.mean()) * 0.05, atol=1e-6)
+    rec = b.meta["generator"]["height"]
+    assert (
+        rec["scale"] == 0.05 and rec["source"].endswith("height.exr") and len(rec["sha256"]) == 64
+    )
+    assert height_at_texels(b.height, b.resolution).shape == (4, 4)
+    (d / "height.exr").unlink()  # without --height naming it, an image without a row again
+    np.save(tmp_path / "h6.npy", rng.normal(size=(6, 6)))  # 6 is not a multiple of 4: 8
+    assert main([*argv, str(tmp_path / "h6.npy"), "-o", str(tmp_path / "b.btf")]) == 0
+    b6 = read_btf(tmp_path / "b.btf")
+    assert b6.height.shape == (8, 8) and abs(float(b6.height.mean())) < 0.05
+
+
+@pytest.mark.parametrize(
+    "make, extra, needles",
+    [
+        (lambda p: np.save(p, np.zeros((4, 6))), [], ["height field 4x6", "square"]),
+        (lambda p: np.save(p, np.full((4, 4), np.nan)), [], ["16 NaN/Inf"]),
+        (lambda p: np.save(p, np.zeros((4, 4))), ["--height-scale", "0"], ["--height-scale = 0.0"]),
+        (lambda p: None, [], ["does not exist"]),
+        (lambda p: p.write_text("not an array"), [], ["cannot read it as a .npy array"]),
+    ],
+)
+def test_bad_height_fields_are_one_line_errors(tmp_path, capsys, make, extra, needles):
+    d = tmp_path / "set"
+    _square_set(d)
+    hp = tmp_path / "h.npy"
+    make(hp)
+    out = tmp_path / "o.btf"
+    code, err = _err(capsys, ["btf", "import", str(d), "-o", str(out), "--height", str(hp), *extra])
+    assert code == 2 and len(err.splitlines()) == 1 and all(n in err for n in needles), err
+    assert not out.exists()
+
+
+def test_a_height_field_needs_square_texels(tmp_path, capsys):
+    make_set(tmp_path / "set")  # 4x6 texels
+    np.save(tmp_path / "h.npy", np.zeros((8, 8)))
+    argv = ["btf", "import", str(tmp_path / "set"), "-o", str(tmp_path / "o.btf"), "--height"]
+    code, err = _err(capsys, [*argv, str(tmp_path / "h.npy")])
+    assert code == 2 and "texels are 4x6; a height field needs square texels" in err, err

@@ -70,6 +70,16 @@ def test_gpu_texture_space_offset_follows_the_twin(method, march):
 
 
 @pytest.mark.gpu
+def test_gpu_texture_space_offset_auto_march_follows_the_twin():
+    """March "auto" of the offset module: once per block where the block spans at most a
+    texel of the offset texture, per texel elsewhere, as the twin decides it."""
+    from runtime_helpers import assert_auto_march_parity
+
+    m = _offset_material("student", "texel")
+    assert_auto_march_parity(m, NeuralMaterial(m.arch, m.networks, m.textures, m.output, m.meta))
+
+
+@pytest.mark.gpu
 @pytest.mark.parametrize("mode", ["texture", "screen", "reference"])
 def test_run_renders_a_neural_offset_pack(tmp_path, mode):
     """``vrneural run --pack`` draws a neural-offset pack (it was refused before), and the
@@ -112,10 +122,11 @@ def test_gpu_screen_space_offset_agrees_with_the_texture_space_pass(tmp_path):
 
 
 @pytest.mark.gpu
-def test_bench_frame_times_the_update_with_the_neural_offset(tmp_path):
-    """``bench frame --neural-offset`` times the texture-space update of the benchmark's
-    materials with the student's offset module, per texel and per block, beside the update
-    without it (the ratios of docs/parallax.md)."""
+def test_bench_frame_times_the_update_with_parallax_and_the_neural_offset(tmp_path):
+    """``bench frame --neural-offset --parallax-steps S`` times the texture-space update of the
+    benchmark's materials with the student's offset module and with height-field parallax,
+    each marched per texel, per block and "auto", beside the update without it (the ratios
+    of docs/parallax.md), and reports the share of blocks "auto" marches once."""
     import json
 
     from vrneural.bench.timing import offset_materials
@@ -124,13 +135,20 @@ def test_bench_frame_times_the_update_with_the_neural_offset(tmp_path):
     for march in ("texel", "block"):
         mats = offset_materials(march=march)
         assert all(m.parallax_kind == "neural" and m.parallax_march == march for m in mats)
-    argv = ["bench", "frame", "--quick", "--neural-offset", "--rounds", "1", "--no-progress",
-            "--out", str(tmp_path / "b")]  # fmt: skip
+    argv = ["bench", "frame", "--quick", "--neural-offset", "--parallax-steps", "4", "--rounds",
+            "1", "--no-progress", "--out", str(tmp_path / "b")]  # fmt: skip
     assert main(argv) == 0
-    sm = json.loads((tmp_path / "b" / "results.json").read_text())["summary"]
-    for name in ("texture_full_offset", "texture_full_offset_block", "texture_slice_offset"):
+    doc = json.loads((tmp_path / "b" / "results.json").read_text())
+    sm = doc["summary"]
+    assert set(doc["auto_block_share"]) == {"parallax", "offset"}
+    assert all(0.0 <= v <= 1.0 for v in doc["auto_block_share"].values())
+    assert "March auto (parallax)" in (tmp_path / "b" / "results.md").read_text()
+    for name in ("parallax_vs_texture", "parallax_block_vs_texture", "parallax_auto_vs_texture"):
+        assert np.isfinite(sm["ratios"][name]["median"]) and sm["ratios"][name]["median"] > 0
+    for name in ("texture_full_offset", "texture_full_offset_block", "texture_slice_offset",
+                 "texture_full_offset_auto"):  # fmt: skip
         assert sm["passes"][name]["wall_ms"] > 0
-    for name in ("offset_vs_texture", "offset_block_vs_texture"):
+    for name in ("offset_vs_texture", "offset_block_vs_texture", "offset_auto_vs_texture"):
         assert np.isfinite(sm["ratios"][name]["median"]) and sm["ratios"][name]["median"] > 0
 
 

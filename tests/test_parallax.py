@@ -194,6 +194,11 @@ def test_bad_packs_are_one_line_errors(tmp_path):
 
     assert "parallax kind 'magic'" in _bad_pack(tmp_path, "kind.vrnm", kind)
 
+    def auto(h, a):  # the renderer's march, not one a pack trains with
+        h["parallax"]["march"] = "auto"
+
+    assert "parallax march 'auto' not in ('texel', 'block')" in _bad_pack(tmp_path, "a.vrnm", auto)
+
 
 def test_relief_measure_and_the_auto_choice():
     flat = height_at_texels(np.zeros((64, 64)), (32, 32))
@@ -246,6 +251,15 @@ def test_gpu_texture_space_parallax_follows_the_twin(mesh, march):
         assert_moved_lookup_parity(at, m, flat, eye, lp, lc, tl)
 
 
+@pytest.mark.gpu
+def test_gpu_texture_space_auto_march_follows_the_twin():
+    """March "auto": per block where a block spans at most a texel of the height field, per
+    texel elsewhere, decided per block in the kernel as the twin decides it."""
+    from runtime_helpers import assert_auto_march_parity
+
+    assert_auto_march_parity(parallax_material(16, amp=0.06), random_material(0, tex_res=16))
+
+
 def test_flat_packs_generate_the_same_kernels_as_before():
     """Parallax off: no height binding, no march; the kernels are what they were."""
     from vrneural.runtime.codegen import screen_space_wgsl, texture_space_wgsl
@@ -270,3 +284,57 @@ def test_gpu_screen_space_parallax_agrees_with_the_texture_space_pass(tmp_path):
     d_modes, d_parallax = mode_and_move_gaps(tmp_path, par, flat)
     # llvmpipe: 0.0042 between the modes, 0.0485 between parallax and none
     assert d_parallax > 5 * d_modes, (d_parallax, d_modes)
+
+
+def test_a_mixed_march_is_the_pure_marches_row_by_row():
+    """``march`` as a per-block mask: blocks marked True are the block march's, the others
+    the per-texel march's; ``auto_blocks`` marks blocks whose atlas texel spans at most half
+    a texel of the grid; the offset module follows the same rule."""
+    from vrneural.mlp import Layer
+    from vrneural.neural_offset import offset_uv
+    from vrneural.parallax import AUTO_BLOCK_FOOT_TEXELS, auto_blocks
+
+    rng = np.random.default_rng(7)
+    uv = rng.uniform(0, 1, (8, 4, 2)).astype(np.float32)
+    wo = views(8, 70)
+    mask = np.array([1, 0, 0, 1, 1, 0, 1, 0], bool)
+    mixed = parallax_uv(bumps(), wo, uv, 16, T75, mask)
+    texel = parallax_uv(bumps(), wo, uv, 16, T75, "texel")
+    block = parallax_uv(bumps(), wo, uv, 16, T75, "block")
+    np.testing.assert_array_equal(mixed[mask], block[mask])
+    np.testing.assert_array_equal(mixed[~mask], texel[~mask])
+    assert np.abs(block - texel).max() > 1e-3  # the two routes differ here
+    foot = np.float32([0.25, 0.5, 0.5001, 2.0]) / 16
+    assert auto_blocks(foot, (16, 16)).tolist() == [True, True, False, False]
+    assert AUTO_BLOCK_FOOT_TEXELS == 0.5
+    tex = random_material(2, tex_res=16).textures["coarse"]  # an offset texture
+    net = [Layer(rng.normal(size=(1, tex.shape[2] + 2)).astype(np.float32), np.ones(1, np.float32))]
+    got = offset_uv(net, tex, wo, uv, mask)
+    np.testing.assert_array_equal(got[mask], offset_uv(net, tex, wo, uv, "block")[mask])
+    np.testing.assert_array_equal(got[~mask], offset_uv(net, tex, wo, uv, "texel")[~mask])
+    with pytest.raises(ValueError, match="resolve 'auto' first"):
+        parallax_uv(bumps(), wo, uv, 16, T75, "auto")
+
+
+def test_the_render_march_applies_in_texture_mode_only():
+    """``--parallax-march``: auto (default) / texel / block replace a parallax pack's march in
+    the texture-space pass; pack keeps it; screen space and flat packs are left alone; the
+    twin of march auto needs each block's footprint."""
+    from vrneural.runtime.settings import Settings, shaded_material
+
+    par, flat = parallax_material(16), random_material(0, tex_res=16)
+    assert shaded_material(par, Settings(), {}).parallax_march == "auto"
+    assert shaded_material(par, Settings(parallax_march="block"), {}).parallax_march == "block"
+    assert shaded_material(par, Settings(parallax_march="pack"), {}) is par
+    assert shaded_material(par, Settings(mode="screen"), {}) is par
+    assert shaded_material(flat, Settings(), {}) is flat
+    cache: dict = {}
+    assert shaded_material(par, Settings(), cache) is shaded_material(par, Settings(), cache)
+    auto = shaded_material(par, Settings(), {})
+    wi, wo = views(2, 20), views(2, 70)
+    uv = np.full((2, 4, 2), 0.3, np.float32)
+    with pytest.raises(VrnError, match="march 'auto' needs each block's foot"):
+        material_forward(auto, wi, wo, uv)
+    fine = material_forward(auto, wi, wo, uv, foot=np.float32([0.01, 0.01]))  # 0.16 texels
+    block = parallax_material(16, march="block")
+    np.testing.assert_array_equal(fine, material_forward(block, wi, wo, uv))

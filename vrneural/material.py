@@ -130,10 +130,12 @@ class NeuralMaterial:
             )
         if kind == "neural":
             from vrneural.neural_offset import check_offset
-            from vrneural.parallax import MARCHES
+            from vrneural.parallax import MATERIAL_MARCHES
 
-            if self.parallax_march not in MARCHES:
-                raise ValueError(f"parallax march {self.parallax_march!r} not in {MARCHES}")
+            if self.parallax_march not in MATERIAL_MARCHES:
+                raise ValueError(
+                    f"parallax march {self.parallax_march!r} not in {MATERIAL_MARCHES}"
+                )
             self.offset_tex = check_offset(self.offset_net, self.offset_tex, res)
         if self.height is not None:
             steps = self.parallax.get("steps", 1) if kind == "height" else 1
@@ -152,8 +154,18 @@ class NeuralMaterial:
 
     @property
     def parallax_march(self) -> str:
-        """Where the parallax march runs: ``"texel"`` or once per 2x2 ``"block"``."""
+        """Where the parallax march runs: ``"texel"``, once per 2x2 ``"block"``, or ``"auto"``
+        (render time only: per block where a block spans at most a texel of the march's grid,
+        :func:`vrneural.parallax.auto_blocks`)."""
         return self.parallax.get("march", "texel")
+
+    @property
+    def march_grid(self) -> tuple[int, ...]:
+        """Shape of the grid the parallax marches on: the height field, or the offset texture
+        of a neural offset (``()`` without parallax)."""
+        if self.parallax_steps:
+            return self.height.shape
+        return self.offset_tex.shape if self.parallax_kind == "neural" else ()
 
     @property
     def parallax_slope_max(self) -> np.float32:
@@ -247,6 +259,7 @@ def material_forward(
     uv: np.ndarray,
     precision: str = "f32",
     lod: np.ndarray | None = None,
+    foot: np.ndarray | None = None,
 ) -> np.ndarray:
     """BTF values of a material, evaluated the way the shader does.
 
@@ -258,7 +271,8 @@ def material_forward(
     pyramids (None: level 0; see :func:`sample_lod`). A material with height-field parallax
     looks its textures up at :func:`vrneural.parallax.parallax_uv` of ``uv`` along the
     extended ``wo`` (the coarse texture at the corrected texels' mean); one with a neural
-    offset at :func:`vrneural.neural_offset.offset_uv`'s.
+    offset at :func:`vrneural.neural_offset.offset_uv`'s. ``foot: [N]``: each block's atlas
+    texel in tiled material UV (the texture-space pass's), which march ``"auto"`` needs.
     """
     wi = np.asarray(wi, np.float32)
     wo = np.asarray(wo, np.float32)
@@ -278,16 +292,21 @@ def material_forward(
         if not np.isfinite(a).all():  # NaN in, NaN out, silently
             raise VrnError(f"material_forward: {name} holds NaN/Inf values")
     wi, wo, weight = extend(wi, wo, mat.dir_range)
+    march = mat.parallax_march
+    if march == "auto" and mat.parallax_kind != "off":
+        from vrneural.parallax import auto_blocks
+
+        if foot is None:
+            raise VrnError("material_forward: parallax march 'auto' needs each block's foot")
+        march = auto_blocks(foot, mat.march_grid)
     if mat.parallax_steps:  # lookups where the (extended) view ray meets the height field
         from vrneural.parallax import parallax_uv
 
-        uv = parallax_uv(
-            mat.height, wo, uv, mat.parallax_steps, mat.parallax_slope_max, mat.parallax_march
-        )
+        uv = parallax_uv(mat.height, wo, uv, mat.parallax_steps, mat.parallax_slope_max, march)
     elif mat.parallax_kind == "neural":  # NeuMIP's offset module moves the lookups
         from vrneural.neural_offset import offset_uv
 
-        uv = offset_uv(mat.offset_net, mat.offset_tex, wo, uv, mat.parallax_march, precision)
+        uv = offset_uv(mat.offset_net, mat.offset_tex, wo, uv, march, precision)
     dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)  # [N, 9]
     if mat.arch == "coarse_fine":
         uc = uv.mean(axis=1)

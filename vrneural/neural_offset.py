@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from vrneural.mlp import Layer, macs, mlp_forward
-from vrneural.sampling import sample_bilinear_wrap
+from vrneural.sampling import block_rows, sample_bilinear_wrap
 
 #: the lower bound of ``wo.z`` in the depth-to-offset stage (NeuMIP Eq. 6)
 MIN_COS = 0.6
@@ -90,19 +90,26 @@ def offset_uv(
     tex: np.ndarray,
     wo: np.ndarray,
     uv: np.ndarray,
-    march: str = "texel",
+    march: str | np.ndarray = "texel",
     precision: str = "f32",
 ) -> np.ndarray:
     """The 2x2 blocks' UVs ``uv: [N, 4, 2]`` moved by the neural offset along ``wo: [N, 3]``
-    (one view per block) -> ``[N, 4, 2]`` float32; per texel or per block (``march``)."""
+    (one view per block) -> ``[N, 4, 2]`` float32; per texel or per block (``march``:
+    ``"texel"``, ``"block"`` or ``[N]`` bool, :func:`vrneural.sampling.block_rows`)."""
     f = np.float32
     uv = np.asarray(uv, f)
+    wo = np.asarray(wo, f)
     s = offset_scale(wo, tex.shape[:2])  # [N, 2]
-    if march == "block":
-        r = offset_depth(layers, tex, wo, uv.mean(axis=1).astype(f), precision)  # [N]
-        return (uv + (r[:, None] * s)[:, None, :]).astype(f)
-    r = offset_depth(layers, tex, np.repeat(wo, 4, axis=0), uv.reshape(-1, 2), precision)
-    return (uv + r.reshape(-1, 4, 1) * s[:, None, :]).astype(f)
+    blk = block_rows(march, len(uv))
+    out = np.empty_like(uv)
+    if blk.any():  # once per block, at the texels' mean
+        r = offset_depth(layers, tex, wo[blk], uv[blk].mean(axis=1).astype(f), precision)
+        out[blk] = uv[blk] + (r[:, None] * s[blk])[:, None, :]
+    if not blk.all():
+        t = ~blk
+        r = offset_depth(layers, tex, np.repeat(wo[t], 4, axis=0), uv[t].reshape(-1, 2), precision)
+        out[t] = uv[t] + r.reshape(-1, 4, 1) * s[t][:, None, :]
+    return out
 
 
 def offset_macs(layers: list[Layer], march: str = "texel") -> float:

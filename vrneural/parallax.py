@@ -30,14 +30,24 @@ import math
 import numpy as np
 
 from vrneural.errors import VrnError
-from vrneural.sampling import sample_bilinear_wrap
+from vrneural.sampling import MARCHES, block_rows, sample_bilinear_wrap
 
 #: parallax kinds of ``distill --parallax`` (``auto`` resolves to one of the others)
 PARALLAX_CHOICES = ("auto", "height", "neural", "off")
 #: the kinds a pack can carry
 PACK_KINDS = ("height", "neural", "off")
-#: where the march runs: per texel, or once per 2x2 block
-MARCHES = ("texel", "block")
+#: where the march runs: per texel, or once per 2x2 block (what a pack records: how it trained;
+#: :data:`vrneural.sampling.MARCHES`)
+#: a material at render time may also march ``"auto"``: once per 2x2 block of radiance texels
+#: where the block spans at most one texel of the march's grid, else per texel
+#: (:func:`auto_blocks`)
+MATERIAL_MARCHES = (*MARCHES, "auto")
+#: the renderer's ``--parallax-march``: ``pack`` keeps the march a pack trained with
+RENDER_MARCHES = ("auto", "pack", *MARCHES)
+#: ``auto`` marches once per block where one atlas texel spans at most this many texels of the
+#: height field (or offset texture): the block's 4 texels then lie within one texel, where the
+#: per-texel march moves them alike to within a fraction of a texel (docs/parallax.md)
+AUTO_BLOCK_FOOT_TEXELS = 0.5
 DEFAULT_STEPS = 16
 MAX_STEPS = 64
 #: ``auto`` gives a material parallax when its relief (:func:`relief_texels`) reaches this many
@@ -121,9 +131,9 @@ def check_pack_height(
     height: np.ndarray, res: tuple[int, int], steps: int, march: str = "texel"
 ) -> np.ndarray:
     """Validate a pack's height field against its texels ``res = (H, W)``: ``[H, W]``, finite,
-    the step count in ``[1, MAX_STEPS]``, the march one of :data:`MARCHES`. Returns it as
+    the step count in ``[1, MAX_STEPS]``, the march one of :data:`MATERIAL_MARCHES`. Returns it as
     float16; ValueError otherwise."""
-    if march not in MARCHES:
+    if march not in MATERIAL_MARCHES:
         raise ValueError(f"parallax march {march!r} not in {MARCHES}")
     h = np.asarray(height)
     if h.shape != tuple(res):
@@ -176,23 +186,38 @@ def parallax_uv(
     uv: np.ndarray,
     steps: int,
     t_max: float,
-    march: str = "texel",
+    march: str | np.ndarray = "texel",
 ) -> np.ndarray:
     """Parallax-corrected material UVs ``[N, 4, 2]`` float32 of the 2x2 blocks ``uv: [N, 4,
     2]`` seen along ``wo: [N, 3]`` (one view per block, ``wo.z > 0``: the extended view of
     :mod:`vrneural.grazing`), on the height field ``height: [H, W]`` float16 (UV units), in at
     most ``steps`` march steps (``t_max``: :func:`slope_max`), per texel or per block
-    (``march``). See the module docstring."""
+    (``march``: ``"texel"``, ``"block"`` or ``[N]`` bool, True where a block marches once:
+    :func:`auto_blocks`). See the module docstring."""
     f = np.float32
     uv = np.asarray(uv, f)
     d = ray_slope(wo, np.shape(height))  # [N, 2]
-    if march == "block":
-        hit = march_hits(height, uv.mean(axis=1).astype(f), d, steps, t_max)  # [N]
-        return (uv + (hit[:, None] * d)[:, None, :]).astype(f)
-    d4 = np.repeat(d, 4, axis=0)  # [N*4, 2]
-    u = uv.reshape(-1, 2)
-    hit = march_hits(height, u, d4, steps, t_max)
-    return (u + hit[:, None] * d4).astype(f).reshape(uv.shape)
+    blk = block_rows(march, len(uv))
+    out = np.empty_like(uv)
+    if blk.any():  # once per block, at the texels' mean
+        hit = march_hits(height, uv[blk].mean(axis=1).astype(f), d[blk], steps, t_max)
+        out[blk] = uv[blk] + (hit[:, None] * d[blk])[:, None, :]
+    if not blk.all():
+        d4 = np.repeat(d[~blk], 4, axis=0)  # [M*4, 2]
+        u = uv[~blk].reshape(-1, 2)
+        hit = march_hits(height, u, d4, steps, t_max)
+        out[~blk] = (u + hit[:, None] * d4).reshape(-1, 4, 2)
+    return out
+
+
+def auto_blocks(foot: np.ndarray, grid: tuple[int, ...]) -> np.ndarray:
+    """March ``"auto"`` for blocks whose atlas texel spans ``foot: [N]`` of (tiled) material
+    UV, on a march grid (height field or offset texture) of shape ``grid = (H, W, ...)``:
+    ``[N]`` bool, True (once per block) where ``foot * max(H, W) <=``
+    :data:`AUTO_BLOCK_FOOT_TEXELS`. float32 arithmetic in the texture-space kernel's order."""
+    f = np.float32
+    side = f(max(grid[0], grid[1]))
+    return (np.asarray(foot, f) * side).astype(f) <= f(AUTO_BLOCK_FOOT_TEXELS)
 
 
 def march_hits(height, u: np.ndarray, d: np.ndarray, steps: int, t_max) -> np.ndarray:

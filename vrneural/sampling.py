@@ -23,3 +23,18 @@ def sample_bilinear_wrap(tex: np.ndarray, uv: np.ndarray) -> np.ndarray:
     top = t[yi0, xi0] * (1 - fx) + t[yi0, xi1] * fx
     bot = t[yi1, xi0] * (1 - fx) + t[yi1, xi1] * fx
     return top * (1 - fy) + bot * fy
+
+
+#: where a lookup-moving march (height parallax, neural offset) runs: per texel, or once per
+#: 2x2 block at the block's mean UV
+MARCHES = ("texel", "block")
+
+
+def block_rows(march: str | np.ndarray, n: int) -> np.ndarray:
+    """``[n]`` bool: which of ``n`` blocks march once per block, for a march ``"texel"``,
+    ``"block"`` or already a ``[n]`` bool array (:func:`vrneural.parallax.auto_blocks`)."""
+    if isinstance(march, str):
+        if march not in MARCHES:
+            raise ValueError(f"parallax march {march!r} not in {MARCHES} (resolve 'auto' first)")
+        return np.full(n, march == "block")
+    return np.asarray(march, bool).reshape(n)

@@ -15,10 +15,11 @@ spell of a shared machine hits every condition:
   shading).
 
 With ``--parallax-steps S`` the same rounds also time the texture-space update of the same two
-materials with height-field parallax of up to S steps, marched per texel and once per 2x2 block
-(a renderer each; issue #44's target: at most 1.5x the update without it); with
-``--neural-offset`` those materials with NeuMIP's neural offset module instead of a height
-field, per texel and per block.
+materials with height-field parallax of up to S steps, marched per texel, once per 2x2 block and
+``auto`` (per block where a block spans at most one texel of the height field: the runtime's
+default; the share of blocks that take that route is reported) (a renderer each; issue #44's
+target: at most 1.5x the update without it); with ``--neural-offset`` those materials with
+NeuMIP's neural offset module instead of a height field, with the same three marches.
 
 Ratios: forward / one-sample floor (target <= 1.15), full update / bare kernel (<= 1.5),
 wall per frame / max(host CPU, GPU) with frames in flight (<= 1.1; GPU = the passes' times
@@ -36,12 +37,15 @@ from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.config import opt, resolved, unset
 
+#: the texture-space pass's marches each parallax kind is timed with (``--parallax-march``)
+MARCHES = ("texel", "block", "auto")
 TARGETS = {
     "forward_vs_sample_floor": 1.15,
     "texture_vs_bare": 1.5,
     "wall_vs_bound": 1.1,
     "parallax_vs_texture": 1.5,
     "parallax_block_vs_texture": 1.5,
+    "parallax_auto_vs_texture": 1.5,
 }
 
 
@@ -178,14 +182,15 @@ def loop(r, frames: int, f0: int) -> dict:
     }
 
 
-def _renderer(scene, c, eye_res, target: str, depth: int = 2):
+def _renderer(scene, c, eye_res, target: str, depth: int = 2, march: str = "pack"):
     from vrneural.runtime.profiles import get_profile
     from vrneural.runtime.renderer import Renderer, Settings
 
     prof = get_profile("quest3")
     s = Settings(eyes=2, reuse=c.reuse, texture_res=c.texture_res, eye_res=eye_res,
                  frames=1, fps=prof.fps, fov_y=prof.fov_y, n_lights=c.lights,
-                 schedule="staggered", frames_in_flight=depth, target=target)  # fmt: skip
+                 schedule="staggered", frames_in_flight=depth, target=target,
+                 parallax_march=march)  # fmt: skip
     r = Renderer(scene, s)
     r.frame(0)
     r.wait()
@@ -214,14 +219,17 @@ def run_frame(cfg: FrameConfig) -> dict:
         disp = _renderer(scene, c, eye_res, "display")
         doc["timestamp_check"] = hdr.timestamp_check
         par = {}  # (kind, march) -> renderer of the materials with parallax of that kind
-        for march in ("texel", "block") if c.parallax_steps else ():
-            mats = timing.parallax_materials(c.parallax_steps, march=march)
-            par["parallax", march] = _renderer(
-                timing.bench_scene(c.lights, mats), c, eye_res, "hdr"
-            )
-        for march in ("texel", "block") if c.neural_offset else ():
-            mats = timing.offset_materials(march=march)
-            par["offset", march] = _renderer(timing.bench_scene(c.lights, mats), c, eye_res, "hdr")
+        kinds = {"parallax": c.parallax_steps, "offset": c.neural_offset}
+        for kind in (k for k, on in kinds.items() if on):
+            mats = (timing.parallax_materials(c.parallax_steps) if kind == "parallax"
+                    else timing.offset_materials())  # fmt: skip
+            for march in MARCHES:  # the render's march (--parallax-march)
+                rr = _renderer(timing.bench_scene(c.lights, mats), c, eye_res, "hdr", march=march)
+                par[kind, march] = rr
+            doc.setdefault("auto_block_share", {})[kind] = timing.auto_block_share(rr)
+            doc["auto_block_share_by_side"] = {  # the same scene with larger materials
+                side: timing.auto_block_share(rr, side) for side in (16, 32, 64, 128, 256)
+            }
         floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_constant", "fs_floor_sample")}
         n1 = c.reuse + 1
         bar = timing.progress(c.rounds, "bench frame (rounds)", c.progress)
@@ -243,7 +251,7 @@ def run_frame(cfg: FrameConfig) -> dict:
             p["texture_slice"] = time_passes(hdr, texture_update(hdr, "main", 0, n1, f), rep)
             p["texture_slice_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, n1, f), rep)
             for (kind, march), rr in par.items():  # the same update, with parallax
-                sfx = kind + ("" if march == "texel" else "_block")
+                sfx = kind + ("" if march == "texel" else f"_{march}")
                 p[f"texture_full_{sfx}"] = time_passes(rr, texture_update(rr, "main", 0, 1, f), rep)
                 p[f"texture_slice_{sfx}"] = time_passes(
                     rr, texture_update(rr, "main", 0, n1, f), rep

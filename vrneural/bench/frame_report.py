@@ -19,11 +19,15 @@ PASS_RATIOS = (
     ("parallax_slice_vs_texture_slice", "texture_slice_parallax", "texture_slice"),
     ("parallax_block_vs_texture", "texture_full_parallax_block", "texture_full"),
     ("parallax_block_slice_vs_texture_slice", "texture_slice_parallax_block", "texture_slice"),
+    ("parallax_auto_vs_texture", "texture_full_parallax_auto", "texture_full"),
+    ("parallax_auto_slice_vs_texture_slice", "texture_slice_parallax_auto", "texture_slice"),
     # --neural-offset: the same update with NeuMIP's neural offset module
     ("offset_vs_texture", "texture_full_offset", "texture_full"),
     ("offset_slice_vs_texture_slice", "texture_slice_offset", "texture_slice"),
     ("offset_block_vs_texture", "texture_full_offset_block", "texture_full"),
     ("offset_block_slice_vs_texture_slice", "texture_slice_offset_block", "texture_slice"),
+    ("offset_auto_vs_texture", "texture_full_offset_auto", "texture_full"),
+    ("offset_auto_slice_vs_texture_slice", "texture_slice_offset_auto", "texture_slice"),
 )
 
 
@@ -128,6 +132,14 @@ def markdown(doc: dict) -> list[str]:
         rows.append([k, v["median"], f"[{v['range'][0]:.3g}, {v['range'][1]:.3g}]", v["clock"],
                      target if target is not None else "-", ok])  # fmt: skip
     md += rp.table(["ratio", "median", "range", "clock", "target", ""], rows)
+    for kind, share in doc.get("auto_block_share", {}).items():
+        md += ["", f"March auto ({kind}): {100 * share:.0f}% of the blocks march once per "
+               "2x2 block (at most one texel of the grid wide), the rest per texel."]  # fmt: skip
+    if "auto_block_share_by_side" in doc:
+        sides = ", ".join(f"{s}^2: {100 * v:.0f}%"
+                          for s, v in doc["auto_block_share_by_side"].items())  # fmt: skip
+        md += ["", f"The same blocks with materials of other sizes (march auto, once per block): "
+               f"{sides}."]  # fmt: skip
     md += ["", "## Frame loop (frames back to back)", ""]
     rows = [
         [d, v["in_flight"], v["wall_ms"], v["host_cpu_ms"], v["gpu_ms"], v["wall_vs_bound"],

@@ -26,7 +26,9 @@ from vrneural.bench import report as rp
 from vrneural.config import opt, resolved, unset
 from vrneural.errors import count
 
-NETWORKS = ("student", "single8", "neumip")
+#: ``*_offset``: the network with NeuMIP's neural offset module of its size (issue #44), its
+#: offset MLP per texel (``--parallax neural``, march per texel) beside the material's
+NETWORKS = ("student", "single8", "neumip", "student_offset", "neumip_offset")
 VARIANTS = ("constants", "buffer", "torch")
 
 
@@ -110,14 +112,26 @@ def network(name: str):
     their values; the inputs NeuMIP does not read are zero, so the constants kernel skips them
     as in a pack)."""
     from vrneural.distill.models import NeuralModel, make_spec
+    from vrneural.neural_offset import OFFSET_SIZES
 
-    method, width = network_width(name) or (name, 8)
+    base = name.removesuffix("_offset")
+    method, width = network_width(base) or (base, 8)
     spec = make_spec(method, (16, 16), width=width)
-    mat = NeuralModel(spec, 5).to_material()
+    if base != name:  # as setup_parallax gives a pack --parallax neural
+        channels, hidden = OFFSET_SIZES[method]
+        spec["parallax"] = {"kind": "neural", "march": "texel", "res": [16, 16],
+                            "channels": channels, "hidden": list(hidden)}  # fmt: skip
+    model = NeuralModel(spec, 5)
+    if base != name:  # its last layer starts at zero; speed does not depend on the values
+        for p in model.offset_mlp.parameters():
+            p.data.normal_(0.0, 0.5)
+    mat = model.to_material()
     if mat.arch == "coarse_fine":  # M_c once per 2x2 block, M_f per texel
         parts = [(mat.networks["coarse"], 0.25), (mat.networks["fine"], 1.0)]
     else:
         parts = [(mat.networks["mlp"], 1.0)]
+    if mat.offset_net:  # the offset MLP per texel
+        parts.append((mat.offset_net, 1.0))
     return parts, mat.macs_per_texel
 
 

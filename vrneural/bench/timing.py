@@ -207,6 +207,25 @@ def offset_materials(seeds=(3, 4), tex_res: int = 16, march: str = "texel"):
     return out
 
 
+def auto_block_share(r, side: int | None = None) -> float:
+    """The share of renderer ``r``'s texture-space blocks (over its neural objects with
+    parallax) that march ``"auto"`` runs once per block (:func:`vrneural.parallax.auto_blocks`
+    at each object's atlas and tiling), for the materials' own march grids or, with ``side``,
+    for a grid of ``side^2`` texels (what a larger material would get)."""
+    import numpy as np
+
+    from vrneural.parallax import auto_blocks
+    from vrneural.runtime.reference import block_geometry
+
+    hits = []
+    for o in r.neural:
+        mat = o.desc.material.neural
+        if mat is not None and mat.parallax_kind != "off":
+            foot = block_geometry(o.atlas)["foot"] * np.float32(o.desc.material.tiling)
+            hits.append(auto_blocks(foot, (side, side) if side else mat.march_grid))
+    return float(np.concatenate(hits).mean()) if hits else 0.0
+
+
 def bench_scene(n_lights: int, materials=None):
     """The benchmark scene, independent of the bundled packs: a neural sphere (0.8 m) and a
     neural tile (0.45 m) on a plain 6 m floor, ``n_lights`` circling point lights

@@ -210,3 +210,18 @@ def shift_wrap(grid: np.ndarray, du: float, dv: float) -> np.ndarray:
     b = np.roll(a, -1, 1)
     top = a * (1 - fx) + b * fx
     return top * (1 - fy) + np.roll(top, -1, 0) * fy
+
+
+def texel_height(height: np.ndarray, res: int) -> np.ndarray:
+    """A tile's height field ``[N, N]`` (UV units) on a grid that nests in ``res`` texels (as
+    packs need it, :func:`vrneural.parallax.height_at_texels`): as it is where ``N`` is a whole
+    multiple of ``res``, else its bilinear surface (:func:`bilinear_wrap`, the one the
+    renderer marches) sampled at the cell centres of the nearest multiple ``k res`` (``k >=
+    1``). ``[M, M]`` float32."""
+    n = height.shape[0]
+    if n % res == 0:
+        return np.asarray(height, np.float32)
+    m = res * max(1, round(n / res))
+    c = (np.arange(m) + 0.5) / m
+    u, v = np.meshgrid(c, c)  # row = v, as the grid's
+    return bilinear_wrap(np.asarray(height, np.float32), u, v)

@@ -122,8 +122,9 @@ def _spec(path: Path):
     return spec
 
 
-def plan_import(folder, table=None, png_linear: bool = False) -> Plan:
-    """Check the folder, the table and every image's header; nothing is written."""
+def plan_import(folder, table=None, png_linear: bool = False, height=None) -> Plan:
+    """Check the folder, the table and every image's header; nothing is written. ``height``:
+    the ``--height`` file, which may lie in the folder without a row."""
     folder = Path(folder)
     if not folder.is_dir():
         raise VrnError(f"{folder}: no such folder")
@@ -142,6 +143,8 @@ def plan_import(folder, table=None, png_linear: bool = False) -> Plan:
         if not p.is_file():
             raise VrnError(f"{p}: missing image (named in {tpath.name}, {r.row})")
     named = {(folder / r.file).resolve() for r in rows}
+    if height is not None:
+        named.add(Path(height).resolve())
     extra = sorted(
         str(p.relative_to(folder))
         for p in folder.rglob("*")
@@ -199,11 +202,14 @@ def read_rgb(path: Path, png_linear: bool = False) -> np.ndarray:
 
 
 def import_images(
-    folder, out, table=None, png_linear: bool = False, resume: bool = False, progress=True
-) -> Path:
-    """Convert the image set in ``folder`` into ``out`` (streaming, one view at a time)."""
+    folder, out, table=None, png_linear: bool = False, resume: bool = False, progress=True,
+    height=None,
+) -> Path:  # fmt: skip
+    """Convert the image set in ``folder`` into ``out`` (streaming, one view at a time).
+    ``height``: the tile's height field and its record
+    (:func:`vrneural.btf.height_import.read_height`), or None."""
 
-    plan = plan_import(folder, table, png_linear)
+    plan = plan_import(folder, table, png_linear, height and height[1]["source"])
     L, V = len(plan.light_dirs), len(plan.view_dirs)
     meta = {
         "name": plan.folder.resolve().name,
@@ -217,6 +223,8 @@ def import_images(
         },
         "seed": None,
     }
+    if height is not None:
+        meta["generator"]["height"] = height[1]
     if resume:
         check_partial_settings(Path(out).with_name(Path(out).name + ".partial"), meta["generator"])
     if plan.n_srgb:
@@ -226,7 +234,8 @@ def import_images(
             "values)",
             file=sys.stderr,
         )
-    w = BtfWriter(out, plan.light_dirs, plan.view_dirs, plan.size, meta, resume=resume)
+    hf = None if height is None else height[0]
+    w = BtfWriter(out, plan.light_dirs, plan.view_dirs, plan.size, meta, resume=resume, height=hf)
 
     def nonfinite(li, v, rgb):
         return f"{plan.files[li][v]}: {int((~np.isfinite(rgb)).sum())} non-finite values (NaN/Inf)"

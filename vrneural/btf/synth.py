@@ -17,6 +17,7 @@ import numpy as np
 
 from vrneural.btf.dirs import direction_set
 from vrneural.btf.format import BtfWriter, check_partial_settings
+from vrneural.btf.heightfield import texel_height
 from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt
 from vrneural.errors import VrnError, check_choice, check_range, check_seed
@@ -118,14 +119,17 @@ def synthesize(
     # missed
     with Stop() as stop:
         stop.second_raises = True
-        w = BtfWriter(out, dirs, dirs, (cfg.res, cfg.res), meta, resume=resume and not force)
+        maps = build_maps(cfg)
+        height = texel_height(maps.height, cfg.res)  # the tile's relief travels with the data
+        w = BtfWriter(
+            out, dirs, dirs, (cfg.res, cfg.res), meta, resume=resume and not force, height=height
+        )
         todo = [v for v in range(len(dirs)) if v not in w.done]
         if resume and w.done:
             print(f"{out}: resuming, {len(w.done)}/{len(dirs)} views already done", file=sys.stderr)
         done_views = len(w.done)
         bar = None
         try:
-            maps = build_maps(cfg)
             with tqdm(total=len(dirs), desc="shadow maps", unit="light", disable=not progress) as b:
                 scene = make_scene(maps, dirs, b)
             del maps

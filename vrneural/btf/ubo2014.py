@@ -226,8 +226,10 @@ def _degrees_to_dirs(angles) -> np.ndarray:
     return spherical(a[:, 0], a[:, 1])
 
 
-def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
-    """Convert a UBO2014 ``.btf`` into our format at ``out`` (streaming, one slice at a time)."""
+def import_ubo(src, out, resume: bool = False, progress: bool = True, height=None) -> Path:
+    """Convert a UBO2014 ``.btf`` into our format at ``out`` (streaming, one slice at a time).
+    ``height``: the tile's height field and its record
+    (:func:`vrneural.btf.height_import.read_height`), or None."""
 
     Ubo2014 = load_extractor()
     src = Path(src)
@@ -258,6 +260,8 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
         },
         "seed": None,
     }
+    if height is not None:
+        meta["generator"]["height"] = height[1]
     if resume:  # name what differs (another source, say) before the writer refuses it
         check_partial_settings(Path(out).with_name(Path(out).name + ".partial"), meta["generator"])
     w = BtfWriter(
@@ -267,6 +271,7 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True) -> Path:
         (h_img, w_img),
         meta,
         resume=resume,
+        height=None if height is None else height[0],
     )
 
     def read(li, v):

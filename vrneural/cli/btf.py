@@ -113,6 +113,18 @@ def register(sub) -> None:
         action="store_true",
         help="image sets: 8/16-bit images hold linear values (default: sRGB, linearised)",
     )
+    im.add_argument(
+        "--height",
+        help="the tile's measured height field, carried into the BTF for parallax: a .npy "
+        "[N, N] or a one-channel image (EXR/PFM/TIFF/PNG), square like the texels",
+    )
+    im.add_argument(
+        "--height-scale",
+        type=float,
+        default=1.0,
+        help="multiplies --height's values into UV units (tile widths; for millimetres on a "
+        "tile w mm wide: 1/w); the mean is removed",
+    )
     im.add_argument("--force", action="store_true", help="overwrite an existing output")
     im.add_argument("--resume", action="store_true", help="continue an interrupted import")
     im.add_argument("--no-progress", action="store_true", help="hide the progress bar")
@@ -294,11 +306,19 @@ def run_import(args) -> int:
         flag = "--table" if args.table else "--png-linear"
         raise VrnError(f"{flag} is for a folder of images; {args.file} is not a folder")
     load_extractor()
-    parse_header(args.file)
+    hdr = parse_header(args.file)
+    height = _height(args, (hdr["height"], hdr["width"]))
     (out,) = check_outputs([args.output], args.force, inputs=[args.file])
     _check_partial(out, args.resume, args.force)
-    print(import_ubo(args.file, out, resume=args.resume, progress=not args.no_progress))
+    print(import_ubo(args.file, out, args.resume, not args.no_progress, height))
     return 0
+
+
+def _height(args, size: tuple[int, int]):
+    """``--height`` read and checked against the BTF's texels ``size``, or None."""
+    from vrneural.btf.height_import import read_height
+
+    return None if args.height is None else read_height(args.height, args.height_scale, size)
 
 
 def _import_images(args) -> int:
@@ -306,7 +326,8 @@ def _import_images(args) -> int:
     from vrneural.btf.imageset import import_images, plan_import
     from vrneural.outputs import check_outputs
 
-    plan_import(args.file, args.table, args.png_linear)  # every check before any output
+    plan = plan_import(args.file, args.table, args.png_linear, args.height)  # all checks first
+    height = _height(args, plan.size)
     (out,) = check_outputs([args.output], args.force)
     _check_partial(out, args.resume, args.force)
     path = import_images(
@@ -316,6 +337,7 @@ def _import_images(args) -> int:
         png_linear=args.png_linear,
         resume=args.resume,
         progress=not args.no_progress,
+        height=height,
     )
     print(path)
     return 0

@@ -35,6 +35,7 @@ from vrneural.formats.container import read_container, write_container
 from vrneural.grazing import DEFAULT_THETA_MAX_DEG
 from vrneural.material import NeuralMaterial
 from vrneural.mlp import Layer
+from vrneural.parallax import MARCHES
 
 VRNM_MAGIC = b"VRNM"
 VRNM_VERSION = 5
@@ -109,6 +110,8 @@ def read_vrnm(path) -> NeuralMaterial:
         }
         if version >= 4:
             parallax = header["parallax"]
+            if parallax.get("march", "texel") not in MARCHES:  # "auto" is the renderer's
+                raise ValueError(f"parallax march {parallax['march']!r} not in {MARCHES}")
             height = np.array(arrays["height"], np.float16) if "height" in arrays else None
         else:
             parallax, height = _no_parallax(path), None

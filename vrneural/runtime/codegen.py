@@ -29,6 +29,7 @@ from vrneural.gpu.shaders import render_wgsl
 from vrneural.grazing import boundary_consts
 from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.mlp import pack_weights, wgsl_type
+from vrneural.parallax import AUTO_BLOCK_FOOT_TEXELS
 from vrneural.runtime.codegen_mlp import network_wgsl
 from vrneural.runtime.codegen_sample import samplers_wgsl
 from vrneural.runtime.interface import (
@@ -280,6 +281,8 @@ def texture_space_wgsl(
         n_active=max(0, int(n_lights)),  # lights looped over: 0 lights -> black, no MLP work
         fmt=radiance_format,
         subgroups=subgroups,
+        auto_foot=repr(float(AUTO_BLOCK_FOOT_TEXELS)),
+        march_side=repr(float(max(mat.march_grid[:2], default=0))),  # the grid's larger side
     )
 
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 from vrneural.config import opt, resolved, unset
 from vrneural.errors import VrnError, check_int, check_range, count
+from vrneural.parallax import RENDER_MARCHES
 from vrneural.runtime.lights import LIGHTS_MAX
 from vrneural.runtime.profiles import PROFILES, get_profile
 from vrneural.runtime.schedule import SCHEDULES
@@ -43,6 +44,14 @@ class RunConfig:
         True,
         "sample a pack's prefiltered neural-texture pyramid at each block's footprint "
         "(packs without one: level 0 alone); off: level 0 everywhere",
+    )
+    parallax_march: str = opt(
+        "auto",
+        "where the texture-space pass marches a pack's parallax (height field or neural "
+        "offset): auto (once per 2x2 block where a block spans at most one texel of the "
+        "material, as at the headset's density; else per texel), pack (the march it trained "
+        "with), texel or block",
+        choices=RENDER_MARCHES,
     )
     radiance: str | None = unset(
         "per-eye",
@@ -241,6 +250,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         mips=bool(cfg.mips),
         screen_res=bool(cfg.screen_res),
         neural_lod=bool(cfg.neural_lod),
+        parallax_march=cfg.parallax_march,
         frames_in_flight=cfg.frames_in_flight,
     )
 

@@ -120,15 +120,17 @@ def block_lod(mat: NeuralMaterial, foot: np.ndarray) -> np.ndarray | None:
 
 
 def shade_points(
-    mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f32", margin=0.0, lod=None
-):
+    mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f32", margin=0.0, lod=None,
+    foot=None,
+):  # fmt: skip
     """Radiance ``[N, 4, 3]`` of ``N`` points (frames ``[N, 3]``) whose 4 texels have material
     UVs ``uvs: [N, 4, 2]``, lit by point lights ``light_pos, light_rgb: [L, 3]`` (W/sr), seen
     from ``eye: [3]``. Returns (radiance, front ``[N]`` bool, coarse evals, fine evals).
     ``margin`` (m): a point also counts as front when it faces any point within ``margin`` of
     the eye (the shared radiance texture of both eyes); its view beyond the horizon is then
     evaluated at the range's edge (:mod:`vrneural.grazing`). ``lod: [N]``: the blocks'
-    levels of detail in the prefiltered neural textures (None: level 0)."""
+    levels of detail in the prefiltered neural textures (None: level 0); ``foot: [N]`` their
+    atlas texels' tiled material-UV length (march ``"auto"``)."""
     f32 = np.float32
     v = np.asarray(eye, f32) - pos
     wo_w = safe_normalize(v, n)
@@ -144,8 +146,9 @@ def shade_points(
         lit = front & (wi[:, 2] > 0)
         if lit.any():
             y = material_forward(
-                mat, wi[lit], wo[lit], uvs[lit], precision, None if lod is None else lod[lit]
-            )
+                mat, wi[lit], wo[lit], uvs[lit], precision, None if lod is None else lod[lit],
+                None if foot is None else foot[lit],
+            )  # fmt: skip
             acc[lit] += y * (lc / d2[lit])[:, None, :]
         n_coarse += int(lit.sum())
     acc = np.nan_to_num(np.clip(acc, 0, F16_MAX), nan=0.0)
@@ -244,7 +247,7 @@ def shade_texture_space(
     tx, ty, pos, n, t, b, uvs = (g[k] for k in ("tx", "ty", "pos", "n", "t", "b", "uvs"))
     rad, front, nc, nf = shade_points(
         mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision, margin,
-        block_lod(mat, g["foot"]),
+        block_lod(mat, g["foot"]), g["foot"],
     )  # fmt: skip
     w = front
     out[ty[w], tx[w], :3] = rad[w]

@@ -8,7 +8,6 @@ counters and per-pass GPU ms (timestamps) come back in its own submit and arrive
 
 from __future__ import annotations
 
-import dataclasses
 import time
 import warnings
 from pathlib import Path
@@ -21,6 +20,7 @@ from vrneural.gpu.readback import read_texture
 from vrneural.gpu.timing import GpuTimer
 from vrneural.gpu.uniforms import UniformArena
 from vrneural.runtime import forward as fw
+from vrneural.runtime import settings
 from vrneural.runtime.adaptive import coverage_slack, near_scale, object_directions
 from vrneural.runtime.assets import collapsed_triangles, get_atlas, get_mesh, lost_triangles
 from vrneural.runtime.camera import (
@@ -108,7 +108,7 @@ class Renderer(FrameEncoding):
         self.warnings: list[str] = []  # one line each; `run` prints them and keeps them
         self.draws = []
         passes: dict = {}
-        self._level0: dict = {}  # id(pack) -> the pack without pyramids (neural_lod off)
+        self._shaded: dict = {}  # id(pack) -> the pack as shaded (settings.shaded_material)
         with warnings.catch_warnings(record=True) as caught:  # mesh warnings go in the summary
             warnings.simplefilter("always", VrnWarning)
             for i, o in enumerate(scene.objects):
@@ -180,9 +180,7 @@ class Renderer(FrameEncoding):
                 except VrnError:  # too small for the mesh's charts: the larger ones only
                     break
             n.level_sides = tuple(sides)
-        mat = o.material.neural
-        if mat is not None and not s.neural_lod and mat.lod_levels > 1:
-            mat = self._level0.setdefault(id(mat), dataclasses.replace(mat, levels={}))
+        mat = settings.shaded_material(o.material.neural, s, self._shaded)
         if s.mode == "reference":
             ref = s.reference or o.material.reference
             if ref is None and o.material.source.endswith(".vrnm"):

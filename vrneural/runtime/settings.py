@@ -3,6 +3,7 @@ that configs and the viewer can name them without loading the GPU modules."""
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 MODES = ("texture", "screen", "reference")
@@ -49,8 +50,33 @@ class Settings:
     #: sample the packs' prefiltered neural-texture pyramids at each block's footprint (False:
     #: level 0 everywhere, as packs without pyramids)
     neural_lod: bool = True
+    #: where the texture-space pass marches a pack's parallax (height field or neural offset):
+    #: "auto" (once per 2x2 block where the block spans at most one texel of the march's
+    #: grid, else per texel: vrneural.parallax.auto_blocks), "pack" (the march it trained
+    #: with), "texel" or "block"
+    parallax_march: str = "auto"
     #: frames the GPU may have queued while the host encodes the next (1 = none ahead)
     frames_in_flight: int = 2
     #: eye colour targets: "hdr" (rgba16float radiance: EXR, FLIP) or "display" (8-bit
     #: Reinhard-tonemapped sRGB, texture mode only: where HDR output is not needed)
     target: str = "hdr"
+
+
+def shaded_material(mat, s: Settings, cache: dict):
+    """The pack ``mat`` (a NeuralMaterial or None) as this render shades it: without its
+    pyramids when ``s.neural_lod`` is off, and in texture mode with the march of
+    ``s.parallax_march`` (unless ``"pack"``). ``cache``: the renderer's, so each pack is
+    adapted once (``id(pack)`` -> the adapted pack)."""
+    if mat is None:
+        return None
+    if id(mat) in cache:
+        return cache[id(mat)]
+    out = mat
+    if not s.neural_lod and mat.lod_levels > 1:
+        out = dataclasses.replace(out, levels={})
+    march = s.parallax_march
+    if s.mode == "texture" and march != "pack" and mat.parallax_kind != "off":
+        if march != mat.parallax_march:
+            out = dataclasses.replace(out, parallax={**mat.parallax, "march": march})
+    cache[id(mat)] = out
+    return out
