@@ -191,12 +191,12 @@ def export_checkpoint(
     from vrneural.btf.identity import btf_fingerprint, check_btf_record
     from vrneural.distill.checkpoint import recorded_btf
     from vrneural.formats.vrnm import write_vrnm
-    from vrneural.outputs import check_not_input, check_output
+    from vrneural.outputs import check_output, check_outputs
 
     out = check_output(out, force)
     if data is None:
         path = btf or recorded_btf(ck, source or "the checkpoint")
-        check_not_input([out], [path])
+        check_outputs([out], True, [path])  # (checked above; now against the BTF)
         b = read_btf(path)
         mismatch = f"does not match the one {source} was trained on"
         check_btf_record(b.path, btf_fingerprint(b), ck["btf"], mismatch, "the checkpoint has")
