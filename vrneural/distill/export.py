@@ -229,7 +229,7 @@ def init_record(init: dict | None) -> dict | None:
     file, hash, width and epochs; None for a run from random weights."""
     if not init:
         return None
-    from vrneural.distill.models import spec_width
+    from vrneural.distill.specs import spec_width
 
     return {
         "path": init["path"],
