@@ -306,13 +306,13 @@ def test_a_bench_that_fails_after_making_its_folder_still_tells_your_files_apart
 
 
 def test_bench_all_checks_every_bench_folder_before_running_any(capsys, tmp_path):
-    from vrneural.outputs import OutputDir, seal_output_dir
+    from vrneural.outputs import OutputDir, mark_output
 
     ba = tmp_path / "ba"
     with OutputDir(ba / "kernels", "bench kernels") as out:
         out.open()
         (ba / "kernels" / "results.json").write_text("{}")
-    seal_output_dir(ba, "bench all")
+    mark_output(ba, "bench all")
     (ba / "kernels" / "notes.md").write_text("mine")
     msg = _err(capsys, ["all", "--quick", "--force", "--out", str(ba)])
     assert "kernels: holds 1 file(s) vrneural did not write there (notes.md)" in msg

@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from vrneural import material as npm
-from vrneural.distill import models
+from vrneural.distill import lookups, models
 from vrneural.distill.lafortune import (
     N_PARAMS,
     fit_lafortune,
@@ -20,7 +20,7 @@ def test_bilinear_wrap_matches_numpy(rng):
     tex = rng.standard_normal((6, 10, 3)).astype(np.float32)
     uv = rng.uniform(-1.5, 2.5, (200, 2)).astype(np.float32)  # wraps in both directions
     ref = npm.sample_bilinear_wrap(tex, uv)
-    got = models.sample_bilinear_wrap(torch.from_numpy(tex), torch.from_numpy(uv)).numpy()
+    got = lookups.sample_bilinear_wrap(torch.from_numpy(tex), torch.from_numpy(uv)).numpy()
     # both use float64 coordinates and float32 weights: only summation order can differ
     np.testing.assert_allclose(got, ref, atol=1e-6)
 
@@ -31,7 +31,7 @@ def test_half_vector_matches_numpy(rng):
     wo = rng.standard_normal((50, 3)).astype(np.float32)
     wo /= np.linalg.norm(wo, axis=1, keepdims=True)
     wo[:5] = -wi[:5]  # opposite directions -> (0, 0, 1)
-    got = models.half_vector(torch.from_numpy(wi), torch.from_numpy(wo)).numpy()
+    got = lookups.half_vector(torch.from_numpy(wi), torch.from_numpy(wo)).numpy()
     np.testing.assert_allclose(got, npm.half_vector(wi, wo), atol=1e-7)
     assert np.array_equal(got[:5], np.tile([0, 0, 1], (5, 1)).astype(np.float32))
 

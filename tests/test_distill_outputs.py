@@ -321,8 +321,8 @@ def test_a_second_run_on_the_same_output_is_refused_while_the_first_runs(trained
     out = tmp_path / "race.pt"
     btf_out = tmp_path / "race.btf"
     hold = (
-        "import sys; from vrneural.outputs import OutputLock as L; "
-        f"a, b = L({str(out)!r}), L({str(btf_out)!r}); assert a.acquire() and b.acquire(); "
+        "import sys; from vrneural.outputs import output_lock\n"
+        f"with output_lock({str(out)!r}, {str(btf_out)!r}): "
         "print('held', flush=True); sys.stdin.read()"
     )
     holder = subprocess.Popen(

@@ -17,9 +17,8 @@ from vrneural.outputs import (
     atomic_path,
     check_output,
     check_suffix,
+    mark_output,
     read_mark,
-    seal_output_dir,
-    write_mark,
 )
 
 
@@ -124,7 +123,7 @@ def test_an_unfinished_output_is_refused_and_every_ending_seals(tmp_path):
     after which added files are told apart."""
     out = tmp_path / "o"
     out.mkdir()
-    write_mark(out, "run", None)  # as a killed process leaves it
+    mark_output(out, "run", sealed=False)  # as a killed process leaves it
     (out / "frame0000_eye0.png").write_bytes(b"png")
     with pytest.raises(VrnError, match="an unfinished `vrneural run` output"):
         OutputDir(out, "run", force=True).check()
@@ -174,9 +173,8 @@ def _lock_held_by_another_process(d):
         [
             sys.executable,
             "-c",
-            "import sys, time; from vrneural.outputs import OutputLock; "
-            "lk = OutputLock(sys.argv[1]); assert lk.acquire(); print('locked', flush=True); "
-            "time.sleep(60)",
+            "import sys, time; from vrneural.outputs import output_lock\n"
+            "with output_lock(sys.argv[1]): print('locked', flush=True); time.sleep(60)",
             str(d),
         ],
         stdout=subprocess.PIPE,
@@ -279,7 +277,7 @@ def test_seal_records_what_a_command_wrote(tmp_path):
     d = tmp_path / "o"
     d.mkdir()
     (d / "a.png").write_bytes(b"")
-    seal_output_dir(d, "run")
+    mark_output(d, "run")
     assert read_mark(d) == {
         "written_by": "vrneural run",
         "command": "run",

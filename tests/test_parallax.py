@@ -88,7 +88,7 @@ def test_the_corrected_lookup_lies_on_the_relief():
 
 def test_torch_twin_equals_the_numpy_spec():
     torch = pytest.importorskip("torch")
-    from vrneural.distill.models import parallax_uv as parallax_uv_t
+    from vrneural.distill.lookups import parallax_uv as parallax_uv_t
 
     rng = np.random.default_rng(2)
     uv = rng.uniform(-1, 2, (40, 4, 2)).astype(np.float32)

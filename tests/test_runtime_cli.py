@@ -65,7 +65,7 @@ def test_bad_flags(capsys, tmp_path, argv, needle):
 
 
 def test_existing_output_needs_force(capsys, tmp_path):
-    from vrneural.outputs import OutputDir, seal_output_dir
+    from vrneural.outputs import OutputDir, mark_output
 
     o = tmp_path / "o"
     with OutputDir(o, "run") as out:
@@ -74,7 +74,7 @@ def test_existing_output_needs_force(capsys, tmp_path):
     msg = _err(capsys, ["--profile", "tiny", "--out", str(o)])
     assert "--force" in msg
     # a bench's output is not a run's: --force does not help
-    seal_output_dir(o, "bench quality")
+    mark_output(o, "bench quality")
     msg = _err(capsys, ["--profile", "tiny", "--force", "--out", str(o)])
     assert "holds the output of `vrneural bench quality`, not of `vrneural run`" in msg
     assert (o / "summary.json").read_text() == "{}"

@@ -16,7 +16,7 @@ supervised by nothing but the BTF values:
 ``wo`` is the extended view of :mod:`vrneural.grazing` (as for height-field parallax). The
 module runs per texel (``march = "texel"``) or once per 2x2 block at the block's mean UV, the
 block's four lookups shifted alike (``"block"``: a quarter of the offset MLP's work). Twins:
-:func:`vrneural.distill.models.offset_uv` (torch, trained) and the WGSL stage of both render
+:func:`vrneural.distill.lookups.offset_uv` (torch, trained) and the WGSL stage of both render
 passes (:mod:`vrneural.runtime.codegen_offset`).
 """
 

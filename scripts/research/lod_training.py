@@ -37,7 +37,7 @@ def level_l1(mat, btf, pairs, level: int) -> float:
     import torch
 
     from vrneural.distill.data import to_blocks
-    from vrneural.distill.models import avg_pool_levels
+    from vrneural.distill.lookups import avg_pool_levels
     from vrneural.material import NeuralMaterial, material_forward, pool_level
 
     if level and mat.lod_levels <= level:  # no pyramid: pool level 0's latents

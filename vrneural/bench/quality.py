@@ -58,7 +58,7 @@ from vrneural.bench.quality_train import (
     with_wide_start,
 )
 from vrneural.config import config_dict, opt, resolved, unset
-from vrneural.distill.config import COMPILE_MODES, NEUMIP_DIRS
+from vrneural.distill.config import StudentShape, TrainBudget
 from vrneural.outputs import file_sha256
 from vrneural.versions import package_versions
 
@@ -85,8 +85,10 @@ def labels(width: int = 8) -> dict[str, str]:
 
 
 @dataclass
-class QualityConfig:
-    """`vrneural bench quality`."""
+class QualityConfig(TrainBudget, StudentShape):
+    """`vrneural bench quality`: the training fields it shares with `distill` (seed, --ema,
+    --lr-patience, --device, --compile, --neumip-dirs, --width, --wide-start) apply to every
+    network but the teacher, as `distill` takes them."""
 
     presets: str | None = unset(
         "leather,fabric,wood",
@@ -103,20 +105,8 @@ class QualityConfig:
     teacher_epochs: int | None = unset(12, "teacher epochs")
     epochs: int | None = unset(12, "epochs of every student and baseline network")
     lafortune_iters: int | None = unset(30, "Levenberg-Marquardt iterations of the Lafortune fit")
-    seed: int = opt(0, "seed of synthesis, initialisation and data order")
     repeats: int = opt(
         1, "train every network but the teacher with this many seeds (seed, seed+1, ...)"
-    )
-    neumip_dirs: str = opt(
-        "xy",
-        "NeuMIP's direction inputs: xy (NeuMIP's own) or full (wi, wo, h, as the student)",
-        choices=NEUMIP_DIRS,
-    )
-    ema: float = opt(0.0, "weight-average decay of every network but the teacher (distill --ema)")
-    lr_patience: int = opt(
-        2,
-        "ReduceLROnPlateau patience of every network but the teacher (distill --lr-patience; "
-        "see docs/quality-research.md on a gentler schedule)",
     )
     parallax: str = opt(
         "off",
@@ -126,21 +116,6 @@ class QualityConfig:
         "full model, and a teacher and student with the module); both: all of them (see "
         "docs/parallax.md)",
         choices=BENCH_PARALLAX,
-    )
-    width: int = opt(
-        8,
-        "hidden width of the single-level net and both students (distill --width; the "
-        "paper's 8; see the width sweep in docs/quality-research.md)",
-    )
-    wide_start: int = opt(
-        0,
-        "train the single-level net and both students this wide for the first half of "
-        "--epochs, then prune them to --width for the rest (distill --wide-start; 0 = off, "
-        "from random weights)",
-    )
-    device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
-    compile: str = opt(
-        "off", "torch.compile the networks (teach/distill --compile)", choices=COMPILE_MODES
     )
     jobs: int = opt(
         1,

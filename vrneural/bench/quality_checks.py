@@ -3,6 +3,8 @@ trained or written, with the ranges the stages would check later."""
 
 from __future__ import annotations
 
+import dataclasses
+
 from vrneural.bench.quality_btf import check_given
 from vrneural.bench.quality_parallax import bench_kinds, check_parallax_data
 from vrneural.config import resolved
@@ -14,7 +16,7 @@ def validate(cfg) -> list[str]:
     """Check every option before anything is synthesised, trained or written (the checks the
     stages would make later, with their ranges); returns the presets."""
     from vrneural.btf.synth import BtfConfig
-    from vrneural.distill.config import DistillConfig
+    from vrneural.distill.config import DistillConfig, TrainBudget
     from vrneural.distill.teach import check_train_config
     from vrneural.distill.train import train_device
 
@@ -52,16 +54,7 @@ def validate(cfg) -> list[str]:
         check_parallax_data(presets, given, cfg.parallax)
     presets = presets + list(given)  # the given BTFs, labelled by file name
     check_seed("--seed + --repeats - 1", cfg.seed + cfg.repeats - 1)
-    check_train_config(  # --ema and the like, as `distill` checks them
-        resolved(
-            DistillConfig(
-                epochs=cfg.epochs,
-                seed=cfg.seed,
-                ema=cfg.ema,
-                lr_patience=cfg.lr_patience,
-                device=cfg.device,
-            )
-        )
-    )
+    shared = {f.name: getattr(cfg, f.name) for f in dataclasses.fields(TrainBudget)}
+    check_train_config(resolved(DistillConfig(epochs=cfg.epochs, **shared)))  # as distill does
     train_device(cfg.device)
     return presets

@@ -24,7 +24,8 @@ def _register_quality(sub) -> None:
     p.add_argument(
         "--out", default="bench-quality", help="output directory (default: bench-quality)"
     )
-    add_config_args(p, QualityConfig)
+    seed = "seed of synthesis, initialisation, data order and texture-lookup jitter"
+    add_config_args(p, QualityConfig, helps={"seed": seed})  # (the BTFs' too: its own help)
     p.set_defaults(func=_run_quality)
 
 

@@ -40,7 +40,7 @@ def _report(fn, output: str) -> int:
     import sys
     from pathlib import Path
 
-    from vrneural.distill.models import spec_width
+    from vrneural.distill.specs import spec_width
     from vrneural.distill.train import Interrupted, dist_teardown
     from vrneural.errors import count
 

@@ -30,13 +30,63 @@ RESUME_FREE = ("epochs", "output", "resume", "progress", "device", "compile", "t
 
 
 @dataclass
-class TrainConfig:
+class TrainBudget:
+    """What a training run is given besides its data and length, shared by `teach`, `distill`
+    and `bench quality` (which gives it to every network it trains but the teacher)."""
+
+    seed: int | None = unset(0, "seed of initialisation, data order and texture-lookup jitter")
+    ema: float | None = unset(
+        0.0,
+        "decay of an exponential moving average of the weights, evaluated and exported "
+        "instead of the last step (0 = off; see docs/training.md)",
+    )
+    lr_patience: int | None = unset(2, "epochs without enough improvement before halving")
+    device: str | None = unset(
+        "cpu",
+        "train on cpu, cuda or cuda:N (CUDA: same result to float tolerance, not bit-exact; "
+        "see docs/training.md)",
+    )
+    compile: str | None = unset(
+        "off",
+        "torch.compile the networks: off, default, or reduce-overhead (adds CUDA graphs); "
+        "fewer kernel launches per step, paid for with a compile at the start (see "
+        "docs/training.md)",
+        choices=COMPILE_MODES,
+    )
+
+
+@dataclass
+class StudentShape:
+    """The small networks' shape, shared by `distill` and `bench quality`."""
+
+    neumip_dirs: str | None = unset(
+        "xy",
+        "NeuMIP's direction inputs: xy (wi.xy, wo.xy, as NeuMIP has them) or full (wi, wo, h "
+        "like the student; a stronger baseline than the paper's, see docs/training.md)",
+        choices=NEUMIP_DIRS,
+    )
+    width: int | None = unset(
+        8,
+        "hidden width of the student's M_c and M_f, and of single8 (NeuMIP is always 25); the "
+        "paper's 8, or 12 with --wide-start 24 to come within a tenth of NeuMIP's L1 on our "
+        "presets (see docs/quality.md)",
+    )
+    wide_start: int | None = unset(
+        0,
+        "train this wide for --epochs // 2 epochs (into <output>.wide.pt), then prune to "
+        "--width and train on for the rest: --width and --init-from in one run; --resume of "
+        "the output continues either half (0 = off, from random weights as the paper; see "
+        "docs/training.md)",
+    )
+
+
+@dataclass
+class TrainConfig(TrainBudget):
     """Fields shared by every trainer (optimizer, schedule, data split, workflow)."""
 
     epochs: int | None = unset(
         20, "training epochs (one epoch = every training (wi, wo) slice once)"
     )
-    seed: int | None = unset(0, "seed of initialisation, data order and texture-lookup jitter")
     lr: float | None = unset(5e-4, "initial Adam learning rate")
     lr_min: float | None = unset(1e-7, "ReduceLROnPlateau floor")
     lr_factor: float | None = unset(0.5, "ReduceLROnPlateau decay factor")
@@ -48,13 +98,7 @@ class TrainConfig:
         "threshold mode: rel (fraction of the best L1) or abs (L1 units)",
         choices=("abs", "rel"),
     )
-    lr_patience: int | None = unset(2, "epochs without enough improvement before halving")
     tex_lr_scale: float | None = unset(10.0, "learning-rate multiplier for neural textures")
-    ema: float | None = unset(
-        0.0,
-        "decay of an exponential moving average of the weights, evaluated and exported "
-        "instead of the last step (0 = off; see docs/training.md)",
-    )
     test_fraction: float | None = unset(
         0.1, "held-out fraction of (wi, wo) pairs (distill: teacher's)"
     )
@@ -67,18 +111,6 @@ class TrainConfig:
     )
     space: str | None = unset(
         "linear", "output and loss space: linear, or log (log(1+y))", choices=SPACES
-    )
-    device: str | None = unset(
-        "cpu",
-        "train on cpu, cuda or cuda:N (CUDA: same result to float tolerance, not bit-exact; "
-        "see docs/training.md)",
-    )
-    compile: str | None = unset(
-        "off",
-        "torch.compile the networks: off, default, or reduce-overhead (adds CUDA graphs); "
-        "fewer kernel launches per step, paid for with a compile at the start (see "
-        "docs/training.md)",
-        choices=COMPILE_MODES,
     )
     threads: int | None = unset(
         1, "torch CPU threads (1 was 15-70x faster than 2 on the shared 2-core box)"
@@ -121,7 +153,7 @@ class TeachConfig(TrainConfig):
 
 
 @dataclass
-class DistillConfig(TrainConfig):
+class DistillConfig(TrainConfig, StudentShape):
     """``vrneural distill``: a small model trained from a teacher (and the ground truth)."""
 
     teacher: str = opt("", "teacher checkpoint (from vrneural teach)", cli=False)
@@ -134,29 +166,10 @@ class DistillConfig(TrainConfig):
     sigma: float | None = unset(0.1, "weight of L1(y_s, y_t)")
     lambda1: float | None = unset(0.1, "weight of L2(z_s1, T1 z_t1)")
     lambda2: float | None = unset(0.1, "weight of L2(z_s2, T2 z_t2)")
-    neumip_dirs: str | None = unset(
-        "xy",
-        "NeuMIP's direction inputs: xy (wi.xy, wo.xy, as NeuMIP has them) or full (wi, wo, h "
-        "like the student; a stronger baseline than the paper's, see docs/training.md)",
-        choices=NEUMIP_DIRS,
-    )
-    width: int | None = unset(
-        8,
-        "hidden width of the student's M_c and M_f, and of single8 (NeuMIP is always 25); the "
-        "paper's 8, or 12 with --wide-start 24 to come within a tenth of NeuMIP's L1 on our "
-        "presets (see docs/quality.md)",
-    )
     init_from: str | None = unset(
         "",
         "start from this run of the same method and teacher (trained at this --width or wider), "
         "its hidden units pruned to --width; see docs/training.md",
-    )
-    wide_start: int | None = unset(
-        0,
-        "train this wide for --epochs // 2 epochs (into <output>.wide.pt), then prune to "
-        "--width and train on for the rest: --width and --init-from in one run; --resume of "
-        "the output continues either half (0 = off, from random weights as the paper; see "
-        "docs/training.md)",
     )
     # recorded in both halves of a --wide-start run (the wide one has no init_from): what the
     # whole run was started with, so that --resume of either half continues that run

@@ -81,7 +81,7 @@ class SliceData:
         """The slice averaged over ``2^level`` texel squares, in blocks ``[N_level, 4, 3]``
         float32 (every rank: the levels are small and not sharded): the ground truth of a
         prefiltered pyramid level."""
-        from vrneural.distill.models import avg_pool_levels
+        from vrneural.distill.lookups import avg_pool_levels
 
         v = self._on[0][pair // self.n_view, pair % self.n_view].float()
         return to_blocks(avg_pool_levels(v, level))

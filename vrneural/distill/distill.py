@@ -47,7 +47,7 @@ from vrneural.distill.teach import check_train_config, resumed_config
 from vrneural.distill.train import Interrupted, compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, count
 from vrneural.outputs import (
-    check_not_input,
+    check_outputs,
     check_resume_force,
     file_sha256,
     output_lock,
@@ -373,7 +373,7 @@ def _train(asked: DistillConfig, on_step=None, epochs_flag: str = "--epochs") ->
         raise VrnError(f"{cfg.teacher}: teacher differs from the one {cfg.output} was trained with")
     cfg = teacher_split(cfg, tck, resume is not None, chosen)
     btf_path = cfg.btf or recorded_btf(tck, cfg.teacher)
-    check_not_input(outs, [btf_path])
+    check_outputs(outs, True, [btf_path])  # (checked above; now against the BTF)
     btf = read_btf(btf_path)
     fp = btf_fingerprint(btf)
     mismatch = f"does not match the teacher {cfg.teacher}"

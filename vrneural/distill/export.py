@@ -191,12 +191,12 @@ def export_checkpoint(
     from vrneural.btf.identity import btf_fingerprint, check_btf_record
     from vrneural.distill.checkpoint import recorded_btf
     from vrneural.formats.vrnm import write_vrnm
-    from vrneural.outputs import check_not_input, check_output
+    from vrneural.outputs import check_output, check_outputs
 
     out = check_output(out, force)
     if data is None:
         path = btf or recorded_btf(ck, source or "the checkpoint")
-        check_not_input([out], [path])
+        check_outputs([out], True, [path])  # (checked above; now against the BTF)
         b = read_btf(path)
         mismatch = f"does not match the one {source} was trained on"
         check_btf_record(b.path, btf_fingerprint(b), ck["btf"], mismatch, "the checkpoint has")
@@ -229,7 +229,7 @@ def init_record(init: dict | None) -> dict | None:
     file, hash, width and epochs; None for a run from random weights."""
     if not init:
         return None
-    from vrneural.distill.models import spec_width
+    from vrneural.distill.specs import spec_width
 
     return {
         "path": init["path"],

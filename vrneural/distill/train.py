@@ -25,8 +25,9 @@ import torch
 import torch.distributed as dist
 from torch import nn
 
+from vrneural.distill.averages import Ema
 from vrneural.distill.checkpoint import save_checkpoint
-from vrneural.distill.core import Ema, NonFiniteLossError, epoch_order, epoch_steps
+from vrneural.distill.core import NonFiniteLossError, epoch_order, epoch_steps
 from vrneural.distill.data import SliceData
 from vrneural.errors import VrnError, count
 from vrneural.interrupt import Stop
