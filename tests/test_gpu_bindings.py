@@ -52,6 +52,9 @@ def test_bindings_refuse_a_slot_twice_and_name_missing_resources():
     ]
     with pytest.raises(KeyError, match="no binding named"):
         b.entries({"c": 1})
+    # a uniform bound at dynamic offsets (the viewer's present pass: one buffer, many draws)
+    dyn = Binding(0, "D", "uniform", INNER, dynamic=True).layout_entry(2, sized=True)
+    assert dyn["buffer"] == {"type": "uniform", "min_binding_size": 16, "has_dynamic_offset": True}
 
 
 def _copy_shader() -> tuple[str, Bindings]:

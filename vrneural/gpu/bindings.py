@@ -140,7 +140,8 @@ class Binding:
     """One resource of a bind group: ``slot`` (binding number), WGSL ``name``, ``kind`` (one of
     :data:`KINDS`), WGSL ``type`` (a string or a :class:`Struct`) and a comment for the WGSL.
     ``sample_type``: a sampled texture's wgpu sample type when not the type's default
-    (``"unfilterable-float"`` for an r32float texture)."""
+    (``"unfilterable-float"`` for an r32float texture). ``dynamic``: a buffer bound with a
+    dynamic offset (one bind group serving many draws' uniforms)."""
 
     slot: int
     name: str
@@ -148,6 +149,7 @@ class Binding:
     type: object
     comment: str = ""
     sample_type: str | None = None
+    dynamic: bool = False
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -184,6 +186,8 @@ class Binding:
                                        "view_dimension": m[1].replace("_", "-")}}  # fmt: skip
         else:
             res = {"sampler": {"type": self.sample_type or "filtering"}}
+        if self.dynamic:
+            res["buffer"]["has_dynamic_offset"] = True
         return {"binding": self.slot, "visibility": visibility, **res}
 
 

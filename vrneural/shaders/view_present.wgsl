@@ -7,19 +7,13 @@
 // No branch per pixel beyond the table's gathers: llvmpipe runs both sides of every branch.
 // Numpy twin: viewer/present.py:compose.
 
-struct Draw {
-    origin: vec2<f32>,   // window pixel of the source's (0, 0)
-    scale: f32,          // window pixels per source pixel
-    kind: u32,           // overlay: 0 the texture times tint, 1 fill with tint
-    tint: vec4<f32>,     // overlay: colour multiplier (fill: the colour)
-}
+// The Draw uniform and the bindings: viewer/present.py:DRAW, PRESENT_BINDINGS.
+{{ structs }}
 
 // the target encodes sRGB: decode first (a pipeline constant: no per-pixel cost otherwise)
 override SRGB: bool = false;
 
-@group(0) @binding(0) var<uniform> D: Draw;
-@group(0) @binding(1) var src: texture_2d<f32>;
-@group(0) @binding(2) var<storage, read> lut: array<u32>;  // f16 bits -> 8-bit display value
+{{ bindings }}
 
 @vertex
 fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {

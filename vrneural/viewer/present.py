@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vrneural.gpu.bindings import Binding, Bindings, Struct
 from vrneural.gpu.device import get_device
 from vrneural.runtime.output import tonemap
 
@@ -56,6 +57,20 @@ def fit(window: tuple[int, int], image: tuple[int, int]) -> tuple[float, float, 
     return x0, y0, s
 
 
+#: one draw's uniform (a panel or an overlay)
+DRAW = Struct(
+    "Draw",
+    [("origin", "vec2<f32>", "window pixel of the source's (0, 0)"),
+     ("scale", "f32", "window pixels per source pixel"),
+     ("kind", "u32", "overlay: 0 the texture times tint, 1 fill with tint"),
+     ("tint", "vec4<f32>", "overlay: colour multiplier (fill: the colour)")],
+)  # fmt: skip
+#: the present pass's bind group: every draw's uniform in one buffer at dynamic offsets
+PRESENT_BINDINGS = Bindings([
+    Binding(0, "D", "uniform", DRAW, dynamic=True),
+    Binding(1, "src", "texture", "texture_2d<f32>"),
+    Binding(2, "lut", "storage", "array<u32>", "f16 bits -> 8-bit display value"),
+])  # fmt: skip
 SLOT = 256  # bytes per draw's uniforms (the dynamic-offset alignment)
 SLOTS = 16
 RING = 15  # marker ring size, pixels
@@ -76,22 +91,13 @@ def _ring() -> np.ndarray:
 def _pipelines(target_format: str):
     import wgpu
 
-    from vrneural.gpu.shaders import load_wgsl
+    from vrneural.gpu.shaders import render_wgsl
 
     dev = get_device()
-    frag = wgpu.ShaderStage.FRAGMENT
-    layout = dev.create_bind_group_layout(
-        entries=[
-            {
-                "binding": 0,
-                "visibility": frag,
-                "buffer": {"type": "uniform", "has_dynamic_offset": True},
-            },
-            {"binding": 1, "visibility": frag, "texture": {"sample_type": "float"}},
-            {"binding": 2, "visibility": frag, "buffer": {"type": "read-only-storage"}},
-        ]
-    )
-    mod = dev.create_shader_module(code=load_wgsl("view_present"), label="view_present")
+    entries = PRESENT_BINDINGS.layout_entries(wgpu.ShaderStage.FRAGMENT, sized=True)
+    layout = dev.create_bind_group_layout(entries=entries)
+    code = render_wgsl("view_present", structs=DRAW.wgsl(), bindings=PRESENT_BINDINGS.wgsl())
+    mod = dev.create_shader_module(code=code, label="view_present")
     pl = dev.create_pipeline_layout(bind_group_layouts=[layout])
     blend = {
         "color": {"src_factor": "src-alpha", "dst_factor": "one-minus-src-alpha"},
@@ -172,11 +178,13 @@ class Presenter:
         if id(tex) not in self._binds:
             if len(self._binds) > 32:  # renderers come and go: keep a few
                 self._binds.clear()
-            entries = [
-                {"binding": 0, "resource": {"buffer": self.params, "offset": 0, "size": 32}},
-                {"binding": 1, "resource": tex.create_view()},
-                {"binding": 2, "resource": {"buffer": self.lut}},
-            ]
+            entries = PRESENT_BINDINGS.entries(
+                {
+                    "D": {"buffer": self.params, "offset": 0, "size": DRAW.size},
+                    "src": tex.create_view(),
+                    "lut": {"buffer": self.lut},
+                }
+            )
             self._binds[id(tex)] = (
                 self.dev.create_bind_group(layout=self.layout, entries=entries),
                 tex,  # keeps the texture alive while its id is a key
@@ -228,12 +236,10 @@ class Presenter:
         """Record the present pass drawing ``lay`` into texture ``target`` (``window`` pixels;
         viewed as ``view_format`` when given)."""
         draws = self.draws(window, lay)
-        data = np.zeros((SLOTS, SLOT // 4), np.uint32)
-        f = data.view(np.float32)
+        data = np.zeros((SLOTS, SLOT), np.uint8)
         for i, (_, _, _, origin, scale, kind, tint) in enumerate(draws):
-            f[i, 0:3] = (*origin, scale)
-            data[i, 3] = kind
-            f[i, 4:8] = tint
+            d = DRAW.view(data[i, : DRAW.size])[0]
+            d["origin"], d["scale"], d["kind"], d["tint"] = origin, scale, kind, tint
         self.dev.queue.write_buffer(self.params, 0, data.tobytes())
         view = target.create_view(format=view_format) if view_format else target.create_view()
         rp = encoder.begin_render_pass(
