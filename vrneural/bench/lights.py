@@ -46,7 +46,6 @@ QUICK_LIGHTS = LightsConfig(lights="1,2,4", texture_res=256, loop=QUICK_LOOP)
 def run_lights(cfg: LightsConfig) -> dict:
     from vrneural.errors import check_range
     from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
-    from vrneural.runtime.profiles import get_profile
 
     c = cfg.resolved()
     counts = rp.int_list("--lights", c.lights, 1, LIGHTS_MAX)
@@ -55,31 +54,11 @@ def run_lights(cfg: LightsConfig) -> dict:
     eye_res = c.loop.check()
     with rp.prepare_out(cfg.out, cfg.force, "lights") as root:
         t0 = time.perf_counter()
-        prof = get_profile("quest3")
         doc = rp.header("lights", c)
-        scene = timing.bench_scene(
-            max(8, *counts)
-        )  # light k stays where it is for any list up to 8
-        n = timing.frames_for(c.reuse, c.loop.cycles, 1)
-        bar = timing.progress(n * len(counts), "bench lights", c.progress)
-        for k in counts:
-            r = timing.make_renderer(
-                scene,
-                texture_res=c.texture_res,
-                eye_res=eye_res,
-                eyes=c.loop.eyes,
-                n_lights=k,
-                reuse=c.reuse,
-                schedule=c.schedule,
-                fps=prof.fps,
-                fov_y=prof.fov_y,
-            )
-            rec = timing.measured_record(
-                r, c.reuse, c.schedule, c.loop.cycles, 1, bar.update, c.loop.warmup
-            )
-            doc["records"].append(rec)
-            del r
-        bar.close()
+        scene = timing.bench_scene(max(8, *counts))  # light k stays put for any list up to 8
+        doc["records"], n = timing.count_sweep(
+            c, eye_res, counts, "bench lights", lambda k: (scene, k)
+        )
         recs = doc["records"]
         first = min(
             recs, key=lambda r: r["lights"]

@@ -59,7 +59,6 @@ def squares_scene(k: int, n_lights: int):
 def run_materials(cfg: MaterialsConfig) -> dict:
     from vrneural.errors import check_range
     from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
-    from vrneural.runtime.profiles import get_profile
 
     c = cfg.resolved()
     counts = rp.int_list("--materials", c.materials, 1, 8)
@@ -69,31 +68,14 @@ def run_materials(cfg: MaterialsConfig) -> dict:
     eye_res = c.loop.check()
     with rp.prepare_out(cfg.out, cfg.force, "materials") as root:
         t0 = time.perf_counter()
-        prof = get_profile("quest3")
         doc = rp.header("materials", c)
-        n = timing.frames_for(c.reuse, c.loop.cycles, 1)
-        bar = timing.progress(n * len(counts), "bench materials", c.progress)
-        for k in counts:
-            r = timing.make_renderer(
-                squares_scene(k, c.lights),
-                texture_res=c.texture_res,
-                eye_res=eye_res,
-                eyes=c.loop.eyes,
-                n_lights=c.lights,
-                reuse=c.reuse,
-                schedule=c.schedule,
-                fps=prof.fps,
-                fov_y=prof.fov_y,
-            )
-            rec = timing.measured_record(
-                r, c.reuse, c.schedule, c.loop.cycles, 1, bar.update, c.loop.warmup
-            )
-            per = c.texture_res**2 * 8 * c.loop.eyes / 2**20  # rgba16float, per eye
+        doc["records"], n = timing.count_sweep(
+            c, eye_res, counts, "bench materials", lambda k: (squares_scene(k, c.lights), c.lights)
+        )
+        per = c.texture_res**2 * 8 * c.loop.eyes / 2**20  # rgba16float, per eye
+        for k, rec in zip(counts, doc["records"], strict=True):
             rec["radiance_texture_mb_per_material"] = per
             rec["radiance_texture_mb"] = per * k  # every material's textures, as the table shows
-            doc["records"].append(rec)
-            del r
-        bar.close()
         recs = doc["records"]
         md = [
             "# Materials: several materials at once (paper Table 3)",

@@ -158,6 +158,31 @@ def base_record(r, **extra) -> dict:
     }
 
 
+def count_sweep(c, eye_res, counts: list[int], desc: str, setup) -> tuple[list[dict], int]:
+    """`bench lights` and `bench materials`: one renderer per count ``k`` of ``counts``, on
+    ``setup(k) -> (scene, point lights)``, with ``c``'s texture side, eyes, N and schedule at
+    the quest3 frame rate and field of view, each measured over ``c.loop.cycles`` update cycles
+    after ``c.loop.warmup`` s. Returns the records (in ``counts`` order) and the frames measured
+    per count."""
+    from vrneural.runtime.profiles import get_profile
+
+    prof = get_profile("quest3")
+    n = frames_for(c.reuse, c.loop.cycles, 1)
+    bar = progress(n * len(counts), desc, c.progress)
+    recs = []
+    for k in counts:
+        scene, n_lights = setup(k)
+        r = make_renderer(scene, texture_res=c.texture_res, eye_res=eye_res, eyes=c.loop.eyes,
+                          n_lights=n_lights, reuse=c.reuse, schedule=c.schedule, fps=prof.fps,
+                          fov_y=prof.fov_y)  # fmt: skip
+        recs.append(
+            measured_record(r, c.reuse, c.schedule, c.loop.cycles, 1, bar.update, c.loop.warmup)
+        )
+        del r
+    bar.close()
+    return recs, n
+
+
 def progress(total: int, desc: str, enabled: bool):
     from tqdm import tqdm
 
