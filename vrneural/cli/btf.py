@@ -37,12 +37,7 @@ def register(sub) -> None:
     )
     add_config_args(s, BtfConfig)
     s.add_argument("-o", "--output", required=True, help="output .btf file")
-    s.add_argument("--force", action="store_true", help="overwrite an existing output")
-    s.add_argument(
-        "--resume", action="store_true", help="continue an interrupted run (<output>.partial)"
-    )
-    s.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    s.set_defaults(func=run_synth)
+    _run_flags(s, run_synth)
 
     from vrneural.btf.pt_render import RenderConfig
 
@@ -57,12 +52,7 @@ def register(sub) -> None:
     r.add_argument("preset", help="the preset to render (weave, pebbles, fur, bark, mosaic)")
     add_config_args(r, RenderConfig, skip=("preset",))
     r.add_argument("-o", "--output", required=True, help="output .btf file")
-    r.add_argument("--force", action="store_true", help="overwrite an existing output")
-    r.add_argument(
-        "--resume", action="store_true", help="continue an interrupted run (<output>.partial)"
-    )
-    r.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    r.set_defaults(func=run_render)
+    _run_flags(r, run_render)
 
     i = bsub.add_parser(
         "info",
@@ -125,10 +115,15 @@ def register(sub) -> None:
         help="multiplies --height's values into UV units (tile widths; for millimetres on a "
         "tile w mm wide: 1/w); the mean is removed",
     )
-    im.add_argument("--force", action="store_true", help="overwrite an existing output")
-    im.add_argument("--resume", action="store_true", help="continue an interrupted import")
-    im.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    im.set_defaults(func=run_import)
+    _run_flags(im, run_import, "continue an interrupted import")
+
+
+def _run_flags(p, func, resume_help="continue an interrupted run (<output>.partial)") -> None:
+    """--force, --resume and --no-progress of the subcommands that write a .btf, and ``func``."""
+    p.add_argument("--force", action="store_true", help="overwrite an existing output")
+    p.add_argument("--resume", action="store_true", help=resume_help)
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.set_defaults(func=func)
 
 
 def _check_partial(out: Path, resume: bool, force: bool) -> None:
@@ -148,53 +143,46 @@ def _check_partial(out: Path, resume: bool, force: bool) -> None:
 
 def run_synth(args) -> int:
     from vrneural.btf.synth import BtfConfig, synthesize
-    from vrneural.config import config_from_args, config_path, write_config
-    from vrneural.outputs import (
-        check_outputs,
-        check_resume_force,
-        check_suffix,
-        output_lock,
-    )
+    from vrneural.config import config_from_args
 
     cfg = config_from_args(BtfConfig, args)
     cfg.validate()
-    check_resume_force(args.resume, args.force)
-    check_suffix(args.output, ".btf", "BTF", "leather.btf")
-    with output_lock(args.output):  # a second synth on it meanwhile is refused
-        out, _ = check_outputs([args.output, config_path(args.output)], args.force)
-        _check_partial(out, args.resume, args.force)
-        path = synthesize(
-            cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force
-        )
-        write_config(path, cfg.resolved())  # grid 0 -> the size used (the header keeps 0)
-    print(path)
-    return 0
+    _check_btf_output(args, "leather.btf")
+    # the sidecar has grid 0 replaced by the size used (the header keeps 0)
+    return _write_btf(args, synthesize, cfg, cfg.resolved())
 
 
 def run_render(args) -> int:
+    from vrneural.btf.pathtrace import load_mitsuba
     from vrneural.btf.pt_render import RenderConfig, render_btf
-    from vrneural.config import config_from_args, config_path, write_config
-    from vrneural.outputs import (
-        check_outputs,
-        check_resume_force,
-        check_suffix,
-        output_lock,
-    )
+    from vrneural.config import config_from_args
 
     cfg = config_from_args(RenderConfig, args)
     cfg.validate()
-    check_resume_force(args.resume, args.force)
-    check_suffix(args.output, ".btf", "BTF", "weave.btf")
-    from vrneural.btf.pathtrace import load_mitsuba
-
+    _check_btf_output(args, "weave.btf")
     load_mitsuba()  # not installed: one line naming the extra, before any output
+    return _write_btf(args, render_btf, cfg, cfg, {"height_grid_used": cfg.grid_size})
+
+
+def _check_btf_output(args, example: str) -> None:
+    """--resume with --force, and an output that is not a .btf, are refused."""
+    from vrneural.outputs import check_resume_force, check_suffix
+
+    check_resume_force(args.resume, args.force)
+    check_suffix(args.output, ".btf", "BTF", example)
+
+
+def _write_btf(args, make, cfg, sidecar, extra: dict | None = None) -> int:
+    """`btf synth` and `btf render`: ``make(cfg, out, ...)`` under the output's lock (a second
+    run on it meanwhile is refused), then ``sidecar`` (+ ``extra``) as its config JSON."""
+    from vrneural.config import config_path, write_config
+    from vrneural.outputs import check_outputs, output_lock
+
     with output_lock(args.output):
         out, _ = check_outputs([args.output, config_path(args.output)], args.force)
         _check_partial(out, args.resume, args.force)
-        path = render_btf(
-            cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force
-        )
-        write_config(path, cfg, {"height_grid_used": cfg.grid_size})
+        path = make(cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force)
+        write_config(path, sidecar, extra)
     print(path)
     return 0
 
@@ -296,10 +284,9 @@ def run_show(args) -> int:
 def run_import(args) -> int:
     from vrneural.btf.ubo2014 import import_ubo, load_extractor, parse_header
     from vrneural.errors import VrnError
-    from vrneural.outputs import check_outputs, check_resume_force, check_suffix
+    from vrneural.outputs import check_outputs
 
-    check_resume_force(args.resume, args.force)
-    check_suffix(args.output, ".btf", "BTF", "leather.btf")  # as btf synth
+    _check_btf_output(args, "leather.btf")  # as btf synth
     if Path(args.file).is_dir():
         return _import_images(args)
     if args.table or args.png_linear:
