@@ -12,10 +12,9 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-import numpy as np
-
 from vrneural.config import config_dict
 from vrneural.outputs import OutputDir, atomic_path, write_json
+from vrneural.runtime.run import percentiles
 
 
 @contextlib.contextmanager
@@ -28,17 +27,8 @@ def prepare_out(out: str | Path, force: bool, bench: str) -> Iterator[Path]:
 
 
 def stats(x) -> dict:
-    """``{median, p95, p99, mean, max}`` of a sequence of numbers (ms)."""
-    a = np.asarray(x, np.float64)
-    if not len(a):
-        return {"median": 0.0, "p95": 0.0, "p99": 0.0, "mean": 0.0, "max": 0.0}
-    return {
-        "median": float(np.median(a)),
-        "p95": float(np.percentile(a, 95)),
-        "p99": float(np.percentile(a, 99)),
-        "mean": float(a.mean()),
-        "max": float(a.max()),
-    }
+    """``{median, p95, p99, mean, max}`` of a sequence of numbers (ms); zeros for none."""
+    return percentiles(x) or dict.fromkeys(("median", "p95", "p99", "mean", "max"), 0.0)
 
 
 def header(bench: str, cfg) -> dict:

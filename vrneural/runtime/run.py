@@ -133,6 +133,7 @@ def default_out() -> Path:
 
 
 def percentiles(x) -> dict:
+    """``{median, p95, p99, mean, max}`` of a sequence of numbers; ``{}`` for none."""
     a = np.asarray(x, np.float64)
     if not len(a):
         return {}
