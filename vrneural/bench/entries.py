@@ -77,16 +77,22 @@ def _summary(name: str, doc: dict, out: str) -> None:
     print(f"bench {name}: {out}/ {', '.join(files)} ({doc['total_seconds']:.0f} s)")
 
 
+def add_bench(sub, name: str, cls, run, help_: str, description: str, **config_kw) -> None:
+    """The subcommand `vrneural bench NAME`: ``--out`` (default ``bench-NAME``) and the fields of
+    config class ``cls`` as options (``config_kw``: :func:`~vrneural.config.add_config_args`'s);
+    ``run(args)`` handles it."""
+    p = sub.add_parser(name, help=help_, description=description)
+    p.add_argument(
+        "--out", default=f"bench-{name}", help=f"output directory (default: bench-{name})"
+    )
+    add_config_args(p, cls, **config_kw)
+    p.set_defaults(func=run)
+
+
 def _entry(name: str):
     def register(sub) -> None:
-        cls, _ = _load(name)
         help_ = SPECS[name][3]
-        p = sub.add_parser(name, help=help_, description=help_ + ".")
-        p.add_argument(
-            "--out", default=f"bench-{name}", help=f"output directory (default: bench-{name})"
-        )
-        add_config_args(p, cls)
-        p.set_defaults(func=lambda args: _run(name, args))
+        add_bench(sub, name, _load(name)[0], lambda args: _run(name, args), help_, help_ + ".")
 
     return register
 

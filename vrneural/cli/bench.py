@@ -8,25 +8,25 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from vrneural.config import add_config_args, config_from_args
+from vrneural.bench.entries import ENTRIES, add_bench
+from vrneural.config import config_from_args
 
 
 def _register_quality(sub) -> None:
     from vrneural.bench.quality import QualityConfig
 
-    p = sub.add_parser(
+    seed = "seed of synthesis, initialisation, data order and texture-lookup jitter"
+    add_bench(
+        sub,
         "quality",
-        help="Table 1 analog: whole-BTF L1 of the student and baselines per material",
-        description="Synthesise each preset's BTF, train the teacher and the five methods "
+        QualityConfig,
+        _run_quality,
+        "Table 1 analog: whole-BTF L1 of the student and baselines per material",
+        "Synthesise each preset's BTF, train the teacher and the five methods "
         "(Lafortune, NeuMIP, single-level 8-wide, student without and with distillation) at "
         "one fixed budget, and write results.json, results.md, curves.png and slices.png.",
+        helps={"seed": seed},  # (the BTFs' too: its own help)
     )
-    p.add_argument(
-        "--out", default="bench-quality", help="output directory (default: bench-quality)"
-    )
-    seed = "seed of synthesis, initialisation, data order and texture-lookup jitter"
-    add_config_args(p, QualityConfig, helps={"seed": seed})  # (the BTFs' too: its own help)
-    p.set_defaults(func=_run_quality)
 
 
 def _run_quality(args) -> int:
@@ -43,17 +43,17 @@ def _run_quality(args) -> int:
 def _register_widths(sub) -> None:
     from vrneural.bench.widths import WidthsConfig
 
-    p = sub.add_parser(
+    add_bench(
+        sub,
         "widths",
-        help="what the student's width costs and buys: whole-BTF L1 against MACs per texel",
-        description="Synthesise one preset's BTF, train its teacher, then the --methods "
+        WidthsConfig,
+        _run_widths,
+        "what the student's width costs and buys: whole-BTF L1 against MACs per texel",
+        "Synthesise one preset's BTF, train its teacher, then the --methods "
         "networks (default: the student) at every --widths, from random weights and/or with "
         "a wide start, and NeuMIP as the reference; write results.json, results.md and "
         "widths.png.",
     )
-    p.add_argument("--out", default="bench-widths", help="output directory (default: bench-widths)")
-    add_config_args(p, WidthsConfig)
-    p.set_defaults(func=_run_widths)
 
 
 def _run_widths(args) -> int:
@@ -67,17 +67,15 @@ def _run_widths(args) -> int:
 def _register_extremes(sub) -> None:
     from vrneural.bench.extremes import ExtremesConfig
 
-    p = sub.add_parser(
+    add_bench(
+        sub,
         "extremes",
-        help="numerical stability at the extremes: every case works or is rejected clearly",
-        description="Run every extreme case (directions, precision, geometry, settings, "
+        ExtremesConfig,
+        _run_extremes,
+        "numerical stability at the extremes: every case works or is rejected clearly",
+        "Run every extreme case (directions, precision, geometry, settings, "
         "training) and write results.json, results.md and f16_error.png; exit 1 on any FAIL.",
     )
-    p.add_argument(
-        "--out", default="bench-extremes", help="output directory (default: bench-extremes)"
-    )
-    add_config_args(p, ExtremesConfig)
-    p.set_defaults(func=_run_extremes)
 
 
 def _run_extremes(args) -> int:
@@ -95,19 +93,17 @@ def _run_extremes(args) -> int:
 def _register_runtime(sub) -> None:
     from vrneural.bench.runtime import RuntimeConfig
 
-    p = sub.add_parser(
+    add_bench(
+        sub,
         "runtime",
-        help="the runtime's performance targets: texture vs screen space, constants vs "
+        RuntimeConfig,
+        _run_runtime,
+        "the runtime's performance targets: texture vs screen space, constants vs "
         "buffer, kernel vs PyTorch, the networks alone, burst vs staggered",
-        description="Measure the runtime's performance targets in one run on this adapter "
+        "Measure the runtime's performance targets in one run on this adapter "
         "(texture_vs_screen, constants_vs_buffer, vs_torch, mlp_only, schedules) and write "
         "results.json and results.md.",
     )
-    p.add_argument(
-        "--out", default="bench-runtime", help="output directory (default: bench-runtime)"
-    )
-    add_config_args(p, RuntimeConfig)
-    p.set_defaults(func=_run_runtime)
 
 
 def _run_runtime(args) -> int:
@@ -128,10 +124,7 @@ BENCHMARKS = {
     "extremes": _register_extremes,
 }
 
-# frames, lights, materials, kernels, tradeoff, all (vrneural/bench/entries.py)
-from vrneural.bench.entries import ENTRIES  # noqa: E402
-
-BENCHMARKS.update(ENTRIES)
+BENCHMARKS.update(ENTRIES)  # frames, lights, materials, kernels, tradeoff, ..., all
 
 
 def register(sub) -> None:
