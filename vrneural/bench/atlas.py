@@ -231,9 +231,3 @@ def _plot(previews: dict, records: list, path: Path) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=100)
     plt.close(fig)
-
-
-def summary_numbers(records: list) -> np.ndarray:
-    """[N, 3] (total seconds, peak MB, coverage %) of the successful records (for tests)."""
-    ok = [r for r in records if "error" not in r]
-    return np.array([[r["total_s"], r["peak_rss_mb"], r["coverage_pct"]] for r in ok])

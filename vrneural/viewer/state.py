@@ -15,7 +15,6 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
-from vrneural.errors import VrnError
 from vrneural.runtime.config import REUSE_MAX, max_texture_res
 from vrneural.runtime.settings import MODES
 
@@ -129,11 +128,3 @@ def step_texture(live: Live, up: bool, adapter) -> None:
 
 def next_mode(live: Live) -> str:
     return cycle(live.mode, MODES)
-
-
-def check_light_index(live: Live, k: int) -> None:
-    if not 0 <= k < len(live.lights_on):
-        raise VrnError(
-            f"light {k + 1}: the scene shades {len(live.lights_on)} light(s) here "
-            "(--lights N shades more)"
-        )
