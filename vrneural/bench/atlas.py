@@ -64,54 +64,53 @@ def _rss_mb() -> float:
     return float("nan")
 
 
-def _load_child(conn, name: str, folder: str, quick: bool) -> None:
+def _load_child(name: str, folder: str, quick: bool):
     """Generate and load one mesh (``load_mesh``: trimesh, normals, tangents); keep the
     :class:`Mesh` arrays in ``folder/<name>.npz`` for the build process."""
-    try:
-        import dataclasses
+    import dataclasses
 
-        from vrneural.atlas import load_mesh
-        from vrneural.bench.atlas_meshes import write_mesh
+    from vrneural.atlas import load_mesh
+    from vrneural.bench.atlas_meshes import write_mesh
 
-        t = time.perf_counter()
-        path = write_mesh(name, Path(folder), quick)
-        (mesh,) = load_mesh(path)
-        load_s = time.perf_counter() - t
-        arrays = {k: v for k, v in dataclasses.asdict(mesh).items() if isinstance(v, np.ndarray)}
-        np.savez(Path(folder) / f"{name}.npz", **arrays)
-        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        info = {"name": mesh.name, "uv_source": mesh.uv_source}
-        conn.send(("ok", {"load_s": load_s, "load_peak_rss_mb": peak, **info}, None, str(path)))
-    except BaseException as e:  # reported, never a hang
-        conn.send(("error", f"{type(e).__name__}: {e}", None, None))
-    finally:
-        conn.close()
-        os._exit(0)
+    t = time.perf_counter()
+    path = write_mesh(name, Path(folder), quick)
+    (mesh,) = load_mesh(path)
+    load_s = time.perf_counter() - t
+    arrays = {k: v for k, v in dataclasses.asdict(mesh).items() if isinstance(v, np.ndarray)}
+    np.savez(Path(folder) / f"{name}.npz", **arrays)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    info = {"name": mesh.name, "uv_source": mesh.uv_source}
+    return {"load_s": load_s, "load_peak_rss_mb": peak, **info}, None, str(path)
 
 
-def _build_child(conn, name: str, folder: str, res: int, loaded: dict) -> None:
-    """Atlas the mesh of ``folder/<name>.npz`` (no cache); send its stats and a preview. The
+def _build_child(name: str, folder: str, res: int, loaded: dict):
+    """Atlas the mesh of ``folder/<name>.npz`` (no cache); its stats and a preview. The
     process holds only the interpreter, the mesh arrays and the build: its peak resident
     memory is the build's."""
-    try:
-        from vrneural.atlas import Mesh, build_atlas
-        from vrneural.atlas.visualize import atlas_image, gutter_mask
+    from vrneural.atlas import Mesh, build_atlas
+    from vrneural.atlas.visualize import atlas_image, gutter_mask
 
-        with np.load(Path(folder) / f"{name}.npz") as z:
-            arrays = {k: z[k] for k in z.files}
-        mesh = Mesh(name=loaded["name"], uv_source=loaded["uv_source"], **arrays)
-        rss0 = _rss_mb()
-        atlas = build_atlas(mesh, res, 2, cache=False, progress=False)
-        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        img = atlas_image(atlas, by="chart", gutter=gutter_mask(atlas))
-        step = max(1, res // 320)
-        rec = {
-            **{k: v for k, v in atlas.stats.items() if k not in ("cache", "cache_file")},
-            "mesh": name,
-            "rss_before_mb": rss0,
-            "peak_rss_mb": peak,
-        }
-        conn.send(("ok", rec, img[::step, ::step].copy(), None))
+    with np.load(Path(folder) / f"{name}.npz") as z:
+        arrays = {k: z[k] for k in z.files}
+    mesh = Mesh(name=loaded["name"], uv_source=loaded["uv_source"], **arrays)
+    rss0 = _rss_mb()
+    atlas = build_atlas(mesh, res, 2, cache=False, progress=False)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    img = atlas_image(atlas, by="chart", gutter=gutter_mask(atlas))
+    step = max(1, res // 320)
+    rec = {
+        **{k: v for k, v in atlas.stats.items() if k not in ("cache", "cache_file")},
+        "mesh": name,
+        "rss_before_mb": rss0,
+        "peak_rss_mb": peak,
+    }
+    return rec, img[::step, ::step].copy(), None
+
+
+def _child_main(conn, target, *args) -> None:
+    """The forked process: send ``("ok", *target(*args))`` or the error, never hang."""
+    try:
+        conn.send(("ok", *target(*args)))
     except BaseException as e:  # reported, never a hang
         conn.send(("error", f"{type(e).__name__}: {e}", None, None))
     finally:
@@ -124,7 +123,7 @@ def _in_child(target, *args):
 
     ctx = mp.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=target, args=(send, *args))
+    proc = ctx.Process(target=_child_main, args=(send, target, *args))
     proc.start()
     send.close()
     try:
