@@ -234,21 +234,11 @@ class DrawObject:
         layout = _layouts()[1 if radiance_view is not None else 2]
         res = {"O": {"buffer": self.ubuf}}
         if radiance_view is not None:
-            res |= {"radiance": radiance_view, "samp": _mip_sampler() if mips else _sampler()}
+            res |= {"radiance": radiance_view, "samp": _sampler(bool(mips))}
         entries = forward_bindings(1)[1].entries(res)
         bg = get_device().create_bind_group(layout=layout, entries=entries)
         self.binds[key] = bg
         return bg
-
-
-@functools.cache
-def _sampler():
-    return get_device().create_sampler(
-        mag_filter="linear",
-        min_filter="linear",
-        address_mode_u="clamp-to-edge",
-        address_mode_v="clamp-to-edge",
-    )
 
 
 #: the anisotropy the mip sampler asks for (WebGPU clamps it to the adapter's)
@@ -256,14 +246,15 @@ MAX_ANISOTROPY = 8
 
 
 @functools.cache
-def _mip_sampler():
+def _sampler(mips: bool = False):
+    """Bilinear, clamped; ``mips``: trilinear and anisotropic over a radiance mip chain."""
+    trilinear = {"mipmap_filter": "linear", "max_anisotropy": MAX_ANISOTROPY} if mips else {}
     return get_device().create_sampler(
         mag_filter="linear",
         min_filter="linear",
-        mipmap_filter="linear",
         address_mode_u="clamp-to-edge",
         address_mode_v="clamp-to-edge",
-        max_anisotropy=MAX_ANISOTROPY,
+        **trilinear,
     )
 
 
