@@ -77,14 +77,20 @@ def _sphere(r: float = 0.25, nu: int = 64, nv: int = 32):
     return pos, _orient_outward(pos, faces), uv
 
 
-def _orient_outward(pos: np.ndarray, faces: np.ndarray, center=(0.0, 0.0, 0.0)) -> np.ndarray:
-    """Flip faces whose normal points toward ``center`` (closed, star-shaped surfaces)."""
+def _orient(pos: np.ndarray, faces: np.ndarray, front) -> np.ndarray:
+    """Flip the faces whose normal points against ``front`` (``[F, 3]`` per face, or ``[3]``):
+    the direction their front side should face."""
     p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
-    n = np.cross(p1 - p0, p2 - p0)
-    inward = np.sum(n * ((p0 + p1 + p2) / 3 - np.asarray(center)), axis=1) < 0
+    inward = np.sum(np.cross(p1 - p0, p2 - p0) * front, axis=1) < 0
     faces = faces.copy()
     faces[inward] = faces[inward][:, [0, 2, 1]]
     return faces
+
+
+def _orient_outward(pos: np.ndarray, faces: np.ndarray, center=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """Flip faces whose normal points toward ``center`` (closed, star-shaped surfaces)."""
+    centroid = sum(pos[faces[:, k]] for k in range(3)) / 3
+    return _orient(pos, faces, centroid - np.asarray(center))
 
 
 def _torus(R: float = 0.3, r: float = 0.1, nu: int = 96, nv: int = 48):
@@ -96,27 +102,14 @@ def _torus(R: float = 0.3, r: float = 0.1, nu: int = 96, nv: int = 48):
     faces = grid_faces(nu, nv)
     # outward = away from the tube centre line
     c = np.stack([R * np.cos(phi), 0 * phi, -R * np.sin(phi)], 1)
-    fc = faces[:, 0]
-    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
-    inward = np.sum(np.cross(p1 - p0, p2 - p0) * (p0 - c[fc]), axis=1) < 0
-    faces[inward] = faces[inward][:, [0, 2, 1]]
-    return pos, faces, uv
+    return pos, _orient(pos, faces, pos[faces[:, 0]] - c[faces[:, 0]]), uv
 
 
 def _plane(size: float = 1.0, n: int = 16):
     s, t = _grid(n, n)
     pos = np.stack([(s - 0.5) * size, 0 * s, (t - 0.5) * size], 1)
     uv = np.stack([s, t], 1) * size / TILE_M
-    return pos, _face_up(pos, grid_faces(n, n)), uv
-
-
-def _face_up(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Orient height-field faces so their normals have y > 0."""
-    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
-    down = np.cross(p1 - p0, p2 - p0)[:, 1] < 0
-    faces = faces.copy()
-    faces[down] = faces[down][:, [0, 2, 1]]
-    return faces
+    return pos, _orient(pos, grid_faces(n, n), (0.0, 1.0, 0.0)), uv  # normals with y > 0
 
 
 def _cloth(size: float = 0.8, n: int = 128, r0: float = 0.15, folds: int = 9):
@@ -137,19 +130,8 @@ def _cloth(size: float = 0.8, n: int = 128, r0: float = 0.15, folds: int = 9):
     y = y + 0.5 * fold_amp * np.cos(folds * ang)
     pos = np.stack([rr * np.cos(ang), y, rr * np.sin(ang)], 1)
     uv = np.stack([s, t], 1) * size / TILE_M
-    return pos, _face_up_by_param(pos, grid_faces(n, n)), uv
-
-
-def _face_up_by_param(pos: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Orient the cloth so the side facing away from the drape centre line is the front."""
-    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
-    n = np.cross(p1 - p0, p2 - p0)
-    c = (p0 + p1 + p2) / 3
-    out = c - np.array([0.0, -1.0, 0.0])  # from a point below the cloth
-    inward = np.sum(n * out, axis=1) < 0
-    faces = faces.copy()
-    faces[inward] = faces[inward][:, [0, 2, 1]]
-    return faces
+    # the front faces away from a point below the cloth
+    return pos, _orient_outward(pos, grid_faces(n, n), (0.0, -1.0, 0.0)), uv
 
 
 def _knot(nu: int = 800, nv: int = 63, p: int = 2, q: int = 3, r: float = 0.035):
