@@ -157,10 +157,7 @@ def _knot(nu: int = 800, nv: int = 63, p: int = 2, q: int = 3, r: float = 0.035)
     length = np.sum(np.linalg.norm(np.diff(curve(np.linspace(0, 2 * np.pi, 4001)), axis=0), axis=1))
     uv = np.stack([s * length, t * 2 * np.pi * r], 1) / TILE_M
     faces = grid_faces(nu, nv)
-    p0, p1, p2 = (pos[faces[:, k]] for k in range(3))
-    inward = np.sum(np.cross(p1 - p0, p2 - p0) * (p0 - c[faces[:, 0]]), axis=1) < 0
-    faces[inward] = faces[inward][:, [0, 2, 1]]
-    return pos, faces, uv
+    return pos, _orient(pos, faces, pos[faces[:, 0]] - c[faces[:, 0]]), uv  # off the centre line
 
 
 _BUILDERS = {

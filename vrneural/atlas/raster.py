@@ -151,11 +151,17 @@ def _edge_terms(es: dict, t: np.ndarray, cx: np.ndarray, cy: np.ndarray, need_di
 
 def _setup(uv: np.ndarray, faces: np.ndarray, R: int):
     """Pixel-space triangles [F, 3, 2] wound positive, signed areas x2 [F], edge setup."""
-    px = uv.astype(np.float64)[np.asarray(faces, dtype=np.int64)] * R
-    area = uv_area_px(px)
+    return _wound(uv.astype(np.float64)[np.asarray(faces, dtype=np.int64)] * R)
+
+
+def _wound(px: np.ndarray):
+    """Triangles ``px`` [F, 3, 2] (a float64 copy) wound positive, their signed areas x2 [F]
+    as given, and the edge setup."""
+    q = px.astype(np.float64)
+    area = uv_area_px(q)
     flip = area < 0
-    px[flip] = px[flip][:, [0, 2, 1]]
-    return px, area, _edge_setup(px)
+    q[flip] = q[flip][:, [0, 2, 1]]
+    return q, area, _edge_setup(q)
 
 
 def _coverage(px, es, tris, R: int) -> tuple[np.ndarray, int]:
@@ -190,11 +196,7 @@ def overlap_pairs(px: np.ndarray, R: int) -> tuple[np.ndarray, np.ndarray]:
     ``(a [P], b [P])`` with ``a < b``, one pair (lowest and highest claimant) per texel."""
     s = min(1.0, OVERLAP_CHECK_RES / R)
     Rc = max(int(np.ceil(R * s)), 1)
-    q = px.astype(np.float64) * s
-    area = uv_area_px(q)
-    flip = area < 0
-    q[flip] = q[flip][:, [0, 2, 1]]
-    es = _edge_setup(q)
+    q, area, es = _wound(px.astype(np.float64) * s)
     tris = np.flatnonzero(area != 0)
     hits = np.zeros(Rc * Rc, np.int32)
     lo = np.full(Rc * Rc, EMPTY, np.uint32)
@@ -220,11 +222,7 @@ def chart_conflicts(px: np.ndarray, faces: np.ndarray, chart: np.ndarray, R: int
     """Texels within L-inf distance 1 of two different charts: a bilinear tap there reads
     another chart (``px`` [F, 3, 2] texel coordinates, ``faces`` [F, 3] for the chart borders,
     ``chart`` [F]). Only chart-border triangles are tested (overlaps are found apart)."""
-    q = px.astype(np.float64)
-    area = uv_area_px(q)
-    flip = area < 0
-    q[flip] = q[flip][:, [0, 2, 1]]
-    es = _edge_setup(q)
+    q, area, es = _wound(px)
     border = np.intersect1d(boundary_faces(np.asarray(faces, np.int64)), np.flatnonzero(area != 0))
     lo = np.full(R * R, np.iinfo(np.int64).max, np.int64)
     hi = np.full(R * R, -1, np.int64)
