@@ -10,7 +10,6 @@ left, the per-pixel reference right; on lavapipe the reference frame takes secon
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 from vrneural.errors import VrnError
@@ -29,6 +28,7 @@ def shoot(frames: int = 8, split: str = "reference", **options):
 def main(argv=None) -> int:
     from vrneural.outputs import check_output
     from vrneural.runtime.output import write_png
+    from vrneural.viewer.xvfb import on_a_display
 
     p = argparse.ArgumentParser(prog="python -m vrneural.viewer.docshot", description=__doc__)
     p.add_argument("out", help="PNG to write")
@@ -36,13 +36,7 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     try:
         out = check_output(a.out, a.force)
-        if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
-            img = shoot()
-        else:
-            from vrneural.viewer.xvfb import virtual_display
-
-            with virtual_display():
-                img = shoot()
+        img = on_a_display(shoot)
         write_png(out, img)
     except VrnError as e:
         print(f"vrneural.viewer.docshot: error: {e}", file=sys.stderr)

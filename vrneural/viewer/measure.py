@@ -253,6 +253,7 @@ def plot(res: dict, path) -> None:
 
 def main(argv=None) -> int:
     from vrneural.outputs import check_output, write_json
+    from vrneural.viewer.xvfb import on_a_display
 
     p = argparse.ArgumentParser(prog="python -m vrneural.viewer.measure", description=__doc__)
     p.add_argument("out", help="results JSON (Markdown and PNG beside it)")
@@ -265,13 +266,7 @@ def main(argv=None) -> int:
         out = check_output(a.out, a.force)
         for sib in (out.with_suffix(".md"), out.with_suffix(".png")):
             check_output(sib, a.force)
-        if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
-            res = measure(a.quick)
-        else:
-            from vrneural.viewer.xvfb import virtual_display
-
-            with virtual_display(2400, 2400):
-                res = measure(a.quick)
+        res = on_a_display(lambda: measure(a.quick), 2400, 2400)
         write_json(out, res)
         from vrneural.outputs import atomic_path
 

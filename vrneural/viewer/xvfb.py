@@ -20,6 +20,15 @@ def have_xvfb() -> bool:
     return shutil.which("Xvfb") is not None
 
 
+def on_a_display(fn, width: int = 2200, height: int = 1400):
+    """``fn()`` on the display there is, or on a virtual one of ``width x height`` (Xvfb)
+    while there is none."""
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return fn()
+    with virtual_display(width, height):
+        return fn()
+
+
 @contextlib.contextmanager
 def virtual_display(width: int = 2200, height: int = 1400) -> Iterator[str]:
     """Start ``Xvfb`` on a free display number (it picks one: ``-displayfd``), set
