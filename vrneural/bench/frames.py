@@ -136,29 +136,17 @@ def markdown(doc: dict) -> list[str]:
             f"{scr[0]['shading_ms_per_frame']:.1f} ms/frame.",
         ]
     md += ["", "## Neural shading GPU ms per displayed frame (amortised) and forward ms", ""]
-    rows = [
+    md += rp.record_table(
+        tex,
         [
-            r["schedule"],
-            r["texture_res"],
-            r["reuse"],
-            r["shading_ms_per_frame"],
-            r["shading_ms_max"],
-            r["forward_ms"],
-            r["mlp_evals_per_frame"],
-        ]
-        for r in tex
-    ]
-    md += rp.table(
-        [
-            "schedule",
-            "texture",
-            "N",
-            "shading ms/frame",
-            "shading ms max",
-            "forward ms",
-            "MLP evals/frame",
+            ("schedule", "schedule"),
+            ("texture", "texture_res"),
+            ("N", "reuse"),
+            ("shading ms/frame", "shading_ms_per_frame"),
+            ("shading ms max", "shading_ms_max"),
+            ("forward ms", "forward_ms"),
+            ("MLP evals/frame", "mlp_evals_per_frame"),
         ],
-        rows,
     )
     return md
 

@@ -88,29 +88,17 @@ def run_materials(cfg: MaterialsConfig) -> dict:
             + (" **Quick run: reduced grid.**" if c.quick else ""),
             "",
         ]
-        rows = [
+        md += rp.record_table(
+            recs,
             [
-                r["materials"],
-                r["fps"],
-                r["frame_ms"]["median"],
-                r["frame_ms"]["p99"],
-                r["shading_ms_per_frame"],
-                r["forward_ms"],
-                r["radiance_texture_mb"],
-            ]
-            for r in recs
-        ]
-        md += rp.table(
-            [
-                "materials",
-                "FPS (mean frame ms)",
-                "frame ms median",
-                "frame ms p99",
-                "shading ms/frame",
-                "forward ms",
-                "radiance textures MiB",
+                ("materials", "materials"),
+                ("FPS (mean frame ms)", "fps"),
+                ("frame ms median", "frame_ms.median"),
+                ("frame ms p99", "frame_ms.p99"),
+                ("shading ms/frame", "shading_ms_per_frame"),
+                ("forward ms", "forward_ms"),
+                ("radiance textures MiB", "radiance_texture_mb"),
             ],
-            rows,
         )
         md += [
             "",

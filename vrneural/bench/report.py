@@ -66,6 +66,20 @@ def table(headers: list[str], rows: list[list]) -> list[str]:
     return out
 
 
+def record_table(records: list[dict], columns: list[tuple]) -> list[str]:
+    """:func:`table` with a row per record: ``columns`` are ``(header, field)``, ``field`` a key
+    (``"frame_ms.median"``: a nested one) or a function of the record."""
+
+    def get(r, field):
+        if callable(field):
+            return field(r)
+        for k in field.split("."):
+            r = r[k]
+        return r
+
+    return table([h for h, _ in columns], [[get(r, f) for _, f in columns] for r in records])
+
+
 def save_png(fig, path: Path) -> Path:
     """Save a matplotlib figure as PNG atomically (dpi 100 keeps plots well under 300 KB)."""
     import matplotlib.pyplot as plt
