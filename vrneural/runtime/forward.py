@@ -21,13 +21,11 @@ from vrneural.gpu.shaders import render_wgsl
 from vrneural.runtime.interface import FRAME, LIGHT, OBJECT, forward_bindings, structs_wgsl
 from vrneural.runtime.reference import normal_matrix
 
-COLOUR_FORMAT = "rgba16float"
 #: eye colour targets: ``hdr`` (linear radiance, for EXR and FLIP) or ``display`` (Reinhard
 #: tonemapped, sRGB-encoded 8 bits: half the bytes where HDR output is not needed)
 TARGETS = {"hdr": "rgba16float", "display": "rgba8unorm-srgb"}
 DEPTH_FORMAT = "depth32float"
 VIS_FORMAT = "rg32uint"
-OBJECT_BYTES = OBJECT.size  # 160
 FRAME_BYTES = FRAME.size  # 96
 
 
