@@ -12,54 +12,35 @@ from pathlib import Path
 
 from vrneural.config import add_config_args, config_from_args
 
-#: name -> (module, config class, run function, help)
+#: name -> (config class, help); each in ``vrneural.bench.<name>``, run by ``run_<name>``
 SPECS = {
     "frames": (
-        "frames",
         "FramesConfig",
-        "run_frames",
         "paper Table 2: frame time over texture resolution x update interval N",
     ),
     "lights": (
-        "lights",
         "LightsConfig",
-        "run_lights",
         "paper Fig. 10: frame time over the number of point lights (1 to 8 by default)",
     ),
-    "materials": (
-        "materials",
-        "MaterialsConfig",
-        "run_materials",
-        "paper Table 3: 1 to 4 materials, 3 lights, 1024^2, N = 7",
-    ),
+    "materials": ("MaterialsConfig", "paper Table 3: 1 to 4 materials, 3 lights, 1024^2, N = 7"),
     "frame": (
-        "frame",
         "FrameConfig",
-        "run_frame",
         "one frame's time: host, GPU per pass, frames in flight, against the adapter's floors",
     ),
     "kernels": (
-        "kernels",
         "KernelsConfig",
-        "run_kernels",
         "MLP kernels: constants vs buffer vs torch vs NeuMIP-sized, f32 vs f16",
     ),
     "tradeoff": (
-        "tradeoff",
         "TradeoffConfig",
-        "run_tradeoff",
         "speed/accuracy: each knob vs the per-pixel teacher (FLIP, PSNR, SSIM)",
     ),
     "atlas": (
-        "atlas",
         "AtlasBenchConfig",
-        "run_atlas",
         "atlas stage: time, memory, coverage, charts and seam error over a fixed mesh set",
     ),
     "distance": (
-        "distance",
         "DistanceConfig",
-        "run_distance",
         "level of detail: a neural sphere from 0.3 to 20 m and tiled 1-16x, with and without "
         "radiance mips, resolution from the screen and prefiltered neural textures",
     ),
@@ -67,9 +48,8 @@ SPECS = {
 
 
 def _load(name: str):
-    mod, cls, fn, _ = SPECS[name]
-    m = importlib.import_module(f"vrneural.bench.{mod}")
-    return getattr(m, cls), getattr(m, fn)
+    m = importlib.import_module(f"vrneural.bench.{name}")
+    return getattr(m, SPECS[name][0]), getattr(m, f"run_{name}")
 
 
 def _summary(name: str, doc: dict, out: str) -> None:
@@ -91,7 +71,7 @@ def add_bench(sub, name: str, cls, run, help_: str, description: str, **config_k
 
 def _entry(name: str):
     def register(sub) -> None:
-        help_ = SPECS[name][3]
+        help_ = SPECS[name][1]
         add_bench(sub, name, _load(name)[0], lambda args: _run(name, args), help_, help_ + ".")
 
     return register
@@ -167,7 +147,7 @@ def _write_index(out: Path, docs: dict, quick: bool, seconds: float) -> None:
         pngs = sorted(p.name for p in (out / name).glob("*.png"))
         plots = ", ".join(f"[{p}]({name}/{p})" for p in pngs) or "-"
         lines.append(
-            f"| {name} | {SPECS[name][3]} | {doc['total_seconds']:.0f} | "
+            f"| {name} | {SPECS[name][1]} | {doc['total_seconds']:.0f} | "
             f"[results.md]({name}/results.md) | {plots} |"
         )
         benches[name] = {
