@@ -22,7 +22,7 @@ import numpy as np
 
 from vrneural.atlas.types import Atlas, Mesh
 from vrneural.gpu.device import get_device
-from vrneural.gpu.readback import upload_buffer
+from vrneural.gpu.readback import upload_buffer, upload_texture
 from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.runtime.codegen import packed_weights, uniform_weights
 from vrneural.runtime.reference import block_geometry
@@ -121,18 +121,8 @@ def upload_height_texture(height: np.ndarray):
     float16 values exactly; read with ``textureLoad``, see neural_material.wgsl)."""
     import wgpu
 
-    h = np.ascontiguousarray(np.asarray(height, np.float32))
-    rows, cols = h.shape
-    t = get_device().create_texture(
-        size=(cols, rows, 1),
-        format="r32float",
-        usage=wgpu.TextureUsage.TEXTURE_BINDING | wgpu.TextureUsage.COPY_DST,
-        label="neural.height",
-    )
-    get_device().queue.write_texture(
-        {"texture": t}, h, {"bytes_per_row": cols * 4, "rows_per_image": rows}, (cols, rows, 1)
-    )
-    return t
+    usage = wgpu.TextureUsage.TEXTURE_BINDING
+    return upload_texture(np.asarray(height, np.float32), "r32float", usage, "neural.height")
 
 
 def vertex_table(mesh: Mesh, uv_atlas: np.ndarray) -> np.ndarray:
