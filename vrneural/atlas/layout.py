@@ -20,6 +20,8 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from vrneural.atlas.raster import uv_area_px
+
 #: charts filling less of their bounding rectangle than this are cut (when large enough)
 FILL_TARGET = 0.8
 #: ... and longer than this many texels at the expected scale
@@ -36,10 +38,7 @@ EXPECTED_FILL = 0.65
 
 def uv_area(cuv: np.ndarray) -> np.ndarray:
     """[F] signed area of corner coordinates ``cuv`` [F, 3, 2]."""
-    a, b, c = cuv[:, 0], cuv[:, 1], cuv[:, 2]
-    return 0.5 * (
-        (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    )
+    return 0.5 * uv_area_px(cuv)
 
 
 def groups(label: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
