@@ -192,21 +192,18 @@ class FrameResults:
         self.last = st
         self.next_slot = (slot + 1) % self.depth
 
-    def _wait_for(self, st: FrameStats) -> None:
-        """Take in frames, oldest first, until ``st`` is in."""
+    def _wait_for(self, st: FrameStats | None) -> None:
+        """Take in frames, oldest first, until ``st`` is in (None: every submitted one)."""
         for k in range(self.depth):
             s = (self.next_slot + k) % self.depth
             if self.ring.busy(s):
                 self._take(s)
-            if st.ready:
+            if st is not None and st.ready:
                 return
 
     def wait(self) -> None:
         """Take in every submitted frame (waits for the GPU to finish them)."""
-        for k in range(self.depth):
-            s = (self.next_slot + k) % self.depth
-            if self.ring.busy(s):
-                self._take(s)
+        self._wait_for(None)
 
     def _take(self, slot: int) -> None:
         (st, names, wall), raw = self.ring.take(slot)
