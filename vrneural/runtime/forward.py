@@ -290,23 +290,10 @@ def record_bundle(eye: EyeTargets, draws: list):
 
 def begin_pass(encoder, eye: EyeTargets, timestamp_writes=None):
     """A render pass clearing colour to black, depth to 1 (and visibility to 0)."""
-    att = [
-        {
-            "view": eye.colour_view,
-            "load_op": "clear",
-            "store_op": "store",
-            "clear_value": (0, 0, 0, 0),
-        }
-    ]
+    clear = {"load_op": "clear", "store_op": "store", "clear_value": (0, 0, 0, 0)}
+    att = [{"view": eye.colour_view, **clear}]
     if eye.vis is not None:
-        att.append(
-            {
-                "view": eye.vis_view,
-                "load_op": "clear",
-                "store_op": "store",
-                "clear_value": (0, 0, 0, 0),
-            }
-        )
+        att.append({"view": eye.vis_view, **clear})
     return encoder.begin_render_pass(
         color_attachments=att,
         depth_stencil_attachment={
