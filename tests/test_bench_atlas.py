@@ -32,6 +32,16 @@ def test_quick_run_writes_every_mesh_json_markdown_and_png(tmp_path, capsys):
     png = (out / "atlases.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) < 300_000
     assert main(argv) == 2 and "pass --force" in capsys.readouterr().err
+    # a mesh that failed keeps its row the table's width (it had one cell too many)
+    from types import SimpleNamespace
+
+    from vrneural.bench.atlas_report import write_reports
+
+    doc["records"][0] = {"mesh": "ico6", "resolution": 64, "error": "xatlas crashed"}
+    write_reports(tmp_path, doc, SimpleNamespace(quick=True))
+    table = [ln for ln in (tmp_path / "results.md").read_text().splitlines() if ln[:6] == "| ico6"]
+    head = next(ln for ln in md.splitlines() if ln.startswith("| mesh |"))
+    assert "FAILED: xatlas crashed" in table[0] and table[0].count("|") == head.count("|")
 
 
 def test_unknown_mesh_is_one_line_before_any_work(tmp_path, capsys):

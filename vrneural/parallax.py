@@ -25,8 +25,6 @@ grid, sampled bilinearly with wrap like them (:func:`vrneural.sampling.sample_bi
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from vrneural.errors import VrnError
@@ -252,12 +250,6 @@ def parallax_fetches(steps: int) -> int:
     """Height-field texel loads per shaded texel at most (4 per bilinear lookup, steps + 1
     lookups): the fetch cost ``bench quality`` reports beside the networks'."""
     return 4 * (steps + 1)
-
-
-def max_shift_texels(height: np.ndarray, theta_deg: float) -> float:
-    """How far (texels) the relief of ``height: [H, W]`` moves a lookup at view angle
-    ``theta_deg``: :func:`relief_texels` times ``tan(theta)``."""
-    return relief_texels(height) * math.tan(math.radians(theta_deg))
 
 
 def setup_parallax(

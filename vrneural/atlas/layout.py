@@ -26,8 +26,6 @@ from vrneural.atlas.raster import uv_area_px
 FILL_TARGET = 0.8
 #: ... and longer than this many texels at the expected scale
 MIN_CUT_TEXELS = 48
-#: a cut is kept only when the halves' rectangles are at most this fraction of the whole's
-CUT_GAIN = 0.93
 #: rounds of cutting
 CUT_ROUNDS = 6
 #: most rotations :func:`min_area_angle` tries (memory: hull points x angles)

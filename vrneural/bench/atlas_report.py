@@ -54,7 +54,7 @@ def write_reports(root: Path, doc: dict, cfg) -> None:
     rows = []
     for r in doc["records"]:
         if "error" in r:
-            rows.append([r["mesh"], "-", r["resolution"], "FAILED: " + r["error"]] + ["-"] * 10)
+            rows.append([r["mesh"], "-", r["resolution"], "FAILED: " + r["error"]] + ["-"] * 9)
             continue
         sm = r.get("seams", {})
         rows.append(

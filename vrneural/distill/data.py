@@ -15,7 +15,7 @@ import copy
 import numpy as np
 import torch
 
-from vrneural.btf.format import Btf, read_btf
+from vrneural.btf.format import Btf
 from vrneural.errors import VrnError
 
 
@@ -123,7 +123,3 @@ def from_blocks(b: torch.Tensor, res: tuple[int, int]) -> torch.Tensor:
     H, W = res
     rest = b.shape[2:]
     return b.reshape(H // 2, W // 2, 2, 2, *rest).transpose(1, 2).reshape(H, W, *rest)
-
-
-def open_btf(path: str) -> Btf:
-    return read_btf(path)
