@@ -16,7 +16,8 @@ steepest view of the data, proportionally fewer where the ray crosses fewer texe
 texels per step at every angle). The march runs per texel (``march = "texel"``) or once per
 2x2 block at its mean UV, the block's 4 lookups shifted alike (``"block"``: a quarter of the
 height lookups; in the texture-space pass a block is 2x2 radiance texels, usually a fraction
-of a material texel). Twins: ``parallax_uv`` in ``shaders/neural_material.wgsl`` and
+of a material texel, and the renderer's default ``"auto"`` marches once per block exactly
+there: :func:`auto_blocks`). Twins: ``parallax_uv`` in ``shaders/neural_material.wgsl`` and
 :func:`vrneural.distill.models.parallax_uv`.
 
 The height field of a pack is ``[H, W]`` float16 on the neural textures' full-resolution texel
@@ -34,9 +35,8 @@ from vrneural.sampling import MARCHES, block_rows, sample_bilinear_wrap
 PARALLAX_CHOICES = ("auto", "height", "neural", "off")
 #: the kinds a pack can carry
 PACK_KINDS = ("height", "neural", "off")
-#: where the march runs: per texel, or once per 2x2 block (what a pack records: how it trained;
-#: :data:`vrneural.sampling.MARCHES`)
-#: a material at render time may also march ``"auto"``: once per 2x2 block of radiance texels
+#: a material's march: a pack's (:data:`vrneural.sampling.MARCHES`: per texel or once per 2x2
+#: block, as it trained) or, at render time, ``"auto"``: once per 2x2 block of radiance texels
 #: where the block spans at most one texel of the march's grid, else per texel
 #: (:func:`auto_blocks`)
 MATERIAL_MARCHES = (*MARCHES, "auto")
