@@ -159,7 +159,6 @@ def run_atlas(cfg: AtlasBenchConfig) -> dict:
     from vrneural.errors import check_range
 
     c = cfg.resolved()
-    names = c.meshes
     check_range("--eye", c.eye, 16, 4096)
     with rp.prepare_out(cfg.out, cfg.force, "atlas") as root:
         t0 = time.perf_counter()
@@ -172,7 +171,7 @@ def run_atlas(cfg: AtlasBenchConfig) -> dict:
             try:
                 # every atlas first, each in a process forked from this small one (before any
                 # render grows it: a child's peak includes what it inherits), then the renders
-                bar = tqdm(names, desc="bench atlas", unit="mesh", disable=not c.progress)
+                bar = tqdm(c.meshes, desc="bench atlas", unit="mesh", disable=not c.progress)
                 paths = {}
                 for name in bar:
                     bar.set_postfix_str(name)

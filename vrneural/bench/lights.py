@@ -50,16 +50,15 @@ def run_lights(cfg: LightsConfig) -> dict:
     from vrneural.errors import check_range
 
     c = cfg.resolved()
-    counts = c.lights
     rp.check_texture_res(c.texture_res)
     check_range("--reuse", c.reuse, 0, REUSE_MAX)
     eye_res = c.loop.check()
     with rp.prepare_out(cfg.out, cfg.force, "lights") as root:
         t0 = time.perf_counter()
         doc = rp.header("lights", c)
-        scene = timing.bench_scene(max(8, *counts))  # light k stays put for any list up to 8
+        scene = timing.bench_scene(max(8, *c.lights))  # light k stays put for any list up to 8
         doc["records"], n = timing.count_sweep(
-            c, eye_res, counts, "bench lights", lambda k: (scene, k)
+            c, eye_res, c.lights, "bench lights", lambda k: (scene, k)
         )
         recs = doc["records"]
         # the fewest lights measured, whatever the order
