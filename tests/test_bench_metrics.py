@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
-from vrneural.bench.report import int_list, stats
+from vrneural.bench.report import stats
 from vrneural.bench.timing import frames_for
 from vrneural.bench.tradeoff_report import pareto
+from vrneural.config import int_items
 from vrneural.errors import VrnError
 from vrneural.scoring import metrics
 
@@ -88,16 +89,40 @@ def test_frames_for_covers_whole_cycles():
 
 
 def test_int_list_errors_are_one_line():
-    assert int_list("--reuse", "0, 2,4", 0, 9) == [0, 2, 4]
+    assert int_items("--reuse", "0, 2,4", 0, 9) == (0, 2, 4) == int_items("--reuse", [0, 2, 4])
     with pytest.raises(VrnError, match="lists 2 twice; each value once"):
-        int_list("--lights", "2,2", 1, 8)  # measured twice, reported as two rows before
+        int_items("--lights", "2,2", 1, 8)  # measured twice, reported as two rows before
     with pytest.raises(VrnError, match="has an empty item"):
-        int_list("--texture-res", "128,,256", 8, 8192)
-    for bad, word in (("a,b", "integers"), ("3,99", "out of range"), ("", "empty")):
+        int_items("--texture-res", "128,,256", 8, 8192)
+    for bad, word in (("a,b", "integers"), ("3,99", "out of range"), ("", "empty"), ((), "empty")):
         with pytest.raises(VrnError, match=word):
-            int_list("--reuse", bad, 0, 9)
+            int_items("--reuse", bad, 0, 9)
     with pytest.raises(VrnError, match="even"):
-        int_list("--texture-res", "801", 2, 8192, even=True)
+        int_items("--texture-res", "801", 2, 8192, even=True)
+
+
+def test_list_fields_hold_tuples_parsed_when_the_config_is_built():
+    """A list option is a tuple in the config, from the command line's comma-separated text
+    or from any sequence in Python, checked once when the config is built."""
+    from vrneural.bench.frames import FramesConfig
+    from vrneural.bench.lights import LightsConfig
+    from vrneural.bench.tradeoff import TradeoffConfig
+    from vrneural.cli import build_parser
+    from vrneural.config import config_from_args
+
+    args = build_parser().parse_args(["bench", "frames", "--reuse", "0, 4", "--schedules", "burst"])
+    c = config_from_args(FramesConfig, args)
+    assert (c.reuse, c.schedules, c.texture_res) == ((0, 4), ("burst",), None)
+    assert FramesConfig(texture_res=[800, 1200]).texture_res == (800, 1200)
+    assert FramesConfig().resolved().texture_res == (800, 1200, 1600, 2000)
+    with pytest.raises(VrnError, match=r"^--lights = '0,9': 0 is out of range; allowed \[1, "):
+        LightsConfig(lights=(0, 9))
+    with pytest.raises(VrnError, match=r"--schedules = 'Burst' is not allowed"):
+        FramesConfig(schedules=("Burst",))
+    t = TradeoffConfig(speeds="0,250.5", poses="", distances=[1])
+    assert (t.speeds, t.poses, t.distances) == ((0.0, 250.5), (), (1.0,))
+    with pytest.raises(VrnError, match=r"--presets = 'leather,' has an empty item"):
+        TradeoffConfig(presets="leather,")
 
 
 def test_stats_percentiles():
@@ -110,7 +135,7 @@ def test_quick_keeps_explicit_flags():
     from vrneural.bench.quality import QualityConfig
 
     c = FramesConfig(quick=True, texture_res="64").resolved()
-    assert c.texture_res == "64" and c.reuse == QUICK_FRAMES.reuse == "0,2,4"  # given: kept
+    assert c.texture_res == (64,) and c.reuse == QUICK_FRAMES.reuse == (0, 2, 4)  # given: kept
     q = QualityConfig(quick=True, epochs=3).resolved()
     assert (q.epochs, q.res, q.teacher_epochs) == (3, 16, 2)
     assert FramesConfig(texture_res="64").resolved().reuse == FramesConfig().resolved().reuse

@@ -149,12 +149,12 @@ def test_lights_and_materials_say_fps_is_from_the_mean_frame_time(tmp_path, benc
 
 
 def test_list_options_refuse_a_value_named_twice():
-    from vrneural.bench.report import choice_list
+    from vrneural.bench.kernels import KernelsConfig
     from vrneural.errors import VrnError
 
-    assert choice_list("--precisions", "f16, f32", ("f32", "f16")) == ["f16", "f32"]
+    assert KernelsConfig(precisions="f16, f32").precisions == ("f16", "f32")
     with pytest.raises(VrnError, match="--precisions names f16 more than once"):
-        choice_list("--precisions", "f16,f16", ("f32", "f16"))
+        KernelsConfig(precisions=("f16", "f16"))
 
 
 def test_kernels_time_the_networks_distill_trains():
@@ -178,11 +178,8 @@ def test_kernels_time_the_networks_distill_trains():
     }
     coarse, fine = (layers for layers, _ in kernels.network("student:4")[0])
     assert [(x.n_in, x.n_out) for x in coarse + fine] == [(17, 4), (4, 4), (12, 4), (4, 3)]
-    assert kernels.network_names("student, student:12,neumip") == [
-        "student",
-        "student:12",
-        "neumip",
-    ]
+    names = ("student", "student:12", "neumip")
+    assert kernels.KernelsConfig(networks="student, student:12,neumip").networks == names
     for bad, msg in (
         ("student:0", "student:W needs a width W in [1, 64]"),
         ("student:x", "student:W needs a width W in [1, 64]"),
@@ -193,7 +190,7 @@ def test_kernels_time_the_networks_distill_trains():
         (" , ", "--networks is empty"),
     ):
         with pytest.raises(VrnError, match=re.escape(msg)):
-            kernels.network_names(bad)
+            kernels.KernelsConfig(networks=bad)
 
 
 @pytest.mark.gpu

@@ -15,6 +15,7 @@ import types
 import typing
 from pathlib import Path
 
+from vrneural.errors import VrnError, check_choice, check_range
 from vrneural.outputs import write_json
 
 
@@ -25,6 +26,115 @@ def opt(default, help: str, **kw):
             default_factory=lambda: type(default)(default), metadata={"help": help, **kw}
         )
     return dataclasses.field(default=default, metadata={"help": help, **kw})
+
+
+class Config:
+    """Base of the configs with list fields (``items=`` on :func:`opt`/:func:`unset`, a parser
+    below such as :func:`ints`): they hold tuples, parsed and checked once, when the config is
+    built, from the comma-separated text the command line gives or from a sequence (Python)."""
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            parse, v = f.metadata.get("items"), getattr(self, f.name)
+            if parse and v is not None:
+                object.__setattr__(self, f.name, parse("--" + f.name.replace("_", "-"), v))
+
+
+def _items(value) -> tuple[list[str], str]:
+    """The items of a list field's value (comma-separated text or a sequence), and its text."""
+    if isinstance(value, str):
+        return value.split(","), value
+    items = [str(v) for v in value]
+    return items, ",".join(items)
+
+
+def ints(lo: int | None = None, hi: int | None = None, even: bool = False):
+    """Items parser: comma-separated integers in ``[lo, hi]`` (None: unchecked), each once."""
+    return lambda flag, value: int_items(flag, value, lo, hi, even)
+
+
+def int_items(flag: str, value, lo=None, hi=None, even: bool = False) -> tuple[int, ...]:
+    """The integers of a list field (see :func:`ints`; one-line VrnError if not)."""
+    items, text = _items(value)
+    if any(not t.strip() for t in items) and text.strip():
+        raise VrnError(f"{flag} = {text!r} has an empty item; write e.g. 1,2,4")
+    try:
+        vals = tuple(int(t) for t in items if t.strip())
+    except ValueError:
+        raise VrnError(f"{flag} = {text!r} must be comma-separated integers") from None
+    if not vals:
+        raise VrnError(f"{flag} is empty")
+    dup = sorted({v for v in vals if vals.count(v) > 1})
+    if dup:
+        raise VrnError(f"{flag} = {text!r} lists {dup[0]} twice; each value once")
+    for v in vals:
+        if lo is not None and not lo <= v <= hi:
+            raise VrnError(f"{flag} = {text!r}: {v} is out of range; allowed [{lo}, {hi}]")
+        if even and v % 2:
+            raise VrnError(f"{flag}: {v} must be even (2x2 blocks)")
+    return vals
+
+
+def floats(lo: float, hi: float):
+    """Items parser: comma-separated numbers in ``[lo, hi]``; empty text: none."""
+
+    def parse(flag: str, value) -> tuple[float, ...]:
+        items, text = _items(value)
+        out = []
+        for item in items if text.strip() else ():
+            try:
+                v = float(item)
+            except ValueError:
+                raise VrnError(f"{flag} = {text!r}: {item.strip()!r} is not a number") from None
+            check_range(flag, v, lo, hi)
+            out.append(v)
+        return tuple(out)
+
+    return parse
+
+
+def choices(allowed, matches=None):
+    """Items parser: comma-separated values, each one of ``allowed`` (or, with ``matches``, a
+    value it accepts: a pattern such as ``student:W``, named in ``allowed``), none twice (a
+    value named twice would be measured and reported twice), at least one."""
+
+    def parse(flag: str, value) -> tuple[str, ...]:
+        items, text = _items(value)
+        vals = tuple(t.strip() for t in items)
+        names = ", ".join(map(str, allowed))
+        if not any(vals):
+            raise VrnError(f"{flag} is empty; choose from {names}")
+        if not all(vals):
+            raise VrnError(f"{flag} = {text!r} has an empty item; choose from {names}")
+        for v in vals:
+            if not (matches and matches(v)):
+                check_choice(flag, v, allowed)
+        twice = sorted({v for v in vals if vals.count(v) > 1})
+        if twice:
+            raise VrnError(f"{flag} names {', '.join(twice)} more than once")
+        return vals
+
+    return parse
+
+
+def words(flag: str, value) -> tuple[str, ...]:
+    """Items parser: the non-empty comma-separated words (paths, names checked later)."""
+    return tuple(t.strip() for t in _items(value)[0] if t.strip())
+
+
+def listed(empty: bool = True):
+    """Items parser: comma-separated words, none of them empty; empty text: none (``empty``)."""
+
+    def parse(flag: str, value) -> tuple[str, ...]:
+        items, text = _items(value)
+        vals = tuple(t.strip() for t in items)
+        if empty and not text.strip():
+            return ()
+        if not all(vals):
+            raise VrnError(f"{flag} = {text!r} has an empty item")
+        return vals
+
+    return parse
 
 
 def part(cls):
@@ -62,6 +172,8 @@ def add_config_args(
         flag = "--" + prefix + f.name.replace("_", "-")
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
         shown = f.metadata.get("default", default)
+        if isinstance(shown, tuple):  # a list field: as it is typed
+            shown = ",".join(map(str, shown))
         tp = hints[f.name]
         if typing.get_origin(tp) in (typing.Union, types.UnionType):  # X | None -> X
             tp = next(a for a in typing.get_args(tp) if a is not type(None))

@@ -22,17 +22,26 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.bench import report as rp
-from vrneural.config import opt, resolved, unset
+from vrneural.bench.atlas_meshes import NAMES
+from vrneural.config import Config, opt, resolved, unset, words
+from vrneural.errors import VrnError
+
+
+def mesh_names(flag: str, value) -> tuple[str, ...]:
+    """``--meshes``: at least one, each one of :data:`~vrneural.bench.atlas_meshes.NAMES`."""
+    names = words(flag, value)
+    bad = [n for n in names if n not in NAMES]
+    if bad or not names:
+        raise VrnError(f"{flag}: {', '.join(bad) or '(none)'} not in {', '.join(NAMES)}")
+    return names
 
 
 @dataclass
-class AtlasBenchConfig:
+class AtlasBenchConfig(Config):
     """`vrneural bench atlas`."""
 
     out: str = opt("bench-atlas", "output directory", cli=False)
-    meshes: str = opt(
-        "ico6,ico7,torus,knot,cloth,fan,field,lightmap", "meshes to run (comma-separated)"
-    )
+    meshes: tuple[str, ...] = opt(NAMES, "meshes to run (comma-separated)", items=mesh_names)
     seams: bool = opt(True, "render each atlas (Lambertian, texture vs screen) for the seam error")
     eye: int | None = unset(384, "seam renders: image side in pixels")
     quick: bool = opt(False, "CI-sized: each mesh a few thousand triangles, 128-256^2, 128 px")
@@ -147,14 +156,9 @@ def _measure(name: str, folder: Path, quick: bool, res: int):
 
 
 def run_atlas(cfg: AtlasBenchConfig) -> dict:
-    from vrneural.bench.atlas_meshes import NAMES
-    from vrneural.errors import VrnError, check_range
+    from vrneural.errors import check_range
 
     c = cfg.resolved()
-    names = [n.strip() for n in c.meshes.split(",") if n.strip()]
-    bad = [n for n in names if n not in NAMES]
-    if bad or not names:
-        raise VrnError(f"--meshes: {', '.join(bad) or '(none)'} not in {', '.join(NAMES)}")
     check_range("--eye", c.eye, 16, 4096)
     with rp.prepare_out(cfg.out, cfg.force, "atlas") as root:
         t0 = time.perf_counter()
@@ -167,7 +171,7 @@ def run_atlas(cfg: AtlasBenchConfig) -> dict:
             try:
                 # every atlas first, each in a process forked from this small one (before any
                 # render grows it: a child's peak includes what it inherits), then the renders
-                bar = tqdm(names, desc="bench atlas", unit="mesh", disable=not c.progress)
+                bar = tqdm(c.meshes, desc="bench atlas", unit="mesh", disable=not c.progress)
                 paths = {}
                 for name in bar:
                     bar.set_postfix_str(name)

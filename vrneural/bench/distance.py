@@ -25,7 +25,7 @@ from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench import tradeoff as tr
 from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored
-from vrneural.config import opt, part, resolved, unset
+from vrneural.config import Config, floats, opt, part, resolved, unset
 from vrneural.scoring import metrics
 
 #: name -> (mips, screen_res, prefiltered neural textures)
@@ -39,12 +39,16 @@ VARIANTS = {
 
 
 @dataclass
-class DistanceConfig:
+class DistanceConfig(Config):
     """`vrneural bench distance`."""
 
     out: str = opt("bench-distance", "output directory", cli=False)
-    distances: str | None = unset("0.3,1,3,10,20", "sphere distances (m)")
-    tilings: str | None = unset("1,4,8,16", "material tilings, at 1 m")
+    distances: tuple[float, ...] | None = unset(
+        (0.3, 1, 3, 10, 20), "sphere distances (m)", items=floats(0.2, 100.0)
+    )
+    tilings: tuple[float, ...] | None = unset(
+        (1, 4, 8, 16), "material tilings, at 1 m", items=floats(0.01, 1000.0)
+    )
     size: float = opt(0.5, "sphere diameter (m)")
     texture_res: int | None = unset(
         1200, "radiance texture side (the cap screen-res chooses under)"
@@ -68,8 +72,8 @@ class DistanceConfig:
 
 #: ``--quick``: the CI-sized run, under the flags given
 QUICK_DISTANCE = DistanceConfig(
-    distances="1,10",
-    tilings="8",
+    distances=(1, 10),
+    tilings=(8,),
     score=QUICK_SCORED,
     texture_res=256,
     budget=QUICK_BUDGET,
@@ -80,10 +84,10 @@ def conditions(c: DistanceConfig) -> list[ts.Condition]:
     first = 8
     window = list(range(first, first + c.score.scored))
     out = []
-    for d in tr._floats("--distances", c.distances, 0.2, 100.0):
+    for d in c.distances:
         out.append(ts.Condition(f"{d:g} m", "distance", d, window[-1] + 1, window, d,
                                 tiling=1.0, size=c.size))  # fmt: skip
-    for t in tr._floats("--tilings", c.tilings, 0.01, 1000.0):
+    for t in c.tilings:
         out.append(ts.Condition(f"tiling {t:g}", "tiling", t, window[-1] + 1, window, 1.0,
                                 tiling=t, size=c.size))  # fmt: skip
     return out
@@ -97,10 +101,8 @@ def check(c: DistanceConfig) -> None:
     rp.check_texture_res(c.texture_res, "--texture-res")
     check_range("--reuse", c.reuse, 0, REUSE_MAX)
     c.score.check()
-    if not (c.distances.strip() or c.tilings.strip()):
+    if not (c.distances or c.tilings):
         raise VrnError("--distances and --tilings are both empty; give at least one condition")
-    tr._floats("--distances", c.distances, 0.2, 100.0)
-    tr._floats("--tilings", c.tilings, 0.01, 1000.0)
     c.budget.check([c.preset])
 
 

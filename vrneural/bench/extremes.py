@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-from vrneural.config import opt
+from vrneural.config import Config, opt
 from vrneural.errors import VrnError
 
 W, R = "works", "rejected"
@@ -92,41 +92,43 @@ CASES = [
 TESTS = Path(__file__).resolve().parents[2] / "tests" / "extremes" / "test_cases.py"
 
 
+def case_names(flag: str, value) -> tuple[str, ...]:
+    """``--only``: case names or groups of :data:`CASES`, at least one (one-line VrnError)."""
+    text = value if isinstance(value, str) else ",".join(map(str, value))
+    items = tuple(t.strip() for t in text.split(","))
+    groups = ", ".join(sorted({c[1] for c in CASES}))
+    if not all(items):
+        what = "is empty" if not any(items) else f"= {text!r} has an empty item"
+        raise VrnError(f"{flag} {what}; name cases or groups ({groups}), or leave it out")
+    bad = sorted(set(items) - {c[0] for c in CASES} - {c[1] for c in CASES})
+    if bad:
+        raise VrnError(
+            f"{flag} = {text!r}: unknown case or group {bad[0]!r}; groups: {groups}; "
+            f"cases: {', '.join(c[0] for c in CASES)}"
+        )
+    return items
+
+
 @dataclass
-class ExtremesConfig:
+class ExtremesConfig(Config):
     """``vrneural bench extremes`` settings."""
 
     quick: bool = opt(
         False, "small sizes for the heavy cases (1M triangles -> 20k, max texture -> 1024)"
     )
-    only: str | None = opt(
+    only: tuple[str, ...] | None = opt(
         None,
         "comma-separated case names or groups to run: "
         f"{', '.join(sorted({c[1] for c in CASES}))} (default: all)",
+        items=case_names,
     )
     force: bool = opt(False, "overwrite an existing --out directory")
     progress: bool = opt(True, "show a progress bar (--no-progress: none)")
 
 
-def selected(only: str, given: bool = False) -> list:
-    """The cases ``--only`` names (all of them when it is not ``given`` and empty)."""
-    if not only and not given:
-        return CASES
-    items = [t.strip() for t in only.split(",")]
-    if not all(items):
-        what = "is empty" if not any(items) else f"= {only!r} has an empty item"
-        groups = ", ".join(sorted({c[1] for c in CASES}))
-        raise VrnError(f"--only {what}; name cases or groups ({groups}), or leave it out")
-    keys = set(items)
-    known = {c[0] for c in CASES} | {c[1] for c in CASES}
-    bad = sorted(keys - known)
-    if bad:
-        groups = ", ".join(sorted({c[1] for c in CASES}))
-        raise VrnError(
-            f"--only = {only!r}: unknown case or group {bad[0]!r}; groups: {groups}; "
-            f"cases: {', '.join(c[0] for c in CASES)}"
-        )
-    return [c for c in CASES if c[0] in keys or c[1] in keys]
+def selected(only: tuple[str, ...] | None) -> list:
+    """The cases ``--only`` names (all of them when it is None)."""
+    return CASES if only is None else [c for c in CASES if c[0] in only or c[1] in only]
 
 
 class Collector:
@@ -256,7 +258,7 @@ def run_extremes(cfg: ExtremesConfig, out: str) -> dict:
     from vrneural.bench.extremes_report import write_report
     from vrneural.bench.report import header, prepare_out
 
-    cases = selected(cfg.only or "", cfg.only is not None)
+    cases = selected(cfg.only)
     pytest = find_pytest()
     with prepare_out(out, cfg.force, "extremes") as root:
         t0 = time.perf_counter()

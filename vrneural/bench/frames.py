@@ -14,20 +14,26 @@ from dataclasses import dataclass
 from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.parts import QUICK_LOOP, Loop
-from vrneural.config import opt, part, resolved, unset
+from vrneural.config import Config, choices, ints, opt, part, resolved, unset
 from vrneural.errors import count
+from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
+from vrneural.runtime.schedule import SCHEDULES
 
 
 @dataclass
-class FramesConfig:
+class FramesConfig(Config):
     """`vrneural bench frames`."""
 
     out: str = opt("bench-frames", "output directory", cli=False)
-    texture_res: str | None = unset(
-        "800,1200,1600,2000", "radiance texture sides (comma-separated)"
+    texture_res: tuple[int, ...] | None = unset(
+        (800, 1200, 1600, 2000), "radiance texture sides (comma-separated)", items=ints()
     )
-    reuse: str | None = unset("0,1,2,4,6", "update intervals N (comma-separated)")
-    schedules: str = opt("burst,staggered", "reuse schedules (comma-separated)")
+    reuse: tuple[int, ...] | None = unset(
+        (0, 1, 2, 4, 6), "update intervals N (comma-separated)", items=ints(0, REUSE_MAX)
+    )
+    schedules: tuple[str, ...] = opt(
+        ("burst", "staggered"), "reuse schedules (comma-separated)", items=choices(SCHEDULES)
+    )
     loop: Loop = part(Loop)
     lights: int = opt(1, "point lights")
     min_frames: int | None = unset(3, "at least this many measured frames per configuration")
@@ -42,19 +48,15 @@ class FramesConfig:
 
 
 #: ``--quick``: the CI-sized run, under the flags given
-QUICK_FRAMES = FramesConfig(texture_res="128,256", reuse="0,2,4", loop=QUICK_LOOP, min_frames=2)
+QUICK_FRAMES = FramesConfig(texture_res=(128, 256), reuse=(0, 2, 4), loop=QUICK_LOOP, min_frames=2)
 
 
 def run_frames(cfg: FramesConfig) -> dict:
     from vrneural.errors import check_range
-    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
     from vrneural.runtime.profiles import get_profile
-    from vrneural.runtime.schedule import SCHEDULES
 
     c = cfg.resolved()
-    texs = rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True)
-    reuses = rp.int_list("--reuse", c.reuse, 0, REUSE_MAX)
-    scheds = rp.choice_list("--schedules", c.schedules, SCHEDULES)
+    texs, reuses, scheds = rp.texture_list(c.texture_res), c.reuse, c.schedules
     eye_res = c.loop.check()
     check_range("--lights", c.lights, 1, LIGHTS_MAX)
     check_range("--min-frames", c.min_frames, 1, 1000)

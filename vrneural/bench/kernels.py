@@ -23,47 +23,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrneural.bench import report as rp
-from vrneural.config import opt, resolved, unset
+from vrneural.config import Config, choices, opt, resolved, unset
 from vrneural.errors import count
 
 #: ``*_offset``: the network with NeuMIP's neural offset module of its size (issue #44), its
 #: offset MLP per texel (``--parallax neural``, march per texel) beside the material's
 NETWORKS = ("student", "single8", "neumip", "student_offset", "neumip_offset")
 VARIANTS = ("constants", "buffer", "torch")
-
-
-@dataclass
-class KernelsConfig:
-    """`vrneural bench kernels`."""
-
-    out: str = opt("bench-kernels", "output directory", cli=False)
-    texels: int | None = unset(
-        1 << 18, "texels per evaluation (the student's coarse net runs on 1/4)"
-    )
-    repeats: int | None = unset(3, "timed repeats (median)")
-    networks: str | None = unset(
-        "student,single8,neumip",
-        "networks (comma-separated): student, single8, neumip, or student:W / single8:W (W "
-        "wide, as distill --width W)",
-    )
-    precisions: str = opt("f32,f16", "GPU precisions (f16 needs shader-f16)")
-    sgemm_n: int | None = unset(1024, "matrix side of the numpy sgemm roofline")
-    threads: int = opt(
-        0,
-        "CPU threads of PyTorch and of numpy's sgemm (0: their default, every core; 1 avoids "
-        "the oversubscription that makes both many times slower on a loaded machine)",
-    )
-    quick: bool = opt(False, "CI-sized: student and NeuMIP, 16384 texels, 2 repeats, sgemm 256")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
-
-    def resolved(self) -> KernelsConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_KERNELS`) or the defaults."""
-        return resolved(self, *([QUICK_KERNELS] if self.quick else []))
-
-
-#: ``--quick``: the CI-sized run, under the flags given
-QUICK_KERNELS = KernelsConfig(texels=16384, repeats=2, sgemm_n=256, networks="student,neumip")
 
 
 #: the networks ``--networks`` also takes at another width, ``NAME:W`` (distill --width W)
@@ -88,21 +54,58 @@ def network_width(name: str) -> tuple[str, int] | None:
     return method, int(w)
 
 
-def network_names(text: str) -> list[str]:
+def network_names(flag: str, value) -> tuple[str, ...]:
     """``--networks``: each one of :data:`NETWORKS`, ``student:W`` or ``single8:W``, none
     twice."""
     from vrneural.errors import VrnError
 
     # network_width: a pair for student(:W) and single8(:W), None otherwise, an error for a bad W
     patterns = tuple(f"{m}:W" for m in WIDENED)
-    vals = rp.choice_list("--networks", text, (*NETWORKS, *patterns), network_width)
+    vals = choices((*NETWORKS, *patterns), network_width)(flag, value)
     seen: dict = {}
     for v in vals:  # student and student:8 are one network: measured and reported twice
         key = network_width(v) or v
         if key in seen:
-            raise VrnError(f"--networks names {seen[key]} and {v}, the same network")
+            raise VrnError(f"{flag} names {seen[key]} and {v}, the same network")
         seen[key] = v
     return vals
+
+
+@dataclass
+class KernelsConfig(Config):
+    """`vrneural bench kernels`."""
+
+    out: str = opt("bench-kernels", "output directory", cli=False)
+    texels: int | None = unset(
+        1 << 18, "texels per evaluation (the student's coarse net runs on 1/4)"
+    )
+    repeats: int | None = unset(3, "timed repeats (median)")
+    networks: tuple[str, ...] | None = unset(
+        ("student", "single8", "neumip"),
+        "networks (comma-separated): student, single8, neumip, or student:W / single8:W (W "
+        "wide, as distill --width W)",
+        items=network_names,
+    )
+    precisions: tuple[str, ...] = opt(
+        ("f32", "f16"), "GPU precisions (f16 needs shader-f16)", items=choices(("f32", "f16"))
+    )
+    sgemm_n: int | None = unset(1024, "matrix side of the numpy sgemm roofline")
+    threads: int = opt(
+        0,
+        "CPU threads of PyTorch and of numpy's sgemm (0: their default, every core; 1 avoids "
+        "the oversubscription that makes both many times slower on a loaded machine)",
+    )
+    quick: bool = opt(False, "CI-sized: student and NeuMIP, 16384 texels, 2 repeats, sgemm 256")
+    progress: bool = opt(True, "show progress bars")
+    force: bool = opt(False, "overwrite an existing output directory")
+
+    def resolved(self) -> KernelsConfig:
+        """The fields not given: ``--quick``'s (:data:`QUICK_KERNELS`) or the defaults."""
+        return resolved(self, *([QUICK_KERNELS] if self.quick else []))
+
+
+#: ``--quick``: the CI-sized run, under the flags given
+QUICK_KERNELS = KernelsConfig(texels=16384, repeats=2, sgemm_n=256, networks=("student", "neumip"))
 
 
 def network(name: str):
@@ -208,10 +211,7 @@ def run_kernels(cfg: KernelsConfig) -> dict:
     check_range("--repeats", c.repeats, 1, 100)
     check_range("--sgemm-n", c.sgemm_n, 16, 8192)
     check_range("--threads", c.threads, 0, 1024)
-    nets = network_names(c.networks)
-    precs = rp.choice_list("--precisions", c.precisions, ("f32", "f16"))
-    if not precs:
-        raise VrnError("--precisions is empty; choose from f32, f16")
+    nets, precs = c.networks, c.precisions
     if "f16" in precs and not adapter_summary().features.get("shader-f16"):
         raise VrnError("--precisions: f16 needs the shader-f16 feature, which the adapter lacks")
     with rp.prepare_out(cfg.out, cfg.force, "kernels") as root:

@@ -16,16 +16,19 @@ from dataclasses import dataclass
 from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.parts import QUICK_LOOP, Loop
-from vrneural.config import opt, part, resolved, unset
+from vrneural.config import Config, ints, opt, part, resolved, unset
 from vrneural.errors import count
+from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 
 
 @dataclass
-class LightsConfig:
+class LightsConfig(Config):
     """`vrneural bench lights`."""
 
     out: str = opt("bench-lights", "output directory", cli=False)
-    lights: str | None = unset("1,2,3,4,5,6,7,8", "light counts (comma-separated, 1..64)")
+    lights: tuple[int, ...] | None = unset(
+        tuple(range(1, 9)), "light counts (comma-separated, 1..64)", items=ints(1, LIGHTS_MAX)
+    )
     texture_res: int | None = unset(1200, "radiance texture side")
     reuse: int = opt(4, "update interval N")
     schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
@@ -40,24 +43,22 @@ class LightsConfig:
 
 
 #: ``--quick``: the CI-sized run, under the flags given
-QUICK_LIGHTS = LightsConfig(lights="1,2,4", texture_res=256, loop=QUICK_LOOP)
+QUICK_LIGHTS = LightsConfig(lights=(1, 2, 4), texture_res=256, loop=QUICK_LOOP)
 
 
 def run_lights(cfg: LightsConfig) -> dict:
     from vrneural.errors import check_range
-    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 
     c = cfg.resolved()
-    counts = rp.int_list("--lights", c.lights, 1, LIGHTS_MAX)
     rp.check_texture_res(c.texture_res)
     check_range("--reuse", c.reuse, 0, REUSE_MAX)
     eye_res = c.loop.check()
     with rp.prepare_out(cfg.out, cfg.force, "lights") as root:
         t0 = time.perf_counter()
         doc = rp.header("lights", c)
-        scene = timing.bench_scene(max(8, *counts))  # light k stays put for any list up to 8
+        scene = timing.bench_scene(max(8, *c.lights))  # light k stays put for any list up to 8
         doc["records"], n = timing.count_sweep(
-            c, eye_res, counts, "bench lights", lambda k: (scene, k)
+            c, eye_res, c.lights, "bench lights", lambda k: (scene, k)
         )
         recs = doc["records"]
         # the fewest lights measured, whatever the order

@@ -13,16 +13,18 @@ from dataclasses import dataclass
 from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.parts import QUICK_LOOP, Loop
-from vrneural.config import opt, part, resolved, unset
+from vrneural.config import Config, ints, opt, part, resolved, unset
 from vrneural.errors import count
 
 
 @dataclass
-class MaterialsConfig:
+class MaterialsConfig(Config):
     """`vrneural bench materials`."""
 
     out: str = opt("bench-materials", "output directory", cli=False)
-    materials: str | None = unset("1,2,3,4", "material counts (comma-separated, 1..8)")
+    materials: tuple[int, ...] | None = unset(
+        (1, 2, 3, 4), "material counts (comma-separated, 1..8)", items=ints(1, 8)
+    )
     texture_res: int | None = unset(1024, "radiance texture side per material")
     reuse: int = opt(7, "update interval N")
     schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
@@ -38,7 +40,7 @@ class MaterialsConfig:
 
 
 #: ``--quick``: the CI-sized run, under the flags given
-QUICK_MATERIALS = MaterialsConfig(materials="1,2,3", texture_res=256, loop=QUICK_LOOP)
+QUICK_MATERIALS = MaterialsConfig(materials=(1, 2, 3), texture_res=256, loop=QUICK_LOOP)
 
 
 def squares_scene(k: int, n_lights: int):
@@ -61,7 +63,7 @@ def run_materials(cfg: MaterialsConfig) -> dict:
     from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 
     c = cfg.resolved()
-    counts = rp.int_list("--materials", c.materials, 1, 8)
+    counts = c.materials
     rp.check_texture_res(c.texture_res)
     check_range("--reuse", c.reuse, 0, REUSE_MAX)
     check_range("--lights", c.lights, 1, LIGHTS_MAX)

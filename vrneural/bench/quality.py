@@ -57,7 +57,7 @@ from vrneural.bench.quality_train import (
     wide_start_record,
     with_wide_start,
 )
-from vrneural.config import config_dict, opt, resolved, unset
+from vrneural.config import Config, config_dict, opt, resolved, unset, words
 from vrneural.distill.config import StudentShape, TrainBudget
 from vrneural.outputs import file_sha256
 from vrneural.versions import package_versions
@@ -85,19 +85,21 @@ def labels(width: int = 8) -> dict[str, str]:
 
 
 @dataclass
-class QualityConfig(TrainBudget, StudentShape):
+class QualityConfig(Config, TrainBudget, StudentShape):
     """`vrneural bench quality`: the training fields it shares with `distill` (seed, --ema,
     --lr-patience, --device, --compile, --neumip-dirs, --width, --wide-start) apply to every
     network but the teacher, as `distill` takes them."""
 
-    presets: str | None = unset(
-        "leather,fabric,wood",
+    presets: tuple[str, ...] | None = unset(
+        ("leather", "fabric", "wood"),
         "comma-separated synthetic BTF presets (none by default when --btf is given)",
+        items=words,
     )
-    btf: str = opt(
-        "",
+    btf: tuple[str, ...] = opt(
+        (),
         "comma-separated .btf files to bench beside --presets, each labelled by its file name "
         "(--res and --dirs apply to the presets only)",
+        items=words,
     )
     out: str = opt("bench-quality", "output directory", cli=False)
     res: int | None = unset(32, "BTF texels per side")
@@ -138,7 +140,7 @@ class QualityConfig(TrainBudget, StudentShape):
     def resolved(self) -> QualityConfig:
         """The fields not given: ``--quick``'s (:data:`QUICK_QUALITY`) or the defaults; no
         presets by default when ``--btf`` names files."""
-        only_btf = {"presets": ""} if any(b.strip() for b in self.btf.split(",")) else {}
+        only_btf = {"presets": ()} if self.btf else {}
         return resolved(self, *([QUICK_QUALITY] if self.quick else []), only_btf)
 
 

@@ -13,11 +13,9 @@ from vrneural.errors import VrnError
 
 
 def given_btfs(cfg) -> dict[str, Path]:
-    """``{file name: path}`` of ``cfg.btf`` (comma-separated; empty: none), in order."""
+    """``{file name: path}`` of ``cfg.btf`` (a tuple of paths; empty: none), in order."""
     out: dict[str, Path] = {}
-    for item in (s.strip() for s in (cfg.btf or "").split(",")):
-        if not item:
-            continue
+    for item in cfg.btf or ():
         p = Path(item)
         if p.name in out:
             raise VrnError(

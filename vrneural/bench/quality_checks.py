@@ -24,7 +24,7 @@ def validate(cfg) -> list[str]:
         raise VrnError("--out is empty; pass an output directory")
     check_resume_force(cfg.resume, cfg.force)
     given = check_given(cfg)
-    presets = [p.strip() for p in cfg.presets.split(",") if p.strip()]
+    presets = list(cfg.presets)
     if not presets and not given:
         raise VrnError("--presets is empty (and no --btf file given)")
     twice = sorted({p for p in presets if presets.count(p) > 1})

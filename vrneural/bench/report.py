@@ -151,28 +151,12 @@ def check_texture_res(value: int, field: str = "--texture-res") -> int:
     return value
 
 
-def int_list(field: str, text: str, lo: int, hi: int, even: bool = False) -> list[int]:
-    """Parse a comma-separated list of integers in ``[lo, hi]`` (one-line VrnError if not)."""
-    from vrneural.errors import VrnError
+def texture_list(value, field: str = "--texture-res") -> tuple[int, ...]:
+    """Radiance texture sides: each in :func:`texture_res_range` and even (one-line VrnError);
+    the adapter's bound is why a list field checks it here, not when its config is built."""
+    from vrneural.config import int_items
 
-    items = str(text).split(",")
-    if any(not t.strip() for t in items) and str(text).strip():
-        raise VrnError(f"{field} = {text!r} has an empty item; write e.g. 1,2,4")
-    try:
-        vals = [int(t) for t in items if t.strip()]
-    except ValueError:
-        raise VrnError(f"{field} = {text!r} must be comma-separated integers") from None
-    if not vals:
-        raise VrnError(f"{field} is empty")
-    dup = sorted({v for v in vals if vals.count(v) > 1})
-    if dup:
-        raise VrnError(f"{field} = {text!r} lists {dup[0]} twice; each value once")
-    for v in vals:
-        if not lo <= v <= hi:
-            raise VrnError(f"{field} = {text!r}: {v} is out of range; allowed [{lo}, {hi}]")
-        if even and v % 2:
-            raise VrnError(f"{field}: {v} must be even (2x2 blocks)")
-    return vals
+    return int_items(field, value, *texture_res_range(), even=True)
 
 
 #: under the tables of the frame benches whose FPS column is ``1000 / mean frame ms``
@@ -180,25 +164,3 @@ FPS_NOTE = (
     "FPS: 1000 / the mean frame ms (wall clock incl. GPU wait), so one slow frame lowers it; "
     "the median and p99 frame ms are beside it."
 )
-
-
-def choice_list(field: str, text: str, allowed, matches=None) -> list[str]:
-    """The comma-separated values of option ``field``, each one of ``allowed`` (or, with
-    ``matches``, a value it accepts: a pattern such as ``student:W``, named in ``allowed``),
-    none twice (a value named twice would be measured and reported twice), at least one."""
-    from vrneural.errors import VrnError, check_choice
-
-    items = [t.strip() for t in str(text).split(",")]
-    names = ", ".join(map(str, allowed))
-    if not any(items):
-        raise VrnError(f"{field} is empty; choose from {names}")
-    if not all(items):
-        raise VrnError(f"{field} = {text!r} has an empty item; choose from {names}")
-    vals = items
-    for v in vals:
-        if not (matches and matches(v)):
-            check_choice(field, v, allowed)
-    twice = sorted({v for v in vals if vals.count(v) > 1})
-    if twice:
-        raise VrnError(f"{field} names {', '.join(twice)} more than once")
-    return vals

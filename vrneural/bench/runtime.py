@@ -26,7 +26,7 @@ import numpy as np
 from tqdm import tqdm
 
 from vrneural.bench.runtime_frames import make_renderer, median_ms, schedules, wall_ms
-from vrneural.config import opt
+from vrneural.config import Config, opt, words
 
 
 def texture_vs_screen(texture_res=1200, eye_res=(2064, 2208), reuse=4, frames=3) -> dict:
@@ -326,29 +326,33 @@ HEADLINES = {
 }
 
 
-@dataclass
-class RuntimeConfig:
-    """`vrneural bench runtime`."""
-
-    only: str = opt(",".join(MEASUREMENTS), f"comma-separated subset of: {', '.join(MEASUREMENTS)}")
-    quick: bool = opt(False, "small sizes (a smoke run)")
-    force: bool = opt(False, "overwrite an existing --out directory")
-    progress: bool = opt(True, "show a progress bar (--no-progress: none)")
-
-
-def selected(only: str) -> list[str]:
+def selected(flag: str, value) -> tuple[str, ...]:
     """The measurements ``--only`` names, in its order (one-line VrnError if one is unknown)."""
     from vrneural.errors import VrnError
 
-    names = [k.strip() for k in only.split(",") if k.strip()]
+    names = words(flag, value)
     if not names:
-        raise VrnError(f"--only is empty; choose from {', '.join(MEASUREMENTS)}")
+        raise VrnError(f"{flag} is empty; choose from {', '.join(MEASUREMENTS)}")
     for k in names:
         if k not in MEASUREMENTS:
             raise VrnError(
-                f"--only: unknown measurement {k!r}; choose from {', '.join(MEASUREMENTS)}"
+                f"{flag}: unknown measurement {k!r}; choose from {', '.join(MEASUREMENTS)}"
             )
     return names
+
+
+@dataclass
+class RuntimeConfig(Config):
+    """`vrneural bench runtime`."""
+
+    only: tuple[str, ...] = opt(
+        tuple(MEASUREMENTS),
+        f"comma-separated subset of: {', '.join(MEASUREMENTS)}",
+        items=selected,
+    )
+    quick: bool = opt(False, "small sizes (a smoke run)")
+    force: bool = opt(False, "overwrite an existing --out directory")
+    progress: bool = opt(True, "show a progress bar (--no-progress: none)")
 
 
 def measure_all(quick: bool = False, only: list[str] | None = None, progress: bool = False):
@@ -380,7 +384,7 @@ def run_runtime(cfg: RuntimeConfig, out: str) -> dict:
     target, seconds) and ``results.md`` into ``out``; returns the document."""
     from vrneural.bench.report import adapter_line, finish, header, prepare_out, table
 
-    names = selected(cfg.only)
+    names = cfg.only
     with prepare_out(out, cfg.force, "runtime") as root:
         t0 = time.perf_counter()
         doc = header("runtime", cfg)

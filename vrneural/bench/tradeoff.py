@@ -31,41 +31,57 @@ from vrneural.bench import trade_scene as ts
 from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored
 from vrneural.bench.trade_scene import reference, render, scheduled_candidates
 from vrneural.bench.tradeoff_report import finish_report, label
-from vrneural.config import opt, part, resolved, unset
+from vrneural.config import Config, floats, ints, listed, opt, part, resolved, unset
+from vrneural.runtime.config import REUSE_MAX
 from vrneural.scoring import metrics
 
 
 @dataclass
-class TradeoffConfig:
+class TradeoffConfig(Config):
     """`vrneural bench tradeoff`."""
 
     out: str = opt("bench-tradeoff", "output directory", cli=False)
     score: Scored = part(Scored)
-    speeds: str | None = unset("0,100,200,300,400", "head-turn speeds (deg/s) of the built-in logs")
+    speeds: tuple[float, ...] | None = unset(
+        (0, 100, 200, 300, 400),
+        "head-turn speeds (deg/s) of the built-in logs",
+        items=floats(0.0, 2000.0),
+    )
     turn: float = opt(30.0, "yaw of each built-in head turn, degrees")
     near: float = opt(0.5, "distance (m) of the sphere in the head-turn conditions (arm's length)")
-    poses: str = opt("", "more pose logs (CSV: t,x,y,z,qx,qy,qz,qw) scored as conditions")
+    poses: tuple[str, ...] = opt(
+        (), "more pose logs (CSV: t,x,y,z,qx,qy,qz,qw) scored as conditions", items=listed()
+    )
     light_speed: float | None = unset(
         120.0, "the moving light's speed about the sphere, deg/s (0: none)"
     )
-    distances: str | None = unset(
-        "", "sphere distances (m) of a distance sweep (default none: `bench distance` has it)"
+    distances: tuple[float, ...] | None = unset(
+        (),
+        "sphere distances (m) of a distance sweep (default none: `bench distance` has it)",
+        items=floats(0.2, 100.0),
     )
-    tilings: str | None = unset(
-        "", "material tilings of a tiling sweep (default none: `bench distance`)"
+    tilings: tuple[float, ...] | None = unset(
+        (),
+        "material tilings of a tiling sweep (default none: `bench distance`)",
+        items=floats(0.01, 1000.0),
     )
-    texture_res: str | None = unset("256,512,1024", "texture sides compared")
+    texture_res: tuple[int, ...] | None = unset(
+        (256, 512, 1024), "texture sides compared", items=ints()
+    )
     base_res: int | None = unset(
         512, "texture side of the base setting (the sphere is ~105 px across)"
     )
-    reuse: str | None = unset("0,2,4,8", "update intervals N compared")
+    reuse: tuple[int, ...] | None = unset(
+        (0, 2, 4, 8), "update intervals N compared", items=ints(0, REUSE_MAX)
+    )
     base_reuse: int = opt(4, "N of the base setting")
     lights: int = opt(2, "point lights (the key light moves in the moving-light condition)")
-    presets: str | None = unset(
-        "leather,metal",
+    presets: tuple[str, ...] | None = unset(
+        ("leather", "metal"),
         "synthetic BTF presets of the trained packs: the first for every condition, the others "
         "(glossy metal: staleness and eye disparity show on highlights) for the base and the "
         "fastest turn",
+        items=listed(empty=False),
     )
     budget: PackBudget = part(PackBudget)
     packs: str | None = opt(
@@ -89,14 +105,14 @@ class TradeoffConfig:
 #: ``--quick``: the CI-sized run, under the flags given
 QUICK_TRADEOFF = TradeoffConfig(
     score=QUICK_SCORED,
-    speeds="0,300",
+    speeds=(0, 300),
     light_speed=0.0,
-    distances="",
-    tilings="",
-    texture_res="128,256",
+    distances=(),
+    tilings=(),
+    texture_res=(128, 256),
     base_res=256,
-    reuse="0,4",
-    presets="leather",
+    reuse=(0, 4),
+    presets=("leather",),
     budget=QUICK_BUDGET,
 )
 
@@ -124,16 +140,12 @@ def variant(knob="base", value="-", **kw) -> dict:
 def variants_for(c, cond: ts.Condition, nets, has_f16: bool, budget: float | None) -> list:
     """The variants scored under ``cond`` (the first is N = 0: the reuse error's reference;
     the second the base)."""
-    res_list = rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True)
-    from vrneural.runtime.config import REUSE_MAX
-
-    reuses = rp.int_list("--reuse", c.reuse, 0, REUSE_MAX)
     out = [variant("reuse", 0, reuse=0), variant()]
-    reuse_rows = [variant("reuse", n, reuse=n) for n in reuses if n not in (0, c.base_reuse)]
+    reuse_rows = [variant("reuse", n, reuse=n) for n in c.reuse if n not in (0, c.base_reuse)]
     burst = variant("schedule", "burst", schedule="burst")
     shared = variant("radiance", "shared", radiance="shared")
     auto = [variant("reuse", "auto", budget=budget)] if budget else []
-    res_rows = [variant("texture_res", t, texture_res=t) for t in res_list if t != c.base_res]
+    res_rows = [variant("texture_res", t, texture_res=t) for t in c.texture_res if t != c.base_res]
     if cond.family in ("rest", "turn", "log"):
         return out + reuse_rows + [burst, shared, *auto]
     if cond.family == "light":
@@ -149,16 +161,12 @@ def variants_for(c, cond: ts.Condition, nets, has_f16: bool, budget: float | Non
 
 
 def conditions(c, fps: float, d: Path) -> list[ts.Condition]:
-    from vrneural.errors import VrnError
 
     d.mkdir(parents=True, exist_ok=True)
     out = []
-    speeds = _floats("--speeds", c.speeds, 0.0, 2000.0)
-    for v in speeds:
+    for v in c.speeds:
         out.append(ts.turn_condition(v, c.turn, fps, c.score.scored, d, c.near))
-    for p in [x.strip() for x in c.poses.split(",")] if c.poses.strip() else []:
-        if not p:
-            raise VrnError(f"--poses = {c.poses!r} has an empty item")
+    for p in c.poses:
         out.append(ts.log_condition(Path(p), fps, c.score.scored, c.near))
     first = 8  # frames before scoring: every staggered phase of N <= 7 has run once
     window = list(range(first, first + c.score.scored))
@@ -171,26 +179,10 @@ def conditions(c, fps: float, d: Path) -> list[ts.Condition]:
                 light_speed=c.light_speed,
             )
         )  # fmt: skip
-    for dist in _floats("--distances", c.distances, 0.2, 100.0):
+    for dist in c.distances:
         out.append(ts.Condition(f"distance {dist:g} m", "distance", dist, frames, window, dist))
-    for t in _floats("--tilings", c.tilings, 0.01, 1000.0):
+    for t in c.tilings:
         out.append(ts.Condition(f"tiling {t:g}", "tiling", t, frames, window, tiling=t))
-    return out
-
-
-def _floats(field: str, text: str, lo: float, hi: float) -> list[float]:
-    from vrneural.errors import VrnError, check_range
-
-    if not text.strip():
-        return []
-    out = []
-    for item in text.split(","):
-        try:
-            v = float(item)
-        except ValueError:
-            raise VrnError(f"{field} = {text!r}: {item.strip()!r} is not a number") from None
-        check_range(field, v, lo, hi)
-        out.append(v)
     return out
 
 
@@ -344,15 +336,10 @@ def check(c) -> None:
     check_range("--light-speed", c.light_speed, 0.0, 3600.0)
     rp.check_texture_res(c.base_res, "--base-res")
     check_range("--base-reuse", c.base_reuse, 0, REUSE_MAX)
-    rp.int_list("--texture-res", c.texture_res, *rp.texture_res_range(), even=True)
-    rp.int_list("--reuse", c.reuse, 0, REUSE_MAX)
-    for field, text, lo, hi in (("--speeds", c.speeds, 0.0, 2000.0),
-                                ("--distances", c.distances, 0.2, 100.0),
-                                ("--tilings", c.tilings, 0.01, 1000.0)):  # fmt: skip
-        _floats(field, text, lo, hi)
-    if not c.speeds.strip():
+    rp.texture_list(c.texture_res)
+    if not c.speeds:
         raise VrnError("--speeds is empty; give at least one turn speed (0 = at rest)")
-    for p in [x.strip() for x in c.poses.split(",")] if c.poses.strip() else []:
+    for p in c.poses:
         from vrneural.runtime.camera import PoseLogPath
 
         PoseLogPath(p)  # its one-line errors: missing, columns, time order, quaternion
@@ -363,10 +350,7 @@ def check(c) -> None:
 
         load_packs(pack_paths(c.packs))
     else:
-        presets = [p.strip() for p in c.presets.split(",")]
-        if not all(presets):
-            raise VrnError(f"--presets = {c.presets!r} has an empty item")
-        c.budget.check(presets, "--presets")
+        c.budget.check(list(c.presets), "--presets")
 
 
 def load_materials(c, root: Path) -> dict:
@@ -376,7 +360,7 @@ def load_materials(c, root: Path) -> dict:
     if c.packs:
         return {Path(c.packs).name: load_packs(pack_paths(c.packs))}
     out = {}
-    for i, preset in enumerate(p.strip() for p in c.presets.split(",")):
+    for i, preset in enumerate(c.presets):
         budget = c.budget.of(preset)
         d = root / "packs" / (preset if i else "")  # the first where earlier releases kept it
         only = None if i == 0 else ("student",)  # other presets: teacher and student

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from vrneural.bench.widths_report import METHODS, STARTS, within, write_report
 from vrneural.btf.presets import PRESETS
-from vrneural.config import config_dict, opt, resolved, unset
+from vrneural.config import Config, choices, config_dict, ints, opt, resolved, unset
 from vrneural.distill.config import COMPILE_MODES
 from vrneural.errors import VrnError, check_range, check_seed
 from vrneural.versions import package_versions
@@ -40,7 +40,7 @@ MAX_WIDE = 32
 
 
 @dataclass
-class WidthsConfig:
+class WidthsConfig(Config):
     """`vrneural bench widths`."""
 
     preset: str = opt(
@@ -53,20 +53,24 @@ class WidthsConfig:
     epochs: int | None = unset(
         24, "epochs of every other network (a wide start takes half of them)"
     )
-    widths: str | None = unset(
-        "4,8,12,16", "comma-separated hidden widths W, each in [1, 64] (at most 32 with wide)"
+    widths: tuple[int, ...] | None = unset(
+        (4, 8, 12, 16),
+        "comma-separated hidden widths W, each in [1, 64] (at most 32 with wide)",
+        items=ints(1, 64),
     )
-    methods: str = opt(
-        "student",
+    methods: tuple[str, ...] = opt(
+        ("student",),
         "comma-separated networks trained at every width: student (coarse-to-fine, "
         "distilled), student_nodistill (on ground truth alone), single8 (the single-level "
         "4-layer net, W wide; distill --method single8 --width W); NeuMIP (4 x 25) is always "
         "trained as the reference",
+        items=choices(list(METHODS)),
     )
-    starts: str = opt(
-        "plain,wide",
+    starts: tuple[str, ...] = opt(
+        ("plain", "wide"),
         "comma-separated: plain (from random weights), wide (2W wide for epochs // 2, then "
         "pruned to W for the rest: distill --wide-start 2W)",
+        items=choices(list(STARTS)),
     )
     seed: int = opt(0, "seed of synthesis, initialisation and data order")
     repeats: int | None = unset(3, "seeds of every network but the teacher (seed, seed+1, ...)")
@@ -94,7 +98,7 @@ class WidthsConfig:
 
 
 #: ``--quick``: the CI-sized run, under the flags given
-QUICK_WIDTHS = WidthsConfig(res=16, dirs=8, teacher_epochs=2, epochs=2, widths="4,8", repeats=1)
+QUICK_WIDTHS = WidthsConfig(res=16, dirs=8, teacher_epochs=2, epochs=2, widths=(4, 8), repeats=1)
 
 
 @dataclass(frozen=True)
@@ -102,24 +106,21 @@ class Plan:
     """What one run trains: the parsed lists, and the `bench quality` config its shared
     stages (BTF, teacher, one network) take."""
 
-    widths: list[int]
-    methods: list[str]
-    starts: list[str]
+    widths: tuple[int, ...]
+    methods: tuple[str, ...]
+    starts: tuple[str, ...]
     quality: object
 
 
 def validate(cfg: WidthsConfig) -> Plan:
     """Every option, before anything is synthesised, trained or written."""
-    from vrneural.bench import report as rp
     from vrneural.bench.quality import QualityConfig
     from vrneural.bench.quality_checks import validate as quality_validate
     from vrneural.btf.synth import BtfConfig
 
     check_seed("--seed", cfg.seed)
     BtfConfig(preset=cfg.preset).validate({"preset": "--preset"})  # one preset, as it is
-    widths = sorted(rp.int_list("--widths", cfg.widths, 1, 64))
-    methods = rp.choice_list("--methods", cfg.methods, list(METHODS))
-    starts = rp.choice_list("--starts", cfg.starts, list(STARTS))
+    widths, methods, starts = tuple(sorted(cfg.widths)), cfg.methods, cfg.starts
     if "wide" in starts:
         too = [w for w in widths if w > MAX_WIDE]
         if too:
@@ -134,7 +135,7 @@ def validate(cfg: WidthsConfig) -> Plan:
             )
     check_range("--repeats", cfg.repeats, 1, 100)
     q = QualityConfig(
-        presets=cfg.preset,
+        presets=(cfg.preset,),
         out=cfg.out,
         res=cfg.res,
         dirs=cfg.dirs,
@@ -168,7 +169,7 @@ def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = T
     from vrneural.outputs import file_sha256
 
     q = plan.quality
-    d = root / q.presets
+    d = root / q.presets[0]
     tsha = file_sha256(d / "teacher.pt") if check_teacher else None
     out = []
     for seed in range(q.seed, q.seed + q.repeats):
@@ -235,7 +236,7 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
     from vrneural.btf.format import read_btf
     from vrneural.btf.identity import btf_fingerprint
 
-    q, preset = plan.quality, plan.quality.presets
+    q, preset = plan.quality, plan.quality.presets[0]
     (root / preset).mkdir(parents=True, exist_ok=True)
     btf_path = make_btf(preset, q, root / "btf" / f"{preset}.btf")
     sha = btf_fingerprint(read_btf(btf_path))["sha256"]

@@ -49,12 +49,8 @@ def _family(rows: dict, method: str, start: str) -> list[dict]:
 def families(doc: dict) -> list[tuple[str, str]]:
     """``(method, start)`` of every family of networks swept over the widths, in the order
     the config names them."""
-
-    def items(text: str) -> list[str]:
-        return [v.strip() for v in text.split(",") if v.strip()]
-
     cfg = doc["config"]
-    return [(m, s) for m in items(cfg["methods"]) for s in items(cfg["starts"])]
+    return [(m, s) for m in cfg["methods"] for s in cfg["starts"]]
 
 
 def markdown(doc: dict) -> str:
