@@ -47,22 +47,27 @@ fn shade_block(k: u32) -> vec4<u32> {
     }
     let q01 = geo_uv01[k];
     let q23 = geo_uv23[k];
-{% if (mat.parallax_steps > 0 or mat.offset_net) and mat.parallax_march == 'auto' %}
-    // march "auto" (height-field parallax or neural offset): once per block where the block
-    // spans at most one texel of the march's grid (an atlas texel at most {{ auto_foot }} of
-    // them), else per texel (twin: parallax.auto_blocks, parallax_uv / offset_uv)
+{% if mat.parallax_steps > 0 or mat.offset_net %}
+    // lookups that move along this eye's (extended) view, as the networks see it: where the
+    // view ray meets the height field (neural_material.parallax_z), or by NeuMIP's offset
+    // MLP's depth at the unmoved uv (offset_r, offset_d); per texel, once per block at the
+    // texels' mean, or "auto" (twins: parallax.parallax_uv, neural_offset.offset_uv)
     let t0 = tiled(q01.xy);
     let t1 = tiled(q01.zw);
     let t2 = tiled(q23.xy);
     let t3 = tiled(q23.zw);
 {% if mat.parallax_steps > 0 %}
     let pd = parallax_d(view_ext(wo));
+{% set moved = 'parallax_z(%s, pd) * pd' %}
 {% else %}
     let ow = view_ext(wo);
     let od = offset_d(ow);
+{% set moved = 'offset_r(%s, ow) * od' %}
 {% endif %}
-    // one march in a loop run once (per block, at the block's mean) or 4 times (per texel):
-    // a single copy of the march in the kernel (a copy per route made it 25% slower)
+{% if mat.parallax_march == 'auto' %}
+    // once per block where the block spans at most one texel of the march's grid (an atlas
+    // texel at most {{ auto_foot }} of them), else per texel (parallax.auto_blocks): one march
+    // in a loop run once or 4 times (a copy of the march per route made it 25% slower)
     let once = geo_tan[k].w * max(P.tiling.x, P.tiling.y) * {{ march_side }} <= {{ auto_foot }};
     let tc = (t0 + t1 + t2 + t3) * 0.25;
     var s0 = vec2<f32>(0.0);
@@ -71,63 +76,26 @@ fn shade_block(k: u32) -> vec4<u32> {
     var s3 = vec2<f32>(0.0);
     for (var i = 0u; i < select(4u, 1u, once); i = i + 1u) {
         let q = select(select(select(select(t3, t2, i == 2u), t1, i == 1u), t0, i == 0u), tc, once);
-{% if mat.parallax_steps > 0 %}
-        let s = parallax_z(q, pd) * pd;
-{% else %}
-        let s = offset_r(q, ow) * od;
-{% endif %}
+        let s = {{ moved % 'q' }};
         s0 = select(s0, s, once || i == 0u);
         s1 = select(s1, s, once || i == 1u);
         s2 = select(s2, s, once || i == 2u);
         s3 = select(s3, s, once || i == 3u);
     }
+{% elif mat.parallax_march == 'block' %}
+    let shift = {{ moved % '(t0 + t1 + t2 + t3) * 0.25' }};
+{% for i in range(4) %}
+    let s{{ i }} = shift;
+{% endfor %}
+{% else %}
+{% for i in range(4) %}
+    let s{{ i }} = {{ moved % ('t%d' % i) }};
+{% endfor %}
+{% endif %}
     let uv0 = t0 + s0;
     let uv1 = t1 + s1;
     let uv2 = t2 + s2;
     let uv3 = t3 + s3;
-{% elif mat.parallax_steps > 0 %}
-    // height-field parallax: each texel's lookups where this eye's view ray meets the height
-    // field (the extended view, as the networks see it; neural_material.parallax_uv)
-    let pd = parallax_d(view_ext(wo));
-{% if mat.parallax_march == 'block' %}
-    // once per block, at the texels' mean (parallax.parallax_uv, march "block")
-    let t0 = tiled(q01.xy);
-    let t1 = tiled(q01.zw);
-    let t2 = tiled(q23.xy);
-    let t3 = tiled(q23.zw);
-    let shift = parallax_z((t0 + t1 + t2 + t3) * 0.25, pd) * pd;
-    let uv0 = t0 + shift;
-    let uv1 = t1 + shift;
-    let uv2 = t2 + shift;
-    let uv3 = t3 + shift;
-{% else %}
-    let uv0 = parallax_uv(tiled(q01.xy), pd);
-    let uv1 = parallax_uv(tiled(q01.zw), pd);
-    let uv2 = parallax_uv(tiled(q23.xy), pd);
-    let uv3 = parallax_uv(tiled(q23.zw), pd);
-{% endif %}
-{% elif mat.offset_net %}
-    // NeuMIP's neural offset: each texel's lookups moved along this eye's (extended) view by
-    // the offset MLP's depth at the unmoved uv (neural_material offset_r, offset_d)
-    let ow = view_ext(wo);
-    let od = offset_d(ow);
-    let t0 = tiled(q01.xy);
-    let t1 = tiled(q01.zw);
-    let t2 = tiled(q23.xy);
-    let t3 = tiled(q23.zw);
-{% if mat.parallax_march == 'block' %}
-    // once per block, at the texels' mean (neural_offset.offset_uv, march "block")
-    let shift = offset_r((t0 + t1 + t2 + t3) * 0.25, ow) * od;
-    let uv0 = t0 + shift;
-    let uv1 = t1 + shift;
-    let uv2 = t2 + shift;
-    let uv3 = t3 + shift;
-{% else %}
-    let uv0 = t0 + offset_r(t0, ow) * od;
-    let uv1 = t1 + offset_r(t1, ow) * od;
-    let uv2 = t2 + offset_r(t2, ow) * od;
-    let uv3 = t3 + offset_r(t3, ow) * od;
-{% endif %}
 {% else %}
     let uv0 = tiled(q01.xy);
     let uv1 = tiled(q01.zw);
