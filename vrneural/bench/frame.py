@@ -226,10 +226,9 @@ def run_frame(cfg: FrameConfig) -> dict:
             for march in MARCHES:  # the render's march (--parallax-march)
                 rr = _renderer(timing.bench_scene(c.lights, mats), c, eye_res, "hdr", march=march)
                 par[kind, march] = rr
-            doc.setdefault("auto_block_share", {})[kind] = timing.auto_block_share(rr)
-            doc["auto_block_share_by_side"] = {  # the same scene with larger materials
-                side: timing.auto_block_share(rr, side) for side in (16, 32, 64, 128, 256)
-            }
+            own, by_side = timing.auto_block_shares(rr, (16, 32, 64, 128, 256))
+            doc.setdefault("auto_block_share", {})[kind] = own
+            doc["auto_block_share_by_side"] = by_side  # the same scene with larger materials
         floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_constant", "fs_floor_sample")}
         n1 = c.reuse + 1
         bar = timing.progress(c.rounds, "bench frame (rounds)", c.progress)

@@ -232,23 +232,29 @@ def offset_materials(seeds=(3, 4), tex_res: int = 16, march: str = "texel"):
     return out
 
 
-def auto_block_share(r, side: int | None = None) -> float:
+def auto_block_shares(r, sides=()) -> tuple[float, dict]:
     """The share of renderer ``r``'s texture-space blocks (over its neural objects with
     parallax) that march ``"auto"`` runs once per block (:func:`vrneural.parallax.auto_blocks`
-    at each object's atlas and tiling), for the materials' own march grids or, with ``side``,
-    for a grid of ``side^2`` texels (what a larger material would get)."""
+    at each object's atlas and tiling) for the materials' own march grids, and ``{side:
+    share}`` for grids of ``side^2`` texels (what larger materials would get); each object's
+    block footprints computed once."""
     import numpy as np
 
     from vrneural.parallax import auto_blocks
     from vrneural.runtime.reference import block_geometry
 
-    hits = []
+    feet = []  # (footprints [N], the material's march grid)
     for o in r.neural:
         mat = o.desc.material.neural
         if mat is not None and mat.parallax_kind != "off":
             foot = block_geometry(o.atlas)["foot"] * np.float32(o.desc.material.tiling)
-            hits.append(auto_blocks(foot, (side, side) if side else mat.march_grid))
-    return float(np.concatenate(hits).mean()) if hits else 0.0
+            feet.append((foot, mat.march_grid))
+
+    def share(side: int | None) -> float:
+        hits = [auto_blocks(f, (side, side) if side else grid) for f, grid in feet]
+        return float(np.concatenate(hits).mean()) if hits else 0.0
+
+    return share(None), {side: share(side) for side in sides}
 
 
 def bench_scene(n_lights: int, materials=None):
