@@ -461,3 +461,17 @@ def test_bench_quality_resume_takes_a_teacher_trained_without_its_pack(tmp_path)
         json.loads((d / "results.json").read_text())["results"]["leather"] for d in (out, fresh)
     )
     assert a["methods"]["student"]["whole_l1"] == b["methods"]["student"]["whole_l1"]
+
+
+def test_bench_quality_help_words_shared_fields_for_the_bench(capsys):
+    """The fields bench quality shares with distill (TrainBudget, StudentShape) are declared
+    once, but its --help speaks of the bench's networks, not of distill's output file."""
+    from vrneural.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["bench", "quality", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "<output>.wide.pt" not in text
+    assert "--wide-start WIDE_START train the single-level net and both students" in text
+    assert "--ema EMA weight-average decay of every network but the teacher" in text
+    assert "--width WIDTH hidden width of the single-level net and both students" in text

@@ -15,7 +15,23 @@ from vrneural.config import config_from_args
 def _register_quality(sub) -> None:
     from vrneural.bench.quality import QualityConfig
 
-    seed = "seed of synthesis, initialisation, data order and texture-lookup jitter"
+    every = "of every network but the teacher"
+    helps = {  # the bench's own words for the fields it shares with distill (TrainBudget, ...)
+        "seed": "seed of synthesis, initialisation, data order and texture-lookup jitter",
+        "ema": f"weight-average decay {every} (distill --ema; 0 = off)",
+        "lr_patience": f"ReduceLROnPlateau patience {every} (distill --lr-patience; see "
+        "docs/quality-research.md on a gentler schedule)",
+        "device": "train on cpu, cuda or cuda:N (teach/distill --device)",
+        "compile": "torch.compile the networks: off, default or reduce-overhead "
+        "(teach/distill --compile)",
+        "neumip_dirs": "NeuMIP's direction inputs: xy (NeuMIP's own) or full (wi, wo, h, as "
+        "the student)",
+        "width": "hidden width of the single-level net and both students (distill --width; "
+        "the paper's 8; see the width sweep in docs/quality-research.md)",
+        "wide_start": "train the single-level net and both students this wide for the first "
+        "half of --epochs, then prune them to --width for the rest (distill --wide-start; "
+        "0 = off, from random weights)",
+    }
     add_bench(
         sub,
         "quality",
@@ -25,7 +41,7 @@ def _register_quality(sub) -> None:
         "Synthesise each preset's BTF, train the teacher and the five methods "
         "(Lafortune, NeuMIP, single-level 8-wide, student without and with distillation) at "
         "one fixed budget, and write results.json, results.md, curves.png and slices.png.",
-        helps={"seed": seed},  # (the BTFs' too: its own help)
+        helps=helps,
     )
 
 
