@@ -131,11 +131,11 @@ def test_stats_percentiles():
 
 
 def test_quick_keeps_explicit_flags():
-    from vrneural.bench.frames import QUICK_FRAMES, FramesConfig
+    from vrneural.bench.frames import FramesConfig
     from vrneural.bench.quality import QualityConfig
 
     c = FramesConfig(quick=True, texture_res="64").resolved()
-    assert c.texture_res == (64,) and c.reuse == QUICK_FRAMES.reuse == (0, 2, 4)  # given: kept
+    assert c.texture_res == (64,) and c.reuse == FramesConfig.QUICK.reuse == (0, 2, 4)  # given
     q = QualityConfig(quick=True, epochs=3).resolved()
     assert (q.epochs, q.res, q.teacher_epochs) == (3, 16, 2)
     assert FramesConfig(texture_res="64").resolved().reuse == FramesConfig().resolved().reuse

@@ -40,6 +40,17 @@ class Config:
                 object.__setattr__(self, f.name, parse("--" + f.name.replace("_", "-"), v))
 
 
+class QuickConfig(Config):
+    """Base of the bench configs with a ``quick`` field: their preset ``QUICK`` (an instance,
+    set beside the class: the CI-sized run) applies under the flags given."""
+
+    QUICK = None
+
+    def resolved(self, *layers):
+        """The fields not given: ``--quick``'s (``QUICK``), then ``layers``', or the defaults."""
+        return resolved(self, *([self.QUICK] if self.quick else []), *layers)
+
+
 def _items(value) -> tuple[list[str], str]:
     """The items of a list field's value (comma-separated text or a sequence), and its text."""
     if isinstance(value, str):

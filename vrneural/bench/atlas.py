@@ -23,7 +23,7 @@ import numpy as np
 
 from vrneural.bench import report as rp
 from vrneural.bench.atlas_meshes import NAMES
-from vrneural.config import Config, opt, resolved, unset, words
+from vrneural.config import QuickConfig, opt, unset, words
 from vrneural.errors import VrnError
 
 
@@ -37,7 +37,7 @@ def mesh_names(flag: str, value) -> tuple[str, ...]:
 
 
 @dataclass
-class AtlasBenchConfig(Config):
+class AtlasBenchConfig(QuickConfig):
     """`vrneural bench atlas`."""
 
     out: str = opt("bench-atlas", "output directory", cli=False)
@@ -48,13 +48,8 @@ class AtlasBenchConfig(Config):
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
-    def resolved(self) -> AtlasBenchConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_ATLAS_BENCH`) or the defaults."""
-        return resolved(self, *([QUICK_ATLAS_BENCH] if self.quick else []))
 
-
-#: ``--quick``: the CI-sized run, under the flags given
-QUICK_ATLAS_BENCH = AtlasBenchConfig(eye=128)
+AtlasBenchConfig.QUICK = AtlasBenchConfig(eye=128)
 
 
 def _resolution(name: str, quick: bool) -> int:

@@ -35,7 +35,7 @@ import numpy as np
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.config import opt, resolved, unset
+from vrneural.config import QuickConfig, opt, unset
 
 #: the texture-space pass's marches each parallax kind is timed with (``--parallax-march``)
 MARCHES = ("texel", "block", "auto")
@@ -50,7 +50,7 @@ TARGETS = {
 
 
 @dataclass
-class FrameConfig:
+class FrameConfig(QuickConfig):
     """`vrneural bench frame`."""
 
     out: str = opt("bench-frame", "output directory", cli=False)
@@ -75,13 +75,8 @@ class FrameConfig:
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
-    def resolved(self) -> FrameConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_FRAME`) or the defaults."""
-        return resolved(self, *([QUICK_FRAME] if self.quick else []))
 
-
-#: ``--quick``: the CI-sized run, under the flags given
-QUICK_FRAME = FrameConfig(texture_res=128, eye_res="96x96", frames=6, repeats=2, rounds=2)
+FrameConfig.QUICK = FrameConfig(texture_res=128, eye_res="96x96", frames=6, repeats=2, rounds=2)
 
 
 def _wait(r) -> None:

@@ -14,14 +14,14 @@ from dataclasses import dataclass
 from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.parts import QUICK_LOOP, Loop
-from vrneural.config import Config, choices, ints, opt, part, resolved, unset
+from vrneural.config import QuickConfig, choices, ints, opt, part, unset
 from vrneural.errors import count
 from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 from vrneural.runtime.schedule import SCHEDULES
 
 
 @dataclass
-class FramesConfig(Config):
+class FramesConfig(QuickConfig):
     """`vrneural bench frames`."""
 
     out: str = opt("bench-frames", "output directory", cli=False)
@@ -42,13 +42,10 @@ class FramesConfig(Config):
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
-    def resolved(self) -> FramesConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_FRAMES`) or the defaults."""
-        return resolved(self, *([QUICK_FRAMES] if self.quick else []))
 
-
-#: ``--quick``: the CI-sized run, under the flags given
-QUICK_FRAMES = FramesConfig(texture_res=(128, 256), reuse=(0, 2, 4), loop=QUICK_LOOP, min_frames=2)
+FramesConfig.QUICK = FramesConfig(
+    texture_res=(128, 256), reuse=(0, 2, 4), loop=QUICK_LOOP, min_frames=2
+)
 
 
 def run_frames(cfg: FramesConfig) -> dict:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrneural.bench import report as rp
-from vrneural.config import Config, choices, opt, resolved, unset
+from vrneural.config import QuickConfig, choices, opt, unset
 from vrneural.errors import count
 
 #: ``*_offset``: the network with NeuMIP's neural offset module of its size (issue #44), its
@@ -72,7 +72,7 @@ def network_names(flag: str, value) -> tuple[str, ...]:
 
 
 @dataclass
-class KernelsConfig(Config):
+class KernelsConfig(QuickConfig):
     """`vrneural bench kernels`."""
 
     out: str = opt("bench-kernels", "output directory", cli=False)
@@ -99,13 +99,10 @@ class KernelsConfig(Config):
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
-    def resolved(self) -> KernelsConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_KERNELS`) or the defaults."""
-        return resolved(self, *([QUICK_KERNELS] if self.quick else []))
 
-
-#: ``--quick``: the CI-sized run, under the flags given
-QUICK_KERNELS = KernelsConfig(texels=16384, repeats=2, sgemm_n=256, networks=("student", "neumip"))
+KernelsConfig.QUICK = KernelsConfig(
+    texels=16384, repeats=2, sgemm_n=256, networks=("student", "neumip")
+)
 
 
 def network(name: str):

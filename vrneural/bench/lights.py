@@ -16,13 +16,13 @@ from dataclasses import dataclass
 from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.parts import QUICK_LOOP, Loop
-from vrneural.config import Config, ints, opt, part, resolved, unset
+from vrneural.config import QuickConfig, ints, opt, part, unset
 from vrneural.errors import count
 from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 
 
 @dataclass
-class LightsConfig(Config):
+class LightsConfig(QuickConfig):
     """`vrneural bench lights`."""
 
     out: str = opt("bench-lights", "output directory", cli=False)
@@ -37,13 +37,8 @@ class LightsConfig(Config):
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
-    def resolved(self) -> LightsConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_LIGHTS`) or the defaults."""
-        return resolved(self, *([QUICK_LIGHTS] if self.quick else []))
 
-
-#: ``--quick``: the CI-sized run, under the flags given
-QUICK_LIGHTS = LightsConfig(lights=(1, 2, 4), texture_res=256, loop=QUICK_LOOP)
+LightsConfig.QUICK = LightsConfig(lights=(1, 2, 4), texture_res=256, loop=QUICK_LOOP)
 
 
 def run_lights(cfg: LightsConfig) -> dict:

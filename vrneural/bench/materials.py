@@ -13,12 +13,12 @@ from dataclasses import dataclass
 from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.parts import QUICK_LOOP, Loop
-from vrneural.config import Config, ints, opt, part, resolved, unset
+from vrneural.config import QuickConfig, ints, opt, part, unset
 from vrneural.errors import count
 
 
 @dataclass
-class MaterialsConfig(Config):
+class MaterialsConfig(QuickConfig):
     """`vrneural bench materials`."""
 
     out: str = opt("bench-materials", "output directory", cli=False)
@@ -34,13 +34,8 @@ class MaterialsConfig(Config):
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
-    def resolved(self) -> MaterialsConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_MATERIALS`) or the defaults."""
-        return resolved(self, *([QUICK_MATERIALS] if self.quick else []))
 
-
-#: ``--quick``: the CI-sized run, under the flags given
-QUICK_MATERIALS = MaterialsConfig(materials=(1, 2, 3), texture_res=256, loop=QUICK_LOOP)
+MaterialsConfig.QUICK = MaterialsConfig(materials=(1, 2, 3), texture_res=256, loop=QUICK_LOOP)
 
 
 def squares_scene(k: int, n_lights: int):

@@ -57,7 +57,7 @@ from vrneural.bench.quality_train import (
     wide_start_record,
     with_wide_start,
 )
-from vrneural.config import Config, config_dict, opt, resolved, unset, words
+from vrneural.config import QuickConfig, config_dict, opt, unset, words
 from vrneural.distill.config import StudentShape, TrainBudget
 from vrneural.outputs import file_sha256
 from vrneural.versions import package_versions
@@ -85,7 +85,7 @@ def labels(width: int = 8) -> dict[str, str]:
 
 
 @dataclass
-class QualityConfig(Config, TrainBudget, StudentShape):
+class QualityConfig(QuickConfig, TrainBudget, StudentShape):
     """`vrneural bench quality`: the training fields it shares with `distill` (seed, --ema,
     --lr-patience, --device, --compile, --neumip-dirs, --width, --wide-start) apply to every
     network but the teacher, as `distill` takes them."""
@@ -138,14 +138,12 @@ class QualityConfig(Config, TrainBudget, StudentShape):
     )
 
     def resolved(self) -> QualityConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_QUALITY`) or the defaults; no
+        """The fields not given: ``--quick``'s (``QUICK``) or the defaults; no
         presets by default when ``--btf`` names files."""
-        only_btf = {"presets": ()} if self.btf else {}
-        return resolved(self, *([QUICK_QUALITY] if self.quick else []), only_btf)
+        return super().resolved({"presets": ()} if self.btf else {})
 
 
-#: ``--quick``: a CI-sized run, under the flags given
-QUICK_QUALITY = QualityConfig(res=16, dirs=8, teacher_epochs=2, epochs=2, lafortune_iters=5)
+QualityConfig.QUICK = QualityConfig(res=16, dirs=8, teacher_epochs=2, epochs=2, lafortune_iters=5)
 
 
 RUNS = {

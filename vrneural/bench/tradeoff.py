@@ -31,13 +31,13 @@ from vrneural.bench import trade_scene as ts
 from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored
 from vrneural.bench.trade_scene import reference, render, scheduled_candidates
 from vrneural.bench.tradeoff_report import finish_report, label
-from vrneural.config import Config, floats, ints, listed, opt, part, resolved, unset
+from vrneural.config import QuickConfig, floats, ints, listed, opt, part, unset
 from vrneural.runtime.config import REUSE_MAX
 from vrneural.scoring import metrics
 
 
 @dataclass
-class TradeoffConfig(Config):
+class TradeoffConfig(QuickConfig):
     """`vrneural bench tradeoff`."""
 
     out: str = opt("bench-tradeoff", "output directory", cli=False)
@@ -97,13 +97,8 @@ class TradeoffConfig(Config):
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
-    def resolved(self) -> TradeoffConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_TRADEOFF`) or the defaults."""
-        return resolved(self, *([QUICK_TRADEOFF] if self.quick else []))
 
-
-#: ``--quick``: the CI-sized run, under the flags given
-QUICK_TRADEOFF = TradeoffConfig(
+TradeoffConfig.QUICK = TradeoffConfig(
     score=QUICK_SCORED,
     speeds=(0, 300),
     light_speed=0.0,

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from vrneural.bench.widths_report import METHODS, STARTS, within, write_report
 from vrneural.btf.presets import PRESETS
-from vrneural.config import Config, choices, config_dict, ints, opt, resolved, unset
+from vrneural.config import QuickConfig, choices, config_dict, ints, opt, unset
 from vrneural.distill.config import COMPILE_MODES
 from vrneural.errors import VrnError, check_range, check_seed
 from vrneural.versions import package_versions
@@ -40,7 +40,7 @@ MAX_WIDE = 32
 
 
 @dataclass
-class WidthsConfig(Config):
+class WidthsConfig(QuickConfig):
     """`vrneural bench widths`."""
 
     preset: str = opt(
@@ -92,13 +92,10 @@ class WidthsConfig(Config):
         "finished ones as they are, interrupted ones continued; train the rest",
     )
 
-    def resolved(self) -> WidthsConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_WIDTHS`) or the defaults."""
-        return resolved(self, *([QUICK_WIDTHS] if self.quick else []))
 
-
-#: ``--quick``: the CI-sized run, under the flags given
-QUICK_WIDTHS = WidthsConfig(res=16, dirs=8, teacher_epochs=2, epochs=2, widths=(4, 8), repeats=1)
+WidthsConfig.QUICK = WidthsConfig(
+    res=16, dirs=8, teacher_epochs=2, epochs=2, widths=(4, 8), repeats=1
+)
 
 
 @dataclass(frozen=True)
