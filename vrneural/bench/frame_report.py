@@ -166,28 +166,20 @@ def plot(doc: dict, path) -> None:
     sm = doc["summary"]
     fig, (a1, a2) = rp.figure(11.0, 3.8, 2)
     groups = [
-        ("forward", ["forward_floor_constant", "forward_floor_sample", "forward",
-                     "forward_display"]),
-        ("texture (full)", ["texture_bare", "texture_full"]),
-        ("texture (frame)", ["texture_slice_bare", "texture_slice"]),
-    ]  # fmt: skip
-    x, labels = 0, []
-    for _, names in groups:
+        ["forward_floor_constant", "forward_floor_sample", "forward", "forward_display"],
+        ["texture_bare", "texture_full"],
+        ["texture_slice_bare", "texture_slice"],
+    ]
+    x, pos, labels = 0, [], []
+    for names in groups:  # a gap of half a bar between the groups
         for n in names:
-            v = sm["passes"][n]["wall_ms"]
             floor = "floor" in n or "bare" in n
-            a1.bar(x, v, color="0.7" if floor else "C0")
+            a1.bar(x, sm["passes"][n]["wall_ms"], color="0.7" if floor else "C0")
+            pos.append(x)
             labels.append(n.replace("forward_", "").replace("texture_", "tex "))
             x += 1
         x += 0.5
-    ticks = [i for i, _ in enumerate(labels)]
-    pos, i = [], 0.0
-    for _, names in groups:
-        for _ in names:
-            pos.append(i)
-            i += 1
-        i += 0.5
-    a1.set_xticks(pos[: len(ticks)], labels, rotation=40, ha="right", fontsize=7)
+    a1.set_xticks(pos, labels, rotation=40, ha="right", fontsize=7)
     a1.set_ylabel("ms, each pass alone (wall)")
     a1.set_title("passes (grey: floors)", fontsize=9)
     d = list(sm["loops"])
