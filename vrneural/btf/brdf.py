@@ -4,8 +4,9 @@
             + (1 - F(cos_i)) (1 - F(cos_o)) [ (1 - max(sheen)) albedo / pi   Lambert diffuse
                                               + sheen D_charlie V_ashikhmin ]  sheen``
 
-with Schlick Fresnel ``F(c) = f0 + (1 - f0)(1 - c)^5`` (per RGB channel; see :func:`schlick`
-for f0 < 0.04), the anisotropic GGX
+with Schlick Fresnel ``F(c) = f0 + s (1 - f0)(1 - c)^5`` per RGB channel (``s = min(1, max(f0) /
+0.04)``: 1 for every real interface; below, the grazing rise fades out, so ``f0 = 0`` gives a
+pure Lambertian BRDF), the anisotropic GGX
 distribution ``D`` with roughness ``alpha_t`` along the tangent and ``alpha_b`` across it, and
 the height-correlated Smith masking-shadowing ``G2 = 1 / (1 + Lambda(wi) + Lambda(wo))``.
 Every term is symmetric in ``(wi, wo)``, so ``f`` is reciprocal. Directions are in the shading
@@ -21,19 +22,6 @@ import numpy as np
 
 INV_PI = np.float32(1.0 / np.pi)
 EPS = np.float32(1e-6)
-
-
-def schlick(f0: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Schlick Fresnel ``f0 + s (1 - f0) (1 - c)^5``; ``c`` is clamped to [0, 1].
-
-    ``s = min(1, max(f0) / 0.04)`` is 1 for every real interface (dielectrics have f0 >= 0.04)
-    and fades the grazing rise out as f0 -> 0 (an index of refraction -> 1 has no Fresnel
-    reflection at all), so ``f0 = 0`` gives a pure Lambertian BRDF.
-    """
-    m = 1.0 - np.clip(c, 0.0, 1.0)
-    m2 = m * m
-    s = np.minimum(1.0, np.max(f0, axis=-1, keepdims=True) / 0.04)
-    return f0 + s * (1.0 - f0) * (m2 * m2 * m)
 
 
 def ggx_d(hx, hy, hz, at, ab) -> np.ndarray:

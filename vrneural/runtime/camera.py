@@ -48,11 +48,6 @@ def look_rotation(forward: np.ndarray, up=(0.0, 1.0, 0.0)) -> np.ndarray:
     return np.stack([r, u, -f], 1)
 
 
-def perspective(fov_y_deg: float, aspect: float, near: float = 0.05, far: float = 100.0):
-    """WebGPU perspective projection ``[4, 4]`` (depth 0 at near, 1 at far)."""
-    return _perspective(float(fov_y_deg), float(aspect), float(near), float(far)).copy()
-
-
 @functools.lru_cache(maxsize=64)
 def _perspective(fov_y_deg: float, aspect: float, near: float, far: float) -> np.ndarray:
     f = 1.0 / np.tan(np.radians(fov_y_deg) / 2)
@@ -207,11 +202,3 @@ def frustum_planes(view_proj: np.ndarray) -> np.ndarray:
     m = view_proj
     planes = np.stack([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[2], m[3] - m[2]])
     return planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
-
-
-def sphere_in_frustum(centre, radius: float, view_proj: np.ndarray, planes=None) -> bool:
-    """Whether a bounding sphere touches the view frustum (conservative); ``planes``: the
-    frustum's :func:`frustum_planes` when the caller has them."""
-    planes = frustum_planes(view_proj) if planes is None else planes
-    d = planes @ np.append(np.asarray(centre, np.float64), 1.0)
-    return bool((d >= -radius).all())

@@ -277,7 +277,7 @@ class Renderer(FrameEncoding):
         return n.sphere[1], n.sphere[2]
 
     def _visible(self, n: NeuralObject, eyes) -> bool:
-        """Whether ``n``'s bounding sphere touches any eye's frustum (``sphere_in_frustum``)."""
+        """Whether ``n``'s bounding sphere touches any eye's frustum (conservative)."""
         self.world_sphere(n)
         _, _, r, ch = n.sphere
         return any(bool((e.planes @ ch >= -r).all()) for e in eyes)
