@@ -222,34 +222,20 @@ def network_runs(
     run must match (``set_resume``; ``tsha``: the teacher's hash, None to skip it)."""
     out = []
     size = {} if width is None else {"width": width}
+    wide_epochs = cfg.epochs // 2 if wide_start else 0
     if wide_start:
-        wide_epochs = cfg.epochs // 2
+        wide_pt = d / f"{stem}.wide.pt"
         wide = _network_config(
-            cfg,
-            d,
-            btf_path,
-            d / f"{stem}.wide.pt",
-            **kw,
-            epochs=wide_epochs,
-            width=wide_start,
-            export=False,
+            cfg, d, btf_path, wide_pt, **kw, epochs=wide_epochs, width=wide_start, export=False
         )
         set_resume(wide, cfg.resume, teacher_sha=tsha)
         out.append((None, f"{stem}.wide", wide))
         if cfg.resume:
             check_wide_start(d / f"{stem}.pt", wide_epochs, cfg.epochs)
-        dcfg = _network_config(
-            cfg,
-            d,
-            btf_path,
-            d / f"{stem}.pt",
-            **kw,
-            epochs=cfg.epochs - wide_epochs,
-            init_from=str(d / f"{stem}.wide.pt"),
-            **size,
-        )
-    else:
-        dcfg = _network_config(cfg, d, btf_path, d / f"{stem}.pt", **kw, epochs=cfg.epochs, **size)
+        size["init_from"] = str(wide_pt)
+    dcfg = _network_config(
+        cfg, d, btf_path, d / f"{stem}.pt", **kw, epochs=cfg.epochs - wide_epochs, **size
+    )
     set_resume(dcfg, cfg.resume, teacher_sha=tsha)
     out.append((name, stem, dcfg))
     return out
@@ -264,7 +250,7 @@ def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
     kw.setdefault("parallax", "off")  # the bench's networks: parallax only where it asks
     if kw.get("method") == "neumip":  # given to the others, it would be refused as unused
         kw["neumip_dirs"] = cfg.neumip_dirs
-    dcfg = resolve_method(
+    return resolve_method(
         DistillConfig(
             teacher=str(d / f"{kw.pop('teacher', 'teacher')}.pt"),
             output=str(output),
@@ -275,7 +261,6 @@ def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
             **_common(cfg),
         )
     )
-    return dcfg
 
 
 def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> None:

@@ -131,22 +131,10 @@ def validate(cfg: WidthsConfig) -> Plan:
                 "start, so at least 2 are needed"
             )
     check_range("--repeats", cfg.repeats, 1, 100)
-    q = QualityConfig(
-        presets=(cfg.preset,),
-        out=cfg.out,
-        res=cfg.res,
-        dirs=cfg.dirs,
-        teacher_epochs=cfg.teacher_epochs,
-        epochs=cfg.epochs,
-        seed=cfg.seed,
-        repeats=cfg.repeats,
-        device=cfg.device,
-        compile=cfg.compile,
-        jobs=cfg.jobs,
-        progress=cfg.progress,
-        force=cfg.force,
-        resume=cfg.resume,
-    ).resolved()
+    # the fields the bench quality config it runs takes from this one
+    shared = ("out", "res", "dirs", "teacher_epochs", "epochs", "seed", "repeats", "device")
+    shared += ("compile", "jobs", "progress", "force", "resume")
+    q = QualityConfig(presets=(cfg.preset,), **{k: getattr(cfg, k) for k in shared}).resolved()
     try:  # --out, --resume/--force, the seeds and the ranges of the options both share
         quality_validate(q)
     except VrnError as e:
