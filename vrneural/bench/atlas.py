@@ -208,8 +208,6 @@ def _plot(previews: dict, records: list, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from vrneural.outputs import atomic_path
-
     n = max(len(previews), 1)
     cols = min(4, n)
     rows = -(-n // cols)
@@ -226,6 +224,4 @@ def _plot(previews: dict, records: list, path: Path) -> None:
             fontsize=8,
         )
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=100)
-    plt.close(fig)
+    rp.save_png(fig, path, bbox=None)

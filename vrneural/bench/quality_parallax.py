@@ -29,6 +29,8 @@ from __future__ import annotations
 import math
 import statistics
 
+from vrneural.bench.report import save_png
+
 #: view polar-angle bins, degrees
 VIEW_BINS = ((0.0, 30.0), (30.0, 50.0), (50.0, 65.0), (65.0, 76.0))
 
@@ -252,11 +254,7 @@ def bins_png(doc: dict, path) -> None:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    from vrneural.outputs import atomic_path
-
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
+    save_png(fig, path, dpi=110, bbox=None)
 
 
 def check_parallax_data(presets: list[str], given: dict, asked: str = "height") -> None:

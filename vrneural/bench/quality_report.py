@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.bench.quality_parallax import bins_png, markdown_bins
+from vrneural.bench.report import save_png
 from vrneural.errors import count
 from vrneural.outputs import atomic_path
 
@@ -283,11 +284,6 @@ def markdown(doc: dict) -> str:
     return "\n".join(lines)
 
 
-def _save(fig, path: Path) -> None:
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
-
-
 def curves_png(doc: dict, path: Path) -> None:
     import matplotlib
 
@@ -340,8 +336,7 @@ def curves_png(doc: dict, path: Path) -> None:
     rows = -(-len(labels) // max(ncol, 1))
     fig.legend(handles, labels, loc="lower center", ncol=ncol, fontsize=7, frameon=False)
     fig.tight_layout(rect=(0, 0.04 + 0.04 * rows, 1, 1))  # below the panels, never over a curve
-    _save(fig, path)
-    plt.close(fig)
+    save_png(fig, path, dpi=110)
 
 
 def slices_png(doc: dict, slices: dict, path: Path) -> None:
@@ -379,8 +374,7 @@ def slices_png(doc: dict, slices: dict, path: Path) -> None:
             if r == 0:
                 ax.set_title(name.replace("_", "\n"), fontsize=8)
         axes[r][0].set_ylabel(f"{p}\npair {pairs[i]}", fontsize=8)
-    _save(fig, path)
-    plt.close(fig)
+    save_png(fig, path, dpi=110)
 
 
 def write_report(doc: dict, slices: dict, root: Path) -> None:

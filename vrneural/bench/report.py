@@ -80,12 +80,13 @@ def record_table(records: list[dict], columns: list[tuple]) -> list[str]:
     return table([h for h, _ in columns], [[get(r, f) for _, f in columns] for r in records])
 
 
-def save_png(fig, path: Path) -> Path:
-    """Save a matplotlib figure as PNG atomically (dpi 100 keeps plots well under 300 KB)."""
+def save_png(fig, path: Path, dpi: int = 100, bbox: str | None = "tight") -> Path:
+    """Save a matplotlib figure as PNG atomically (dpi 100 keeps plots well under 300 KB) and
+    close it; ``bbox``: matplotlib's ``bbox_inches``."""
     import matplotlib.pyplot as plt
 
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=100, bbox_inches="tight")
+        fig.savefig(tmp, format="png", dpi=dpi, bbox_inches=bbox)
     plt.close(fig)
     return path
 

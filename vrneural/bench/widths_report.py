@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from vrneural.bench.report import save_png
 from vrneural.errors import count
 from vrneural.outputs import atomic_path
 
@@ -177,9 +178,7 @@ def widths_png(doc: dict, path: Path) -> None:
     ax.legend(fontsize=7)
     ax.set_title(describe(doc["config"]), fontsize=8)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110)
-    plt.close(fig)
+    save_png(fig, path, dpi=110, bbox=None)
 
 
 def write_report(doc: dict, root: Path) -> None:

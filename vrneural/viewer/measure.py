@@ -224,6 +224,8 @@ def plot(res: dict, path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from vrneural.bench.report import save_png
+
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.6))
     profiles = ["preview", "quest3"]
     x = np.arange(len(profiles))
@@ -244,11 +246,7 @@ def plot(res: dict, path) -> None:
     b.set_xlabel(f"ms from key to its frame's swap (dotted: 1, 2 x {frame_ms:.0f} ms)")
     b.set_ylabel("presses")
     fig.tight_layout()
-    from vrneural.outputs import atomic_path
-
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
+    save_png(fig, path, dpi=110, bbox=None)
 
 
 def main(argv=None) -> int:
