@@ -203,10 +203,7 @@ def run_atlas(cfg: AtlasBenchConfig) -> dict:
 
 
 def _plot(previews: dict, records: list, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = rp.pyplot()
 
     n = max(len(previews), 1)
     cols = min(4, n)

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 import statistics
 
-from vrneural.bench.report import save_png
+from vrneural.bench.report import pyplot, save_png
 
 #: view polar-angle bins, degrees
 VIEW_BINS = ((0.0, 30.0), (30.0, 50.0), (50.0, 65.0), (65.0, 76.0))
@@ -227,10 +227,7 @@ def markdown_bins(doc: dict) -> list[str]:
 
 def bins_png(doc: dict, path) -> None:
     """L1 per view-angle bin, one panel per material, one line per method (PNG)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     res = doc["results"]
     lab = doc["labels"]

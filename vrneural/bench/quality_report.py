@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.bench.quality_parallax import bins_png, markdown_bins
-from vrneural.bench.report import save_png
+from vrneural.bench.report import pyplot, save_png
 from vrneural.errors import count
 from vrneural.outputs import atomic_path
 
@@ -285,11 +285,9 @@ def markdown(doc: dict) -> str:
 
 
 def curves_png(doc: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
+
+    plt = pyplot()
 
     res = doc["results"]
     n_rows = -(-len(ORDER) // (2 * len(res)))  # legend rows (at most one entry per method)
@@ -340,10 +338,7 @@ def curves_png(doc: dict, path: Path) -> None:
 
 
 def slices_png(doc: dict, slices: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     cols = [
         "ground truth",

@@ -91,14 +91,19 @@ def save_png(fig, path: Path, dpi: int = 100, bbox: str | None = "tight") -> Pat
     return path
 
 
-def figure(w: float = 6.4, h: float = 4.0, ncols: int = 1, sharey: bool = False):
-    """A matplotlib (Agg) figure and its ``ncols`` axes, as a list."""
+def pyplot():
+    """``matplotlib.pyplot`` on the Agg backend (files only, no display needed)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(
+    return plt
+
+
+def figure(w: float = 6.4, h: float = 4.0, ncols: int = 1, sharey: bool = False):
+    """A matplotlib (Agg) figure and its ``ncols`` axes, as a list."""
+    fig, axes = pyplot().subplots(
         1, ncols, figsize=(w, h), squeeze=False, sharey=sharey, layout="constrained"
     )
     return fig, list(axes[0])

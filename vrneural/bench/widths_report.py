@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from vrneural.bench.report import save_png
+from vrneural.bench.report import pyplot, save_png
 from vrneural.errors import count
 from vrneural.outputs import atomic_path
 
@@ -125,10 +125,7 @@ def markdown(doc: dict) -> str:
 
 
 def widths_png(doc: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     rows = doc["rows"]
     nm = rows["neumip"]

@@ -219,12 +219,9 @@ def markdown(res: dict) -> str:
 
 
 def plot(res: dict, path) -> None:
-    import matplotlib
+    from vrneural.bench.report import pyplot, save_png
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from vrneural.bench.report import save_png
+    plt = pyplot()
 
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.6))
     profiles = ["preview", "quest3"]
