@@ -247,13 +247,14 @@ def _sgemm(c: KernelsConfig) -> float:
 
 def _run(c: KernelsConfig, doc: dict, nets, precs, root, t0) -> dict:
     import torch
+    from tqdm import tqdm
 
     sg_runs = [_sgemm(c)]
     doc["torch_threads"] = torch.get_num_threads()
     doc["sgemm_threads"] = c.threads or "default"
     jobs = [(n, v, p) for n in nets for v in ("constants", "buffer") for p in precs]
     jobs += [(n, "torch", "f32") for n in nets]
-    bar = rp_progress(len(jobs), c.progress)
+    bar = tqdm(total=len(jobs), desc="bench kernels", unit="kernel", disable=not c.progress)
     for name, var, prec in jobs:
         parts, macs = network(name)
         rng = np.random.default_rng(0)
@@ -320,12 +321,6 @@ def roofline_exceeded(doc: dict) -> list[dict]:
     if not doc["adapter"].get("is_cpu"):
         return []
     return [r for r in doc["records"] if r["gflops"] > doc["sgemm_gflops"]]
-
-
-def rp_progress(total: int, enabled: bool):
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc="bench kernels", unit="kernel", disable=not enabled)
 
 
 def markdown(doc: dict) -> list[str]:

@@ -7,7 +7,6 @@ all written atomically into ``--out DIR``: new, empty, or this bench's own earli
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -132,10 +131,6 @@ def finish(root: Path, doc: dict, md: list[str], t0: float) -> dict:
     with atomic_path(root / "results.md") as tmp:
         tmp.write_text("\n".join(md) + "\n")
     return doc
-
-
-def replace(cfg, **kw):
-    return dataclasses.replace(cfg, **kw)
 
 
 def texture_res_range() -> tuple[int, int]:
