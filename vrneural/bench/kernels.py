@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrneural.bench import report as rp
+from vrneural.bench.runtime_frames import median_ms, wall_ms
 from vrneural.config import QuickConfig, choices, opt, unset
 from vrneural.errors import count
 
@@ -147,20 +148,14 @@ def sgemm_gflops(n: int, repeats: int) -> float:
     b = rng.standard_normal((n, n), dtype=np.float32)
     for _ in range(3):  # warm-up: BLAS threads, caches, clocks
         a @ b
-    k = max(1, int(0.05 / max(min(_timed(lambda: a @ b) for _ in range(3)), 1e-6)))
+    k = max(1, int(0.05 / max(min(wall_ms(lambda: a @ b) for _ in range(3)) / 1e3, 1e-6)))
 
     def batch():
         for _ in range(k):
             a @ b
 
-    best = min(_timed(batch) for _ in range(max(repeats, 5))) / k
+    best = min(wall_ms(batch) for _ in range(max(repeats, 5))) / 1e3 / k
     return 2 * n**3 / best / 1e9
-
-
-def _timed(fn) -> float:
-    t0 = time.perf_counter()
-    fn()
-    return time.perf_counter() - t0
 
 
 def _gpu_ms(parts, texels, precision, buffer_weights, repeats, rng) -> float:
@@ -183,7 +178,6 @@ def _torch_ms(parts, texels, repeats, rng) -> float:
     import torch
 
     from vrneural.bench.runtime import torch_net
-    from vrneural.bench.runtime_frames import median_ms
 
     nets, xs = [], []
     for layers, f in parts:

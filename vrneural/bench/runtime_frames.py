@@ -18,12 +18,7 @@ def wall_ms(fn) -> float:
 
 def median_ms(fn, repeats: int) -> float:
     fn()  # warm-up / compile
-    ts = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        ts.append((time.perf_counter() - t0) * 1e3)
-    return float(np.median(ts))
+    return float(np.median([wall_ms(fn) for _ in range(repeats)]))
 
 
 def make_renderer(mode, texture_res, eye_res, reuse=0, schedule="burst", frames=1, eyes=2):
