@@ -35,8 +35,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vrneural.errors import VrnError
-from vrneural.grazing import DEFAULT_THETA_MAX_DEG, check_dir_range, extend
-from vrneural.mlp import Layer, mlp_forward, random_mlp
+from vrneural.grazing import DEFAULT_THETA_MAX_DEG, boundary_consts, check_dir_range, extend
+from vrneural.mlp import Layer, macs, mlp_forward, random_mlp
+from vrneural.parallax import PACK_KINDS, check_pack_height, slope_max
 from vrneural.sampling import sample_bilinear_wrap
 
 ARCHS = {
@@ -114,8 +115,6 @@ class NeuralMaterial:
         self._check_parallax()
 
     def _check_parallax(self) -> None:
-        from vrneural.parallax import PACK_KINDS, check_pack_height
-
         self.parallax = dict(self.parallax or {"kind": "off"})
         kind = self.parallax.get("kind")
         if kind not in PACK_KINDS:
@@ -171,9 +170,6 @@ class NeuralMaterial:
     def parallax_slope_max(self) -> np.float32:
         """The steepest view's ray slope (:func:`vrneural.parallax.slope_max`): the march's
         full step count is reached there."""
-        from vrneural.grazing import boundary_consts
-        from vrneural.parallax import slope_max
-
         return slope_max(*boundary_consts(self.dir_range[1]), self.height.shape)
 
     @property
@@ -184,8 +180,6 @@ class NeuralMaterial:
     @property
     def macs_per_texel(self) -> float:
         """Multiply-adds per shaded texel (the coarse net counts a quarter: once per block)."""
-        from vrneural.mlp import macs
-
         extra = 0.0
         if self.parallax_kind == "neural":
             from vrneural.neural_offset import offset_macs

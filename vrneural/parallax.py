@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, check_range
+from vrneural.grazing import directions_range
 from vrneural.sampling import MARCHES, block_rows, sample_bilinear_wrap
 
 #: parallax kinds of ``distill --parallax`` (``auto`` resolves to one of the others)
@@ -261,8 +262,6 @@ def setup_parallax(
     ``{"kind", "why", "relief_texels"}`` kept in the checkpoint and the pack's meta.
     ``recorded``: that record of the checkpoint a ``--resume`` continues (``auto`` keeps its
     choice, which an older version may have made otherwise)."""
-    from vrneural.errors import check_range
-
     check_range("--parallax-steps", cfg.parallax_steps, 1, MAX_STEPS)
     height = None
     if btf.height is not None:
@@ -299,7 +298,6 @@ def setup_parallax(
         return None, record
     if kind != "height":
         return None, record
-    from vrneural.grazing import directions_range
 
     spec["parallax"] = {
         "kind": "height",

@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from vrneural.sampling import sample_bilinear_wrap
+
 #: the correlation window (texels per side)
 WINDOW = 7
 #: a texel counts when its best correlation reaches this
@@ -54,8 +56,6 @@ def _box(a: np.ndarray) -> np.ndarray:
 def _shifted(img: np.ndarray, shift: np.ndarray) -> np.ndarray:
     """``img: [H, W]`` looked up bilinearly (wrap) at every texel moved by ``shift: [2]``
     texels (x, y)."""
-    from vrneural.sampling import sample_bilinear_wrap
-
     H, W = img.shape
     y, x = np.mgrid[0:H, 0:W].astype(np.float64)
     uv = np.stack([(x + 0.5 + shift[0]) / W, (y + 0.5 + shift[1]) / H], -1)

@@ -17,6 +17,15 @@ from pathlib import Path
 
 import numpy as np
 
+from vrneural.atlas.build import (
+    MAX_PADDING,
+    MAX_RESOLUTION,
+    MIN_RESOLUTION,
+    check_texture_resolution,
+)
+from vrneural.errors import ArgumentParser, VrnError, check_range
+from vrneural.outputs import atomic_path, check_output, write_json
+
 STAGES = ("unwrap_s", "raster_s", "sliver_s", "dilate_s", "total_s")
 
 
@@ -67,8 +76,6 @@ def plot(result: dict, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from vrneural.outputs import atomic_path
-
     fig, ax = plt.subplots(figsize=(7, 2.4))
     left = 0.0
     for k in STAGES[:-1]:
@@ -91,8 +98,6 @@ def main(argv: list[str] | None = None) -> int:
     import sys
 
     from vrneural.atlas import BUILTIN_MESHES
-    from vrneural.atlas.build import MAX_PADDING, MAX_RESOLUTION, MIN_RESOLUTION
-    from vrneural.errors import ArgumentParser, VrnError
 
     prog = "python -m vrneural.atlas.benchmark"
     p = ArgumentParser(
@@ -139,7 +144,6 @@ def main(argv: list[str] | None = None) -> int:
     except VrnError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)
         return e.exit_code
-    from vrneural.outputs import write_json
 
     write_json(out, result)
     plot(result, out.with_suffix(".png"))
@@ -155,10 +159,6 @@ def main(argv: list[str] | None = None) -> int:
 def _check_args(a: argparse.Namespace) -> Path:
     """Validate the options before any work (one-line :class:`VrnError`); returns the JSON
     path."""
-    from vrneural.atlas.build import MAX_PADDING, check_texture_resolution
-    from vrneural.errors import VrnError, check_range
-    from vrneural.outputs import check_output
-
     check_texture_resolution("--res", a.res)
     check_range("--padding", a.padding, 0, MAX_PADDING)
     check_range("--repeats", a.repeats, 1, 1000)

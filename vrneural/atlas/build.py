@@ -9,11 +9,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrneural.atlas.cache import cache_key, load_cached, split_mesh, store
+from vrneural.atlas.charts import face_normals
+from vrneural.atlas.generate import Layout, generated_layout
 from vrneural.atlas.geometry import check_geometry, check_uv
-from vrneural.atlas.meshuv import MODES
+from vrneural.atlas.layout import uv_area
+from vrneural.atlas.meshuv import MODES, density_spread
 from vrneural.atlas.progress import Stages
 from vrneural.atlas.raster import rasterize_ids
 from vrneural.atlas.types import EMPTY, Atlas, Mesh
+from vrneural.atlas.visualize import uv_charts
 from vrneural.config import opt
 from vrneural.errors import VrnError, check_choice, check_int, check_range, count
 
@@ -163,7 +167,6 @@ def choose_layout(mesh: Mesh, R: int, padding: int, atlas_uv: str, bar):
     """``(Layout, stats)``: the mesh's own UVs when ``atlas_uv`` asks and they serve, else a
     generated layout; the stats say which and why."""
     from vrneural.atlas import meshuv
-    from vrneural.atlas.generate import Layout, generated_layout
 
     reason = f"atlas_uv = {atlas_uv}"
     if atlas_uv in ("auto", "mesh"):
@@ -204,11 +207,6 @@ def choose_layout(mesh: Mesh, R: int, padding: int, atlas_uv: str, bar):
 def layout_stats(split: Mesh, uv: np.ndarray, R: int) -> dict:
     """Charts (components over shared atlas-UV points), texels per metre and the texel
     density spread (95th / 5th percentile, :func:`vrneural.atlas.meshuv.density_spread`)."""
-    from vrneural.atlas.charts import face_normals
-    from vrneural.atlas.layout import uv_area
-    from vrneural.atlas.meshuv import density_spread
-    from vrneural.atlas.visualize import uv_charts
-
     faces = np.asarray(split.faces, np.int64)
     a_uv = uv_area(uv.astype(np.float64)[faces] * R)
     _, a3 = face_normals(np.asarray(split.positions, np.float64), faces)

@@ -24,7 +24,10 @@ import numpy as np
 from vrneural.atlas import layout as lay
 from vrneural.atlas.charts import chart_faces, face_adjacency, project
 from vrneural.atlas.pack import pack_scale
+from vrneural.atlas.raster import overlapping_faces
 from vrneural.atlas.types import Mesh
+from vrneural.atlas.unwrap import unwrap
+from vrneural.atlas.visualize import uv_charts
 from vrneural.errors import VrnError, count
 
 METHODS = ("charts", "xatlas")
@@ -92,8 +95,6 @@ def generated_layout(mesh: Mesh, R: int, padding: int, method: str, bar=None) ->
 def pack_charts(cuv, chart, fa, fb, R: int, padding: int, bar=None):
     """Cut, orient and pack charts (module doc). Returns ``(texel coords [F, 3, 2], chart [F],
     scale (texels per unit), charts added by cuts)``; ValueError when they cannot fit."""
-    from vrneural.atlas.raster import overlapping_faces
-
     area = float(np.abs(lay.uv_area(cuv)).sum())
     s0 = R * np.sqrt(lay.EXPECTED_FILL / max(area, 1e-300))
     n0 = int(chart.max()) + 1
@@ -128,10 +129,6 @@ def _halve(cuv, chart, charts, fa, fb) -> np.ndarray:
 def _xatlas(mesh: Mesh, R: int, padding: int, path: list, bar):
     """xatlas's charts ``(cuv [F, 3, 2] mesh units, chart [F])``, retried once (module doc);
     None (with the reasons in ``path``) when both tries fail."""
-    from vrneural.atlas.raster import overlapping_faces
-    from vrneural.atlas.unwrap import unwrap
-    from vrneural.atlas.visualize import uv_charts
-
     tries = (("xatlas", mesh, None), ("xatlas retry", _jittered(mesh), RETRY_OPTIONS))
     for label, m, options in tries:
         _stage(bar, f"{label} ({len(mesh.faces)} triangles, child process)", 1)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from vrneural.atlas.types import EMPTY
+from vrneural.errors import check_range
 
 
 def raster_coverage(uv: np.ndarray, faces: np.ndarray, R: int) -> np.ndarray:
@@ -20,7 +21,6 @@ def raster_coverage(uv: np.ndarray, faces: np.ndarray, R: int) -> np.ndarray:
     atlas UVs ``uv`` [V, 2], EMPTY elsewhere (GPU)."""
     import wgpu
 
-    from vrneural.errors import check_range
     from vrneural.gpu import get_device, load_wgsl, read_texture, upload_buffer
     from vrneural.gpu.pipelines import pipeline_cache
 

@@ -20,6 +20,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from vrneural.atlas.pack import chart_offset
 from vrneural.atlas.raster import uv_area_px
 
 #: charts filling less of their bounding rectangle than this are cut (when large enough)
@@ -168,8 +169,6 @@ def place(
     :func:`vrneural.atlas.pack.pack_scale` (``scale``, cell corners ``xy``, ``rotated``): each
     chart scaled, turned a quarter for a rotated cell, and moved into its cell, half the gap
     from its lower-left corner."""
-    from vrneural.atlas.pack import chart_offset
-
     p = cuv * scale
     h = (extent[:, 1] * scale)[chart][:, None]
     turned = np.stack([h - p[..., 1], p[..., 0]], -1)

@@ -28,8 +28,11 @@ from __future__ import annotations
 import numpy as np
 
 from vrneural.atlas import layout as lay
+from vrneural.atlas.charts import face_normals
 from vrneural.atlas.pack import pack_scale
+from vrneural.atlas.raster import chart_conflicts, overlap_pairs
 from vrneural.atlas.types import Mesh
+from vrneural.atlas.visualize import uv_charts
 from vrneural.errors import VrnError, count
 
 #: ``atlas_uv`` choices: the mesh's UVs when they serve, always, or a generated unwrap
@@ -70,8 +73,6 @@ def density_spread(uv_area: np.ndarray, area3d: np.ndarray) -> float:
 def uv_chart_labels(mesh: Mesh, uv: np.ndarray) -> np.ndarray:
     """[F] chart of each face: components over shared vertices, vertices welded by (position,
     UV) so a split for normals alone does not cut a chart."""
-    from vrneural.atlas.visualize import uv_charts
-
     key = np.concatenate([np.asarray(mesh.positions, np.float64), uv], axis=1)
     _, weld = np.unique(key, axis=0, return_inverse=True)
     return uv_charts(weld.reshape(-1, 1).astype(np.float64), np.asarray(mesh.faces, np.int64))
@@ -79,9 +80,6 @@ def uv_chart_labels(mesh: Mesh, uv: np.ndarray) -> np.ndarray:
 
 def inspect(mesh: Mesh, uv: np.ndarray, R: int) -> dict:
     """The checks of the module doc (counts, spread, charts) for UV set ``uv`` [V, 2]."""
-    from vrneural.atlas.charts import face_normals
-    from vrneural.atlas.raster import overlap_pairs
-
     faces = np.asarray(mesh.faces, np.int64)
     cuv = uv[faces]
     a_uv = lay.uv_area(cuv)
@@ -152,8 +150,6 @@ def insist_error(mesh: Mesh, name: str, rep: dict) -> VrnError | None:
 
 def mesh_layout(mesh: Mesh, uv: np.ndarray, rep: dict, R: int, padding: int):
     """``(vmap, faces, uv [V, 2] float32 in [0, 1], info)``: the set as it is or re-packed."""
-    from vrneural.atlas.raster import chart_conflicts
-
     faces = np.asarray(mesh.faces, np.int64)
     chart = rep["chart"]
     cuv = uv[faces]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from vrneural.atlas.raster import texel_barycentrics
 from vrneural.atlas.types import EMPTY, Atlas
 
 
@@ -58,7 +59,5 @@ def atlas_image(atlas: Atlas, by: str = "triangle", gutter: np.ndarray | None = 
 
 def gutter_mask(atlas: Atlas) -> np.ndarray:
     """[R, R] bool: texels whose centre is outside their triangle (gutter and sliver texels)."""
-    from vrneural.atlas.raster import texel_barycentrics
-
     bary = texel_barycentrics(atlas)
     return (atlas.tri_ids != EMPTY) & (bary.min(axis=-1) < -1e-6)

@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.bench import report as rp
-from vrneural.bench.atlas_meshes import NAMES
+from vrneural.bench.atlas_meshes import NAMES, RESOLUTION, write_mesh
 from vrneural.config import QuickConfig, opt, unset, words
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, check_range
 
 
 def mesh_names(flag: str, value) -> tuple[str, ...]:
@@ -53,8 +53,6 @@ AtlasBenchConfig.QUICK = AtlasBenchConfig(eye=128)
 
 
 def _resolution(name: str, quick: bool) -> int:
-    from vrneural.bench.atlas_meshes import RESOLUTION
-
     if quick:
         return 256 if name in ("field", "knot") else 128
     return RESOLUTION.get(name, 1200)
@@ -74,7 +72,6 @@ def _load_child(name: str, folder: str, quick: bool):
     import dataclasses
 
     from vrneural.atlas import load_mesh
-    from vrneural.bench.atlas_meshes import write_mesh
 
     t = time.perf_counter()
     path = write_mesh(name, Path(folder), quick)
@@ -151,8 +148,6 @@ def _measure(name: str, folder: Path, quick: bool, res: int):
 
 
 def run_atlas(cfg: AtlasBenchConfig) -> dict:
-    from vrneural.errors import check_range
-
     c = cfg.resolved()
     check_range("--eye", c.eye, 16, 4096)
     with rp.prepare_out(cfg.out, cfg.force, "atlas") as root:

@@ -26,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from vrneural.outputs import atomic_path
+
 NAMES = ("ico6", "ico7", "torus", "knot", "cloth", "fan", "field", "lightmap")
 #: atlas resolution per mesh (full set; the quick set uses 128 or 256)
 RESOLUTION = {"ico7": 2048, "field": 2048}
@@ -117,8 +119,6 @@ def torus_with_lightmap(nu: int = 96, nv: int = 48, ring: float = 0.3, tube: flo
 def write_glb(path, pos, faces, normals=None, uv0=None, uv1=None) -> Path:
     """A one-mesh, one-node GLB: POSITION, NORMAL, TEXCOORD_0, TEXCOORD_1 (float32, each
     optional but the positions) and uint32 indices, written atomically."""
-    from vrneural.outputs import atomic_path
-
     arrays = [("POSITION", pos, "VEC3"), ("NORMAL", normals, "VEC3")]
     arrays += [("TEXCOORD_0", uv0, "VEC2"), ("TEXCOORD_1", uv1, "VEC2")]
     blob, views, accessors, attributes = b"", [], [], {}

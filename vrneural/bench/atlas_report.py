@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from vrneural.bench import report as rp
+from vrneural.outputs import atomic_path, write_json
 
 #: the issue's targets: coverage on every mesh but the needle fan, the 1M-triangle mesh's time
 #: and peak memory, and the mesh with lightmap UVs using them
@@ -48,8 +49,6 @@ def targets(records: list) -> list[tuple[str, bool, str]]:
 
 
 def write_reports(root: Path, doc: dict, cfg) -> None:
-    from vrneural.outputs import atomic_path, write_json
-
     write_json(root / "results.json", doc)
     rows = []
     for r in doc["records"]:

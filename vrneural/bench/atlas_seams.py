@@ -18,17 +18,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from vrneural.material import lambertian_material
+from vrneural.runtime.camera import OrbitPath
+from vrneural.runtime.lights import PointLight
+from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
+
 ALBEDO = (0.8, 0.5, 0.2)
 
 
 def _scene(mesh_file: str, size: float, atlas_uv: str):
     from pathlib import Path
 
-    from vrneural.material import lambertian_material
     from vrneural.runtime.assets import get_mesh
-    from vrneural.runtime.camera import OrbitPath
-    from vrneural.runtime.lights import PointLight
-    from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 
     p = get_mesh(mesh_file).positions
     centre = (p.max(0) + p.min(0)) / 2

@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 from vrneural.config import add_config_args, config_from_args
+from vrneural.outputs import OutputDir, atomic_path, write_json
 
 #: name -> (config class, help); each in ``vrneural.bench.<name>``, run by ``run_<name>``
 SPECS = {
@@ -104,8 +105,6 @@ def _register_all(sub) -> None:
 
 
 def _run_all(args) -> int:
-    from vrneural.outputs import OutputDir
-
     t0 = time.perf_counter()
     # the folder is checked as every bench checks its own: a folder of other files is refused,
     # and one of ours needs --force (each bench below then replaces only its own sub-folder)
@@ -129,8 +128,6 @@ def _run_all(args) -> int:
 
 def _write_index(out: Path, docs: dict, quick: bool, seconds: float) -> None:
     """``OUT/index.md`` + ``index.json``: what each bench reproduces, its time and its files."""
-    from vrneural.outputs import atomic_path, write_json
-
     first = next(iter(docs.values()))
     a = first.get("adapter", {})
     lines = [

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
+from vrneural.bench.extremes_report import write_report
+from vrneural.bench.report import header, prepare_out
 from vrneural.config import Config, opt
 from vrneural.errors import VrnError
 
@@ -240,9 +242,6 @@ class ReportPlugin(Collector):
     def pytest_sessionfinish(self, session):
         import sys
 
-        from vrneural.bench.extremes_report import write_report
-        from vrneural.bench.report import header, prepare_out
-
         try:
             with prepare_out(self.out, True, "extremes") as root:
                 doc = header("extremes", self.cfg)
@@ -255,9 +254,6 @@ class ReportPlugin(Collector):
 
 def run_extremes(cfg: ExtremesConfig, out: str) -> dict:
     """Run the cases, write the report into ``out``; returns the results document."""
-    from vrneural.bench.extremes_report import write_report
-    from vrneural.bench.report import header, prepare_out
-
     cases = selected(cfg.only)
     pytest = find_pytest()
     with prepare_out(out, cfg.force, "extremes") as root:

@@ -35,7 +35,12 @@ import numpy as np
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
+from vrneural.bench.frame_report import markdown, plot, summarise
 from vrneural.config import QuickConfig, opt, unset
+from vrneural.errors import check_range
+from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
+from vrneural.runtime.lights import light_arrays
+from vrneural.runtime.profiles import get_profile
 
 #: the texture-space pass's marches each parallax kind is timed with (``--parallax-march``)
 MARCHES = ("texel", "block", "auto")
@@ -114,8 +119,6 @@ def texture_update(r, entry: str, phase: int, period: int, f: int):
     """An encoder callback: every neural object's update of rows ``phase::period`` for every
     radiance texture, at frame ``f``'s eyes and lights, in one compute pass (``entry``:
     ``main``, the pass; ``bare``, its floor)."""
-    from vrneural.runtime.lights import light_arrays
-
     eyes = r.eyes_at(f)
     lp, lc = light_arrays(r.lights, f / r.s.fps)
 
@@ -178,7 +181,6 @@ def loop(r, frames: int, f0: int) -> dict:
 
 
 def _renderer(scene, c, eye_res, target: str, depth: int = 2, march: str = "pack"):
-    from vrneural.runtime.profiles import get_profile
     from vrneural.runtime.renderer import Renderer, Settings
 
     prof = get_profile("quest3")
@@ -193,10 +195,6 @@ def _renderer(scene, c, eye_res, target: str, depth: int = 2, march: str = "pack
 
 
 def run_frame(cfg: FrameConfig) -> dict:
-    from vrneural.bench.frame_report import markdown, plot, summarise
-    from vrneural.errors import check_range
-    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
-
     c = cfg.resolved()
     rp.check_texture_res(c.texture_res)
     check_range("--reuse", c.reuse, 0, REUSE_MAX)

@@ -15,8 +15,9 @@ from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.parts import QUICK_LOOP, Loop
 from vrneural.config import QuickConfig, choices, ints, opt, part, unset
-from vrneural.errors import count
+from vrneural.errors import check_range, count
 from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
+from vrneural.runtime.profiles import get_profile
 from vrneural.runtime.schedule import SCHEDULES
 
 
@@ -49,9 +50,6 @@ FramesConfig.QUICK = FramesConfig(
 
 
 def run_frames(cfg: FramesConfig) -> dict:
-    from vrneural.errors import check_range
-    from vrneural.runtime.profiles import get_profile
-
     c = cfg.resolved()
     texs, reuses, scheds = rp.texture_list(c.texture_res), c.reuse, c.schedules
     eye_res = c.loop.check()

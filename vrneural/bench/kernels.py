@@ -23,9 +23,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrneural.bench import report as rp
+from vrneural.bench.runtime import torch_net
 from vrneural.bench.runtime_frames import median_ms, wall_ms
 from vrneural.config import QuickConfig, choices, opt, unset
-from vrneural.errors import count
+from vrneural.errors import VrnError, check_range, count
+from vrneural.neural_offset import OFFSET_SIZES
 
 #: ``*_offset``: the network with NeuMIP's neural offset module of its size (issue #44), its
 #: offset MLP per texel (``--parallax neural``, march per texel) beside the material's
@@ -41,8 +43,6 @@ def network_width(name: str) -> tuple[str, int] | None:
     """``(method, width)`` of ``student``/``single8`` (8 wide, the paper's) or ``student:W``/
     ``single8:W`` (``--networks``; W in [1, 64], as `distill --width`); None for another
     name. Raises a one-line error for such a name whose width is not such an integer."""
-    from vrneural.errors import VrnError
-
     method, sep, w = name.partition(":")
     if method not in WIDENED:
         return None
@@ -58,8 +58,6 @@ def network_width(name: str) -> tuple[str, int] | None:
 def network_names(flag: str, value) -> tuple[str, ...]:
     """``--networks``: each one of :data:`NETWORKS`, ``student:W`` or ``single8:W``, none
     twice."""
-    from vrneural.errors import VrnError
-
     # network_width: a pair for student(:W) and single8(:W), None otherwise, an error for a bad W
     patterns = tuple(f"{m}:W" for m in WIDENED)
     vals = choices((*NETWORKS, *patterns), network_width)(flag, value)
@@ -113,7 +111,6 @@ def network(name: str):
     their values; the inputs NeuMIP does not read are zero, so the constants kernel skips them
     as in a pack)."""
     from vrneural.distill.models import NeuralModel, make_spec
-    from vrneural.neural_offset import OFFSET_SIZES
 
     base = name.removesuffix("_offset")
     method, width = network_width(base) or (base, 8)
@@ -177,8 +174,6 @@ def _gpu_ms(parts, texels, precision, buffer_weights, repeats, rng) -> float:
 def _torch_ms(parts, texels, repeats, rng) -> float:
     import torch
 
-    from vrneural.bench.runtime import torch_net
-
     nets, xs = [], []
     for layers, f in parts:
         rows = max(1, int(texels * f))
@@ -194,7 +189,6 @@ def _torch_ms(parts, texels, repeats, rng) -> float:
 
 
 def run_kernels(cfg: KernelsConfig) -> dict:
-    from vrneural.errors import VrnError, check_range
     from vrneural.gpu.device import adapter_summary
 
     c = cfg.resolved()

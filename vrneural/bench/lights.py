@@ -17,7 +17,7 @@ from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.parts import QUICK_LOOP, Loop
 from vrneural.config import QuickConfig, ints, opt, part, unset
-from vrneural.errors import count
+from vrneural.errors import check_range, count
 from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 
 
@@ -42,8 +42,6 @@ LightsConfig.QUICK = LightsConfig(lights=(1, 2, 4), texture_res=256, loop=QUICK_
 
 
 def run_lights(cfg: LightsConfig) -> dict:
-    from vrneural.errors import check_range
-
     c = cfg.resolved()
     rp.check_texture_res(c.texture_res)
     check_range("--reuse", c.reuse, 0, REUSE_MAX)

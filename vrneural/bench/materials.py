@@ -14,7 +14,11 @@ from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.parts import QUICK_LOOP, Loop
 from vrneural.config import QuickConfig, ints, opt, part, unset
-from vrneural.errors import count
+from vrneural.errors import check_range, count
+from vrneural.material import random_material
+from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
+from vrneural.runtime.lights import default_lights
+from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 
 
 @dataclass
@@ -40,10 +44,6 @@ MaterialsConfig.QUICK = MaterialsConfig(materials=(1, 2, 3), texture_res=256, lo
 
 def squares_scene(k: int, n_lights: int):
     """k upright squares (0.3 m) in a row facing the built-in head path, distinct materials."""
-    from vrneural.material import random_material
-    from vrneural.runtime.lights import default_lights
-    from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
-
     objs = []
     for i in range(k):
         x = (i - (k - 1) / 2) * 0.34
@@ -54,9 +54,6 @@ def squares_scene(k: int, n_lights: int):
 
 
 def run_materials(cfg: MaterialsConfig) -> dict:
-    from vrneural.errors import check_range
-    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
-
     c = cfg.resolved()
     counts = c.materials
     rp.check_texture_res(c.texture_res)

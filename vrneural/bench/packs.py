@@ -14,7 +14,10 @@ import json
 from pathlib import Path
 
 from vrneural.btf.identity import fingerprint_mismatch
+from vrneural.btf.synth import BtfConfig, synthesize
+from vrneural.distill.config import DistillConfig, TeachConfig
 from vrneural.errors import VrnError
+from vrneural.formats.vrnm import read_vrnm
 from vrneural.material import distilled, pack_width
 
 RUNS = {
@@ -35,8 +38,6 @@ def train_packs(
     """Train (or reuse) every pack under ``d``; ``budget``: preset, res, dirs, teacher_width,
     teacher_epochs, epochs, seed; ``only``: the networks of :data:`RUNS` to train (default all;
     the teacher always). Returns name -> .vrnm path."""
-    from vrneural.btf.synth import BtfConfig, synthesize
-    from vrneural.distill.config import DistillConfig, TeachConfig
     from vrneural.distill.distill import run_distill
     from vrneural.distill.teach import run_teach
 
@@ -111,8 +112,6 @@ def pack_paths(d) -> dict[str, Path]:
 def load_packs(paths: dict[str, Path]) -> dict:
     """name -> NeuralMaterial, each checked against the role its name gives it
     (:func:`check_packs`). Raises a one-line :class:`VrnError` naming the file."""
-    from vrneural.formats.vrnm import read_vrnm
-
     out = {}
     for k, p in paths.items():
         if Path(p).is_dir():

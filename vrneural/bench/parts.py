@@ -11,7 +11,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from vrneural.bench.supersample import SPP_MAX
+from vrneural.btf.synth import BtfConfig
 from vrneural.config import opt, unset
+from vrneural.errors import check_range
+from vrneural.runtime.config import parse_res
 
 
 @dataclass
@@ -27,9 +31,6 @@ class Loop:
 
     def check(self) -> tuple[int, int]:
         """One-line errors for bad values; returns ``--eye-res`` as ``(width, height)``."""
-        from vrneural.errors import check_range
-        from vrneural.runtime.config import parse_res
-
         check_range("--eyes", self.eyes, 1, 2)
         check_range("--cycles", self.cycles, 1, 100)
         check_range("--warmup", self.warmup, 0.0, 60.0)
@@ -51,9 +52,6 @@ class Scored:
     scored: int | None = unset(6, "consecutive frames scored per condition")
 
     def check(self) -> None:
-        from vrneural.bench.supersample import SPP_MAX
-        from vrneural.errors import check_range
-
         check_range("--crop", self.crop, 16, 2064)
         check_range("--spp", self.spp, 1, SPP_MAX)
         check_range("--scored", self.scored, 2, 1000)
@@ -72,9 +70,6 @@ class PackBudget:
 
     def check(self, presets: list[str], preset_flag: str = "--preset") -> None:
         """Each preset's BTF and the training sizes, with their options' names."""
-        from vrneural.btf.synth import BtfConfig
-        from vrneural.errors import check_range
-
         flags = {"res": "--btf-res", "dirs": "--btf-dirs", "preset": preset_flag}
         for p in presets:
             BtfConfig(preset=p, res=self.btf_res, dirs=self.btf_dirs, seed=self.seed).validate(

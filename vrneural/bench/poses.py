@@ -16,6 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
+from vrneural.outputs import atomic_path
+from vrneural.runtime.camera import look_rotation
+
 #: eye centre above and in front of the neck pivot, metres (a common VR neck model)
 NECK_UP = 0.12
 NECK_FORWARD = 0.08
@@ -45,8 +48,6 @@ def turn_poses(speed: float, amplitude: float = 30.0, still: float = 0.1, after:
                fps: float = 90.0) -> np.ndarray:  # fmt: skip
     """Rows ``[t, x, y, z, qx, qy, qz, qw]``: rest, a yaw turn of ``amplitude`` degrees at
     ``speed`` deg/s about the neck (centred on the view of :data:`TARGET`), rest."""
-    from vrneural.runtime.camera import look_rotation
-
     start, n = turn_frames(speed, amplitude, still, fps)
     total = start + n + round(after * fps) + 1
     base = look_rotation(TARGET - HEAD)
@@ -65,8 +66,6 @@ def turn_poses(speed: float, amplitude: float = 30.0, still: float = 0.1, after:
 
 def write_pose_log(path: Path, rows: np.ndarray) -> Path:
     """Write ``rows`` as a pose-log CSV with a header line."""
-    from vrneural.outputs import atomic_path
-
     with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["t", "x", "y", "z", "qx", "qy", "qz", "qw"])

@@ -42,6 +42,7 @@ from vrneural.bench.quality_parallax import (
     runs_table,
     teachers,
 )
+from vrneural.bench.quality_report import write_report
 from vrneural.bench.quality_train import (
     check_bench_out,
     check_wide_start,
@@ -57,9 +58,12 @@ from vrneural.bench.quality_train import (
     wide_start_record,
     with_wide_start,
 )
+from vrneural.btf.format import read_btf
+from vrneural.btf.identity import btf_fingerprint
 from vrneural.config import QuickConfig, config_dict, opt, unset, words
-from vrneural.distill.config import StudentShape, TrainBudget
-from vrneural.outputs import file_sha256
+from vrneural.distill.config import DistillConfig, StudentShape, TeachConfig, TrainBudget
+from vrneural.outputs import file_sha256, write_json
+from vrneural.scoring.score import score
 from vrneural.versions import package_versions
 
 METHODS = ("lafortune", "neumip", "single8", "student_nodistill", "student")
@@ -169,8 +173,6 @@ def _teach_config(
 ):
     """The teacher's config (``stem``: its file, ``parallax``: teach --parallax); ``resume``
     where ``--resume`` finds its checkpoint (it must match)."""
-    from vrneural.distill.config import TeachConfig
-
     tcfg = TeachConfig(
         btf=str(btf_path),
         output=str(root / preset / f"{stem}.pt"),
@@ -243,7 +245,6 @@ def network_runs(
 
 def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
     """The `distill` config of one network of the bench (``kw``: method, seed, epochs, ...)."""
-    from vrneural.distill.config import DistillConfig
     from vrneural.distill.distill import resolve_method
 
     kw = dict(kw)
@@ -266,9 +267,6 @@ def _network_config(cfg: QualityConfig, d: Path, btf_path: Path, output, **kw):
 def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> None:
     """``--jobs N``: synthesise, then train every teacher, then every other network, N
     processes at a time; the evaluation afterwards finds them finished and reuses them."""
-    from vrneural.btf.format import read_btf
-    from vrneural.btf.identity import btf_fingerprint
-
     quiet = dataclasses.replace(cfg, progress=False)
     btfs = {p: btf_file(p, cfg, root) for p in presets}
     with job_pool(cfg.jobs) as pool:
@@ -292,8 +290,6 @@ def _train_parallel(presets: list[str], cfg: QualityConfig, root: Path, log) -> 
 def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bool = False) -> dict:
     """Train and evaluate every method on one preset; returns its records. ``trained``: the
     ``--jobs`` workers trained them all, so only load them."""
-    from vrneural.btf.format import read_btf
-    from vrneural.btf.identity import btf_fingerprint
     from vrneural.distill.checkpoint import model_from_checkpoint
     from vrneural.distill.data import SliceData
     from vrneural.distill.evaluate import mean_l1, predict_slice
@@ -321,7 +317,6 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bo
     out: dict = {"btf": tck["btf"], "synth_seconds": synth_s, "methods": {}, "slices": {}}
     gt = [data.target(p, shard=False) for p in slices]
     out["slices"]["ground truth"] = [img(g, data.res) for g in gt]
-    from vrneural.scoring.score import score
 
     for name, cks in records.items():
         models = [model_from_checkpoint(ck) for ck in cks]
@@ -393,9 +388,6 @@ def run_quality(cfg: QualityConfig) -> dict:
 
 
 def _run(presets: list[str], cfg: QualityConfig, root: Path) -> dict:
-    from vrneural.bench.quality_report import write_report
-    from vrneural.outputs import write_json
-
     results, slices, t_all = {}, {}, time.perf_counter()
     if cfg.jobs > 1:
         _train_parallel(presets, cfg, root, print)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from vrneural.btf.format import read_btf
 from vrneural.errors import VrnError
 
 
@@ -29,8 +30,6 @@ def given_btfs(cfg) -> dict[str, Path]:
 def check_given(cfg) -> dict[str, Path]:
     """Every ``--btf`` file opens as a BTF that training takes (even size, at least two
     (light, view) pairs); one-line errors before any work."""
-    from vrneural.btf.format import read_btf
-
     btfs = given_btfs(cfg)
     for p in btfs.values():
         if p.suffix.lower() != ".btf":

@@ -7,7 +7,9 @@ import dataclasses
 
 from vrneural.bench.quality_btf import check_given
 from vrneural.bench.quality_parallax import bench_kinds, check_parallax_data
+from vrneural.btf.synth import BtfConfig
 from vrneural.config import resolved
+from vrneural.distill.config import DistillConfig, TrainBudget
 from vrneural.errors import VrnError, check_range, check_seed
 from vrneural.outputs import check_resume_force
 
@@ -15,8 +17,6 @@ from vrneural.outputs import check_resume_force
 def validate(cfg) -> list[str]:
     """Check every option before anything is synthesised, trained or written (the checks the
     stages would make later, with their ranges); returns the presets."""
-    from vrneural.btf.synth import BtfConfig
-    from vrneural.distill.config import DistillConfig, TrainBudget
     from vrneural.distill.teach import check_train_config
     from vrneural.distill.train import train_device
 

@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from vrneural.bench.quality_parallax import bin_pairs
+from vrneural.outputs import atomic_path
 
 
 def img(blocks, res):
@@ -29,7 +30,6 @@ def lafortune(data, every, slices, cfg, out: dict, path: Path, btf_sha: str):
     import torch
 
     from vrneural.distill.lafortune import N_PARAMS, fit_lafortune, predict_lafortune
-    from vrneural.outputs import atomic_path
 
     L = data.values.shape[0]
     H, W = data.res

@@ -30,6 +30,9 @@ import math
 import statistics
 
 from vrneural.bench.report import pyplot, save_png
+from vrneural.btf.format import read_btf
+from vrneural.errors import VrnError
+from vrneural.parallax import parallax_fetches
 
 #: view polar-angle bins, degrees
 VIEW_BINS = ((0.0, 30.0), (30.0, 50.0), (50.0, 65.0), (65.0, 76.0))
@@ -107,7 +110,6 @@ def texel_fetches(mat) -> float:
     """Texel loads per shaded texel of the runtime kernel (4 per bilinear lookup of 8
     channels; the coarse texture once per 2x2 block) plus the parallax march's at most, or the
     offset texture's."""
-    from vrneural.parallax import parallax_fetches
 
     def loads(name):
         return 4 * math.ceil(mat.textures[name].shape[2] / 8)
@@ -258,9 +260,6 @@ def check_parallax_data(presets: list[str], given: dict, asked: str = "height") 
     """``--parallax height`` (or ``both``) needs a height field in every BTF it benches:
     one-line error before any work for a synthetic preset (``btf synth`` writes none yet) or
     a given BTF without one (format version 1)."""
-    from vrneural.btf.format import read_btf
-    from vrneural.errors import VrnError
-
     if presets:
         raise VrnError(
             f"--parallax {asked}: the synthetic presets ({', '.join(presets)}) carry no height "

@@ -19,6 +19,7 @@ from vrneural.bench.quality_parallax import resolved_parallax
 from vrneural.config import config_dict, resolved
 from vrneural.distill.config import BEFORE_FIELD, RESUME_FREE
 from vrneural.errors import VrnError, count
+from vrneural.interrupt import raise_terminated, threading_main
 from vrneural.outputs import OutputDir, file_sha256
 
 
@@ -351,8 +352,6 @@ def resume_hint(root: Path):
     """Ctrl-C or SIGTERM in a training bench, in any phase (training, fits, evaluation, the
     report): finished networks are kept; say how to continue. SIGTERM raises
     KeyboardInterrupt here as SIGINT does (training's own handler saves first)."""
-    from vrneural.interrupt import raise_terminated, threading_main
-
     main = threading_main() and signal.getsignal(signal.SIGTERM) is not signal.SIG_IGN
     old = signal.signal(signal.SIGTERM, raise_terminated) if main else None
     try:

@@ -11,9 +11,12 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from vrneural.config import config_dict
+from vrneural.config import config_dict, int_items
+from vrneural.errors import VrnError, check_range
 from vrneural.outputs import OutputDir, atomic_path, write_json
+from vrneural.runtime.config import max_texture_res
 from vrneural.runtime.run import percentiles
+from vrneural.versions import package_versions
 
 
 @contextlib.contextmanager
@@ -33,7 +36,6 @@ def stats(x) -> dict:
 def header(bench: str, cfg) -> dict:
     """The common head of every ``results.json``: bench name, adapter, versions, config."""
     from vrneural.gpu.device import adapter_summary
-    from vrneural.versions import package_versions
 
     resolved = cfg.resolved() if hasattr(cfg, "resolved") else cfg
     return {
@@ -137,15 +139,12 @@ def texture_res_range() -> tuple[int, int]:
     """``[lo, hi]`` of a radiance texture side on this adapter (the same bounds as `run`)."""
     from vrneural.atlas.build import MIN_RESOLUTION
     from vrneural.gpu.device import adapter_summary
-    from vrneural.runtime.config import max_texture_res
 
     return MIN_RESOLUTION, max_texture_res(adapter_summary())
 
 
 def check_texture_res(value: int, field: str = "--texture-res") -> int:
     """One radiance texture side: in :func:`texture_res_range` and even (one-line VrnError)."""
-    from vrneural.errors import VrnError, check_range
-
     check_range(field, value, *texture_res_range())
     if value % 2:
         raise VrnError(f"{field} = {value} must be even (2x2 blocks)")
@@ -155,8 +154,6 @@ def check_texture_res(value: int, field: str = "--texture-res") -> int:
 def texture_list(value, field: str = "--texture-res") -> tuple[int, ...]:
     """Radiance texture sides: each in :func:`texture_res_range` and even (one-line VrnError);
     the adapter's bound is why a list field checks it here, not when its config is built."""
-    from vrneural.config import int_items
-
     return int_items(field, value, *texture_res_range(), even=True)
 
 

@@ -25,8 +25,11 @@ from dataclasses import dataclass
 import numpy as np
 from tqdm import tqdm
 
+from vrneural.bench.report import adapter_line, finish, header, prepare_out, table
 from vrneural.bench.runtime_frames import make_renderer, median_ms, schedules, wall_ms
 from vrneural.config import Config, opt, words
+from vrneural.errors import VrnError
+from vrneural.material import half_vector, random_material, sample_bilinear_wrap
 
 
 def texture_vs_screen(texture_res=1200, eye_res=(2064, 2208), reuse=4, frames=3) -> dict:
@@ -65,7 +68,6 @@ def texture_vs_screen(texture_res=1200, eye_res=(2064, 2208), reuse=4, frames=3)
 
 
 def _plane_case(res: int, n_lights: int = 1):
-    from vrneural.material import random_material
     from vrneural.runtime.assets import get_atlas, get_mesh
 
     atlas = get_atlas(get_mesh("plane"), res)
@@ -142,8 +144,6 @@ def vs_torch(res=512, repeats=7, n_lights=3) -> dict:
     the three back to back. Seven repeats by default: torch's time on a shared CPU varies far
     more between runs than the kernel's."""
     import torch
-
-    from vrneural.material import half_vector, sample_bilinear_wrap
 
     case = _plane_case(res, n_lights)
     mat = case[1]
@@ -265,7 +265,6 @@ def mlp_only(n_blocks=65536, repeats=3) -> dict:
 
     from vrneural.gpu.mlp_kernel import MlpKernel
     from vrneural.gpu.timing import GpuTimer
-    from vrneural.material import random_material
 
     mat = random_material(5)
     rng = np.random.default_rng(0)
@@ -328,8 +327,6 @@ HEADLINES = {
 
 def selected(flag: str, value) -> tuple[str, ...]:
     """The measurements ``--only`` names, in its order (one-line VrnError if one is unknown)."""
-    from vrneural.errors import VrnError
-
     names = words(flag, value)
     if not names:
         raise VrnError(f"{flag} is empty; choose from {', '.join(MEASUREMENTS)}")
@@ -382,8 +379,6 @@ def run_runtime(cfg: RuntimeConfig, out: str) -> dict:
     """Check ``--only`` and the output folder, measure, write ``results.json`` (``quick``, one
     key per measurement with its result, and one record per measurement: headline figures,
     target, seconds) and ``results.md`` into ``out``; returns the document."""
-    from vrneural.bench.report import adapter_line, finish, header, prepare_out, table
-
     names = cfg.only
     with prepare_out(out, cfg.force, "runtime") as root:
         t0 = time.perf_counter()

@@ -9,6 +9,8 @@ import time
 
 import numpy as np
 
+from vrneural.runtime.scene import builtin_scene
+
 
 def wall_ms(fn) -> float:
     t0 = time.perf_counter()
@@ -23,7 +25,6 @@ def median_ms(fn, repeats: int) -> float:
 
 def make_renderer(mode, texture_res, eye_res, reuse=0, schedule="burst", frames=1, eyes=2):
     from vrneural.runtime.renderer import Renderer, Settings
-    from vrneural.runtime.scene import builtin_scene
 
     s = Settings(
         eyes=eyes,

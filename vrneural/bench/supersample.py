@@ -15,6 +15,8 @@ import math
 
 import numpy as np
 
+from vrneural.errors import check_int
+
 #: the largest sample count per pixel (each sample is a full per-pixel teacher render)
 SPP_MAX = 256
 
@@ -34,7 +36,6 @@ class SupersampledReference:
     samples per pixel: ``frame(f) -> [eyes, H, W, 3]`` float32 linear radiance."""
 
     def __init__(self, scene, settings, spp: int = 16, seed: int = 0):
-        from vrneural.errors import check_int
         from vrneural.runtime.renderer import Renderer
 
         check_int("--spp", spp, 1, SPP_MAX)

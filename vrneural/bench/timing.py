@@ -18,6 +18,14 @@ import time
 import numpy as np
 
 from vrneural.bench.report import stats
+from vrneural.btf.heightfield import spectral_noise
+from vrneural.material import NeuralMaterial, random_material
+from vrneural.mlp import random_mlp
+from vrneural.neural_offset import OFFSET_SIZES, VIEW_INPUTS
+from vrneural.parallax import auto_blocks
+from vrneural.runtime.lights import default_lights
+from vrneural.runtime.profiles import get_profile
+from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 
 
 def make_renderer(
@@ -164,8 +172,6 @@ def count_sweep(c, eye_res, counts: list[int], desc: str, setup) -> tuple[list[d
     the quest3 frame rate and field of view, each measured over ``c.loop.cycles`` update cycles
     after ``c.loop.warmup`` s. Returns the records (in ``counts`` order) and the frames measured
     per count."""
-    from vrneural.runtime.profiles import get_profile
-
     prof = get_profile("quest3")
     n = frames_for(c.reuse, c.loop.cycles, 1)
     bar = progress(n * len(counts), desc, c.progress)
@@ -195,9 +201,6 @@ def parallax_materials(steps: int, seeds=(3, 4), tex_res: int = 16, march: str =
     range; the march ends where it meets it, so the cost depends on the relief)."""
     import numpy as np
 
-    from vrneural.btf.heightfield import spectral_noise
-    from vrneural.material import NeuralMaterial, random_material
-
     out = []
     for s in seeds:
         m = random_material(s, tex_res=tex_res)
@@ -214,10 +217,6 @@ def offset_materials(seeds=(3, 4), tex_res: int = 16, march: str = "texel"):
     student's size (:data:`vrneural.neural_offset.OFFSET_SIZES`: a random offset texture and
     a random dense offset MLP; the cost does not depend on the values)."""
     import numpy as np
-
-    from vrneural.material import NeuralMaterial, random_material
-    from vrneural.mlp import random_mlp
-    from vrneural.neural_offset import OFFSET_SIZES, VIEW_INPUTS
 
     ch, hidden = OFFSET_SIZES["student"]
     out = []
@@ -240,7 +239,6 @@ def auto_block_shares(r, sides=()) -> tuple[float, dict]:
     block footprints computed once."""
     import numpy as np
 
-    from vrneural.parallax import auto_blocks
     from vrneural.runtime.reference import block_geometry
 
     feet = []  # (footprints [N], the material's march grid)
@@ -266,10 +264,7 @@ def bench_scene(n_lights: int, materials=None):
     architecture; frame time does not depend on the weights' values)."""
     from pathlib import Path
 
-    from vrneural.material import random_material
     from vrneural.runtime.assets import get_mesh
-    from vrneural.runtime.lights import default_lights
-    from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 
     def fit(name: str, size: float) -> float:  # scale so the mesh's largest extent is ``size``
         p = get_mesh(name).positions

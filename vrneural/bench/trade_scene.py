@@ -21,7 +21,11 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.bench import poses
+from vrneural.bench.supersample import SupersampledReference
+from vrneural.runtime.adaptive import AdaptiveState
 from vrneural.runtime.camera import HeadPath, OrbitPath, PoseLogPath, look_rotation
+from vrneural.runtime.lights import PointLight, light_arrays
+from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 
 SPHERE_M = 0.08  # sphere diameter, metres (about 105 pixels at 1 m on quest3)
 DIST_M = 1.0  # default distance head -> sphere centre
@@ -74,8 +78,6 @@ def scene_for(c: Condition, mat, reference=None, n_lights: int = 2):
     """The condition's scene with neural material ``mat`` on the sphere (``reference``: the
     teacher pack reference mode shades instead)."""
     from vrneural.runtime.assets import get_mesh
-    from vrneural.runtime.lights import PointLight
-    from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 
     p = get_mesh("sphere").positions
     scale = c.size / float((p.max(0) - p.min(0)).max())
@@ -194,8 +196,6 @@ def render(scene, s, cond, crop, full, keep) -> tuple[dict, list]:
 
 
 def reference(scene, s, cond, crop, full, frames, spp, seed) -> dict:
-    from vrneural.bench.supersample import SupersampledReference
-
     ref = SupersampledReference(scene, s, spp, seed)
     track(ref.r, cond, crop, full)
     return {f: ref.frame(f) for f in frames}
@@ -205,9 +205,6 @@ def scheduled_candidates(r, cond, budget: float | None) -> float:
     """Candidate blocks per displayed frame (frame 0, the first full update, left out) that
     renderer ``r``'s schedule hands the texture-space pass over ``cond``'s frames, with adaptive
     reuse at ``budget`` degrees (None: the fixed N): the schedule alone, nothing shaded."""
-    from vrneural.runtime.adaptive import AdaptiveState
-    from vrneural.runtime.lights import light_arrays
-
     r.s.reuse_budget = budget
     for n in r.neural:
         n.fresh, n.adapt = False, AdaptiveState()

@@ -28,11 +28,14 @@ import numpy as np
 
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
+from vrneural.bench.packs import REQUIRED, load_packs, pack_paths, train_packs
 from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored
 from vrneural.bench.trade_scene import reference, render, scheduled_candidates
 from vrneural.bench.tradeoff_report import finish_report, label
 from vrneural.config import QuickConfig, floats, ints, listed, opt, part, unset
-from vrneural.runtime.config import REUSE_MAX
+from vrneural.errors import VrnError, check_range
+from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
+from vrneural.runtime.profiles import get_profile
 from vrneural.scoring import metrics
 
 
@@ -321,9 +324,6 @@ def work(stats) -> dict:
 
 def check(c) -> None:
     """Every option, before any output exists."""
-    from vrneural.errors import VrnError, check_range
-    from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
-
     c.score.check()
     check_range("--turn", c.turn, 1.0, 180.0)
     check_range("--near", c.near, 0.2, 100.0)
@@ -350,8 +350,6 @@ def check(c) -> None:
 
 def load_materials(c, root: Path) -> dict:
     """``{preset or pack folder: {pack name: NeuralMaterial}}`` (trained into ``root/packs``)."""
-    from vrneural.bench.packs import load_packs, pack_paths, train_packs
-
     if c.packs:
         return {Path(c.packs).name: load_packs(pack_paths(c.packs))}
     out = {}
@@ -366,9 +364,7 @@ def load_materials(c, root: Path) -> dict:
 def run_tradeoff(cfg: TradeoffConfig) -> dict:
     from tqdm import tqdm
 
-    from vrneural.bench.packs import REQUIRED
     from vrneural.gpu.device import adapter_summary
-    from vrneural.runtime.profiles import get_profile
 
     c = cfg.resolved()
     check(c)

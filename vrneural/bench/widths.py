@@ -26,11 +26,29 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+from vrneural.bench.quality import QualityConfig, _teach_config
+from vrneural.bench.quality import network_runs as one
+from vrneural.bench.quality_checks import validate as quality_validate
+from vrneural.bench.quality_train import (
+    check_bench_out,
+    job_pool,
+    load_trained,
+    make_btf,
+    resume_hint,
+    run_jobs,
+    run_networks,
+    train_in_process,
+    with_wide_start,
+)
 from vrneural.bench.widths_report import METHODS, STARTS, within, write_report
+from vrneural.btf.format import read_btf
+from vrneural.btf.identity import btf_fingerprint
 from vrneural.btf.presets import PRESETS
+from vrneural.btf.synth import BtfConfig
 from vrneural.config import QuickConfig, choices, config_dict, ints, opt, unset
 from vrneural.distill.config import COMPILE_MODES
 from vrneural.errors import VrnError, check_range, check_seed
+from vrneural.outputs import file_sha256, write_json
 from vrneural.versions import package_versions
 
 #: the networks ``--methods`` may name: their `distill` settings and their names in the report
@@ -111,10 +129,6 @@ class Plan:
 
 def validate(cfg: WidthsConfig) -> Plan:
     """Every option, before anything is synthesised, trained or written."""
-    from vrneural.bench.quality import QualityConfig
-    from vrneural.bench.quality_checks import validate as quality_validate
-    from vrneural.btf.synth import BtfConfig
-
     check_seed("--seed", cfg.seed)
     BtfConfig(preset=cfg.preset).validate({"preset": "--preset"})  # one preset, as it is
     widths, methods, starts = tuple(sorted(cfg.widths)), cfg.methods, cfg.starts
@@ -150,9 +164,6 @@ def _key(method: str, width: int | None, start: str) -> str:
 def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = True) -> list:
     """``((method, width, start), stem, config)`` of every network and seed (wide halves: None
     instead of the triple), in an order one process can train them in."""
-    from vrneural.bench.quality import network_runs as one
-    from vrneural.outputs import file_sha256
-
     q = plan.quality
     d = root / q.presets[0]
     tsha = file_sha256(d / "teacher.pt") if check_teacher else None
@@ -172,8 +183,6 @@ def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = T
 
 def run_widths(cfg: WidthsConfig) -> dict:
     """Run the sweep; writes results.json, results.md and widths.png in ``out``."""
-    from vrneural.bench.quality_train import check_bench_out, resume_hint
-
     cfg = cfg.resolved()
     plan = validate(cfg)
     root = Path(cfg.out)
@@ -209,18 +218,6 @@ def _check_same_preset(cfg: WidthsConfig, root: Path) -> None:
 def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
     """Synthesise the BTF, train the teacher and every network (``--jobs`` processes at a
     time); returns the teacher's checkpoint and ``(key, final checkpoint)`` of each network."""
-    from vrneural.bench.quality import _teach_config
-    from vrneural.bench.quality_train import (
-        job_pool,
-        load_trained,
-        make_btf,
-        run_jobs,
-        run_networks,
-        train_in_process,
-    )
-    from vrneural.btf.format import read_btf
-    from vrneural.btf.identity import btf_fingerprint
-
     q, preset = plan.quality, plan.quality.presets[0]
     (root / preset).mkdir(parents=True, exist_ok=True)
     btf_path = make_btf(preset, q, root / "btf" / f"{preset}.btf")
@@ -240,12 +237,9 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
 def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
     import numpy as np
 
-    from vrneural.bench.quality_train import with_wide_start
-    from vrneural.btf.format import read_btf
     from vrneural.distill.checkpoint import model_from_checkpoint
     from vrneural.distill.data import SliceData
     from vrneural.distill.evaluate import mean_l1
-    from vrneural.outputs import write_json
 
     t0 = time.perf_counter()
     tck, done = _train(plan, root, print)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.btf.format import Btf
+from vrneural.btf.format import Btf, read_btf
 from vrneural.errors import VrnError
 from vrneural.grazing import directions_range
 
@@ -83,8 +83,6 @@ def moved_btf(record: dict, beside) -> str | None:
     name beside ``beside`` (the checkpoint or pack that records it), if it exists and is that
     very BTF (every fingerprint key the record has matches, ``values_sha256`` included when
     recorded), said on stderr; else None."""
-    from vrneural.btf.format import read_btf
-
     name = Path(str(record.get("path") or "")).name
     if not name or "sha256" not in record:
         return None

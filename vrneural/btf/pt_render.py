@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.btf.dirs import MAX_THETA_DEG, direction_set
-from vrneural.btf.format import BtfWriter, check_partial_settings
+from vrneural.btf.format import BtfWriter, check_partial_settings, read_btf
 from vrneural.btf.pt_presets import PT_PRESETS
 from vrneural.config import config_dict, opt
 from vrneural.errors import VrnError, check_choice, check_range, check_seed
@@ -173,7 +173,6 @@ def noise_floor(path, views: int = 6, progress: bool = True) -> dict:
     from tqdm import tqdm
 
     from vrneural.btf import pathtrace as pt
-    from vrneural.btf.format import read_btf
 
     btf = read_btf(path)
     gen = dict(btf.meta.get("generator") or {})

@@ -19,6 +19,8 @@ import numpy as np
 
 from vrneural.btf.dirs import spherical
 from vrneural.btf.format import Btf
+from vrneural.errors import VrnError
+from vrneural.outputs import atomic_path
 from vrneural.warn import VrnWarning
 
 
@@ -194,8 +196,6 @@ def sheet_figure(btf: Btf, texel: tuple[int, int] | None = None):
 
 def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
     """Write the contact sheet PNG to ``out``. ``texel = (x, y)`` picks the unfolded texel."""
-    from vrneural.outputs import atomic_path
-
     fig = sheet_figure(btf, texel)  # selects the Agg backend before pyplot is imported here
     import matplotlib.pyplot as plt
 
@@ -209,7 +209,6 @@ def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
 def _height_summary(btf) -> dict:
     """The height field's size and range, and its relief on the texel grid with the parallax
     ``distill --parallax auto`` gives it (vrneural.parallax; None where it does not fit)."""
-    from vrneural.errors import VrnError
     from vrneural.parallax import choose_kind, height_at_texels, relief_texels
 
     out = {

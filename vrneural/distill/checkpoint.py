@@ -26,8 +26,11 @@ from pathlib import Path
 
 import torch
 
+from vrneural.btf.format import BTF_MAGIC
+from vrneural.btf.identity import moved_btf
 from vrneural.distill.models import NeuralModel
 from vrneural.errors import VrnError
+from vrneural.formats.vrnm import VRNM_MAGIC
 from vrneural.grazing import DEFAULT_THETA_MAX_DEG
 from vrneural.outputs import make_parent
 from vrneural.warn import VrnWarning
@@ -154,9 +157,6 @@ def _non_finite(obj, name: str = "") -> str | None:
 
 def _refuse_our_other_formats(p: Path) -> None:
     """A BTF or a runtime pack given where a checkpoint belongs: say which it is."""
-    from vrneural.btf.format import BTF_MAGIC
-    from vrneural.formats.vrnm import VRNM_MAGIC
-
     try:
         with open(p, "rb") as f:
             head = f.read(8)
@@ -177,7 +177,6 @@ def recorded_btf(ck: dict, source) -> str:
     path = ck["btf"]["path"]
     if Path(path).exists():
         return path
-    from vrneural.btf.identity import moved_btf
 
     found = moved_btf(ck["btf"], source) if isinstance(source, (str, Path)) else None
     if found is None:

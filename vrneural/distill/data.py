@@ -16,6 +16,7 @@ import numpy as np
 import torch
 
 from vrneural.btf.format import Btf
+from vrneural.distill.lookups import avg_pool_levels
 from vrneural.errors import VrnError
 
 
@@ -81,8 +82,6 @@ class SliceData:
         """The slice averaged over ``2^level`` texel squares, in blocks ``[N_level, 4, 3]``
         float32 (every rank: the levels are small and not sharded): the ground truth of a
         prefiltered pyramid level."""
-        from vrneural.distill.lookups import avg_pool_levels
-
         v = self._on[0][pair // self.n_view, pair % self.n_view].float()
         return to_blocks(avg_pool_levels(v, level))
 

@@ -14,11 +14,17 @@ from types import SimpleNamespace
 import numpy as np
 import torch
 
+from vrneural.btf.format import read_btf
+from vrneural.btf.identity import btf_fingerprint, check_btf_record
+from vrneural.distill.checkpoint import model_from_checkpoint, recorded_btf
 from vrneural.distill.data import SliceData
+from vrneural.distill.specs import spec_width
 from vrneural.errors import VrnError
 from vrneural.formats.f16 import F16_MAX, F16_MIN_NORMAL
+from vrneural.formats.vrnm import write_vrnm
 from vrneural.grazing import directions_range
 from vrneural.material import NeuralMaterial, half_vector, material_forward, sample_bilinear_wrap
+from vrneural.outputs import check_output, check_outputs, file_sha256
 
 RANGE_PAIRS = 16  # training slices used for activation ranges
 
@@ -94,7 +100,6 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None, lod_leve
     ``lod_levels`` > 1 for a checkpoint trained without a pyramid: give the pack one of box
     averages of level 0 (the ``filter`` pyramid, untrained)."""
     from vrneural import __version__
-    from vrneural.distill.checkpoint import model_from_checkpoint
 
     model = model_from_checkpoint(ck, source)
     if lod_levels > 1 and model.lod_levels == 1:
@@ -187,12 +192,6 @@ def export_checkpoint(
     lod_levels: int = 0,
 ) -> tuple[Path, dict]:
     """Write the ``.vrnm`` of a loaded checkpoint. Returns ``(path, meta)``."""
-    from vrneural.btf.format import read_btf
-    from vrneural.btf.identity import btf_fingerprint, check_btf_record
-    from vrneural.distill.checkpoint import recorded_btf
-    from vrneural.formats.vrnm import write_vrnm
-    from vrneural.outputs import check_output, check_outputs
-
     out = check_output(out, force)
     if data is None:
         path = btf or recorded_btf(ck, source or "the checkpoint")
@@ -219,8 +218,6 @@ def ranges_table(ranges: dict) -> str:
 
 
 def _sha256_or_none(path) -> str | None:
-    from vrneural.outputs import file_sha256
-
     return file_sha256(path) if path and Path(path).is_file() else None
 
 
@@ -229,7 +226,6 @@ def init_record(init: dict | None) -> dict | None:
     file, hash, width and epochs; None for a run from random weights."""
     if not init:
         return None
-    from vrneural.distill.specs import spec_width
 
     return {
         "path": init["path"],

@@ -16,6 +16,7 @@ from torch import nn
 from vrneural.grazing import boundary_consts
 from vrneural.material import HALF_EPS2
 from vrneural.mlp import Layer
+from vrneural.neural_offset import MIN_COS, VIEW_INPUTS
 
 
 def half_vector(wi: torch.Tensor, wo: torch.Tensor) -> torch.Tensor:
@@ -123,8 +124,6 @@ def march_hits(height, u: torch.Tensor, d: torch.Tensor, steps: int, t_max: floa
 def offset_depth(mlp, tex: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor, march: str = "texel"):
     """The neural offset's ray depth (texels) per texel ``[N, 4, 1]`` of the blocks ``uv:
     [N, 4, 2]`` seen along ``wo: [3]`` (once per block and repeated for ``march = "block"``)."""
-    from vrneural.neural_offset import VIEW_INPUTS
-
     u = uv.mean(1, keepdim=True) if march == "block" else uv  # [N, 1 or 4, 2]
     psi = sample_bilinear_wrap(tex, u)
     view = wo[:VIEW_INPUTS].to(psi.dtype).expand(*psi.shape[:-1], VIEW_INPUTS)
@@ -136,8 +135,6 @@ def offset_uv(mlp, tex: torch.Tensor, wo: torch.Tensor, uv: torch.Tensor, march:
     """Twin of :func:`vrneural.neural_offset.offset_uv` for one view ``wo: [3]``: the blocks'
     UVs ``uv: [N, 4, 2]`` moved by NeuMIP's neural offset (offset texture ``tex: [H, W, C]``,
     offset MLP ``mlp``) -> ``[N, 4, 2]``; differentiable in both (trained with the rest)."""
-    from vrneural.neural_offset import MIN_COS
-
     H, W = tex.shape[:2]
     c = torch.clamp(wo[2], min=MIN_COS)
     s = torch.stack([wo[0] / W / c, wo[1] / H / c]).to(uv.dtype)  # [2]

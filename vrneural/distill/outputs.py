@@ -17,7 +17,7 @@ import json
 import warnings
 from pathlib import Path
 
-from vrneural.config import config_path
+from vrneural.config import config_path, write_config
 from vrneural.distill.checkpoint import load_checkpoint, unfinished_run
 from vrneural.errors import VrnError
 from vrneural.outputs import (
@@ -178,8 +178,6 @@ def finish_outputs(ck: dict, cfg, data, export: bool | None = None, missing_only
     ``missing_only`` (a finished run resumed, nothing trained) only files that are not there
     are written: the ones there describe this very checkpoint already, and a pack exported
     from it since (``vrneural export``) stays as it is."""
-    from vrneural.config import write_config
-
     extra = {"epochs_done": ck["epoch"], "history": ck["history"], "btf": ck["btf"]}
     if not (missing_only and config_path(cfg.output).exists()):
         write_config(cfg.output, cfg, extra)

@@ -22,6 +22,7 @@ from vrneural.distill.outputs import (
 )
 from vrneural.distill.train import compile_networks, dist_setup, fit, train_device
 from vrneural.errors import VrnError, check_range, check_seed, count
+from vrneural.outputs import output_lock
 from vrneural.parallax import setup_parallax
 
 
@@ -113,8 +114,6 @@ def run_teach(cfg: TeachConfig, on_step=None, epochs_flag: str = "--epochs") -> 
     outputs while it trains (:func:`vrneural.outputs.output_lock`). Fields left None take
     their defaults, or on ``--resume`` the checkpoint's; ``epochs_flag``: the option that
     sets ``cfg.epochs``, for messages."""
-    from vrneural.outputs import output_lock
-
     with output_lock(cfg.output):
         return _run_teach(cfg, on_step, epochs_flag)
 

@@ -29,7 +29,7 @@ from vrneural.gpu.shaders import render_wgsl
 from vrneural.grazing import boundary_consts
 from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.mlp import pack_weights, wgsl_type
-from vrneural.parallax import AUTO_BLOCK_FOOT_TEXELS
+from vrneural.parallax import AUTO_BLOCK_FOOT_TEXELS, height_bounds
 from vrneural.runtime.codegen_mlp import network_wgsl
 from vrneural.runtime.codegen_sample import samplers_wgsl
 from vrneural.runtime.interface import (
@@ -220,7 +220,6 @@ def _height_consts(mat: NeuralMaterial) -> tuple:
     (exact float32 values, as the numpy twin uses); ``()`` without parallax."""
     if not mat.parallax_steps:
         return ()
-    from vrneural.parallax import height_bounds
 
     lo, hi = height_bounds(mat.height)
     H, W = mat.height.shape

@@ -12,6 +12,7 @@ from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.parallax import RENDER_MARCHES
 from vrneural.runtime.lights import LIGHTS_MAX
 from vrneural.runtime.profiles import PROFILES, get_profile
+from vrneural.runtime.scene import Scene
 from vrneural.runtime.schedule import SCHEDULES
 from vrneural.runtime.settings import FRAMES_IN_FLIGHT_MAX, MODES, RADIANCE, Settings
 
@@ -131,7 +132,6 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     """Profile < scene < CLI (``--texture-res`` also beats objects' ``texture_res``);
     validates ranges against the adapter (``AdapterSummary``)."""
     from vrneural.runtime.codegen import resolve_precision
-    from vrneural.runtime.scene import Scene
 
     if not isinstance(cfg, RunConfig):
         raise VrnError(f"resolve: cfg is a {type(cfg).__name__}, expected a RunConfig")

@@ -18,8 +18,10 @@ import numpy as np
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import upload_buffer
 from vrneural.gpu.shaders import render_wgsl
+from vrneural.gpu.uniforms import UniformArena
 from vrneural.runtime.interface import FRAME, LIGHT, OBJECT, forward_bindings, structs_wgsl
 from vrneural.runtime.reference import normal_matrix
+from vrneural.runtime.texture_pass import pack_lights_into
 
 #: eye colour targets: ``hdr`` (linear radiance, for EXR and FLIP) or ``display`` (Reinhard
 #: tonemapped, sRGB-encoded 8 bits: half the bytes where HDR output is not needed)
@@ -159,8 +161,6 @@ class EyeTargets:
     ):  # fmt: skip
         import wgpu
 
-        from vrneural.gpu.uniforms import UniformArena
-
         dev = get_device()
         tu = wgpu.TextureUsage
         self.size = (width, height)
@@ -195,8 +195,6 @@ class EyeTargets:
     def update(self, view_proj, eye_pos, light_pos, light_rgb) -> None:
         """Frame uniforms: ``view_proj [4, 4]``, ``eye_pos [3]``, lights (positions as given,
         in the same frame as ``view_proj``)."""
-        from vrneural.runtime.texture_pass import pack_lights_into
-
         ar = self.arena
         f = FRAME.view(ar.view(self.f_off, FRAME_BYTES, np.uint8))[0]
         pack_frame_into(f, view_proj, eye_pos, len(light_pos))

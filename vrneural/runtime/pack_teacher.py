@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from vrneural.errors import VrnError
+from vrneural.formats.vrnm import read_vrnm
 from vrneural.outputs import file_sha256, same_file
 
 
@@ -49,8 +50,6 @@ def teacher_beside(pack: Path, mat) -> tuple[Path | None, object, list[str]]:
 
 def _read_teacher(t: Path, pack: Path, want: str | None, strict: bool) -> tuple[object, str]:
     """``(material, "")`` when ``t`` is the teacher of ``pack``, else ``(None, why not)``."""
-    from vrneural.formats.vrnm import read_vrnm
-
     if not t.is_file():
         return None, "not found"
     if same_file(t, pack):

@@ -35,6 +35,7 @@ from vrneural.runtime.encode import FrameEncoding
 from vrneural.runtime.gpu_material import GpuAtlas
 from vrneural.runtime.lights import light_arrays
 from vrneural.runtime.objects import NeuralObject, bounding_sphere
+from vrneural.runtime.output import tonemap
 from vrneural.runtime.schedule import frame_slice
 from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget
 from vrneural.runtime.screen_res import choose, level_sides, mesh_area, wanted_side
@@ -468,8 +469,6 @@ class Renderer(FrameEncoding):
     def read_display(self) -> list[np.ndarray]:
         """The eyes' display colours ``[H, W, 3]`` uint8 (sRGB) of the last frame (waits for
         it): the display target as it is, or the HDR target through ``output.tonemap``."""
-        from vrneural.runtime.output import tonemap
-
         self.wait()
         if self.s.target == "display":
             return [read_texture(et.colour)[..., :3] for et in self.eye_t]

@@ -12,6 +12,7 @@ import numpy as np
 
 from vrneural.config import config_dict, given, resolved
 from vrneural.errors import VrnError, check_int, check_range, count
+from vrneural.formats.vrnm import read_vrnm
 from vrneural.interrupt import Stop
 from vrneural.outputs import OUTPUT_MARK, OutputDir, write_json
 from vrneural.outputs.files import make_dirs, why
@@ -25,6 +26,7 @@ from vrneural.runtime.output import (
     write_png,
 )
 from vrneural.runtime.pack_teacher import teacher_beside
+from vrneural.runtime.scene import MaterialDesc, builtin_lights, builtin_scene, load_scene
 
 
 def selected_frames(spec: str, frames: int) -> list[int]:
@@ -77,9 +79,6 @@ def use_pack(scene, path: str) -> None:
     object keeping its tiling. Its teacher pack (:func:`teacher_beside`) becomes the ``--mode
     reference``; a teacher pack is its own, so ``--pack teacher.vrnm --mode reference`` renders
     it."""
-    from vrneural.formats.vrnm import read_vrnm
-    from vrneural.runtime.scene import MaterialDesc
-
     p = Path(path)
     if not p.is_file():
         what = "a directory, not a pack file" if p.is_dir() else "file not found"
@@ -170,7 +169,6 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
 
     from vrneural.gpu.device import adapter_summary
     from vrneural.runtime.renderer import Renderer
-    from vrneural.runtime.scene import builtin_lights, builtin_scene, load_scene
 
     out = od.path
     chosen = given(cfg)  # the fields given (None: not given): a knob that does nothing is named

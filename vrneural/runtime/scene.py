@@ -42,6 +42,7 @@ import numpy as np
 import tomllib
 
 from vrneural.errors import SEED_MAX, VrnError, check_int, number_text
+from vrneural.formats.vrnm import read_vrnm
 from vrneural.material import NeuralMaterial, lambertian_material, random_material
 from vrneural.runtime.lights import (
     LIGHTS_MAX,
@@ -50,6 +51,7 @@ from vrneural.runtime.lights import (
     PointLight,
     default_lights,
 )
+from vrneural.runtime.profiles import PROFILES
 
 
 @dataclass
@@ -206,7 +208,6 @@ def _material(src: str, path: str, t: dict, base: Path) -> MaterialDesc:
     f.unknown(("kind", "pack", "procedural", "seed", "albedo", "scale", "reference"))
     f.one_of("pack", "procedural")
     tiling = f.num("scale", 1.0, 0.0, lo_open=True)
-    from vrneural.formats.vrnm import read_vrnm
 
     ref, ref_src = None, ""
     if "reference" in t:
@@ -240,7 +241,6 @@ def _material(src: str, path: str, t: dict, base: Path) -> MaterialDesc:
 def parse_scene(data: dict, src: str, base: Path) -> Scene:
     top = _Fields(src, "", data)
     top.unknown(("name", "profile", "ipd", "head", "objects", "lights"))
-    from vrneural.runtime.profiles import PROFILES
 
     profile = top.str("profile", None, tuple(PROFILES)) if "profile" in data else None
     ipd = top.num("ipd", 0.063, 0.0, 0.2) if "ipd" in data else None
@@ -414,8 +414,6 @@ def builtin_pack(name: str) -> Path:
 
 def builtin_material(key: str) -> MaterialDesc:
     """The bundled student pack ``key`` with its teacher attached as ``.reference``."""
-    from vrneural.formats.vrnm import read_vrnm
-
     spec = BUILTIN_MATERIALS[key]
     stem = spec["pack"].removesuffix(".vrnm")
     pack = Path(str(builtin_pack(spec["pack"])))

@@ -21,6 +21,7 @@ from vrneural.material import NeuralMaterial
 from vrneural.runtime.codegen import material_spec, texture_space_wgsl
 from vrneural.runtime.gpu_material import GpuAtlas, GpuMaterial, new_radiance_texture
 from vrneural.runtime.interface import LIGHT, TEXTURE_PARAMS, texture_bindings
+from vrneural.runtime.radiance_mips import MipChain, mip_count
 from vrneural.runtime.reference import normal_matrix
 
 PARAMS_BYTES = TEXTURE_PARAMS.size  # 176
@@ -190,8 +191,6 @@ class TextureTarget:
         arena: UniformArena | None = None,
         mips: bool = False,
     ):
-        from vrneural.runtime.radiance_mips import MipChain, mip_count
-
         self.tpass = tpass
         self.gatlas = gatlas
         self.R = gatlas.resolution

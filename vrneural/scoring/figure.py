@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vrneural.btf.sheet import sheet_panels
 from vrneural.scoring.score import display_slice, predict_slice, slice_exposure, texel_blocks
 
 
@@ -20,8 +21,6 @@ def slices_png(mats: list, names: list[str], btf, precision: str) -> bytes:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from vrneural.btf.sheet import sheet_panels
 
     prec = "f16" if precision == "f16" else "f32"
     L, V, H, W = btf.shape

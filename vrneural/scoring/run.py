@@ -18,7 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
+from vrneural.btf.format import read_btf
+from vrneural.btf.identity import btf_fingerprint, fingerprint_mismatch, split_pairs
+from vrneural.config import config_dict
 from vrneural.errors import VrnError, count
+from vrneural.formats.vrnm import read_vrnm
+from vrneural.interrupt import Stop
+from vrneural.material import distilled, width_words
+from vrneural.outputs import OutputDir, atomic_path, write_json
 from vrneural.scoring.score import (
     PRECISION_CHOICES,
     EvalConfig,
@@ -34,8 +41,6 @@ COMPARED = ("shape", "sha256", "values_sha256")  # the shape first: the plainest
 def load_packs(paths: list[str]) -> list:
     """Read and validate each pack (one-line errors name the file); a pack named twice is an
     error."""
-    from vrneural.formats.vrnm import read_vrnm
-
     if not paths:
         raise VrnError("no pack given: name one or more runtime packs (.vrnm)")
     seen: dict[Path, str] = {}
@@ -114,8 +119,6 @@ def _recipe(mat) -> str:
 def held_out(pack: str, mat, fp: dict, btf, warnings: list[str]) -> list[int] | None:
     """The pack's held-out pair indices on ``btf`` (fingerprint ``fp``), None when the pack
     was trained on another BTF (a warning says so) or records no split."""
-    from vrneural.btf.identity import fingerprint_mismatch, split_pairs
-
     rec = _record(mat)
     differs = fingerprint_mismatch(fp, rec, COMPARED)
     if differs:
@@ -158,8 +161,6 @@ def trainer_test(mat, test: list[int] | None) -> list[int] | None:
 
 def label(mat, path: str) -> dict:
     """What the table says of a pack: name, method, MACs per texel, bytes."""
-    from vrneural.material import distilled, width_words
-
     method = (mat.meta.get("method") or "?") + width_words(mat)
     if mat.meta.get("method") in ("student", "single8") and distilled(mat) is False:
         method += " w/o distillation"
@@ -175,10 +176,6 @@ def label(mat, path: str) -> dict:
 
 def evaluate(cfg: EvalConfig, progress: bool = True) -> dict:
     """Score ``cfg.packs``; print warnings; write ``cfg.out`` when set. Returns the results."""
-    from vrneural.btf.format import read_btf
-    from vrneural.btf.identity import btf_fingerprint
-    from vrneural.outputs import OutputDir
-
     t0 = time.perf_counter()
     if isinstance(cfg.packs, (str, os.PathLike)):  # one pack given bare, from Python
         cfg = dataclasses.replace(cfg, packs=(str(cfg.packs),))
@@ -228,9 +225,6 @@ def write_outputs(cfg: EvalConfig, out: Path, doc: dict, mats: list, btf) -> Non
     """Write :data:`OUT_FILES`. Everything is computed first (the figure too); then the old
     output is replaced and the files written with Ctrl-C held off, so an interrupted eval
     leaves the old output or the whole new one, never a mix."""
-    from vrneural.config import config_dict
-    from vrneural.interrupt import Stop
-    from vrneural.outputs import OutputDir, atomic_path, write_json
     from vrneural.scoring.figure import slices_png
 
     png = slices_png(mats, [p["name"] for p in doc["packs"]], btf, cfg.precision)

@@ -31,9 +31,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vrneural.btf.sheet import dir_angles, fmt_angle
 from vrneural.config import opt
 from vrneural.errors import VrnError
 from vrneural.material import NeuralMaterial, material_forward
+from vrneural.scoring.metrics import display, psnr, ssim
 
 #: ``--slices auto`` scores every slice up to this many texels in all, else slices drawn at
 #: random adding up to about as many (a few minutes on two CPU cores for an 8-wide student)
@@ -133,8 +135,6 @@ def predict_slice(
 
 def display_slice(x: np.ndarray, exposure: float) -> np.ndarray:
     """A slice as displayed at ``exposure`` (see the module docstring), ``[H, W, 3]`` in [0, 1]."""
-    from vrneural.scoring.metrics import display
-
     return display(x * exposure)
 
 
@@ -172,8 +172,6 @@ def score(
     ``{"slices": {...}, "scores": [[{...} per precision] per pack]}`` (see the module
     docstring for the metrics)."""
     from tqdm import tqdm
-
-    from vrneural.scoring.metrics import psnr, ssim
 
     L, V, H, W = btf.shape
     if H % 2 or W % 2:
@@ -257,8 +255,6 @@ def score(
 
 
 def _slice_record(btf, pair: int, l1: float) -> dict:
-    from vrneural.btf.sheet import dir_angles, fmt_angle
-
     V = btf.shape[1]
     li, vi = divmod(pair, V)
     wi = fmt_angle(*dir_angles(btf.light_dirs[li]))

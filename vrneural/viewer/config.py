@@ -9,6 +9,7 @@ from pathlib import Path
 
 from vrneural.config import opt
 from vrneural.errors import VrnError, check_int, check_range
+from vrneural.outputs import check_output
 
 SPLITS = ("off", "reference", "flip")
 #: `run` options the viewer has no use for: it writes no run directory
@@ -37,8 +38,6 @@ class ViewConfig:
 
 def check_view_config(vc: ViewConfig) -> None:
     """Range and file checks before anything opens (one-line errors, as `run`'s)."""
-    from vrneural.outputs import check_output
-
     if not isinstance(vc, ViewConfig):
         raise VrnError(f"view: config is a {type(vc).__name__}, expected a ViewConfig")
     check_int("--frames", vc.frames)

@@ -13,6 +13,8 @@ import argparse
 import sys
 
 from vrneural.errors import VrnError
+from vrneural.outputs import check_output
+from vrneural.viewer.xvfb import on_a_display
 
 
 def shoot(frames: int = 8, split: str = "reference", **options):
@@ -26,9 +28,7 @@ def shoot(frames: int = 8, split: str = "reference", **options):
 
 
 def main(argv=None) -> int:
-    from vrneural.outputs import check_output
     from vrneural.runtime.output import write_png
-    from vrneural.viewer.xvfb import on_a_display
 
     p = argparse.ArgumentParser(prog="python -m vrneural.viewer.docshot", description=__doc__)
     p.add_argument("out", help="PNG to write")

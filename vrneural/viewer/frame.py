@@ -11,6 +11,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vrneural.errors import VrnError
+from vrneural.interrupt import Stop
+from vrneural.scoring.metrics import pixels_per_degree
+from vrneural.viewer.backends import _capabilities, target_format
+from vrneural.viewer.camera import project
+from vrneural.viewer.controls import effective_lights
+from vrneural.viewer.hud import panel
+from vrneural.viewer.hud_text import hud_lines
+from vrneural.viewer.outputs import FlipWorker, Recorder, save_shot
+from vrneural.viewer.shot import shot_settings
 
 #: frames since a renderer was taken up that :meth:`View.replay_offscreen` can render again
 REPLAY_MAX = 5000
@@ -74,8 +83,6 @@ class FrameWork:
     def _open(self, canvas, loop) -> None:
         import wgpu
 
-        from vrneural.viewer.backends import _capabilities, target_format
-        from vrneural.viewer.outputs import Recorder
         from vrneural.viewer.present import Presenter
 
         self.canvas, self.loop = canvas, loop
@@ -120,8 +127,6 @@ class FrameWork:
         are taken here, inside the loop (rendercanvas's own SIGINT handler would close the
         window in the middle of a frame, with a swap-chain texture acquired and not presented):
         the first closes the window after this frame, a second one stops the frame."""
-        from vrneural.interrupt import Stop
-
         if self.stopper == "install":
             self.stopper = Stop().__enter__()  # View.run puts the handlers back
         stop = self.stopper if isinstance(self.stopper, Stop) else None
@@ -140,8 +145,6 @@ class FrameWork:
                     self.close()
 
     def _frame(self) -> None:
-        from vrneural.viewer.controls import effective_lights
-
         start = time.perf_counter()
         dt = 0.0 if self.t_last is None else min(start - self.t_last, 0.25)
         self.t_last = start
@@ -264,9 +267,6 @@ class FrameWork:
         return rr.colour_textures()[0], False
 
     def _submit_flip(self, rr) -> None:
-        from vrneural.scoring.metrics import pixels_per_degree
-        from vrneural.viewer.outputs import FlipWorker
-
         if self.flip is None:
             self.flip = FlipWorker()
         ppd = pixels_per_degree(self.r.s.eye_res[1], self.r.s.fov_y)
@@ -296,7 +296,6 @@ class FrameWork:
             )
 
     def _layout(self, r, right, display: bool):
-        from vrneural.viewer.camera import project
         from vrneural.viewer.present import fit
 
         size = self.image_size()
@@ -323,9 +322,6 @@ class FrameWork:
         )
 
     def _hud_panel(self, st, last):
-        from vrneural.viewer.hud import panel
-        from vrneural.viewer.hud_text import hud_lines
-
         lines, alert = hud_lines(self, st, last)
         return panel(lines, alert, max_width=self.canvas.get_physical_size()[0] - 16)
 
@@ -352,9 +348,7 @@ class FrameWork:
         import wgpu
 
         from vrneural.gpu.readback import read_texture
-        from vrneural.viewer.outputs import save_shot
         from vrneural.viewer.present import Presenter
-        from vrneural.viewer.shot import shot_settings
 
         w, h = lay.image
         if self._shot_target is None or tuple(self._shot_target.size[:2]) != (w, h):

@@ -26,6 +26,8 @@ import time
 import numpy as np
 
 from vrneural.errors import VrnError
+from vrneural.outputs import check_output, write_json
+from vrneural.viewer.xvfb import on_a_display
 
 
 def _load() -> float:
@@ -247,9 +249,6 @@ def plot(res: dict, path) -> None:
 
 
 def main(argv=None) -> int:
-    from vrneural.outputs import check_output, write_json
-    from vrneural.viewer.xvfb import on_a_display
-
     p = argparse.ArgumentParser(prog="python -m vrneural.viewer.measure", description=__doc__)
     p.add_argument("out", help="results JSON (Markdown and PNG beside it)")
     p.add_argument("--quick", action="store_true", help="fewer frames (a smoke run)")

@@ -13,7 +13,7 @@ import numpy as np
 
 from vrneural.errors import VrnError
 from vrneural.outputs import write_json
-from vrneural.runtime.output import write_exr, write_png
+from vrneural.runtime.output import VideoWriter, write_exr, write_png
 
 
 def claim_shot(directory: str | Path) -> Path:
@@ -62,8 +62,6 @@ class Recorder:
     frames of another size after a window resize are cropped or padded to the first's)."""
 
     def __init__(self, path: str | Path, fps: float):
-        from vrneural.runtime.output import VideoWriter
-
         self.path = Path(path)
         self.writer = VideoWriter(self.path, fps)
         self.shape: tuple | None = None

@@ -16,6 +16,8 @@ import numpy as np
 
 from vrneural.gpu.bindings import Binding, Bindings, Struct
 from vrneural.gpu.device import get_device
+from vrneural.gpu.readback import upload_buffer, upload_texture
+from vrneural.gpu.shaders import render_wgsl
 from vrneural.runtime.output import tonemap
 
 MAX_MARKERS = 9
@@ -91,8 +93,6 @@ def _ring() -> np.ndarray:
 def _pipelines(target_format: str):
     import wgpu
 
-    from vrneural.gpu.shaders import render_wgsl
-
     dev = get_device()
     entries = PRESENT_BINDINGS.layout_entries(wgpu.ShaderStage.FRAGMENT, sized=True)
     layout = dev.create_bind_group_layout(entries=entries)
@@ -133,8 +133,6 @@ class Presenter:
 
     def __init__(self, target_format: str, exposure: float = 1.0):
         import wgpu
-
-        from vrneural.gpu.readback import upload_buffer, upload_texture
 
         self.dev = get_device()
         self.format = target_format

@@ -9,6 +9,7 @@ import dataclasses
 import numpy as np
 
 from vrneural.config import config_dict
+from vrneural.viewer.controls import effective_lights
 
 
 def quaternion(rot) -> list[float]:
@@ -36,8 +37,6 @@ def quaternion(rot) -> list[float]:
 
 def shot_settings(view) -> dict:
     """What the screenshot of ``view``'s current frame was rendered from."""
-    from vrneural.viewer.controls import effective_lights
-
     r = view.r
     resolved = dataclasses.asdict(dataclasses.replace(r.s, reference=None))
     resolved["reference"] = view.cfg.reference

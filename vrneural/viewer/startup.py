@@ -8,8 +8,12 @@ from pathlib import Path
 
 from vrneural.config import resolved
 from vrneural.errors import VrnError, check_int
-from vrneural.runtime.config import RunConfig
+from vrneural.runtime.config import RunConfig, resolve
+from vrneural.runtime.lights import LIGHTS_MAX
+from vrneural.runtime.run import use_pack
+from vrneural.runtime.scene import Scene, builtin_lights, builtin_scene, load_scene
 from vrneural.viewer.config import RUN_ONLY, ViewConfig
+from vrneural.viewer.state import Live
 
 #: the viewer's defaults where they differ from `run`'s: a desktop-sized single eye
 VIEW_DEFAULTS = {"profile": "preview", "eyes": 1}
@@ -48,10 +52,6 @@ def configs(config=None, view=None, options: dict | None = None) -> tuple[RunCon
 def load(scene, cfg: RunConfig):
     """The scene: a :class:`~vrneural.runtime.scene.Scene`, a scene file, or None for the
     built-in one (``--pack`` applied), with `run`'s checks and messages."""
-    from vrneural.runtime.lights import LIGHTS_MAX
-    from vrneural.runtime.run import use_pack
-    from vrneural.runtime.scene import Scene, builtin_lights, builtin_scene, load_scene
-
     if scene is None and cfg.scene:
         scene = cfg.scene
     if scene is not None and cfg.pack:
@@ -78,9 +78,6 @@ def load(scene, cfg: RunConfig):
 def start_live(renderers, vc: ViewConfig):
     """The first :class:`~.state.Live` knobs: the resolved settings of the configs (checked by
     ``resolve``, so a bad flag is `run`'s one-line error)."""
-    from vrneural.runtime.config import resolve
-    from vrneural.viewer.state import Live
-
     cfg = renderers.cfg = dataclasses.replace(renderers.cfg, scene=None, pack=None)
     if cfg.reference and not Path(cfg.reference).is_file():
         raise VrnError(f"--reference = {cfg.reference!r}: file not found")

@@ -15,7 +15,7 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
-from vrneural.runtime.config import REUSE_MAX, max_texture_res
+from vrneural.runtime.config import REUSE_MAX, max_texture_res, resolve
 from vrneural.runtime.settings import MODES
 
 #: renderers kept (the active one, the split view's reference, the one before)
@@ -67,8 +67,6 @@ class Renderers:
 
     def settings(self, live: Live, mode: str | None = None):
         """Resolved :class:`~vrneural.runtime.renderer.Settings` for ``live`` (in ``mode``)."""
-        from vrneural.runtime.config import resolve
-
         mode = mode or live.mode
         cfg = dataclasses.replace(
             self.cfg,

@@ -22,7 +22,14 @@ from collections import deque
 import numpy as np
 
 from vrneural.errors import VrnError
+from vrneural.viewer.backends import jupyter_canvas, window_canvas
+from vrneural.viewer.camera import ViewCamera
+from vrneural.viewer.config import check_view_config
+from vrneural.viewer.controls import Controls
 from vrneural.viewer.frame import REPLAY_MAX, FrameInput, FrameWork
+from vrneural.viewer.keys import KeyMap, load_keys
+from vrneural.viewer.startup import configs, load, start_live
+from vrneural.viewer.state import Renderers
 
 
 class View(FrameWork):
@@ -34,12 +41,6 @@ class View(FrameWork):
 
     def __init__(self, scene=None, config=None, view=None, **options):
         from vrneural.gpu.device import adapter_summary, get_device
-        from vrneural.viewer.camera import ViewCamera
-        from vrneural.viewer.config import check_view_config
-        from vrneural.viewer.controls import Controls
-        from vrneural.viewer.keys import KeyMap, load_keys
-        from vrneural.viewer.startup import configs, load, start_live
-        from vrneural.viewer.state import Renderers
 
         self.cfg, self.vc = configs(config, view, options)
         check_view_config(self.vc)
@@ -81,8 +82,6 @@ class View(FrameWork):
         ``record`` is kept. An error closes it too: then no video is left behind."""
         import signal
 
-        from vrneural.viewer.backends import window_canvas
-
         canvas, loop = window_canvas(self.window_size(), self.title(), self.vc.vsync)
         self._open(canvas, loop)
         before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
@@ -107,8 +106,6 @@ class View(FrameWork):
     def show(self):
         """The viewer as a Jupyter widget (rendercanvas's Jupyter backend); display it as a
         cell's output."""
-        from vrneural.viewer.backends import jupyter_canvas
-
         size = self.window_size()
         canvas, loop = jupyter_canvas(size, self.title())
         # the size until the browser reports its own (a notebook run without one, nbclient,
