@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import numbers
 
 
 class VrnError(Exception):
@@ -73,8 +74,6 @@ def check_range(name: str, value: float, lo: float | None = None, hi: float | No
 def check_int(name: str, value, lo: int | None = None, hi: int | None = None) -> None:
     """Raise :class:`VrnError` unless ``value`` is a whole number (an int, not a bool, a float
     or a string) with ``lo <= value <= hi`` (bounds optional)."""
-    import numbers
-
     if not isinstance(value, numbers.Integral) or isinstance(value, bool):
         raise VrnError(f"{name} = {value!r} must be a whole number")
     check_range(name, value, lo, hi)

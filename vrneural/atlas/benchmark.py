@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import sys
 import time
 from pathlib import Path
 
@@ -95,8 +96,6 @@ def plot(result: dict, path: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     """The command line; a user error (:class:`VrnError`, a bad option) prints one line and
     returns (argparse: exits with) 2."""
-    import sys
-
     from vrneural.atlas import BUILTIN_MESHES
 
     prog = "python -m vrneural.atlas.benchmark"

@@ -51,6 +51,8 @@ e.g. finely subdivided icospheres, jpcy/xatlas#146) is reported in one line nami
 
 from __future__ import annotations
 
+import faulthandler
+import multiprocessing as mp
 import os
 import signal
 
@@ -98,8 +100,6 @@ def unwrap(
     process (module docstring); errors come back as the same one-line :class:`VrnError`.
     ``chart_options``: xatlas ``ChartOptions`` fields to set (None: the defaults above).
     """
-    import multiprocessing as mp
-
     # fork, not spawn / forkserver: those re-import the caller's main module in the child,
     # which breaks scripts without a __main__ guard and `python -` (stdin). The child touches
     # only numpy and xatlas, never the parent's GPU or torch threads.
@@ -166,8 +166,6 @@ def died_message(name: str, n_faces: int, exitcode: int | None) -> str:
 
 def _child(conn, mesh: Mesh, resolution: int, padding: int, chart_options=None) -> None:
     """Child process: unwrap, send ``(kind, payload)``, exit without destroying xatlas objects."""
-    import faulthandler
-
     # a crash inside xatlas is reported by the parent in one line (died_message); a
     # faulthandler inherited from the parent (pytest, python -X faulthandler) would add a
     # multi-line "Fatal Python error" dump to stderr first

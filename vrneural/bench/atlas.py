@@ -12,6 +12,8 @@ the build's (the loading's peak is reported apart). Writes ``results.json``,
 
 from __future__ import annotations
 
+import dataclasses
+import multiprocessing as mp
 import os
 import resource
 import tempfile
@@ -69,8 +71,6 @@ def _rss_mb() -> float:
 def _load_child(name: str, folder: str, quick: bool):
     """Generate and load one mesh (``load_mesh``: trimesh, normals, tangents); keep the
     :class:`Mesh` arrays in ``folder/<name>.npz`` for the build process."""
-    import dataclasses
-
     from vrneural.atlas import load_mesh
 
     t = time.perf_counter()
@@ -120,8 +120,6 @@ def _child_main(conn, target, *args) -> None:
 
 
 def _in_child(target, *args):
-    import multiprocessing as mp
-
     ctx = mp.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_child_main, args=(send, target, *args))

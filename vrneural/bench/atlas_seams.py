@@ -16,6 +16,8 @@ modes whatever the atlas), both relative to the 99th percentile of the screen-sp
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from vrneural.material import lambertian_material
@@ -27,8 +29,6 @@ ALBEDO = (0.8, 0.5, 0.2)
 
 
 def _scene(mesh_file: str, size: float, atlas_uv: str):
-    from pathlib import Path
-
     from vrneural.runtime.assets import get_mesh
 
     p = get_mesh(mesh_file).positions

@@ -14,6 +14,7 @@ installed package.
 
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -240,8 +241,6 @@ class ReportPlugin(Collector):
         self.cfg = ExtremesConfig(quick=quick, force=True, progress=False)
 
     def pytest_sessionfinish(self, session):
-        import sys
-
         try:
             with prepare_out(self.out, True, "extremes") as root:
                 doc = header("extremes", self.cfg)

@@ -17,10 +17,13 @@ beforehand, excluded).
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import time
 from dataclasses import dataclass
 
 import numpy as np
+from tqdm import tqdm
 
 from vrneural.bench import report as rp
 from vrneural.bench.runtime import torch_net
@@ -218,8 +221,6 @@ def _sgemm(c: KernelsConfig) -> float:
     numpy loads, so a set count runs it in a child process started with that count."""
     if not c.threads:
         return sgemm_gflops(c.sgemm_n, c.repeats)
-    import subprocess
-    import sys
 
     n = str(c.threads)
     env = dict(os.environ, OMP_NUM_THREADS=n, OPENBLAS_NUM_THREADS=n, MKL_NUM_THREADS=n)
@@ -235,7 +236,6 @@ def _sgemm(c: KernelsConfig) -> float:
 
 def _run(c: KernelsConfig, doc: dict, nets, precs, root, t0) -> dict:
     import torch
-    from tqdm import tqdm
 
     sg_runs = [_sgemm(c)]
     doc["torch_threads"] = torch.get_num_threads()

@@ -7,6 +7,8 @@ import json
 import time
 from pathlib import Path
 
+import numpy as np
+
 from vrneural.bench.quality_parallax import bin_pairs
 from vrneural.outputs import atomic_path
 
@@ -26,7 +28,6 @@ def slice_pairs(data) -> list[int]:
 def lafortune(data, every, slices, cfg, out: dict, path: Path, btf_sha: str):
     """Fit (or, with --resume, reload a matching fit from ``path``) and evaluate Lafortune;
     returns the record and whether the fit was reloaded."""
-    import numpy as np
     import torch
 
     from vrneural.distill.lafortune import N_PARAMS, fit_lafortune, predict_lafortune

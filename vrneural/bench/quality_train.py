@@ -12,6 +12,7 @@ import os
 import signal
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 from vrneural.bench.quality_btf import is_given
@@ -122,8 +123,6 @@ def job_pool(jobs: int):
     workers jobs ahead, which cancelling cannot recall), and the run waits for them, so no
     worker outlives it. Workers ignore Ctrl-C itself outside training (the event stops them).
     ``--resume`` then continues the interrupted networks."""
-    from concurrent.futures import ProcessPoolExecutor
-
     ctx = multiprocessing.get_context("spawn")
     stop = ctx.Event()
     pool = ProcessPoolExecutor(
@@ -148,8 +147,6 @@ def _worker_init(stop) -> None:
 def run_jobs(pool, jobs: list, log) -> None:
     """Run ``(label, kind, config)`` steps (:func:`_job`) in ``pool`` (:func:`job_pool`); log
     each as it ends."""
-    from concurrent.futures import as_completed
-
     futures = {pool.submit(_job, kind, c): label for label, kind, c in jobs}
     for f in as_completed(futures):
         log(f"{futures[f]}  {f.result()}")

@@ -14,8 +14,10 @@ H100 section); a CPU adapter spends one frame.
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from vrneural.bench.report import stats
 from vrneural.btf.heightfield import spectral_noise
@@ -190,8 +192,6 @@ def count_sweep(c, eye_res, counts: list[int], desc: str, setup) -> tuple[list[d
 
 
 def progress(total: int, desc: str, enabled: bool):
-    from tqdm import tqdm
-
     return tqdm(total=total, desc=desc, unit="frame", disable=not enabled)
 
 
@@ -199,8 +199,6 @@ def parallax_materials(steps: int, seeds=(3, 4), tex_res: int = 16, march: str =
     """The benchmark scene's two random students with height-field parallax of ``steps``
     march steps on a rough random relief (spectral noise over 0.15 tile widths, pebbles'
     range; the march ends where it meets it, so the cost depends on the relief)."""
-    import numpy as np
-
     out = []
     for s in seeds:
         m = random_material(s, tex_res=tex_res)
@@ -216,8 +214,6 @@ def offset_materials(seeds=(3, 4), tex_res: int = 16, march: str = "texel"):
     """The benchmark scene's two random students with NeuMIP's neural offset module of the
     student's size (:data:`vrneural.neural_offset.OFFSET_SIZES`: a random offset texture and
     a random dense offset MLP; the cost does not depend on the values)."""
-    import numpy as np
-
     ch, hidden = OFFSET_SIZES["student"]
     out = []
     for s in seeds:
@@ -237,8 +233,6 @@ def auto_block_shares(r, sides=()) -> tuple[float, dict]:
     at each object's atlas and tiling) for the materials' own march grids, and ``{side:
     share}`` for grids of ``side^2`` texels (what larger materials would get); each object's
     block footprints computed once."""
-    import numpy as np
-
     from vrneural.runtime.reference import block_geometry
 
     feet = []  # (footprints [N], the material's march grid)
@@ -262,8 +256,6 @@ def bench_scene(n_lights: int, materials=None):
     count only through ``scene.lights[:k]``), the built-in head orbit. ``materials``: two
     NeuralMaterials (default: seeded random students, the runtime's coarse-to-fine 8-wide
     architecture; frame time does not depend on the weights' values)."""
-    from pathlib import Path
-
     from vrneural.runtime.assets import get_mesh
 
     def fit(name: str, size: float) -> float:  # scale so the mesh's largest extent is ``size``

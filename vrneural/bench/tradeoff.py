@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
@@ -362,8 +363,6 @@ def load_materials(c, root: Path) -> dict:
 
 
 def run_tradeoff(cfg: TradeoffConfig) -> dict:
-    from tqdm import tqdm
-
     from vrneural.gpu.device import adapter_summary
 
     c = cfg.resolved()

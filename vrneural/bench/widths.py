@@ -19,12 +19,15 @@ width sweep of docs/quality-research.md.
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import statistics
 import time
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
+
+import numpy as np
 
 from vrneural.bench.quality import QualityConfig, _teach_config
 from vrneural.bench.quality import network_runs as one
@@ -202,8 +205,6 @@ def run_widths(cfg: WidthsConfig) -> dict:
 def _check_same_preset(cfg: WidthsConfig, root: Path) -> None:
     """One sweep per OUT: ``--resume`` in the OUT of another preset's sweep would replace
     that sweep's report (``--force`` replaces it on purpose)."""
-    import json
-
     try:
         have = json.loads((root / "results.json").read_text())["config"]["preset"]
     except (OSError, ValueError, KeyError, TypeError):
@@ -235,8 +236,6 @@ def _train(plan: Plan, root: Path, log) -> tuple[dict, list]:
 
 
 def _run(cfg: WidthsConfig, plan: Plan, root: Path) -> dict:
-    import numpy as np
-
     from vrneural.distill.checkpoint import model_from_checkpoint
     from vrneural.distill.data import SliceData
     from vrneural.distill.evaluate import mean_l1

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from vrneural.errors import VrnError
 from vrneural.formats.container import ContainerWriter, read_container, write_container
@@ -300,8 +301,6 @@ class BtfWriter:
         :meth:`put_clamped`; a progress bar of views). A slice with a non-finite value discards
         the partial file and raises a VrnError that starts with ``nonfinite(li, v, rgb)``; a
         Ctrl-C says how to resume and is raised again."""
-        from tqdm import tqdm
-
         L, V = self.values.shape[:2]
         name = self.partial.name.removesuffix(".partial")
         bar = tqdm(total=V, initial=len(self.done), desc="import views", unit="view",

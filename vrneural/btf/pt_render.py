@@ -14,11 +14,14 @@ distance is the noise floor under which no method can be judged.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from vrneural.btf.dirs import MAX_THETA_DEG, direction_set
 from vrneural.btf.format import BtfWriter, check_partial_settings, read_btf
@@ -93,8 +96,6 @@ def render_btf(
     settings are an error unless ``force``, which starts over). Views are written one at a
     time (all lights per view); values are checked finite and clamped into [0, 65504].
     """
-    from tqdm import tqdm
-
     from vrneural.btf import pathtrace as pt
 
     cfg.validate()
@@ -167,11 +168,6 @@ def noise_floor(path, views: int = 6, progress: bool = True) -> dict:
     channels, linear BTF units). Two independent renders differ by about sqrt(2) times each
     one's distance to the converged image, so ``l1_vs_converged`` is ``l1 / sqrt(2)``.
     Returns ``{"file", "views", "l1", "l1_vs_converged", "mean", "relative", "seconds"}``."""
-    import dataclasses
-    import time
-
-    from tqdm import tqdm
-
     from vrneural.btf import pathtrace as pt
 
     btf = read_btf(path)

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from vrneural.btf.dirs import direction_set
 from vrneural.btf.format import BtfWriter, check_partial_settings
@@ -96,8 +97,6 @@ def synthesize(
     Views are rendered one at a time (all lights per view); values are clamped into
     ``[0, 65504]`` (float16) and checked finite before they are written.
     """
-    from tqdm import tqdm
-
     cfg.validate()
     from vrneural.btf.render import make_scene, render_view
 

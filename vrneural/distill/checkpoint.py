@@ -22,6 +22,7 @@ import os
 import pickle
 import re
 import warnings
+import zipfile
 from pathlib import Path
 
 import torch
@@ -123,8 +124,6 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
 def _check_crcs(p: Path) -> None:
     """A checkpoint is a zip whose entries carry CRC-32s that torch.load does not check: a
     flipped byte in a tensor would load as a wrong weight. Check them all."""
-    import zipfile
-
     try:
         if not zipfile.is_zipfile(p):
             return  # torch.load says what it is

@@ -14,6 +14,7 @@ run resumed trains nothing and writes only the files that are missing.
 from __future__ import annotations
 
 import json
+import os
 import warnings
 from pathlib import Path
 
@@ -94,8 +95,6 @@ def clear_outputs(outputs: list[str]) -> None:
     All or nothing: each is first renamed aside; if one cannot be (an immutable file, a folder
     of someone else's with the sticky bit), the others are put back and it is a one-line
     error, so the old run stays whole."""
-    import os
-
     moved: list[tuple[Path, Path]] = []
     for o in map(Path, outputs):
         if not (o.exists() or o.is_symlink()):

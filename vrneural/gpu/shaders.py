@@ -14,6 +14,7 @@ import os
 from importlib import resources
 
 import jinja2
+import numpy as np
 
 
 @functools.cache
@@ -39,8 +40,6 @@ def _env() -> jinja2.Environment:
 
 def wgsl_float(x: float, suffix: str = "") -> str:
     """A float literal WGSL accepts, exact for float32 (``repr`` round-trips float64)."""
-    import numpy as np
-
     v = float(np.float32(x)) if suffix == "" else float(np.float16(x))
     s = repr(v)
     if "inf" in s or "nan" in s:

@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from vrneural.config import config_dict, given, resolved
 from vrneural.errors import VrnError, check_int, check_range, count
@@ -165,8 +166,6 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
 
 
 def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
-    from tqdm import tqdm
-
     from vrneural.gpu.device import adapter_summary
     from vrneural.runtime.renderer import Renderer
 

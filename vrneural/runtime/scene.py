@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
@@ -396,8 +397,6 @@ BUILTIN_MATERIALS = {
 
 def bundled_path(name: str) -> Path:
     """Where the bundled pack ``name`` (like ``"leather.vrnm"``) lives, present or not."""
-    from importlib.resources import files
-
     return Path(str(files("vrneural") / "data" / "materials" / name))
 
 

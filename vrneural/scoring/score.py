@@ -30,6 +30,7 @@ import numbers
 from dataclasses import dataclass
 
 import numpy as np
+from tqdm import tqdm
 
 from vrneural.btf.sheet import dir_angles, fmt_angle
 from vrneural.config import opt
@@ -171,8 +172,6 @@ def score(
     of them its trainer's test L1 was measured on (``l1_trainer_test``). Returns
     ``{"slices": {...}, "scores": [[{...} per precision] per pack]}`` (see the module
     docstring for the metrics)."""
-    from tqdm import tqdm
-
     L, V, H, W = btf.shape
     if H % 2 or W % 2:
         raise VrnError(f"{btf.path}: resolution {H}x{W} must be even (packs shade 2x2 blocks)")

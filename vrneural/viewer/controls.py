@@ -8,6 +8,7 @@ renderer are only marked here; the frame builds or fetches it (:class:`~.state.R
 from __future__ import annotations
 
 import dataclasses
+import time
 
 from vrneural.runtime.lights import PointLight
 from vrneural.runtime.schedule import SCHEDULES
@@ -40,8 +41,6 @@ class Controls:
 
     def handle(self, ev: dict) -> None:
         """The canvas's event handler (every event type)."""
-        import time
-
         v, kind = self.view, ev.get("event_type")
         if kind in ("key_down", "key_up"):
             action = v.keymap.action(ev.get("key", ""))

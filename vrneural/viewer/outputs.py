@@ -5,8 +5,11 @@ preview size, which would freeze the window)."""
 
 from __future__ import annotations
 
+import json
 import os
+import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -104,8 +107,6 @@ def flip_map(ref: np.ndarray, test: np.ndarray, ppd: float) -> tuple[np.ndarray,
 
 def write_array(f, a: np.ndarray) -> None:
     """One array on a byte stream: a JSON line (dtype, shape), then its bytes."""
-    import json
-
     a = np.asarray(a)
     a = a if a.flags.c_contiguous else a.copy(order="C")  # (ascontiguousarray makes 0-d 1-d)
     f.write((json.dumps({"dtype": a.dtype.str, "shape": a.shape}) + "\n").encode())
@@ -115,8 +116,6 @@ def write_array(f, a: np.ndarray) -> None:
 
 def read_array(f) -> np.ndarray | None:
     """The next :func:`write_array` array of stream ``f`` (None at its end)."""
-    import json
-
     line = f.readline()
     if not line:
         return None
@@ -154,9 +153,6 @@ class FlipWorker:
 
     def submit(self, ref: np.ndarray, test: np.ndarray, ppd: float) -> bool:
         """Start a job unless one is running; whether it started."""
-        import subprocess
-        from concurrent.futures import ThreadPoolExecutor
-
         if self.busy:
             return False
         try:

@@ -15,6 +15,7 @@ The renderer interface used: ``frame(f, t, head)``, ``colour_textures()``, ``rea
 from __future__ import annotations
 
 import dataclasses
+import signal
 import sys
 import time
 from collections import deque
@@ -80,8 +81,6 @@ class View(FrameWork):
         :meth:`summary`. Ctrl-C or SIGTERM close it after the frame being drawn (a second one
         stops that frame) and raise :class:`KeyboardInterrupt`, as `run` does; the video of
         ``record`` is kept. An error closes it too: then no video is left behind."""
-        import signal
-
         canvas, loop = window_canvas(self.window_size(), self.title(), self.vc.vsync)
         self._open(canvas, loop)
         before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}

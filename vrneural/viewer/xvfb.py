@@ -6,8 +6,11 @@ from __future__ import annotations
 
 import contextlib
 import os
+import select
 import shutil
 import subprocess
+import sys
+import tempfile
 import time
 from collections.abc import Iterator
 
@@ -36,7 +39,6 @@ def virtual_display(width: int = 2200, height: int = 1400) -> Iterator[str]:
     exe = shutil.which("Xvfb")
     if exe is None:
         raise VrnError(f"Xvfb is not installed ({INSTALL})")
-    import tempfile
 
     r, w = os.pipe()
     log = tempfile.TemporaryFile()  # Xvfb's messages (read only when it fails to start)
@@ -73,8 +75,6 @@ def virtual_display(width: int = 2200, height: int = 1400) -> Iterator[str]:
 def _let_go_of_glfw() -> None:
     """Close glfw's X connection before its server goes (else Xlib's fatal-error handler ends
     the process at exit); rendercanvas initialises glfw again for its next window."""
-    import sys
-
     glfw = sys.modules.get("glfw")
     if glfw is not None:
         glfw.terminate()
@@ -83,8 +83,6 @@ def _let_go_of_glfw() -> None:
 
 def _read_display(fd: int, proc, log, timeout: float = 30.0) -> int:
     """The display number Xvfb writes to ``fd`` once it accepts connections."""
-    import select
-
     buf = b""
     end = time.monotonic() + timeout
     while not buf.endswith(b"\n"):
