@@ -22,8 +22,10 @@ from vrneural.atlas.build import (
     MAX_PADDING,
     MAX_RESOLUTION,
     MIN_RESOLUTION,
+    build_atlas,
     check_texture_resolution,
 )
+from vrneural.atlas.builtin import BUILTIN_MESHES, builtin_mesh
 from vrneural.errors import ArgumentParser, VrnError, check_range
 from vrneural.outputs import atomic_path, check_output, write_json
 
@@ -32,8 +34,6 @@ STAGES = ("unwrap_s", "raster_s", "sliver_s", "dilate_s", "total_s")
 
 def run_benchmark(mesh_name: str, resolution: int, padding: int, repeats: int) -> dict:
     """Build ``repeats`` uncached atlases; returns the JSON-ready result."""
-    from vrneural.atlas import build_atlas, builtin_mesh
-
     t = time.perf_counter()
     mesh = builtin_mesh(mesh_name)
     mesh_s = time.perf_counter() - t
@@ -96,8 +96,6 @@ def plot(result: dict, path: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     """The command line; a user error (:class:`VrnError`, a bad option) prints one line and
     returns (argparse: exits with) 2."""
-    from vrneural.atlas import BUILTIN_MESHES
-
     prog = "python -m vrneural.atlas.benchmark"
     p = ArgumentParser(
         prog=prog,

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vrneural.atlas import meshuv
 from vrneural.atlas.cache import cache_key, load_cached, split_mesh, store
 from vrneural.atlas.charts import face_normals
 from vrneural.atlas.generate import Layout, generated_layout
@@ -166,8 +167,6 @@ def build_atlas(
 def choose_layout(mesh: Mesh, R: int, padding: int, atlas_uv: str, bar):
     """``(Layout, stats)``: the mesh's own UVs when ``atlas_uv`` asks and they serve, else a
     generated layout; the stats say which and why."""
-    from vrneural.atlas import meshuv
-
     reason = f"atlas_uv = {atlas_uv}"
     if atlas_uv in ("auto", "mesh"):
         name, uv = meshuv.candidate(mesh)

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from vrneural.btf import pathtrace as pt
 from vrneural.btf.dirs import MAX_THETA_DEG, direction_set
 from vrneural.btf.format import BtfWriter, check_partial_settings, read_btf
 from vrneural.btf.pt_presets import PT_PRESETS
@@ -75,8 +76,6 @@ class RenderConfig:
 def build(cfg: RenderConfig, progress: bool = False):
     """The preset's scene (Mitsuba loaded, tile copies around it) and its height field
     ``[N, N]`` relative to the reference plane (whose height is set on the scene)."""
-    from vrneural.btf import pathtrace as pt
-
     pt.load_mitsuba()
     tile = PT_PRESETS[cfg.preset](np.random.default_rng([cfg.seed, 1]))
     zmin, zmax = tile.bounds()
@@ -96,8 +95,6 @@ def render_btf(
     settings are an error unless ``force``, which starts over). Views are written one at a
     time (all lights per view); values are checked finite and clamped into [0, 65504].
     """
-    from vrneural.btf import pathtrace as pt
-
     cfg.validate()
     pt.load_mitsuba()  # before any output: a one-line error when it is not installed
     dirs = direction_set(cfg.dirs)
@@ -168,8 +165,6 @@ def noise_floor(path, views: int = 6, progress: bool = True) -> dict:
     channels, linear BTF units). Two independent renders differ by about sqrt(2) times each
     one's distance to the converged image, so ``l1_vs_converged`` is ``l1 / sqrt(2)``.
     Returns ``{"file", "views", "l1", "l1_vs_converged", "mean", "relative", "seconds"}``."""
-    from vrneural.btf import pathtrace as pt
-
     btf = read_btf(path)
     gen = dict(btf.meta.get("generator") or {})
     if gen.get("config") != "RenderConfig":

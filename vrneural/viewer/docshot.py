@@ -14,13 +14,13 @@ import sys
 
 from vrneural.errors import VrnError
 from vrneural.outputs import check_output
+from vrneural.runtime.output import write_png
+from vrneural.viewer.view import View
 from vrneural.viewer.xvfb import on_a_display
 
 
 def shoot(frames: int = 8, split: str = "reference", **options):
     """``[H, W, 3]`` uint8: the window's surface after ``frames`` frames."""
-    from vrneural.viewer import View
-
     v = View(frames=frames, split=split, **options)
     v.keep_shown = True
     v.run()
@@ -28,8 +28,6 @@ def shoot(frames: int = 8, split: str = "reference", **options):
 
 
 def main(argv=None) -> int:
-    from vrneural.runtime.output import write_png
-
     p = argparse.ArgumentParser(prog="python -m vrneural.viewer.docshot", description=__doc__)
     p.add_argument("out", help="PNG to write")
     p.add_argument("--force", action="store_true", help="overwrite it")

@@ -25,8 +25,10 @@ import time
 
 import numpy as np
 
+from vrneural.bench.report import pyplot, save_png
 from vrneural.errors import VrnError
 from vrneural.outputs import check_output, write_json
+from vrneural.viewer.view import View
 from vrneural.viewer.xvfb import on_a_display
 
 
@@ -36,8 +38,6 @@ def _load() -> float:
 
 def offscreen_fps(profile: str, frames: int) -> dict:
     """``Renderer.frame`` alone at the viewer's start-up camera, one eye, as the window does."""
-    from vrneural.viewer import View
-
     v = View(profile=profile)  # the same renderer, settings, pose and lights as the window
     r, head = v.r, v.pose()
     r.lights[:] = v.lights
@@ -53,8 +53,6 @@ def offscreen_fps(profile: str, frames: int) -> dict:
 def window_run(profile: str, frames: int, presses: int = 0, seed: int = 0) -> dict:
     """`vrneural view` in a window for ``frames`` frames (after 3 warm-up ones); with
     ``presses``, a thread submits that many ``]`` / ``[`` key presses at random moments."""
-    from vrneural.viewer import View
-
     v = View(profile=profile)
     w, h = v.image_size()
     v.vc.window = f"{w}x{h}"  # scale 1
@@ -221,8 +219,6 @@ def markdown(res: dict) -> str:
 
 
 def plot(res: dict, path) -> None:
-    from vrneural.bench.report import pyplot, save_png
-
     plt = pyplot()
 
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.6))
