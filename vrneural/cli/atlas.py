@@ -8,6 +8,13 @@ import sys
 import warnings
 from pathlib import Path
 
+from vrneural.atlas import BUILTIN_MESHES, builtin_mesh, load_mesh
+from vrneural.atlas.build import MAX_PADDING, AtlasConfig, build_atlas, check_texture_resolution
+from vrneural.atlas.visualize import atlas_image, gutter_mask
+from vrneural.config import add_config_args, config_dict, config_from_args
+from vrneural.errors import VrnError, check_range
+from vrneural.outputs import atomic_path, check_output, write_json
+
 STAT_LINES = (
     ("uv_source", "UVs", "{}"),
     ("uv_reason", "because", "{}"),
@@ -27,9 +34,6 @@ STAT_LINES = (
 
 
 def register(sub) -> None:
-    from vrneural.atlas.build import AtlasConfig
-    from vrneural.config import add_config_args
-
     p = sub.add_parser(
         "atlas",
         help="atlas a mesh (its own UVs or an unwrap), rasterize its triangle-ID texture, write a "
@@ -69,9 +73,6 @@ def register(sub) -> None:
 
 
 def _meshes(spec: str, crease: float | None = None):
-    from vrneural.atlas import BUILTIN_MESHES, builtin_mesh, load_mesh
-    from vrneural.errors import VrnError
-
     if spec in BUILTIN_MESHES and not Path(spec).exists():
         return [builtin_mesh(spec, crease)]
     head = spec.rsplit(":", 1)[0]
@@ -87,15 +88,6 @@ def _meshes(spec: str, crease: float | None = None):
 
 
 def run(args) -> int:
-    from vrneural.atlas.build import (
-        MAX_PADDING,
-        AtlasConfig,
-        build_atlas,
-        check_texture_resolution,
-    )
-    from vrneural.config import config_from_args
-    from vrneural.errors import VrnError, check_range
-    from vrneural.outputs import check_output
     from vrneural.runtime.assets import collapsed_triangles, lost_triangles
 
     cfg = config_from_args(AtlasConfig, args)
@@ -171,9 +163,6 @@ def sidecar_path(out: Path) -> Path:
 def _write_png(path: Path, atlas, color: str) -> None:
     import imageio.v3 as iio
 
-    from vrneural.atlas.visualize import atlas_image, gutter_mask
-    from vrneural.outputs import atomic_path
-
     img = atlas_image(atlas, by=color, gutter=gutter_mask(atlas))
     with atomic_path(path) as tmp:
         iio.imwrite(tmp, img, extension=".png")
@@ -182,9 +171,6 @@ def _write_png(path: Path, atlas, color: str) -> None:
 def _write_sidecar(
     out: Path, cfg, results: list[dict], notes: list[str], crease: float | None
 ) -> None:
-    from vrneural.config import config_dict
-    from vrneural.outputs import write_json
-
     # what write_config writes, at the path checked before anything was written (even where
     # OUT of a multi-mesh file is a directory: it is not written then)
     doc = {**config_dict(cfg), "crease_angle": crease, "stats": results, "warnings": notes}

@@ -9,12 +9,14 @@ from __future__ import annotations
 from pathlib import Path
 
 from vrneural.bench.entries import ENTRIES, add_bench
+from vrneural.bench.extremes import ExtremesConfig, run_extremes
+from vrneural.bench.quality import QualityConfig, run_quality
+from vrneural.bench.runtime import HEADLINES, RuntimeConfig, headline, run_runtime
+from vrneural.bench.widths import WidthsConfig, run_widths
 from vrneural.config import config_from_args
 
 
 def _register_quality(sub) -> None:
-    from vrneural.bench.quality import QualityConfig
-
     every = "of every network but the teacher"
     helps = {  # the bench's own words for the fields it shares with distill (TrainBudget, ...)
         "seed": "seed of synthesis, initialisation, data order and texture-lookup jitter",
@@ -46,8 +48,6 @@ def _register_quality(sub) -> None:
 
 
 def _run_quality(args) -> int:
-    from vrneural.bench.quality import QualityConfig, run_quality
-
     doc = run_quality(config_from_args(QualityConfig, args))
     print(
         f"{args.out}: results.json, results.md, curves.png, slices.png "
@@ -57,8 +57,6 @@ def _run_quality(args) -> int:
 
 
 def _register_widths(sub) -> None:
-    from vrneural.bench.widths import WidthsConfig
-
     add_bench(
         sub,
         "widths",
@@ -73,16 +71,12 @@ def _register_widths(sub) -> None:
 
 
 def _run_widths(args) -> int:
-    from vrneural.bench.widths import WidthsConfig, run_widths
-
     doc = run_widths(config_from_args(WidthsConfig, args))
     print(f"{args.out}: results.json, results.md, widths.png ({doc['total_seconds'] / 60:.1f} min)")
     return 0
 
 
 def _register_extremes(sub) -> None:
-    from vrneural.bench.extremes import ExtremesConfig
-
     add_bench(
         sub,
         "extremes",
@@ -95,8 +89,6 @@ def _register_extremes(sub) -> None:
 
 
 def _run_extremes(args) -> int:
-    from vrneural.bench.extremes import ExtremesConfig, run_extremes
-
     doc = run_extremes(config_from_args(ExtremesConfig, args), args.out)
     png = ", f16_error.png" if (Path(args.out) / "f16_error.png").is_file() else ""
     print(
@@ -107,8 +99,6 @@ def _run_extremes(args) -> int:
 
 
 def _register_runtime(sub) -> None:
-    from vrneural.bench.runtime import RuntimeConfig
-
     add_bench(
         sub,
         "runtime",
@@ -123,8 +113,6 @@ def _register_runtime(sub) -> None:
 
 
 def _run_runtime(args) -> int:
-    from vrneural.bench.runtime import HEADLINES, RuntimeConfig, headline, run_runtime
-
     doc = run_runtime(config_from_args(RuntimeConfig, args), args.out)
     print(f"bench runtime: {args.out}/ results.json, results.md ({doc['total_seconds']:.0f} s)")
     for name, paths in HEADLINES.items():

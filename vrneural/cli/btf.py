@@ -16,11 +16,23 @@ import json
 import sys
 from pathlib import Path
 
+from vrneural.btf.format import read_btf
+from vrneural.btf.pathtrace import load_mitsuba
+from vrneural.btf.pt_render import RenderConfig, render_btf
+from vrneural.btf.sheet import contact_sheet, sheet_panels, summary
+from vrneural.btf.synth import BtfConfig, synthesize
+from vrneural.config import add_config_args, config_from_args, config_path, write_config
+from vrneural.errors import VrnError, check_range
+from vrneural.outputs import (
+    check_output,
+    check_outputs,
+    check_resume_force,
+    check_suffix,
+    output_lock,
+)
+
 
 def register(sub) -> None:
-    from vrneural.btf.synth import BtfConfig
-    from vrneural.config import add_config_args
-
     p = sub.add_parser(
         "btf",
         help="synthesize, inspect, show and import tabulated BTFs",
@@ -38,8 +50,6 @@ def register(sub) -> None:
     add_config_args(s, BtfConfig)
     s.add_argument("-o", "--output", required=True, help="output .btf file")
     _run_flags(s, run_synth)
-
-    from vrneural.btf.pt_render import RenderConfig
 
     r = bsub.add_parser(
         "render",
@@ -129,8 +139,6 @@ def _run_flags(p, func, resume_help="continue an interrupted run (<output>.parti
 def _check_partial(out: Path, resume: bool, force: bool) -> None:
     """An interrupted run's ``<out>.partial`` is only continued (--resume) or discarded (--force)
     on request: a long render is never thrown away by accident."""
-    from vrneural.errors import VrnError
-
     partial = out.with_name(out.name + ".partial")
     if partial.exists() and not (resume or force):
         raise VrnError(
@@ -142,9 +150,6 @@ def _check_partial(out: Path, resume: bool, force: bool) -> None:
 
 
 def run_synth(args) -> int:
-    from vrneural.btf.synth import BtfConfig, synthesize
-    from vrneural.config import config_from_args
-
     cfg = config_from_args(BtfConfig, args)
     cfg.validate()
     _check_btf_output(args, "leather.btf")
@@ -153,10 +158,6 @@ def run_synth(args) -> int:
 
 
 def run_render(args) -> int:
-    from vrneural.btf.pathtrace import load_mitsuba
-    from vrneural.btf.pt_render import RenderConfig, render_btf
-    from vrneural.config import config_from_args
-
     cfg = config_from_args(RenderConfig, args)
     cfg.validate()
     _check_btf_output(args, "weave.btf")
@@ -166,8 +167,6 @@ def run_render(args) -> int:
 
 def _check_btf_output(args, example: str) -> None:
     """--resume with --force, and an output that is not a .btf, are refused."""
-    from vrneural.outputs import check_resume_force, check_suffix
-
     check_resume_force(args.resume, args.force)
     check_suffix(args.output, ".btf", "BTF", example)
 
@@ -175,9 +174,6 @@ def _check_btf_output(args, example: str) -> None:
 def _write_btf(args, make, cfg, sidecar, extra: dict | None = None) -> int:
     """`btf synth` and `btf render`: ``make(cfg, out, ...)`` under the output's lock (a second
     run on it meanwhile is refused), then ``sidecar`` (+ ``extra``) as its config JSON."""
-    from vrneural.config import config_path, write_config
-    from vrneural.outputs import check_outputs, output_lock
-
     with output_lock(args.output):
         out, _ = check_outputs([args.output, config_path(args.output)], args.force)
         _check_partial(out, args.resume, args.force)
@@ -204,9 +200,6 @@ def _warn_nonfinite(file: str, s: dict) -> None:
 
 
 def run_info(args) -> int:
-    from vrneural.btf.format import read_btf
-    from vrneural.btf.sheet import summary
-
     s = summary(read_btf(args.file))
     _warn_nonfinite(args.file, s)
     if args.json:
@@ -252,11 +245,6 @@ def run_info(args) -> int:
 
 
 def run_show(args) -> int:
-    from vrneural.btf.format import read_btf
-    from vrneural.btf.sheet import contact_sheet, sheet_panels
-    from vrneural.errors import check_range
-    from vrneural.outputs import check_output, check_suffix
-
     check_suffix(args.output, ".png", "image", "sheet.png", ignore_case=True)
     btf = read_btf(args.file)
     if args.texel:
@@ -264,7 +252,6 @@ def run_show(args) -> int:
         check_range("--texel X", args.texel[0], 0, W - 1)
         check_range("--texel Y", args.texel[1], 0, H - 1)
     out = check_output(args.output, args.force)
-    from vrneural.btf.sheet import summary
 
     _warn_nonfinite(args.file, summary(btf))  # the sheet shows them as black or white
     print(contact_sheet(btf, out, tuple(args.texel) if args.texel else None))
@@ -283,8 +270,6 @@ def run_show(args) -> int:
 
 def run_import(args) -> int:
     from vrneural.btf.ubo2014 import import_ubo, load_extractor, parse_header
-    from vrneural.errors import VrnError
-    from vrneural.outputs import check_outputs
 
     _check_btf_output(args, "leather.btf")  # as btf synth
     if Path(args.file).is_dir():
@@ -311,7 +296,6 @@ def _height(args, size: tuple[int, int]):
 def _import_images(args) -> int:
     """`btf import DIR`: an image set (vrneural/btf/imageset.py)."""
     from vrneural.btf.imageset import import_images, plan_import
-    from vrneural.outputs import check_outputs
 
     plan = plan_import(args.file, args.table, args.png_linear, args.height)  # all checks first
     height = _height(args, plan.size)

@@ -3,12 +3,12 @@ baseline with --method)."""
 
 from __future__ import annotations
 
+from vrneural.cli.teach import _report
 from vrneural.config import add_config_args, config_from_args
+from vrneural.distill.config import DistillConfig
 
 
 def register(sub) -> None:
-    from vrneural.distill.config import DistillConfig
-
     p = sub.add_parser(
         "distill",
         help="distill a student (or baseline) from a teacher checkpoint",
@@ -26,8 +26,6 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from vrneural.cli.teach import _report
-    from vrneural.distill.config import DistillConfig
     from vrneural.distill.distill import run_distill
 
     cfg = config_from_args(DistillConfig, args)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import json
+
+from vrneural.config import add_config_args, config_from_args
+from vrneural.scoring.score import EvalConfig
+
 
 def register(sub) -> None:
-    from vrneural.config import add_config_args
-    from vrneural.scoring.score import EvalConfig
-
     p = sub.add_parser(
         "eval",
         help="score runtime packs (.vrnm) against a BTF: L1, PSNR, SSIM, f16 cost",
@@ -34,11 +36,7 @@ def register(sub) -> None:
 
 
 def main(args) -> int:
-    import json
-
-    from vrneural.config import config_from_args
     from vrneural.scoring.run import OUT_FILES, evaluate, text_table
-    from vrneural.scoring.score import EvalConfig
 
     cfg = config_from_args(EvalConfig, args, packs=tuple(args.packs))
     doc = evaluate(cfg, progress=not args.quiet)

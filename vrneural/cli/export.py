@@ -2,6 +2,16 @@
 
 from __future__ import annotations
 
+import json
+import warnings
+from pathlib import Path
+
+from vrneural.config import config_path
+from vrneural.errors import check_range
+from vrneural.formats.vrnm import read_vrnm
+from vrneural.material import width_words
+from vrneural.outputs import check_outputs, check_suffix, write_json
+
 
 def register(sub) -> None:
     p = sub.add_parser(
@@ -28,14 +38,8 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    import json
-
-    from vrneural.config import config_path
     from vrneural.distill.checkpoint import load_checkpoint
     from vrneural.distill.export import export_checkpoint, ranges_table
-    from vrneural.formats.vrnm import read_vrnm
-    from vrneural.material import width_words
-    from vrneural.outputs import check_outputs, check_suffix, write_json
 
     check_suffix(args.output, ".vrnm", "pack", "material.vrnm")
     sidecar = config_path(args.output)
@@ -43,7 +47,6 @@ def run(args) -> int:
     ck = load_checkpoint(args.checkpoint)
     if not ck.get("finished", True):
         _warn_unfinished(args.checkpoint, ck, args.output)
-    from vrneural.errors import check_range
 
     check_range("--lod-levels", args.lod_levels, 0, 12)
     out, meta = export_checkpoint(
@@ -81,9 +84,6 @@ def run(args) -> int:
 
 def _warn_unfinished(path, ck: dict, output) -> None:
     """One-line warning: the checkpoint is an interrupted run, and how to finish it."""
-    import warnings
-    from pathlib import Path
-
     from vrneural.distill.checkpoint import UnfinishedRunWarning, unfinished_run
     from vrneural.distill.distill import is_wide_half, run_of_wide_half
 

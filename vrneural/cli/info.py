@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import json
 
+from vrneural.errors import check_range
+from vrneural.versions import package_versions
+
 
 def register(sub) -> None:
     p = sub.add_parser(
@@ -29,11 +32,9 @@ ROUNDS = 3
 
 
 def collect(texels: int) -> dict:
-    from vrneural.errors import check_range
     from vrneural.gpu import adapter_summary, has_feature
     from vrneural.gpu.probe import mlp_throughput
     from vrneural.gpu.timing import timestamp_period_ns
-    from vrneural.versions import package_versions
 
     check_range("--texels", texels, 1024, 1 << 24)
     summary = adapter_summary().to_dict()

@@ -5,11 +5,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from vrneural.config import add_config_args, config_from_args
+from vrneural.runtime.config import RunConfig
+from vrneural.runtime.run import human_summary, run
+
 
 def register(sub) -> None:
-    from vrneural.config import add_config_args
-    from vrneural.runtime.config import RunConfig
-
     p = sub.add_parser(
         "run",
         help="render a scene (texture-space neural shading with reuse), write frames + summary",
@@ -26,10 +27,6 @@ def register(sub) -> None:
 
 
 def main(args) -> int:
-    from vrneural.config import config_from_args
-    from vrneural.runtime.config import RunConfig
-    from vrneural.runtime.run import human_summary, run
-
     cfg = config_from_args(RunConfig, args, scene=args.scene)
     sm = run(cfg, progress=not args.quiet)
     print(human_summary(sm))

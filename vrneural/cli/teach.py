@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import os
+import sys
+from pathlib import Path
+
 from vrneural.config import add_config_args, config_from_args
+from vrneural.distill.config import TeachConfig
+from vrneural.errors import count
 
 
 def register(sub) -> None:
-    from vrneural.distill.config import TeachConfig
-
     p = sub.add_parser(
         "teach",
         help="train the teacher network on a BTF",
@@ -25,7 +29,6 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from vrneural.distill.config import TeachConfig
     from vrneural.distill.teach import run_teach
 
     cfg = config_from_args(TeachConfig, args)
@@ -36,13 +39,8 @@ def _report(fn, output: str) -> int:
     """Run a training stage; report the result or the interruption (exit 130). Under
     ``torchrun`` only rank 0 reports (it alone writes the files), and every rank leaves the
     process group before it exits."""
-    import os
-    import sys
-    from pathlib import Path
-
     from vrneural.distill.specs import spec_width
     from vrneural.distill.train import Interrupted, dist_teardown
-    from vrneural.errors import count
 
     rank0 = int(os.environ.get("RANK", "0")) == 0
     try:

@@ -3,12 +3,17 @@ knob `run` has, an orbit / fly camera, a HUD, a split view against the per-pixel
 
 from __future__ import annotations
 
+import dataclasses
+import sys
+
+from vrneural.config import add_config_args, config_from_args
+from vrneural.runtime.config import RunConfig
+from vrneural.viewer.backends import check_display, import_glfw
+from vrneural.viewer.config import RUN_ONLY, ViewConfig
+from vrneural.viewer.view import View
+
 
 def register(sub) -> None:
-    from vrneural.config import add_config_args
-    from vrneural.runtime.config import RunConfig
-    from vrneural.viewer.config import RUN_ONLY, ViewConfig
-
     p = sub.add_parser(
         "view",
         help="watch the runtime live in a window: keys for every knob, a HUD, a split view",
@@ -29,15 +34,6 @@ def register(sub) -> None:
 
 
 def main(args) -> int:
-    import dataclasses
-    import sys
-
-    from vrneural.config import config_from_args
-    from vrneural.runtime.config import RunConfig
-    from vrneural.viewer.backends import check_display, import_glfw
-    from vrneural.viewer.config import ViewConfig
-    from vrneural.viewer.view import View
-
     check_display()  # before the scene and its shaders take their seconds
     import_glfw()
     cfg = config_from_args(RunConfig, args)
