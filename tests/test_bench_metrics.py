@@ -170,3 +170,30 @@ def test_flip_of_both_eyes_leaves_the_gap_out():
     c = b.copy()
     c[0] *= 1.5  # now both differ: about twice the error
     assert 1.5 < flip_hdr_eyes(a, c, 23.0) / both < 2.5
+
+
+def test_a_bench_sets_its_own_defaults_for_a_shared_part(capsys):
+    """bench distance trains its packs 24 epochs (DistanceConfig.DEFAULTS) where bench tradeoff,
+    sharing the PackBudget part, keeps 4; --quick and flags given still win, and --help and
+    the CLI reference show the bench's own default."""
+    from vrneural.bench.distance import DistanceConfig
+    from vrneural.bench.tradeoff import TradeoffConfig
+    from vrneural.cli import build_parser, main
+    from vrneural.config import config_from_args
+
+    d = DistanceConfig().resolved().budget
+    assert (d.teacher_epochs, d.epochs, d.btf_res) == (24, 24, 32)
+    assert TradeoffConfig().resolved().budget.epochs == 4
+    q = DistanceConfig(quick=True).resolved().budget
+    assert (q.teacher_epochs, q.epochs) == (1, 1)
+    args = build_parser().parse_args(["bench", "distance", "--epochs", "7"])
+    given = config_from_args(DistanceConfig, args).resolved().budget
+    assert (given.epochs, given.teacher_epochs) == (7, 24)
+    with pytest.raises(SystemExit):
+        main(["bench", "distance", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "--epochs EPOCHS epochs of each small network (default: 24)" in text
+    with pytest.raises(SystemExit):
+        main(["bench", "tradeoff", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "--epochs EPOCHS epochs of each small network (default: 4)" in text

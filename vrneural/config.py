@@ -46,9 +46,13 @@ class QuickConfig(Config):
 
     QUICK = None
 
+    #: the command's own defaults for fields of parts it shares (flat keys), under ``QUICK``
+    DEFAULTS: typing.ClassVar[dict] = {}
+
     def resolved(self, *layers):
-        """The fields not given: ``--quick``'s (``QUICK``), then ``layers``', or the defaults."""
-        return resolved(self, *([self.QUICK] if self.quick else []), *layers)
+        """The fields not given: ``--quick``'s (``QUICK``), then ``layers``', then the command's
+        own ``DEFAULTS``, or the fields' defaults."""
+        return resolved(self, *([self.QUICK] if self.quick else []), *layers, self.DEFAULTS)
 
 
 def _items(value) -> tuple[list[str], str]:
@@ -165,24 +169,27 @@ def add_config_args(
     skip: tuple[str, ...] = (),
     prefix: str = "",
     helps: dict[str, str] | None = None,
+    own: dict | None = None,
 ) -> None:
     """Add one ``--field-name`` option per dataclass field of ``cls`` (``helps``: a command's
-    own help for some of them, as the viewer's defaults).
+    own help for some of them, as the viewer's defaults; ``own``: defaults of a part's fields
+    that the command sets for itself, its class's ``DEFAULTS``, shown by ``--help``).
 
     A bool that is off by default becomes a switch (``--force``); one that is on by default
     also gets ``--no-<name>`` (``--no-progress``). An :func:`unset` field not given parses to
     None; its help shows the default it resolves to.
     """
     hints = typing.get_type_hints(cls)
+    own = {**getattr(cls, "DEFAULTS", {}), **(own or {})}
     for f in dataclasses.fields(cls):
         if f.name in skip or f.metadata.get("cli") is False:
             continue
         if f.metadata.get("part"):
-            add_config_args(parser, hints[f.name], skip, prefix, helps)
+            add_config_args(parser, hints[f.name], skip, prefix, helps, own)
             continue
         flag = "--" + prefix + f.name.replace("_", "-")
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
-        shown = f.metadata.get("default", default)
+        shown = own.get(f.name, f.metadata.get("default", default))
         if isinstance(shown, tuple):  # a list field: as it is typed
             shown = ",".join(map(str, shown))
         tp = hints[f.name]

@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -25,7 +26,7 @@ from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench import tradeoff as tr
 from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored
-from vrneural.config import Config, floats, opt, part, resolved, unset
+from vrneural.config import QuickConfig, floats, opt, part, unset
 from vrneural.scoring import metrics
 
 #: name -> (mips, screen_res, prefiltered neural textures)
@@ -39,7 +40,7 @@ VARIANTS = {
 
 
 @dataclass
-class DistanceConfig(Config):
+class DistanceConfig(QuickConfig):
     """`vrneural bench distance`."""
 
     out: str = opt("bench-distance", "output directory", cli=False)
@@ -65,13 +66,13 @@ class DistanceConfig(Config):
     progress: bool = opt(True, "show progress bars")
     force: bool = opt(False, "overwrite an existing output directory")
 
-    def resolved(self) -> DistanceConfig:
-        """The fields not given: ``--quick``'s (:data:`QUICK_DISTANCE`) or the defaults."""
-        return resolved(self, *([QUICK_DISTANCE] if self.quick else []))
+    #: packs trained 24 epochs, not the shared 4: with 4, the LOD pack's level 0 is noisier
+    #: than the plain student's and flickers more at 0.3 m (docs/lod.md); 24 cost a minute
+    DEFAULTS: ClassVar[dict] = {"teacher_epochs": 24, "epochs": 24}
 
 
 #: ``--quick``: the CI-sized run, under the flags given
-QUICK_DISTANCE = DistanceConfig(
+DistanceConfig.QUICK = DistanceConfig(
     distances=(1, 10),
     tilings=(8,),
     score=QUICK_SCORED,
