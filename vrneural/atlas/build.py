@@ -73,7 +73,7 @@ def build_atlas(
 ) -> Atlas:
     """The R x R atlas of ``mesh``: atlas UVs, triangle IDs with a ``padding``-texel gutter.
 
-    ``atlas_uv`` (:data:`vrneural.atlas.meshuv.MODES`): ``auto`` uses the mesh's own lightmap
+    ``atlas_uv`` (:data:`vrneural.atlas.config.MODES`): ``auto`` uses the mesh's own lightmap
     or UV set when it passes the checks of :mod:`vrneural.atlas.meshuv`, else generates one
     (:mod:`vrneural.atlas.generate`); ``mesh`` insists on the mesh's own (an unusable set is a
     :class:`VrnError`); ``charts`` and ``xatlas`` always generate. Returns an :class:`Atlas`
