@@ -150,15 +150,11 @@ def loop(r, frames: int, f0: int) -> dict:
 
 
 def _renderer(scene, c, eye_res, target: str, depth: int = 2, march: str = "pack"):
-    from vrneural.runtime.renderer import Renderer, Settings
-
     prof = get_profile("quest3")
-    s = Settings(eyes=2, reuse=c.reuse, texture_res=c.texture_res, eye_res=eye_res,
-                 frames=1, fps=prof.fps, fov_y=prof.fov_y, n_lights=c.lights,
-                 schedule="staggered", frames_in_flight=depth, target=target,
-                 parallax_march=march)  # fmt: skip
-    r = Renderer(scene, s)
-    r.frame(0)
+    r = timing.make_renderer(scene, eyes=2, reuse=c.reuse, texture_res=c.texture_res,
+                             eye_res=eye_res, fps=prof.fps, fov_y=prof.fov_y, n_lights=c.lights,
+                             schedule="staggered", frames_in_flight=depth, target=target,
+                             parallax_march=march)  # fmt: skip
     r.wait()
     return r
 
@@ -191,7 +187,7 @@ def run_frame(cfg: FrameConfig) -> dict:
             own, by_side = timing.auto_block_shares(rr, (16, 32, 64, 128, 256))
             doc.setdefault("auto_block_share", {})[kind] = own
             doc["auto_block_share_by_side"] = by_side  # the same scene with larger materials
-        floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_constant", "fs_floor_sample")}
+        floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_sample", "fs_floor_constant")}
         n1 = c.reuse + 1
         bar = timing.progress(c.rounds, "bench frame (rounds)", c.progress)
         f = n1 * 2  # after a cycle of warm-up
@@ -207,26 +203,21 @@ def run_frame(cfg: FrameConfig) -> dict:
                 f += c.frames
             p, rep = rec["passes"], c.repeats
             rec["empty_submit_ms"] = time_passes(hdr, lambda enc, timer: None, rep)["wall_ms"]
-            p["texture_full"] = time_passes(hdr, texture_update(hdr, "main", 0, 1, f), rep)
-            p["texture_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, 1, f), rep)
-            p["texture_slice"] = time_passes(hdr, texture_update(hdr, "main", 0, n1, f), rep)
-            p["texture_slice_bare"] = time_passes(hdr, texture_update(hdr, "bare", 0, n1, f), rep)
+            updates = {"texture_full": (hdr, "main", 1), "texture_bare": (hdr, "bare", 1),
+                       "texture_slice": (hdr, "main", n1),
+                       "texture_slice_bare": (hdr, "bare", n1)}  # fmt: skip
             for (kind, march), rr in par.items():  # the same update, with parallax
                 sfx = kind + ("" if march == "texel" else f"_{march}")
-                p[f"texture_full_{sfx}"] = time_passes(rr, texture_update(rr, "main", 0, 1, f), rep)
-                p[f"texture_slice_{sfx}"] = time_passes(
-                    rr, texture_update(rr, "main", 0, n1, f), rep
-                )
+                updates[f"texture_full_{sfx}"] = (rr, "main", 1)
+                updates[f"texture_slice_{sfx}"] = (rr, "main", n1)
+            for key, (rr, entry, period) in updates.items():
+                p[key] = time_passes(rr, texture_update(rr, entry, 0, period, f), rep)
             hdr.frame(f)  # the eyes' uniforms and radiance textures of a real frame
             hdr.wait()
             f += 1
             p["forward"] = time_passes(hdr, forward(hdr), rep)
-            p["forward_floor_sample"] = time_passes(
-                hdr, forward(hdr, floors["fs_floor_sample"]), rep
-            )
-            p["forward_floor_constant"] = time_passes(
-                hdr, forward(hdr, floors["fs_floor_constant"]), rep
-            )
+            for k, bundles in floors.items():  # forward_floor_constant, forward_floor_sample
+                p[k.replace("fs_", "forward_")] = time_passes(hdr, forward(hdr, bundles), rep)
             disp.frame(f)
             disp.wait()
             p["forward_display"] = time_passes(disp, forward(disp), rep)

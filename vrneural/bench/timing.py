@@ -30,39 +30,12 @@ from vrneural.runtime.profiles import get_profile
 from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 
 
-def make_renderer(
-    scene,
-    *,
-    mode="texture",
-    texture_res=1200,
-    eye_res=(2064, 2208),
-    reuse=4,
-    schedule="staggered",
-    n_lights=1,
-    precision="f32",
-    eyes=2,
-    reference=None,
-    fps=90.0,
-    fov_y=96.0,
-):
-    """A renderer for ``scene`` with the given settings, its frame 0 already rendered."""
+def make_renderer(scene, **settings):
+    """A renderer for ``scene`` with these :class:`~vrneural.runtime.renderer.Settings` (one
+    light unless ``n_lights`` is given), its frame 0 already rendered."""
     from vrneural.runtime.renderer import Renderer, Settings
 
-    s = Settings(
-        eyes=eyes,
-        reuse=reuse,
-        texture_res=texture_res,
-        eye_res=tuple(eye_res),
-        frames=1,
-        fps=fps,
-        fov_y=fov_y,
-        n_lights=n_lights,
-        mode=mode,
-        schedule=schedule,
-        precision=precision,
-        reference=reference,
-    )
-    r = Renderer(scene, s)
+    r = Renderer(scene, Settings(**{"n_lights": 1, **settings, "frames": 1}))
     r.frame(0)  # compile + first full update: not measured
     r.next_frame = 1
     return r
