@@ -231,13 +231,12 @@ def z_dim(mat) -> int:
 
 
 def _torch_act(act: str):
+    """The torch module of an activation (:data:`vrneural.mlp.ACTIVATIONS`)."""
     import torch
 
-    if act == "relu":
-        return torch.relu
-    if act == "leaky_relu":
-        return lambda x: torch.nn.functional.leaky_relu(x, 0.01)
-    return lambda x: x
+    return {"relu": torch.nn.ReLU(), "leaky_relu": torch.nn.LeakyReLU(0.01)}.get(
+        act, torch.nn.Identity()
+    )
 
 
 def torch_net(layers):
@@ -248,11 +247,7 @@ def torch_net(layers):
         lin = torch.nn.Linear(lay.n_in, lay.n_out)
         lin.weight.data = torch.from_numpy(lay.weight)
         lin.bias.data = torch.from_numpy(lay.bias)
-        mods.append(lin)
-        if lay.act == "relu":
-            mods.append(torch.nn.ReLU())
-        elif lay.act == "leaky_relu":
-            mods.append(torch.nn.LeakyReLU(0.01))
+        mods += [lin, _torch_act(lay.act)]
     return torch.nn.Sequential(*mods).eval()
 
 
