@@ -69,11 +69,6 @@ def test_pixels_per_degree_quest3():
     assert metrics.pixels_per_degree(p.eye_res[1], p.fov_y) == pytest.approx(23.0)
 
 
-def test_frame_change():
-    f = [np.zeros((2, 2)), np.full((2, 2), 0.5), np.full((2, 2), 0.25)]
-    assert metrics.frame_change(f) == [0.5, 0.25]
-
-
 def test_pareto_front():
     pts = [(1.0, 0.5), (2.0, 0.3), (3.0, 0.4), (0.5, 0.9), (2.0, 0.3)]
     # (3, 0.4) is dominated by (2, 0.3); the duplicate (2, 0.3) points do not dominate each other

@@ -14,8 +14,6 @@ window lies inside the image (a 5-pixel border is dropped) and over the 3 channe
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 
 SSIM_SIGMA = 1.5
@@ -112,8 +110,3 @@ def flip_hdr_eyes(ref: np.ndarray, test: np.ndarray, ppd: float) -> float:
 def pixels_per_degree(eye_height: int, fov_y: float) -> float:
     """Pixels per degree of an eye image ``eye_height`` pixels tall spanning ``fov_y`` degrees."""
     return eye_height / fov_y
-
-
-def frame_change(frames: list[np.ndarray]) -> list[float]:
-    """Mean absolute frame-to-frame change of display images (any equal shapes, in [0, 1])."""
-    return [float(np.abs(b - a).mean()) for a, b in itertools.pairwise(frames)]
