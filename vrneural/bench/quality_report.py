@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.bench.quality_parallax import bins_png, markdown_bins
-from vrneural.bench.report import pyplot, save_png
+from vrneural.bench.report import pyplot, save_png, table
 from vrneural.errors import count
 from vrneural.outputs import atomic_path
 
@@ -101,27 +101,17 @@ def _several_seeds(res: dict, presets: list[str], lab: dict, width: int) -> list
         "Picked: every method keeps the seed with the lowest held-out test L1 (whole-BTF L1 of "
         "that seed), and the targets are judged on those.",
         "",
-        "| material | student < single-level (pairs) | student < no-distillation (pairs) | "
-        + " | ".join(f"{lab[n]} (picked)" for n in names)
-        + " | "
-        + " | ".join(target_names(width))
-        + " |",
-        "|---|---|---|" + "---|" * (len(names) + len(TARGETS)),
     ]
+    rows = []
     for p in presets:
         m = res[p]["methods"]
         pairs, pick = seed_pairs(m), picked(m)
-        t = targets(pick)
-        lines.append(
-            f"| {p} | "
-            + " | ".join(f"{w} of {n}" for w, n in pairs.values())
-            + " | "
-            + " | ".join(f"{pick[n]['whole_l1']:.5f}" for n in names)
-            + " | "
-            + " | ".join("yes" if v else "**no**" for v in t.values())
-            + " |"
-        )
-    return [*lines, ""]
+        rows.append([p, *(f"{w} of {n}" for w, n in pairs.values()),
+                     *(f"{pick[n]['whole_l1']:.5f}" for n in names),
+                     *("yes" if v else "**no**" for v in targets(pick).values())])  # fmt: skip
+    head = ["material", "student < single-level (pairs)", "student < no-distillation (pairs)",
+            *(f"{lab[n]} (picked)" for n in names), *target_names(width)]  # fmt: skip
+    return [*lines, *table(head, rows), ""]
 
 
 def _cell(r: dict, best: bool) -> str:
@@ -144,18 +134,13 @@ def _psnr_ssim(res: dict, presets: list[str], lab: dict) -> list[str]:
         "runtime's tone map x / (1 + x) and sRGB; the mean over slices, and over seeds. The "
         "same definitions as `vrneural eval`. PSNR in dB / SSIM; Lafortune is not scored.",
         "",
-        "| method | " + " | ".join(presets) + " |",
-        "|---|" + "---|" * len(presets),
     ]
-    for name in ORDER:
-        if name not in first or "ssim" not in first[name]:
-            continue
-        cells = [
-            f"{res[p]['methods'][name]['psnr_db']:.2f} / {res[p]['methods'][name]['ssim']:.3f}"
-            for p in presets
-        ]
-        lines.append(f"| {lab[name]} | " + " | ".join(cells) + " |")
-    return [*lines, ""]
+    rows = [
+        [lab[n], *(f"{r[n]['psnr_db']:.2f} / {r[n]['ssim']:.3f}"
+                   for r in (res[p]["methods"] for p in presets))]
+        for n in ORDER if n in first and "ssim" in first[n]
+    ]  # fmt: skip
+    return [*lines, *table(["method", *presets], rows), ""]
 
 
 def markdown(doc: dict) -> str:
@@ -200,23 +185,17 @@ def markdown(doc: dict) -> str:
         "networks it reused from earlier runs list their own train s below (per seed: "
         "the mean over the seeds).",
         "",
-        "| method | " + " | ".join(presets) + " | storage (bytes) | MLP MACs / texel |",
-        "|---|" + "---|" * (len(presets) + 2),
     ]
-    for name in ORDER:
-        if name not in res[presets[0]]["methods"]:
-            continue
+    best = {p: min(r["whole_l1"] for m, r in res[p]["methods"].items() if m != "teacher")
+            for p in presets}  # fmt: skip
+    rows = []
+    for name in (n for n in ORDER if n in res[presets[0]]["methods"]):
         r0 = res[presets[0]]["methods"][name]
-        vals = []
-        for p in presets:
-            r = res[p]["methods"][name]
-            best = min(
-                res[p]["methods"][m]["whole_l1"] for m in res[p]["methods"] if m != "teacher"
-            )
-            vals.append(_cell(r, r["whole_l1"] == best))
-        store = f"{r0['texture_bytes']} + {r0['weight_bytes']}"
+        vals = [_cell(r, r["whole_l1"] == best[p])
+                for p, r in ((p, res[p]["methods"][name]) for p in presets)]  # fmt: skip
         macs = "-" if r0["macs_per_texel"] is None else f"{r0['macs_per_texel']:g}"
-        lines.append(f"| {lab[name]} | " + " | ".join(vals) + f" | {store} | {macs} |")
+        rows.append([lab[name], *vals, f"{r0['texture_bytes']} + {r0['weight_bytes']}", macs])
+    lines += table(["method", *presets, "storage (bytes)", "MLP MACs / texel"], rows)
     lines += [
         "",
         "Storage = texture + network bytes of the runtime pack (textures float16, weights "
@@ -237,20 +216,15 @@ def markdown(doc: dict) -> str:
         "absolute. A ratio of totals shrinks when the data carry error no model removes "
         "(measured BTFs); the absolute difference does not.",
         "",
-        "| material | " + " | ".join(target_names(width)) + " |",
-        "|---|" + "---|" * 4,
     ]
+    rows = []
     for p in presets:
         m = res[p]["methods"]
-        t, sure, gap = targets(m), decided(m), gaps(m)
-        cells = [
-            ("yes" if v else "**no**")
-            + f" ({gap[n][0]:+.1%}, {gap[n][1]:+.5f})"
-            + ("" if sure[n] else " *(seeds overlap)*")
-            for n, v in t.items()
-        ]
-        lines.append(f"| {p} | " + " | ".join(cells) + " |")
-    lines.append("")
+        sure, gap = decided(m), gaps(m)
+        rows.append([p, *(("yes" if v else "**no**") + f" ({gap[n][0]:+.1%}, {gap[n][1]:+.5f})"
+                          + ("" if sure[n] else " *(seeds overlap)*")
+                          for n, v in targets(m).items())])  # fmt: skip
+    lines += [*table(["material", *target_names(width)], rows), ""]
     if k > 1:
         lines += _several_seeds(res, presets, lab, width)
     lines += _psnr_ssim(res, presets, lab)
@@ -261,18 +235,13 @@ def markdown(doc: dict) -> str:
         "any time the job was paused or shared its core); s/epoch: the median epoch, which "
         "is robust to such interruptions.",
         "",
-        "| material | method | test L1 | whole L1 | train s | s/epoch |",
-        "|---|---|---|---|---|---|",
     ]
-    for p in presets:
-        for name in ORDER:
-            r = res[p]["methods"].get(name)
-            if r:
-                ep = r.get("epoch_seconds_median")
-                lines.append(
-                    f"| {p} | {name} | {r['test_l1']:.5f} | {r['whole_l1']:.5f} | "
-                    f"{r['train_seconds']:.1f} | {'-' if ep is None else f'{ep:.1f}'} |"
-                )
+    rows = [
+        [p, name, f"{r['test_l1']:.5f}", f"{r['whole_l1']:.5f}", f"{r['train_seconds']:.1f}",
+         "-" if r.get("epoch_seconds_median") is None else f"{r['epoch_seconds_median']:.1f}"]
+        for p in presets for name, r in ((n, res[p]["methods"].get(n)) for n in ORDER) if r
+    ]  # fmt: skip
+    lines += table(["material", "method", "test L1", "whole L1", "train s", "s/epoch"], rows)
     lines += [
         "",
         "Figures: `curves.png` (test L1 per epoch; thick: the first seed, thin: the others), "

@@ -284,16 +284,14 @@ def train_in_process(preset: str, tcfg, runs, log, more=()) -> tuple[dict, list]
     from vrneural.distill.distill import run_distill
     from vrneural.distill.teach import run_teach
 
-    reused = _finished(tcfg)
-    tck = run_teach(as_given(tcfg), epochs_flag="--teacher-epochs")
-    log(f"{preset}: teacher  {took(tck, reused)}")
     done = []
-    for c in more:  # further teachers (the parallax variant's), before the networks they teach
-        reused = _finished(c)
+    for c in (tcfg, *more):  # the teacher, then further ones (the parallax variant's) before
+        reused = _finished(c)  # the networks they teach
         ck = run_teach(as_given(c), epochs_flag="--teacher-epochs")
-        stem = Path(c.output).stem
+        stem = Path(c.output).stem  # "teacher" for tcfg
         log(f"{preset}: {stem}  {took(ck, reused)}")
         done.append((stem, ck, ""))
+    tck = done.pop(0)[1]
     for key, stem, c in runs():
         reused = _finished(c)
         ck = run_distill(as_given(c), epochs_flag=epochs_flag(c))
