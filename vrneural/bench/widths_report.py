@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from vrneural.bench.report import pyplot, save_png
+from vrneural.bench.report import pyplot, save_png, table
 from vrneural.bench.train_configs import METHODS, STARTS
 from vrneural.errors import count
 from vrneural.outputs import atomic_path
@@ -64,12 +64,9 @@ def markdown(doc: dict) -> str:
         f"output: {doc['zero_output_l1']:.5f}. MACs per texel count the student's coarse "
         "net at a quarter (it runs once per 2x2 texel block).",
         "",
-        "| network | width | MACs / texel | weights (B) | whole-BTF L1 per seed | mean ± sd "
-        "| vs NeuMIP | training s (mean of seeds) |",
-        "|---|---|---|---|---|---|---|---|",
     ]
 
-    def row(r: dict, label: str, width: str) -> str:
+    def row(r: dict, label: str, width: str) -> list:
         black = doc["zero_output_l1"]  # a seed at or above it learned nothing: say so
         seeds = " / ".join(
             f"{v:.5f}" + (" (no better than black)" if v >= black else "")
@@ -81,15 +78,14 @@ def markdown(doc: dict) -> str:
         vs = "" if r is nm else f"{gap:+.1%}"
         if r is not nm and within(r, nm):
             vs = f"**{vs}**"
-        return (
-            f"| {label} | {width} | {r['macs_per_texel']:g} | {r['weight_bytes']} | {seeds} | "
-            f"{r['whole_l1']:.5f}{sd} | {vs} | {secs:.1f} |"
-        )
+        return [label, width, f"{r['macs_per_texel']:g}", r["weight_bytes"], seeds,
+                f"{r['whole_l1']:.5f}{sd}", vs, f"{secs:.1f}"]  # fmt: skip
 
-    for method, start in families(doc):
-        for r in _family(rows, method, start):
-            lines.append(row(r, _label(r), str(r["width"])))
-    lines.append(row(nm, _label(nm), "25"))
+    table_rows = [row(r, _label(r), str(r["width"]))
+                  for m, s in families(doc) for r in _family(rows, m, s)]  # fmt: skip
+    head = ["network", "width", "MACs / texel", "weights (B)", "whole-BTF L1 per seed",
+            "mean ± sd", "vs NeuMIP", "training s (mean of seeds)"]  # fmt: skip
+    lines += table(head, [*table_rows, row(nm, _label(nm), "25")])
     lines += ["", "Narrowest width within 10% of NeuMIP (seed means; **bold** above):", ""]
     for method, start in families(doc):
         w = doc["within_10pct"][f"{method}:{start}"]
