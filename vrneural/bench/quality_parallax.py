@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 import statistics
 
-from vrneural.bench.report import pyplot, save_png
+from vrneural.bench.report import pyplot, save_png, table
 from vrneural.btf.format import read_btf
 from vrneural.errors import VrnError
 from vrneural.parallax import parallax_fetches
@@ -159,48 +159,32 @@ def markdown_bins(doc: dict) -> list[str]:
         "## L1 by view angle (whole BTF: every pair, by its view's polar angle)",
         "",
     ]
+
+    def ratios(name: str, a: dict, b: dict) -> list:  # a row of L1 ratios a / b
+        bins = zip(a["view_bins_l1"], b["view_bins_l1"], strict=True)
+        return [name, _ratio(a["whole_l1"], b["whole_l1"]), *(_ratio(x, y) for x, y in bins)]
+
     for preset, r in res.items():
         methods = {k: m for k, m in r["methods"].items() if m.get("view_bins_l1")}
         if not methods:
             continue
         first = next(iter(methods.values()))
         n = first.get("view_bin_pairs") or []
-        lines += [
-            f"**{preset}** (pairs per bin: {', '.join(str(k) for k in n)})",
-            "",
-            "| Method | whole L1 | " + " | ".join(head) + " | MACs/texel | loads/texel |",
-            "|---" * (len(head) + 4) + "|",
-        ]
+        lines += [f"**{preset}** (pairs per bin: {', '.join(str(k) for k in n)})", ""]
+        rows = []
         for k, m in methods.items():
-            macs = m.get("macs_per_texel")
-            fetch = m.get("fetches_per_texel")
-            lines.append(
-                f"| {lab.get(k, k)} | {_fmt(m['whole_l1'])} | "
-                + " | ".join(_fmt(x) for x in m["view_bins_l1"])
-                + f" | {'-' if macs is None else f'{macs:.0f}'} | "
-                + f"{'-' if fetch is None else f'{fetch:g}'} |"
-            )
+            macs, fetch = m.get("macs_per_texel"), m.get("fetches_per_texel")
+            rows.append([lab.get(k, k), _fmt(m["whole_l1"]), *map(_fmt, m["view_bins_l1"]),
+                         "-" if macs is None else f"{macs:.0f}",
+                         "-" if fetch is None else f"{fetch:g}"])  # fmt: skip
+        lines += table(["Method", "whole L1", *head, "MACs/texel", "loads/texel"], rows)
         pairs = [(a, plain_twin(a)) for a in methods]
         pairs = [(a, b) for a, b in pairs if b in methods]
         if pairs:
-            lines += [
-                "",
-                "With / without parallax (ratio of L1; below 1: parallax helps):",
-                "",
-                "| Pair | whole | " + " | ".join(head) + " |",
-                "|---" * (len(head) + 2) + "|",
-            ]
-            for a, b in pairs:
-                ma, mb = methods[a], methods[b]
-                lines.append(
-                    f"| {lab.get(a, a)} / {lab.get(b, b)} | "
-                    f"{_ratio(ma['whole_l1'], mb['whole_l1'])} | "
-                    + " | ".join(
-                        _ratio(x, y)
-                        for x, y in zip(ma["view_bins_l1"], mb["view_bins_l1"], strict=True)
-                    )
-                    + " |"
-                )
+            lines += ["", "With / without parallax (ratio of L1; below 1: parallax helps):", ""]
+            rows = [ratios(f"{lab.get(a, a)} / {lab.get(b, b)}", methods[a], methods[b])
+                    for a, b in pairs]  # fmt: skip
+            lines += table(["Pair", "whole", *head], rows)
         ref = methods.get("neumip_neural")
         rivals = [k for k in ("student_parallax", "student_neural", "student") if k in methods]
         if ref is not None and rivals:  # the target: within 10% of NeuMIP with offset
@@ -208,19 +192,9 @@ def markdown_bins(doc: dict) -> list[str]:
                 "",
                 f"Against {lab.get('neumip_neural')} (ratio of L1; at most 1.1: within 10%):",
                 "",
-                "| Method | whole | " + " | ".join(head) + " |",
-                "|---" * (len(head) + 2) + "|",
             ]
-            for k in rivals:
-                m = methods[k]
-                lines.append(
-                    f"| {lab.get(k, k)} | {_ratio(m['whole_l1'], ref['whole_l1'])} | "
-                    + " | ".join(
-                        _ratio(x, y)
-                        for x, y in zip(m["view_bins_l1"], ref["view_bins_l1"], strict=True)
-                    )
-                    + " |"
-                )
+            rows = [ratios(lab.get(k, k), methods[k], ref) for k in rivals]
+            lines += table(["Method", "whole", *head], rows)
         lines.append("")
     return lines
 
