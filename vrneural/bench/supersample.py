@@ -5,7 +5,7 @@ image shifted by a sub-pixel offset (``Renderer.jitter``): one offset in each ce
 ``k x k`` grid over the pixel (``spp = k^2``; a non-square count takes the first ``spp`` cells of
 the next square grid), placed uniformly at random inside its cell (stratified sampling, seeded).
 Same geometry, lights and head path as the renders it judges. Its own sampling noise is what two
-references with different ``seed`` differ by (:func:`noise_floor`): a difference between a
+references with different ``seed`` differ by (the benches' noise floor): a difference between a
 render and the reference below that is not measurable.
 """
 
@@ -51,9 +51,3 @@ class SupersampledReference:
             acc = imgs if acc is None else acc + imgs
         self.r.jitter = (0.0, 0.0)
         return (acc / len(self.offsets)).astype(np.float32)
-
-
-def noise_floor(a: np.ndarray, b: np.ndarray, metric) -> float:
-    """``metric(a, b)``: the score of one reference against another of different seed, the floor
-    under which a render's difference from the reference is noise."""
-    return float(metric(a, b))
