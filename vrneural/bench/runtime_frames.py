@@ -23,19 +23,12 @@ def median_ms(fn, repeats: int) -> float:
     return float(np.median([wall_ms(fn) for _ in range(repeats)]))
 
 
-def make_renderer(mode, texture_res, eye_res, reuse=0, schedule="burst", frames=1, eyes=2):
+def make_renderer(mode, texture_res, eye_res, reuse=0, schedule="burst"):
+    """A renderer of the built-in scene (3 lights, both eyes); frame 0 not yet rendered."""
     from vrneural.runtime.renderer import Renderer, Settings
 
-    s = Settings(
-        eyes=eyes,
-        reuse=reuse,
-        texture_res=texture_res,
-        eye_res=eye_res,
-        frames=frames,
-        n_lights=3,
-        mode=mode,
-        schedule=schedule,
-    )
+    s = Settings(reuse=reuse, texture_res=texture_res, eye_res=eye_res, frames=1, n_lights=3,
+                 mode=mode, schedule=schedule)  # fmt: skip
     return Renderer(builtin_scene(3), s)
 
 
@@ -54,34 +47,27 @@ def _timed_frames(r, frames: int) -> dict:
     return out
 
 
+def _summary(x, *stats: str, series: bool = True) -> dict:
+    """``{"median", *stats, "series"}`` of ``x`` (a stat ``pN``: the Nth percentile, ``max``;
+    the series rounded to 3 decimals, in frame order)."""
+    out = {"median": float(np.median(x))}
+    for k in stats:
+        out[k] = float(np.max(x) if k == "max" else np.percentile(x, int(k[1:])))
+    return out | ({"series": [round(float(v), 3) for v in x]} if series else {})
+
+
 def _distribution(t: dict) -> dict:
     w, work = np.asarray(t["wall"]), np.asarray(t["work"], np.float64)
     return {
-        "frame_wall_ms": {
-            "median": float(np.median(w)),
-            "p95": float(np.percentile(w, 95)),
-            "p99": float(np.percentile(w, 99)),
-            "series": [round(float(x), 3) for x in w],  # frames 1.. in order
-        },
+        "frame_wall_ms": _summary(w, "p95", "p99"),  # frames 1.. in order
         "p99_over_median": float(np.percentile(w, 99) / np.median(w)),
         # CPU time of the whole process (all llvmpipe threads) per frame: on a CPU adapter the
         # frame's cost without the time other jobs on the machine took from it
-        "frame_cpu_ms": {
-            "median": float(np.median(t["cpu"])),
-            "p99": float(np.percentile(t["cpu"], 99)),
-            "series": [round(float(x), 3) for x in t["cpu"]],
-        },
+        "frame_cpu_ms": _summary(t["cpu"], "p99"),
         "cpu_p99_over_median": float(np.percentile(t["cpu"], 99) / np.median(t["cpu"])),
-        "texture_gpu_ms": {
-            "median": float(np.median(t["tex"])),
-            "max": float(np.max(t["tex"])),
-            "series": [round(float(x), 3) for x in t["tex"]],
-        },
+        "texture_gpu_ms": _summary(t["tex"], "max"),
         # the work per frame from the counters (MLP evaluations), immune to CPU contention
-        "mlp_evals_per_frame": {
-            "median": float(np.median(work)),
-            "p99": float(np.percentile(work, 99)),
-        },
+        "mlp_evals_per_frame": _summary(work, "p99", series=False),
         "work_p99_over_median": float(np.percentile(work, 99) / max(np.median(work), 1.0)),
     }
 
