@@ -13,6 +13,7 @@ H100 section); a CPU adapter spends one frame.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 
@@ -21,7 +22,7 @@ from tqdm import tqdm
 
 from vrneural.bench.report import stats
 from vrneural.btf.heightfield import spectral_noise
-from vrneural.material import NeuralMaterial, random_material
+from vrneural.material import random_material
 from vrneural.mlp import random_mlp
 from vrneural.neural_offset import OFFSET_SIZES, VIEW_INPUTS
 from vrneural.parallax import auto_blocks
@@ -78,19 +79,17 @@ def measure(
     untimed = set(sts[0].untimed)
     walls = [st.wall_ms for st in sts]
     gpu = [sum(st.gpu_ms.values()) for st in sts]
-    shade = [st.gpu_ms.get("texture", 0.0) + st.gpu_ms.get("screen", 0.0) for st in sts]
-    fwd = [st.gpu_ms.get("forward", 0.0) for st in sts]
     evals = [st.mlp_coarse + st.mlp_fine for st in sts]
     blocks = [st.blocks_shaded if r.s.mode == "texture" else st.pixels_shaded for st in sts]
-    clock, m = "timestamps", 0
+    clock, m, timed = "timestamps", 0, sts
     if untimed:  # this adapter's timestamps miss a pass: one more cycle, each pass timed alone
         r.pass_clock, clock = "wall", "wall"
         m = frames_for(reuse, 1, 1)
-        wsts = [r.frame(f) for f in range(f0 + n, f0 + n + m)]
+        timed = [r.frame(f) for f in range(f0 + n, f0 + n + m)]
         r.pass_clock = "timestamps"
         r.wait()
-        shade = [st.gpu_ms.get("texture", 0.0) + st.gpu_ms.get("screen", 0.0) for st in wsts]
-        fwd = [st.gpu_ms.get("forward", 0.0) for st in wsts]
+    shade = [st.gpu_ms.get("texture", 0.0) + st.gpu_ms.get("screen", 0.0) for st in timed]
+    fwd = [st.gpu_ms.get("forward", 0.0) for st in timed]
     r.next_frame = f0 + n + m
     fs = stats(walls)
     return {
@@ -178,8 +177,7 @@ def parallax_materials(steps: int, seeds=(3, 4), tex_res: int = 16, march: str =
         h = spectral_noise(np.random.default_rng(s), tex_res, 1, 8)
         h = 0.15 * (h - h.mean()) / max(float(np.ptp(h)), 1e-12)
         par = {"kind": "height", "steps": steps, "march": march}
-        args = (m.arch, m.networks, m.textures, m.output, m.meta, m.dir_range, {}, par, h)
-        out.append(NeuralMaterial(*args))
+        out.append(dataclasses.replace(m, levels={}, parallax=par, height=h))
     return out
 
 
@@ -195,8 +193,7 @@ def offset_materials(seeds=(3, 4), tex_res: int = 16, march: str = "texel"):
         tex = rng.normal(0.0, 0.5, (tex_res, tex_res, ch)).astype(np.float16)
         net = random_mlp([ch + VIEW_INPUTS, *hidden, 1], s)
         par = {"kind": "neural", "march": march}
-        args = (m.arch, m.networks, m.textures, m.output, m.meta, m.dir_range, {}, par)
-        out.append(NeuralMaterial(*args, offset_net=net, offset_tex=tex))
+        out.append(dataclasses.replace(m, levels={}, parallax=par, offset_net=net, offset_tex=tex))
     return out
 
 
