@@ -44,7 +44,6 @@ def run_frames(cfg: FramesConfig) -> dict:
                     rec = timing.measured_record(
                         r, n, sched, c.loop.cycles, c.min_frames, bar.update, c.loop.warmup
                     )
-                    rec["schedule"], rec["reuse"] = sched, n
                     doc["records"].append(rec)
             del r
         if c.screen:

@@ -117,26 +117,21 @@ def measure(
 def measured_record(
     r, reuse: int, schedule: str, cycles: int, min_frames: int, tick=None, warmup: float = 0.0
 ) -> dict:
-    """:func:`base_record` of renderer ``r`` with the timing fields of :func:`measure`."""
-    rec = base_record(r)
-    rec.update(measure(r, reuse, schedule, cycles, min_frames, tick, warmup))
-    return rec
-
-
-def base_record(r, **extra) -> dict:
-    s = r.s
+    """Renderer ``r``'s settings and scene sizes, with the timing fields of :func:`measure`."""
+    timed = measure(r, reuse, schedule, cycles, min_frames, tick, warmup)  # sets reuse, schedule
+    s, texture = r.s, r.s.mode == "texture"
     return {
         "mode": s.mode,
-        "schedule": s.schedule if s.mode == "texture" else "-",
-        "texture_res": s.texture_res if s.mode == "texture" else None,
-        "reuse": s.reuse if s.mode == "texture" else 0,
+        "schedule": s.schedule if texture else "-",
+        "texture_res": s.texture_res if texture else None,
+        "reuse": s.reuse if texture else 0,
         "lights": len(r.lights),
         "materials": len({id(n.desc.material.neural) for n in r.neural}),
         "neural_objects": len(r.neural),
         "eyes": s.eyes,
         "eye_res": list(s.eye_res),
         "precision": s.precision,
-        **extra,
+        **timed,
     }
 
 
