@@ -53,10 +53,6 @@ TARGETS = {
 }
 
 
-def _wait(r) -> None:
-    r.dev.queue.read_buffer(r.counters.buf, 0, 16)  # a copy after everything: waits for it
-
-
 def time_passes(r, encode, repeats: int) -> dict:
     """``encode(enc, timer)`` records one pass (or a set of passes timed together) into a
     fresh encoder; submitted alone ``repeats`` times: ``{"wall_ms", "timestamp_ms"}``
@@ -72,7 +68,7 @@ def time_passes(r, encode, repeats: int) -> dict:
         r.arena.flush()
         t0 = time.perf_counter()
         r.dev.queue.submit([enc.finish()])
-        _wait(r)
+        r.dev.queue.read_buffer(r.counters.buf, 0, 16)  # a copy after everything: waits for it
         ts = timer.read()
         if i:
             walls.append((time.perf_counter() - t0) * 1e3)

@@ -87,17 +87,12 @@ def plain_twin(name: str) -> str | None:
     return None
 
 
-def view_theta(data, pair: int) -> float:
-    """The view polar angle of a pair, degrees."""
-    z = float(data.dirs(pair)[1][2])
-    return math.degrees(math.acos(min(max(z, -1.0), 1.0)))
-
-
 def bin_pairs(data, pairs) -> list[list[int]]:
     """``pairs`` grouped by :data:`VIEW_BINS` (a pair beyond the last bin: in none)."""
     out: list[list[int]] = [[] for _ in VIEW_BINS]
     for p in pairs:
-        t = view_theta(data, p)
+        z = float(data.dirs(p)[1][2])
+        t = math.degrees(math.acos(min(max(z, -1.0), 1.0)))  # the view's polar angle, degrees
         for i, (lo, hi) in enumerate(VIEW_BINS):
             if lo <= t < hi:
                 out[i].append(p)

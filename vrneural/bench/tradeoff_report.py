@@ -38,16 +38,12 @@ def pareto(points: list[tuple[float, float]], lower_better: bool) -> list[int]:
     return out
 
 
-def base_of(rec: dict) -> dict:
-    return next(v for v in rec["variants"] if v["knob"] == "base")
-
-
 def ranking(doc: dict) -> list[dict]:
     """Per condition and preset, every variant against the base: FLIP change, frame ms and
     blocks saved, FLIP change per ms saved, and whether the change is within the noise floor."""
     out = []
     for rec in doc["records"]:
-        b = base_of(rec)
+        b = next(v for v in rec["variants"] if v["knob"] == "base")
         floor = rec.get("difference_floor", rec["noise_floor"]["flip"])
         for v in rec["variants"]:
             if v is b:
