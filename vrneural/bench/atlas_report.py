@@ -48,31 +48,34 @@ def targets(records: list) -> list[tuple[str, bool, str]]:
     return out
 
 
+#: the table's columns: ``(header, field)``, a record's key or a function of the record
+COLUMNS = [
+    ("mesh", "mesh"),
+    ("triangles", "triangles"),
+    ("R", "resolution"),
+    ("UVs", "uv_source"),
+    ("path", lambda r: " -> ".join(r["unwrap_path"])),
+    ("time s", "total_s"),
+    ("peak MB", lambda r: round(r["peak_rss_mb"])),
+    ("coverage %", "coverage_pct"),
+    ("charts", "charts"),
+    ("tris w/o texel", "triangles_without_texels"),
+    ("spread", "density_spread"),
+    ("seam err", lambda r: r.get("seams", {}).get("seam_error", "-")),
+    ("interior err", lambda r: r.get("seams", {}).get("interior_error", "-")),
+]
+
+
+def _row(r: dict) -> list:
+    if "error" in r:  # the table's width, the failure under UVs
+        return [r["mesh"], "-", r["resolution"], "FAILED: " + r["error"]] + ["-"] * (
+            len(COLUMNS) - 4
+        )
+    return [f(r) if callable(f) else r[f] for _, f in COLUMNS]
+
+
 def write_reports(root: Path, doc: dict, cfg) -> None:
     write_json(root / "results.json", doc)
-    rows = []
-    for r in doc["records"]:
-        if "error" in r:
-            rows.append([r["mesh"], "-", r["resolution"], "FAILED: " + r["error"]] + ["-"] * 9)
-            continue
-        sm = r.get("seams", {})
-        rows.append(
-            [
-                r["mesh"],
-                r["triangles"],
-                r["resolution"],
-                r["uv_source"],
-                " -> ".join(r["unwrap_path"]),
-                r["total_s"],
-                round(r["peak_rss_mb"]),
-                r["coverage_pct"],
-                r["charts"],
-                r["triangles_without_texels"],
-                r["density_spread"],
-                sm.get("seam_error", "-"),
-                sm.get("interior_error", "-"),
-            ]
-        )
     md = [
         "# Atlas: time, memory, coverage and seams over the bench mesh set",
         "",
@@ -88,24 +91,7 @@ def write_reports(root: Path, doc: dict, cfg) -> None:
         "(relative to the image's 99th percentile).",
         "",
     ]
-    md += rp.table(
-        [
-            "mesh",
-            "triangles",
-            "R",
-            "UVs",
-            "path",
-            "time s",
-            "peak MB",
-            "coverage %",
-            "charts",
-            "tris w/o texel",
-            "spread",
-            "seam err",
-            "interior err",
-        ],
-        rows,
-    )
+    md += rp.table([h for h, _ in COLUMNS], [_row(r) for r in doc["records"]])
     md += ["", "## Targets", ""]
     if cfg.quick:
         md += [
