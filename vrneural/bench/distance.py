@@ -169,9 +169,7 @@ def finish(root, doc: dict, t0: float) -> dict:
                          v["frame_ms"]["mean"]])  # fmt: skip
     md += rp.table(["condition", "variant", "FLIP (worst)", "FLIP own", "floor", "flicker",
                     "texels", "side", "frame ms"], rows)  # fmt: skip
-    png(doc, root / "distance.png")
-    md += ["", "![distance](distance.png)"]
-    return rp.finish(root, doc, md, t0)
+    return rp.finish(root, doc, md, t0, [("distance.png", "distance", png)])
 
 
 def png(doc: dict, path) -> None:

@@ -222,7 +222,4 @@ def run_frame(cfg: FrameConfig) -> dict:
         bar.close()
         doc["summary"] = summarise(doc, c.reuse)
         doc["targets"] = TARGETS
-        md = markdown(doc)
-        plot(doc, root / "frame.png")
-        md += ["", "![frame breakdown](frame.png)"]
-        return rp.finish(root, doc, md, t0)
+        return rp.finish(root, doc, markdown(doc), t0, [("frame.png", "frame breakdown", plot)])

@@ -51,10 +51,7 @@ def run_frames(cfg: FramesConfig) -> dict:
             rec = timing.measured_record(r, 0, "burst", 1, c.min_frames, bar.update, c.loop.warmup)
             doc["records"].append(rec)
         bar.close()
-        md = markdown(doc)
-        plot(doc, root / "frames.png")
-        md += ["", "![frame time](frames.png)"]
-        return rp.finish(root, doc, md, t0)
+        return rp.finish(root, doc, markdown(doc), t0, [("frames.png", "frame time", plot)])
 
 
 def _cell(rec: dict) -> str:

@@ -202,10 +202,7 @@ def _run(c: KernelsConfig, doc: dict, nets, precs, root, t0) -> dict:
     # this run; a kernel measured above the sgemm roofline (so `fraction_of_sgemm` overstates)
     doc["sgemm_varied"] = max(sg_runs) > 2 * min(sg_runs)
     doc["roofline_unreliable"] = bool(roofline_exceeded(doc))
-    md = markdown(doc)
-    plot(doc, root / "kernels.png")
-    md += ["", "![kernels](kernels.png)"]
-    return rp.finish(root, doc, md, t0)
+    return rp.finish(root, doc, markdown(doc), t0, [("kernels.png", "kernels", plot)])
 
 
 def add_speedups(doc: dict) -> str:

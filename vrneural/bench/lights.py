@@ -65,11 +65,9 @@ def run_lights(cfg: LightsConfig) -> dict:
             "",
             f"shading / linear: shading ms over (shading ms per light at {first['lights']} "
             "light(s) x lights); 1 = linear.",
-            "",
-            "![lights](lights.png)",
         ]
-        plot(doc, base, root / "lights.png")
-        return rp.finish(root, doc, md, t0)
+        plots = [("lights.png", "lights", lambda d, path: plot(d, base, path))]
+        return rp.finish(root, doc, md, t0, plots)
 
 
 def plot(doc: dict, base: float, path) -> None:

@@ -125,9 +125,13 @@ def plain_log_ticks(axis) -> None:
     axis.set_minor_formatter(NullFormatter())
 
 
-def finish(root: Path, doc: dict, md: list[str], t0: float) -> dict:
-    """Stamp the run time, write ``results.json`` and ``results.md`` (``root`` is sealed when
+def finish(root: Path, doc: dict, md: list[str], t0: float, plots=()) -> dict:
+    """Draw ``plots`` (``(file, alt text, fn(doc, path))``: each shown under ``md``), stamp the
+    run time, write ``results.json`` and ``results.md`` (``root`` is sealed when
     :func:`prepare_out`'s block ends)."""
+    for name, alt, draw in plots:
+        draw(doc, root / name)
+        md = [*md, "", f"![{alt}]({name})"]
     doc["total_seconds"] = time.perf_counter() - t0
     md = [*md, "", f"Run time {doc['total_seconds']:.0f} s. Raw records: results.json."]
     write_json(root / "results.json", doc)

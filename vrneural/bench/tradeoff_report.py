@@ -189,8 +189,5 @@ def pareto_png(doc: dict, path) -> None:
 
 def finish_report(root, doc: dict, t0: float) -> dict:
     doc["ranking"] = ranking(doc)
-    md = markdown(doc)
-    speed_png(doc, root / "speed.png")
-    pareto_png(doc, root / "pareto.png")
-    md += ["", "![speed](speed.png)", "", "![pareto](pareto.png)"]
-    return rp.finish(root, doc, md, t0)
+    plots = [("speed.png", "speed", speed_png), ("pareto.png", "pareto", pareto_png)]
+    return rp.finish(root, doc, markdown(doc), t0, plots)
