@@ -24,10 +24,8 @@ its slices drawn with a fixed seed (``--slices``); the output says how many.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import numbers
-from dataclasses import dataclass
 
 import numpy as np
 from tqdm import tqdm
@@ -122,18 +120,8 @@ def slice_exposure(gt: np.ndarray) -> float:
     return 1.0 / max(float(np.percentile(gt.max(-1), 99.0)), 1e-6)
 
 
-@dataclass
-class _Acc:
-    """Running sums of one (pack, precision) over the slices scored."""
-
-    abs_sum: list = dataclasses.field(default_factory=list)  # per slice: sum |e| (float64)
-    sq_sum: list = dataclasses.field(default_factory=list)
-    psnr: list = dataclasses.field(default_factory=list)
-    ssim: list = dataclasses.field(default_factory=list)
-
-
-def _l1(acc: _Acc, idx: list[int], per_slice: int) -> float | None:
-    return float(np.sum([acc.abs_sum[i] for i in idx]) / (len(idx) * per_slice)) if idx else None
+def _l1(acc: dict, idx: list[int], per_slice: int) -> float | None:
+    return float(np.sum([acc["abs"][i] for i in idx]) / (len(idx) * per_slice)) if idx else None
 
 
 def score(
@@ -160,7 +148,8 @@ def score(
                 f"(light * {V} + view)"
             )
     uv = texel_blocks(H, W)
-    accs = [[_Acc() for _ in precs] for _ in mats]
+    # per (pack, precision), per slice: sum |e|, sum e^2 (float64), PSNR and SSIM
+    accs = [[{k: [] for k in ("abs", "sq", "psnr", "ssim")} for _ in precs] for _ in mats]
     gt_sum = 0.0
     bar = tqdm(pairs, desc="vrneural eval", unit="slice", disable=not progress)
     for p in bar:
@@ -179,11 +168,11 @@ def score(
                 y = predict_slice(mat, btf.light_dirs[li], btf.view_dirs[vi], uv, H, W, prec)
                 e = (y - gt).astype(np.float64)
                 a = accs[m][k]
-                a.abs_sum.append(float(np.abs(e).sum()))
-                a.sq_sum.append(float((e * e).sum()))
+                a["abs"].append(float(np.abs(e).sum()))
+                a["sq"].append(float((e * e).sum()))
                 y_disp = display_slice(y, ex)
-                a.psnr.append(psnr(gt_disp, y_disp))
-                a.ssim.append(ssim(gt_disp, y_disp))
+                a["psnr"].append(psnr(gt_disp, y_disp))
+                a["ssim"].append(ssim(gt_disp, y_disp))
     bar.close()
     per_slice = H * W * 3
     pos = {p: i for i, p in enumerate(pairs)}
@@ -200,7 +189,7 @@ def score(
         for k, prec in enumerate(precs):
             a = accs[m][k]
             l1 = _l1(a, list(range(len(pairs))), per_slice)
-            order = np.argsort(a.abs_sum)[::-1][:N_WORST]
+            order = np.argsort(a["abs"])[::-1][:N_WORST]
             rows.append(
                 {
                     "precision": prec,
@@ -210,11 +199,11 @@ def score(
                     "l1_train": _l1(a, trained, per_slice),
                     "l1_trainer_test": _l1(a, sub_idx, per_slice),
                     "l1_relative": l1 / mean_gt if mean_gt > 0 else None,
-                    "rmse": math.sqrt(sum(a.sq_sum) / (len(pairs) * per_slice)),
-                    "psnr_db": float(np.mean(a.psnr)),
-                    "ssim": float(np.mean(a.ssim)),
+                    "rmse": math.sqrt(sum(a["sq"]) / (len(pairs) * per_slice)),
+                    "psnr_db": float(np.mean(a["psnr"])),
+                    "ssim": float(np.mean(a["ssim"])),
                     "worst": [
-                        _slice_record(btf, pairs[int(i)], a.abs_sum[int(i)] / per_slice)
+                        _slice_record(btf, pairs[int(i)], a["abs"][int(i)] / per_slice)
                         for i in order
                     ],
                 }
