@@ -76,19 +76,13 @@ def markdown(doc: dict) -> list[str]:
         + (" **Quick run: reduced grid.**" if c["quick"] else ""),
         "Cells: FPS from the mean frame time (median / p99 frame ms, wall clock incl. GPU wait).",
     ]
+    cells = {}  # (schedule, N, texture side) -> its cell (the first such record)
+    for r in tex:
+        cells.setdefault((r["schedule"], r["reuse"], r["texture_res"]), _cell(r))
     for sched in dict.fromkeys(r["schedule"] for r in tex):
         md += ["", f"## Schedule: {sched}", ""]
-        rows = []
-        for n in sorted({r["reuse"] for r in tex}):
-            row = [n]
-            for t in texs:
-                m = [
-                    r
-                    for r in tex
-                    if r["schedule"] == sched and r["reuse"] == n and r["texture_res"] == t
-                ]
-                row.append(_cell(m[0]) if m else "-")
-            rows.append(row)
+        rows = [[n, *(cells.get((sched, n, t), "-") for t in texs)]
+                for n in sorted({r["reuse"] for r in tex})]  # fmt: skip
         md += rp.table(["N \\ texture"] + [f"{t}^2" for t in texs], rows)
     scr = [r for r in recs if r["mode"] == "screen"]
     if scr:
