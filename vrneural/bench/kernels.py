@@ -31,8 +31,6 @@ from vrneural.bench.runtime_frames import median_ms, wall_ms
 from vrneural.errors import VrnError, check_range, count
 from vrneural.neural_offset import OFFSET_SIZES
 
-VARIANTS = ("constants", "buffer", "torch")
-
 
 def network(name: str):
     """``[(layers, rows per texel)]`` of a network, and its MACs per texel: the network

@@ -35,15 +35,15 @@ def stats(x) -> dict:
 
 
 def header(bench: str, cfg) -> dict:
-    """The common head of every ``results.json``: bench name, adapter, versions, config."""
+    """The common head of every ``results.json``: bench name, adapter, versions, ``cfg``
+    (resolved: the values the run used)."""
     from vrneural.gpu.device import adapter_summary
 
-    resolved = cfg.resolved() if hasattr(cfg, "resolved") else cfg
     return {
         "bench": bench,
         "adapter": adapter_summary().to_dict(),
         "versions": package_versions(),
-        "config": config_dict(resolved),
+        "config": config_dict(cfg),
         "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "records": [],
     }

@@ -37,9 +37,6 @@ from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 from vrneural.runtime.profiles import get_profile
 from vrneural.scoring import metrics
 
-#: the full quest3 eye image the crops are cut from (pixels) and its pixels per degree
-QUEST3 = "quest3"
-
 
 def variant(knob="base", value="-", **kw) -> dict:
     base = dict(
@@ -299,7 +296,7 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
             from vrneural.bench.packs import PACKS
 
             doc["packs"]["absent"] = [k for k in PACKS if k not in next(iter(mats.values()))]
-        prof = get_profile(QUEST3)
+        prof = get_profile("quest3")  # the eye image the crops are cut from
         full = prof.eye_res
         ppd = metrics.pixels_per_degree(full[1], prof.fov_y)
         doc["ppd"] = ppd
