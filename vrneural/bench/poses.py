@@ -27,11 +27,8 @@ HEAD = np.array([0.0, 1.3, 1.0])
 TARGET = np.array([0.0, 1.3, 0.0])
 
 
-def yaw_quaternion(base: np.ndarray, yaw_deg: float) -> np.ndarray:
-    """``[x, y, z, w]`` of the rotation ``base [3, 3]`` turned by ``yaw_deg`` about world +y."""
-    a = np.radians(yaw_deg)
-    ry = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
-    m = ry @ base
+def _quaternion(m: np.ndarray) -> np.ndarray:
+    """``[x, y, z, w]`` (w >= 0, unit) of the rotation matrix ``m [3, 3]``."""
     w = np.sqrt(max(1e-12, 1 + m[0, 0] + m[1, 1] + m[2, 2])) / 2
     q = np.array([(m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w),
                   (m[1, 0] - m[0, 1]) / (4 * w), w])  # fmt: skip
@@ -51,16 +48,14 @@ def turn_poses(speed: float, amplitude: float = 30.0, still: float = 0.1, after:
     start, n = turn_frames(speed, amplitude, still, fps)
     total = start + n + round(after * fps) + 1
     base = look_rotation(TARGET - HEAD)
-    pivot = HEAD - base @ np.array([0.0, NECK_UP, -NECK_FORWARD])
+    neck = np.array([0.0, NECK_UP, -NECK_FORWARD])  # the eyes from the pivot, head frame
+    pivot = HEAD - base @ neck
     rows = []
     for f in range(total):
         k = np.clip((f - start) / n, 0.0, 1.0) if n else 0.0
-        yaw = amplitude * (k - 0.5) if n else 0.0
-        q = yaw_quaternion(base, yaw)
-        a = np.radians(yaw)
-        ry = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
-        pos = pivot + ry @ base @ np.array([0.0, NECK_UP, -NECK_FORWARD])
-        rows.append([f / fps, *pos, *q])
+        a = np.radians(amplitude * (k - 0.5) if n else 0.0)  # the yaw about world +y
+        m = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]]) @ base
+        rows.append([f / fps, *(pivot + m @ neck), *_quaternion(m)])
     return np.asarray(rows)
 
 
