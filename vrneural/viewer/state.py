@@ -16,7 +16,6 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 
 from vrneural.runtime.config import REUSE_MAX, max_texture_res, resolve
-from vrneural.runtime.settings import MODES
 
 #: renderers kept (the active one, the split view's reference, the one before)
 CACHE = 3
@@ -122,7 +121,3 @@ def step_texture(live: Live, up: bool, adapter) -> None:
     r = min(max(r, MIN_RESOLUTION), max_texture_res(adapter))
     live.texture_res = r - r % 2
     live.texture_res_given = True
-
-
-def next_mode(live: Live) -> str:
-    return cycle(live.mode, MODES)
