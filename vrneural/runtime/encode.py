@@ -48,16 +48,20 @@ class FrameEncoding:
         if self.pass_clock == "wall":  # everything before the pass, first
             enc = self._cut(enc, "_before")
         cp = enc.begin_compute_pass(timestamp_writes=self._writes("texture"))
-        shading = self._shading_eyes(eyes)
-        bound = None
+        self._dispatch_updates(cp, todo, eyes, lp, lc)
+        cp.end()
+        return self._cut(enc, "texture")
+
+    def _dispatch_updates(self, cp, todo, eyes, lp, lc) -> None:
+        """The updates ``todo = [(k, object, phase, period)]`` into the open compute pass
+        ``cp``: their uniforms written, each target's dispatches recorded."""
+        bound, shading = None, self._shading_eyes(eyes)
         for k, n, phase, period in todo:
             tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
             for e, ((pos, margin), tgt) in enumerate(zip(shading, n.targets, strict=True)):
                 slot = k * self.s.eyes + e
                 tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, slot, margin)
                 bound = tgt.dispatch(cp, phase, period, bound=bound)
-        cp.end()
-        return self._cut(enc, "texture")
 
     def _encode_eyes(self, enc, eyes, lp, lc) -> tuple:
         """Per eye, the forward pass (replaying its bundle) and, in the screen modes, the

@@ -81,7 +81,6 @@ class ScreenSpacePass:
             e: compute_pipeline(self.code, e, label=f"screen_space/{e}")
             for e in ("cull", "args", "main")
         }
-        self.pipe = self.pipes["main"]
 
 
 _SCRATCH: dict = {}
@@ -151,11 +150,6 @@ class ScreenTarget:
         lights = LIGHT.view(ar.view(self.l_off, LIGHT.size * self.spass.n_lights, np.uint8))
         pack_lights_into(lights, light_pos, light_rgb)
         ar.written()
-
-    def encode(self, encoder, timestamp_writes=None) -> None:
-        cp = encoder.begin_compute_pass(timestamp_writes=timestamp_writes)
-        self.dispatch(cp)
-        cp.end()
 
     def dispatch(self, cp) -> None:
         """Record this target's dispatches into compute pass ``cp``: list the rectangle's pixels
