@@ -166,23 +166,14 @@ class EyeTargets:
         self.size = (width, height)
         self.target = target
         storage = tu.STORAGE_BINDING if target == "hdr" else 0  # the screen pass writes HDR
-        self.colour = dev.create_texture(
-            size=(width, height, 1),
-            format=TARGETS[target],
-            usage=tu.RENDER_ATTACHMENT | tu.COPY_SRC | storage | tu.TEXTURE_BINDING,
-        )
-        self.depth = dev.create_texture(
-            size=(width, height, 1), format=DEPTH_FORMAT, usage=tu.RENDER_ATTACHMENT
-        )
-        self.vis = (
-            dev.create_texture(
-                size=(width, height, 1),
-                format=VIS_FORMAT,
-                usage=tu.RENDER_ATTACHMENT | tu.TEXTURE_BINDING,
-            )
-            if vis
-            else None
-        )
+
+        def texture(fmt: str, usage):
+            return dev.create_texture(size=(width, height, 1), format=fmt, usage=usage)
+
+        rt = tu.RENDER_ATTACHMENT
+        self.colour = texture(TARGETS[target], rt | tu.COPY_SRC | storage | tu.TEXTURE_BINDING)
+        self.depth = texture(DEPTH_FORMAT, rt)
+        self.vis = texture(VIS_FORMAT, rt | tu.TEXTURE_BINDING) if vis else None
         self.colour_view = self.colour.create_view()
         self.depth_view = self.depth.create_view()
         self.vis_view = self.vis.create_view() if vis else None

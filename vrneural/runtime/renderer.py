@@ -327,7 +327,7 @@ class Renderer(FrameEncoding):
         sl = frame_slice(f, s.reuse, s.schedule)
         adaptive = s.reuse_budget is not None
         centre = np.mean([e.position for e in eyes], axis=0) if adaptive else None
-        todo, updated, culled = [], 0, 0
+        todo, culled = [], 0
         for k, n in enumerate(self.neural):
             if not self._visible(n, eyes):
                 culled += 1
@@ -354,8 +354,7 @@ class Renderer(FrameEncoding):
                     todo.append((k, n, a.phase, a.period))
             elif sl.update:
                 todo.append((k, n, sl.phase, sl.period))
-        updated = len(todo)
-        return todo, updated, culled
+        return todo, len(todo), culled
 
     def _coverage(self, n: NeuralObject, eye) -> float:
         """The fraction of the (whole) eye image the object's bounding sphere covers."""

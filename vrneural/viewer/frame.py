@@ -329,15 +329,11 @@ class FrameWork:
 
     def _read(self, tex) -> np.ndarray:
         """``[H, W, 3]`` uint8 RGB of the canvas texture just drawn."""
+        from vrneural.gpu.readback import read_texture
+
         if not self.can_read:
             raise VrnError("this canvas's texture cannot be read back (no COPY_SRC usage)")
-        w, h = tex.size[0], tex.size[1]
-        mem = self.dev.queue.read_texture(
-            {"texture": tex, "origin": (0, 0, 0), "mip_level": 0},
-            {"offset": 0, "bytes_per_row": w * 4, "rows_per_image": h},
-            (w, h, 1),
-        )
-        a = np.frombuffer(mem, np.uint8).reshape(h, w, 4)
+        a = read_texture(tex)
         return np.ascontiguousarray(
             a[..., [2, 1, 0]] if str(tex.format).startswith("bgra") else a[..., :3]
         )
