@@ -101,11 +101,6 @@ def non_empty_blocks(tri_ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.nonzero(b)
 
 
-def count_non_empty_blocks(tri_ids: np.ndarray) -> int:
-    """2x2 blocks of ``tri_ids: [R, R]`` with at least one triangle."""
-    return len(non_empty_blocks(tri_ids)[0])
-
-
 def block_lod(mat: NeuralMaterial, foot: np.ndarray) -> np.ndarray | None:
     """Each block's level of detail in ``mat``'s prefiltered neural textures (None without
     pyramids): ``log2`` of its footprint in the full-resolution texture's texels (at least 1):

@@ -227,8 +227,7 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
         r.warnings.append(
             f"{scene.src}: the scene has {count(len(scene.lights), 'light')} and the "
             f"{cfg.profile or scene.profile or 'quest3'} profile shades the first "
-            f"{s.n_lights}; "
-            f"--lights {len(scene.lights)} shades them all"
+            f"{s.n_lights}; --lights {len(scene.lights)} shades them all"
         )
     if r.neural and not scene.lights:
         r.warnings.append(f"{scene.src}: the scene has no [[lights]]: neural objects are black")
@@ -248,8 +247,7 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
     if s.mode != "texture" and unused:  # texture space's knobs: say they do nothing here
         r.warnings.append(
             f"{' and '.join(unused)} only {'apply' if len(unused) > 1 else 'applies'} to "
-            f"--mode texture; --mode {s.mode} shades "
-            "every pixel every frame"
+            f"--mode texture; --mode {s.mode} shades every pixel every frame"
         )
     if not cfg.video and "video_scale" in chosen:  # does nothing: say so
         r.warnings.append("--video-scale only applies to the video, and --no-video writes none")
