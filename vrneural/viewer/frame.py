@@ -296,7 +296,7 @@ class FrameWork:
             )
 
     def _layout(self, r, right, display: bool):
-        from vrneural.viewer.present import fit
+        from vrneural.viewer.present import Layout, fit
 
         size = self.image_size()
         eyes = r.colour_textures()
@@ -311,14 +311,10 @@ class FrameWork:
                 else:
                     markers.append((-100.0, -100.0, on))  # off screen: drawn nowhere
         if self.live.split == "off":
-            return dataclasses.replace(
-                _layout(eyes, size), markers=markers, selected=self.live.selected
-            )
-        return dataclasses.replace(
-            _layout(eyes[:1], size, size[0] // 2, right, display),
-            markers=markers,
-            selected=self.live.selected,
-            split_line=self.live.hud,
+            return Layout(eyes, size, markers=markers, selected=self.live.selected)
+        live = self.live
+        return Layout(
+            eyes[:1], size, size[0] // 2, right, display, markers, live.selected, live.hud
         )
 
     def _hud_panel(self, st, last):
@@ -372,9 +368,3 @@ class FrameWork:
             return
         self.shots += paths
         self.say(f"saved {paths[0]} (+ .exr, .json)")
-
-
-def _layout(eyes, size, split=None, right=None, display=False):
-    from vrneural.viewer.present import Layout
-
-    return Layout(eyes, size, split, right, display)

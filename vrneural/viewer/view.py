@@ -148,11 +148,8 @@ class View(FrameWork):
 
     def fps(self) -> float:
         """Frames per second over the last second (wall clock between frames' ends)."""
-        ends = (
-            [e for e in self.fps_window if e >= self.fps_window[-1] - 1.0]
-            if self.fps_window
-            else []
-        )
+        last = self.fps_window[-1] if self.fps_window else 0.0
+        ends = [e for e in self.fps_window if e >= last - 1.0]
         if len(ends) < 2:
             return 0.0
         return (len(ends) - 1) / max(ends[-1] - ends[0], 1e-9)
