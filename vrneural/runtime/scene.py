@@ -172,7 +172,7 @@ class _Fields:
         """A .vrnm path: relative to the scene file, else a bundled pack of that name."""
         name = self.str(key)
         p = Path(name)
-        here = p if p.is_absolute() else base / p
+        here = base / p  # an absolute path stays as it is
         if not here.is_file() and p.parent == Path(".") and bundled_path(name).is_file():
             return bundled_path(name)
         if not here.is_file():
@@ -251,8 +251,7 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         h.unknown(("path",))
         head = h.str("path", "orbit")
         if head != "orbit":
-            p = Path(head)
-            p = p if p.is_absolute() else base / p
+            p = base / head  # an absolute path stays as it is
             if not p.is_file():
                 raise h.err(
                     "path", f"= {head!r}: pose log not found ({p}); the built-in path is orbit"
