@@ -32,7 +32,7 @@ def shot_settings(view) -> dict:
         "frame": view.f,
         "t": view.t,
         "resolved": resolved,
-        "knobs": view.live.settings_dict(),
+        "knobs": dataclasses.asdict(view.live),
         "head": {
             "position": np.asarray(pos).tolist(),
             "rotation": np.asarray(rot).tolist(),

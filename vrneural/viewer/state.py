@@ -49,9 +49,6 @@ class Live:
         radiance = self.radiance if mode == "texture" else "per-eye"
         return (mode, precision, self.texture_res, self.texture_res_given, radiance)
 
-    def settings_dict(self) -> dict:
-        return dataclasses.asdict(self)
-
 
 class Renderers:
     """Builds and caches renderers for :class:`Live` settings on one scene."""
