@@ -393,7 +393,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
             k: percentiles(per_frame["gpu_ms"][k][1:] or per_frame["gpu_ms"][k]) for k in gpu_names
         },
         # passes whose timestamps this adapter does not cover (runtime/timecheck.py)
-        "gpu_untimed": {k: UNTIMED_NOTE for k in r.untimed if k in _passes_run(s)},
+        "gpu_untimed": dict.fromkeys(r.untimed, UNTIMED_NOTE),
         # the work of frame 0 is a full first update whatever the schedule: left out as well
         f"{unit}_shaded_per_frame": percentiles(shaded[1:] or shaded),
         "mlp_evaluations_per_frame": percentiles(evals[1:] or evals),
@@ -415,10 +415,6 @@ UNTIMED_NOTE = (
     "first frame: runtime/timecheck.py); its time is in frame_wall_ms, and `vrneural bench "
     "frame` times it by the wall clock"
 )
-
-
-def _passes_run(s) -> tuple:
-    return ("texture", "forward") if s.mode == "texture" else ("forward", "screen")
 
 
 def reference_of(cfg, material) -> str | None:
