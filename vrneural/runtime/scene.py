@@ -35,7 +35,7 @@ Format (all lengths in metres, angles in degrees)::
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from importlib.resources import files
 from pathlib import Path
 
@@ -239,6 +239,12 @@ def _material(src: str, path: str, t: dict, base: Path) -> MaterialDesc:
     return MaterialDesc("neural", mat, proc, tiling, reference=ref, reference_source=ref_src)
 
 
+#: the fields of an [[objects]] table: ObjectDesc's, its model as position, rotation and scale
+OBJECT_KEYS = {f.name for f in fields(ObjectDesc)} - {"model"} | {"position", "rotation", "scale"}
+#: the fields of a [[lights]] table: PointLight's, "color" as well as "colour"
+LIGHT_KEYS = {f.name for f in fields(PointLight)} | {"color"}
+
+
 def parse_scene(data: dict, src: str, base: Path) -> Scene:
     top = _Fields(src, "", data)
     top.unknown(("name", "profile", "ipd", "head", "objects", "lights"))
@@ -263,20 +269,7 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
     objects, taken = [], set()  # taken: the object names given so far
     for i, o in enumerate(objs_raw):
         f = _Fields(src, f"objects[{i}]", o)
-        f.unknown(
-            (
-                "name",
-                "mesh",
-                "position",
-                "rotation",
-                "scale",
-                "material",
-                "texture_res",
-                "min_texture_res",
-                "crease_angle",
-                "atlas_uv",
-            )
-        )
+        f.unknown(OBJECT_KEYS)
         mesh = f.str("mesh")
         from vrneural.atlas.meshuv import MODES
 
@@ -319,9 +312,7 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         raise VrnError(f"{src}: lights must be an array of tables ([[lights]])")
     for i, lt in enumerate(data.get("lights", [])):
         f = _Fields(src, f"lights[{i}]", lt)
-        f.unknown(
-            ("position", "colour", "color", "intensity", "motion", "radius", "period", "phase")
-        )
+        f.unknown(LIGHT_KEYS)
         f.one_of("colour", "color")
         colour = f.vec("colour" if "colour" in lt else "color", (1, 1, 1), lo=0.0)
         intensity = f.num("intensity", 1.0, 0.0, MAX_INTENSITY)
