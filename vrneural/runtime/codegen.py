@@ -91,10 +91,6 @@ class MaterialSpec:
     offset_ch: int = 0
     offset_consts: tuple = ()
 
-    @property
-    def buffer_weights(self) -> bool:
-        return self.weights != "constants"
-
 
 def reference_weights(mat: NeuralMaterial) -> str:
     """The buffer-weight variant for a per-pixel reference network: streamed from uniform

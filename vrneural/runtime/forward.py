@@ -95,6 +95,16 @@ def _layouts():
     )
 
 
+#: the vertex buffer of :func:`expanded_vertices`: position, normal, atlas uv, triangle
+VERTEX_BUFFER = {
+    "array_stride": 36,
+    "attributes": [
+        {"format": f, "offset": off, "shader_location": k}
+        for k, (f, off) in enumerate(
+            (("float32x3", 0), ("float32x3", 12), ("float32x2", 24), ("uint32", 32))
+        )
+    ],
+}
 #: fragment entry points whose object group holds a radiance texture
 SAMPLING = ("fs_neural", "fs_floor_sample", "fs_floor_constant")
 
@@ -124,21 +134,7 @@ def render_pipeline(
         targets.append({"format": VIS_FORMAT})
     return get_device().create_render_pipeline(
         layout=layout,
-        vertex={
-            "module": mod,
-            "entry_point": "vs_main",
-            "buffers": [
-                {
-                    "array_stride": 36,
-                    "attributes": [
-                        {"format": "float32x3", "offset": 0, "shader_location": 0},
-                        {"format": "float32x3", "offset": 12, "shader_location": 1},
-                        {"format": "float32x2", "offset": 24, "shader_location": 2},
-                        {"format": "uint32", "offset": 32, "shader_location": 3},
-                    ],
-                }
-            ],
-        },
+        vertex={"module": mod, "entry_point": "vs_main", "buffers": [VERTEX_BUFFER]},
         primitive={"topology": "triangle-list", "cull_mode": "none"},
         depth_stencil={
             "format": DEPTH_FORMAT,
