@@ -34,13 +34,16 @@ class FrameEncoding:
         a new encoder; otherwise ``enc``."""
         if self.pass_clock != "wall":
             return enc
-        self.arena.flush()
-        q = self.dev.queue
-        t0 = time.perf_counter()
-        q.submit([enc.finish()])
-        q.read_buffer(self.counters.buf, 0, 16)  # a copy after the pass: waits for it
-        self._wall[name] = self._wall.get(name, 0.0) + (time.perf_counter() - t0) * 1e3
+        self._wall[name] = self._wall.get(name, 0.0) + self._submit_and_wait(enc)
         return self.dev.create_command_encoder()
+
+    def _submit_and_wait(self, enc) -> float:
+        """Submit ``enc`` (the arena's uniforms first) and wait for it; returns the wall ms."""
+        self.arena.flush()
+        t0 = time.perf_counter()
+        self.dev.queue.submit([enc.finish()])
+        self.dev.queue.read_buffer(self.counters.buf, 0, 16)  # a copy after the pass: waits
+        return (time.perf_counter() - t0) * 1e3
 
     def _encode_texture(self, enc, todo, eyes, lp, lc):
         """All of a frame's texture-space dispatches, in one compute pass; returns the

@@ -193,14 +193,11 @@ class GpuAtlas:
         import wgpu
 
         if period not in self._lists:
-            by = self.geometry()["by"]
-            idx, spans, off = [], [], 0
-            for ph in range(period):
-                sel = np.nonzero(by % period == ph)[0]
-                idx.append(sel.astype(np.uint32))
-                spans.append((off, len(sel)))
-                off += len(sel)
-            data = np.concatenate([*idx, np.zeros(1, np.uint32)])  # never an empty buffer
+            phase = self.geometry()["by"] % period
+            idx = np.argsort(phase, kind="stable").astype(np.uint32)  # row-major in each phase
+            n = np.bincount(phase, minlength=period)
+            spans = [(int(o), int(k)) for o, k in zip(np.cumsum(n) - n, n, strict=True)]
+            data = np.concatenate([idx, np.zeros(1, np.uint32)])  # never an empty buffer
             buf = upload_buffer(
                 data, wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC, f"blocks/{period}"
             )

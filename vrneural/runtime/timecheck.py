@@ -14,8 +14,6 @@ wall time is *untimed*: left out of ``FrameStats.gpu_ms`` and named in ``FrameSt
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from vrneural.gpu.timing import GpuTimer
@@ -29,11 +27,7 @@ MIN_MS = 2.0
 def _wall(r, encode) -> float:
     enc = r.dev.create_command_encoder()
     encode(enc, None)
-    r.arena.flush()
-    t0 = time.perf_counter()
-    r.dev.queue.submit([enc.finish()])
-    r.dev.queue.read_buffer(r.counters.buf, 0, 16)  # a copy after the pass: waits for it
-    return (time.perf_counter() - t0) * 1e3
+    return r._submit_and_wait(enc)
 
 
 def _passes(r) -> dict:
