@@ -57,7 +57,7 @@ class FrameRecord:
 class FrameWork:
     """The per-frame half of the viewer (state lives on the :class:`View`)."""
 
-    def _init_frame_work(self, s) -> None:
+    def _init_frame_work(self) -> None:
         self.want_shot = False
         self.shots: list = []
         self.recorder = None

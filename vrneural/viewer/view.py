@@ -54,7 +54,6 @@ class View(FrameWork):
         self.r, _ = self.renderers.get(self.live)
         for w in self.r.warnings:
             print(f"warning: {w}", file=sys.stderr)
-        s = self.r.s
         self.head_path = self.r.head  # the scene's (orbit or pose log), as run plays it
         self.lights = [dataclasses.replace(lt) for lt in self.r.lights]
         self.live.lights_on = [True] * len(self.lights)
@@ -72,7 +71,7 @@ class View(FrameWork):
         self.hooks: list = []
         self.failure: BaseException | None = None
         self.fps_window: deque = deque(maxlen=240)
-        self._init_frame_work(s)
+        self._init_frame_work()
 
     # ----- public API
 
