@@ -38,6 +38,8 @@ class ViewConfig:
 
 def check_view_config(vc: ViewConfig) -> None:
     """Range and file checks before anything opens (one-line errors, as `run`'s)."""
+    if not isinstance(vc, ViewConfig):
+        raise VrnError(f"view: config is a {type(vc).__name__}, expected a ViewConfig")
     check_int("--frames", vc.frames)
     check_range("--frames", vc.frames, 0, 10_000_000)
     check_int("--split-every", vc.split_every)
