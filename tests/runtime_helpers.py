@@ -1,6 +1,9 @@
-"""Hand-made meshes and atlases for the runtime tests (independent of vrneural.atlas)."""
+"""Hand-made meshes and atlases for the runtime tests (independent of vrneural.atlas), and the
+multiply-add count of generated WGSL."""
 
 from __future__ import annotations
+
+import re
 
 import numpy as np
 
@@ -127,3 +130,8 @@ def mode_and_move_gaps(tmp_path, moved, unmoved) -> tuple[float, float]:
     seen = scr.sum(-1) > 0
     assert seen.mean() > 0.05
     return float(np.abs(tex - scr)[seen].mean()), float(np.abs(scr_unmoved - scr)[seen].mean())
+
+
+def count_macs(wgsl: str) -> int:
+    """Multiply-adds by constant weights in unrolled WGSL (``<literal> * <value>`` terms)."""
+    return len(re.findall(r"(?<![\w.])-?[0-9][0-9.e+-]*[fh] \* ", wgsl))

@@ -13,9 +13,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from runtime_helpers import count_macs
 
 from vrneural.gpu.mlp_kernel import mlp_wgsl
-from vrneural.gpu.unroll import affine_lines, count_macs, mlp_lines
+from vrneural.gpu.unroll import affine_lines, mlp_lines
 from vrneural.material import NeuralMaterial, random_material
 from vrneural.mlp import Layer, macs, random_mlp
 from vrneural.runtime.codegen import material_spec, texture_space_wgsl

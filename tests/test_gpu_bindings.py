@@ -21,7 +21,7 @@ TRICKY = Struct(
 
 def test_struct_layout_follows_the_wgsl_rules():
     # hand-computed from the WGSL spec's alignment and size rules (uniform address space)
-    assert TRICKY.offsets == {
+    assert {name: f[1] for name, f in TRICKY.dtype.fields.items()} == {
         "s": 0, "v3": 16, "t": 28, "m3": 32, "v2": 80, "arr": 96, "inner": 128, "u": 144, "i": 160
     }  # fmt: skip
     assert (INNER.size, TRICKY.size) == (16, 176)

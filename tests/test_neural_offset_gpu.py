@@ -7,10 +7,10 @@ import re
 import numpy as np
 import pytest
 from distill_helpers import run_cli
+from runtime_helpers import count_macs
 from test_neural_offset import _model
 
 from vrneural.formats.vrnm import write_vrnm
-from vrneural.gpu.unroll import count_macs
 from vrneural.material import NeuralMaterial, random_material
 from vrneural.mlp import macs
 from vrneural.runtime.codegen import material_spec, screen_space_wgsl, texture_space_wgsl

@@ -8,6 +8,7 @@ fail instead (.ci/run installs both through scripts/setup.sh).
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 
@@ -20,10 +21,10 @@ pytestmark = pytest.mark.gpu
 
 @pytest.fixture(scope="module")
 def display():
-    from vrneural.viewer.xvfb import have_xvfb, virtual_display
+    from vrneural.viewer.xvfb import virtual_display
 
     missing = []
-    if not have_xvfb():
+    if shutil.which("Xvfb") is None:
         missing.append("Xvfb (apt-get install xvfb)")
     try:
         import glfw  # noqa: F401

@@ -44,14 +44,12 @@ class Struct:
         self.name = name
         self.fields = [(f[0], f[1], f[2] if len(f) > 2 else "") for f in fields]
         names, formats, offsets, off, align = [], [], [], 0, 16
-        self.offsets: dict[str, int] = {}
         for fname, ftype, _ in self.fields:
             lay = layout_of(ftype)
             off = _round(off, lay.align)
             names.append(fname)
             formats.append(lay.dtype)
             offsets.append(off)
-            self.offsets[fname] = off
             off += lay.size
             align = max(align, lay.align)
         self.align = align

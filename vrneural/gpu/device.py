@@ -20,12 +20,6 @@ WANTED_LIMITS = (
 )
 
 
-def _quiet_env() -> None:
-    # lavapipe (and other Mesa drivers) warn about XDG_RUNTIME_DIR when it is unset; harmless.
-    if "XDG_RUNTIME_DIR" not in os.environ:
-        os.environ["XDG_RUNTIME_DIR"] = "/tmp"
-
-
 #: Backends whose WGSL compute path we test (storage textures, f16, constant weights). wgpu
 #: also offers OpenGL (e.g. Mesa's llvmpipe through EGL when no Vulkan driver is installed),
 #: but our kernels give wrong results there (its view-dimension heuristics, no shader-f16),
@@ -60,7 +54,8 @@ def _describe(info: dict) -> str:
 
 @functools.cache
 def _adapter():
-    _quiet_env()
+    # lavapipe (and other Mesa drivers) warn about XDG_RUNTIME_DIR when it is unset; harmless
+    os.environ.setdefault("XDG_RUNTIME_DIR", "/tmp")
     import wgpu
 
     try:

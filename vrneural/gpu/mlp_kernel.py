@@ -62,15 +62,11 @@ class MlpKernel:
         import wgpu
 
         self.layers = layers
-        self.precision = precision
-        self.buffer_weights = buffer_weights
         self.code = mlp_wgsl(layers, precision, buffer_weights)
         self.dev = get_device()
-        self._wbuf = (
-            upload_buffer(pack_weights(layers), wgpu.BufferUsage.STORAGE)
-            if buffer_weights
-            else None
-        )
+        self._wbuf = None
+        if buffer_weights:
+            self._wbuf = upload_buffer(pack_weights(layers), wgpu.BufferUsage.STORAGE)
 
     def run(self, x: np.ndarray, repeats: int = 1, timer: GpuTimer | None = None) -> np.ndarray:
         """Evaluate on ``x: [N, in]``; returns ``[N, min(out, 4)]`` float32.

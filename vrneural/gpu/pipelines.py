@@ -12,19 +12,17 @@ from vrneural.gpu.shaders import debug_enabled, numbered
 
 @dataclass
 class PipelineCache:
-    """Shader modules and pipelines by content hash, with hit/miss counters."""
+    """Shader modules and pipelines by content hash, with a hit counter."""
 
     modules: dict = field(default_factory=dict)
     pipelines: dict = field(default_factory=dict)
     hits: int = 0
-    misses: int = 0
 
     def module(self, code: str, label: str = ""):
         key = hashlib.sha256(code.encode()).hexdigest()
         if key in self.modules:
             self.hits += 1
             return self.modules[key]
-        self.misses += 1
         try:
             m = get_device().create_shader_module(code=code, label=label)
         except Exception:
@@ -43,7 +41,6 @@ class PipelineCache:
         if key in self.pipelines:
             self.hits += 1
             return self.pipelines[key]
-        self.misses += 1
         mod = self.module(code, label)
         stage = {"module": mod, "entry_point": entry}
         if consts:

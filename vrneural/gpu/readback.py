@@ -15,6 +15,8 @@ _FORMATS = {
     "rg32float": (np.float32, 2),
     "rgba8unorm": (np.uint8, 4),
     "rgba8unorm-srgb": (np.uint8, 4),
+    "bgra8unorm": (np.uint8, 4),
+    "bgra8unorm-srgb": (np.uint8, 4),
     "r16float": (np.float16, 1),
     "rg16float": (np.float16, 2),
     "depth32float": (np.float32, 1),

@@ -103,9 +103,7 @@ class GpuTimer:
 
     def read(self) -> dict[str, float]:
         """Milliseconds per pass name (summed over repeats); resets for the next use."""
-        if not self.enabled or not self.names:
-            self.names = []
+        names, self.names = self.names, []
+        if not self.enabled or not names:
             return {}
-        out = self.decode(self.dev.queue.read_buffer(self.resolve_buf), self.names)
-        self.names = []
-        return out
+        return self.decode(self.dev.queue.read_buffer(self.resolve_buf), names)

@@ -58,13 +58,6 @@ class UniformArena:
         self._mark(offset, nbytes)
         return self.host[offset : offset + nbytes].view(dtype)
 
-    def write(self, offset: int, data) -> None:
-        """Copy ``data`` (bytes or an array) into the region at ``offset``."""
-        b = np.frombuffer(data, np.uint8) if isinstance(data, (bytes, bytearray)) else data
-        b = np.asarray(b).view(np.uint8).ravel()
-        self.view(offset, len(b), np.uint8)[:] = b
-        self.written()
-
     def _mark(self, offset: int, nbytes: int) -> None:
         self.lo = offset if self.lo is None else min(self.lo, offset)
         self.hi = max(self.hi, offset + nbytes)

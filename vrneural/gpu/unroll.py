@@ -1,5 +1,6 @@
 """Unrolled MLP layers as WGSL lines: plain Python, so the generated code can be unit-tested
-(its multiply-adds counted against the network's) and stepped through in a debugger.
+(its multiply-adds counted against the network's: tests/runtime_helpers.py) and stepped
+through in a debugger.
 
 A layer ``y = act(W x + b)`` (:class:`vrneural.mlp.Layer`) becomes one ``let`` per output unit
 with its weights as WGSL constants; zero weights are skipped, so the cost follows the network.
@@ -17,7 +18,6 @@ outside the loop by :func:`affine_lines`. :func:`mlp_lines` then gets the bracke
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -94,8 +94,3 @@ def mlp_lines(
                 pre = f"{name}_p"
             lines.append(f"{IND}let {name} = {act_expr(layer.act, pre, T)};")
     return lines
-
-
-def count_macs(wgsl: str) -> int:
-    """Multiply-adds by constant weights in unrolled WGSL (``<literal> * <value>`` terms)."""
-    return len(re.findall(r"(?<![\w.])-?[0-9][0-9.e+-]*[fh] \* ", wgsl))

@@ -76,12 +76,10 @@ class AdaptiveState:
     last: np.ndarray | None = None  # [1 + L, 3] at the previous frame
     period: int = 1
     phase: int = 0  # the next phase of the sweep
-    refreshes: int = 0  # refreshes started (statistics)
 
     def restart(self, dirs: np.ndarray) -> None:
         """A full update was just made from ``dirs`` (first sight, back in view)."""
         self.ref, self.last, self.phase, self.period = dirs, dirs, 0, 1
-        self.refreshes += 1
 
     def step(
         self, dirs: np.ndarray, scale: np.ndarray, budget: float, p_max: int, staggered: bool
@@ -102,5 +100,4 @@ class AdaptiveState:
         rate = turned(dirs, prev, scale)
         period = int(np.clip(np.floor(budget / max(rate, 1e-9)), 1, p_max)) if staggered else 1
         self.ref, self.period, self.phase = dirs, period, 1 % period
-        self.refreshes += 1
         return Slice(True, 0, period)

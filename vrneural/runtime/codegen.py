@@ -21,6 +21,7 @@ and texture channel counts are template parameters; the radiance texture side ``
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import accumulate
 
 import numpy as np
 
@@ -89,10 +90,6 @@ class MaterialSpec:
     offset_net: list | None = None
     offset_ch: int = 0
     offset_consts: tuple = ()
-
-    @property
-    def buffer_weights(self) -> bool:
-        return self.weights != "constants"
 
 
 def reference_weights(mat: NeuralMaterial) -> str:
@@ -170,11 +167,7 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
     layers = _layers(mat)
     dims_in = [lay.n_in for lay in layers]
     dims_out = [lay.n_out for lay in layers]
-    offs, off = [], 0
-    for lay in layers:
-        offs.append(off)
-        off += lay.n_in * lay.n_out + lay.n_out
-    boffs = np.concatenate([[0], np.cumsum(dims_out)[:-1]]).astype(int).tolist()
+    offs = list(accumulate((lay.n_in * lay.n_out + lay.n_out for lay in layers[:-1]), initial=0))
     ca = mat.textures[texs[0]].shape[2]
     cb = mat.textures["fine"].shape[2] if mat.arch == "coarse_fine" else 0
     z = mat.networks["coarse"][-1].n_out if mat.arch == "coarse_fine" else 0
@@ -193,7 +186,7 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
         buf_dims_out=dims_out,
         buf_offsets=offs,
         buf_acts=[lay.act for lay in layers],
-        buf_bias_offsets=boffs,
+        buf_bias_offsets=list(accumulate(dims_out[:-1], initial=0)),
         dir_consts=tuple(repr(float(c)) for t in mat.dir_range for c in boundary_consts(t)),
         lod_levels=mat.lod_levels,
         parallax_steps=mat.parallax_steps,

@@ -32,7 +32,7 @@ def network_wgsl(spec, T: str) -> str:
     (:mod:`vrneural.runtime.codegen_offset`)."""
     if spec.weights in ("uniform", "streamed"):
         lines = streamed_single(spec, T)
-    elif spec.buffer_weights:
+    elif spec.weights == "storage":
         lines = storage_nets(spec, T)
     else:
         lines = constant_nets(spec, T)

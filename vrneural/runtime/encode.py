@@ -34,13 +34,16 @@ class FrameEncoding:
         a new encoder; otherwise ``enc``."""
         if self.pass_clock != "wall":
             return enc
-        self.arena.flush()
-        q = self.dev.queue
-        t0 = time.perf_counter()
-        q.submit([enc.finish()])
-        q.read_buffer(self.counters.buf, 0, 16)  # a copy after the pass: waits for it
-        self._wall[name] = self._wall.get(name, 0.0) + (time.perf_counter() - t0) * 1e3
+        self._wall[name] = self._wall.get(name, 0.0) + self._submit_and_wait(enc)
         return self.dev.create_command_encoder()
+
+    def _submit_and_wait(self, enc) -> float:
+        """Submit ``enc`` (the arena's uniforms first) and wait for it; returns the wall ms."""
+        self.arena.flush()
+        t0 = time.perf_counter()
+        self.dev.queue.submit([enc.finish()])
+        self.dev.queue.read_buffer(self.counters.buf, 0, 16)  # a copy after the pass: waits
+        return (time.perf_counter() - t0) * 1e3
 
     def _encode_texture(self, enc, todo, eyes, lp, lc):
         """All of a frame's texture-space dispatches, in one compute pass; returns the
@@ -48,16 +51,20 @@ class FrameEncoding:
         if self.pass_clock == "wall":  # everything before the pass, first
             enc = self._cut(enc, "_before")
         cp = enc.begin_compute_pass(timestamp_writes=self._writes("texture"))
-        shading = self._shading_eyes(eyes)
-        bound = None
+        self._dispatch_updates(cp, todo, eyes, lp, lc)
+        cp.end()
+        return self._cut(enc, "texture")
+
+    def _dispatch_updates(self, cp, todo, eyes, lp, lc) -> None:
+        """The updates ``todo = [(k, object, phase, period)]`` into the open compute pass
+        ``cp``: their uniforms written, each target's dispatches recorded."""
+        bound, shading = None, self._shading_eyes(eyes)
         for k, n, phase, period in todo:
             tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
             for e, ((pos, margin), tgt) in enumerate(zip(shading, n.targets, strict=True)):
                 slot = k * self.s.eyes + e
                 tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, slot, margin)
                 bound = tgt.dispatch(cp, phase, period, bound=bound)
-        cp.end()
-        return self._cut(enc, "texture")
 
     def _encode_eyes(self, enc, eyes, lp, lc) -> tuple:
         """Per eye, the forward pass (replaying its bundle) and, in the screen modes, the

@@ -95,6 +95,16 @@ def _layouts():
     )
 
 
+#: the vertex buffer of :func:`expanded_vertices`: position, normal, atlas uv, triangle
+VERTEX_BUFFER = {
+    "array_stride": 36,
+    "attributes": [
+        {"format": f, "offset": off, "shader_location": k}
+        for k, (f, off) in enumerate(
+            (("float32x3", 0), ("float32x3", 12), ("float32x2", 24), ("uint32", 32))
+        )
+    ],
+}
 #: fragment entry points whose object group holds a radiance texture
 SAMPLING = ("fs_neural", "fs_floor_sample", "fs_floor_constant")
 
@@ -124,21 +134,7 @@ def render_pipeline(
         targets.append({"format": VIS_FORMAT})
     return get_device().create_render_pipeline(
         layout=layout,
-        vertex={
-            "module": mod,
-            "entry_point": "vs_main",
-            "buffers": [
-                {
-                    "array_stride": 36,
-                    "attributes": [
-                        {"format": "float32x3", "offset": 0, "shader_location": 0},
-                        {"format": "float32x3", "offset": 12, "shader_location": 1},
-                        {"format": "float32x2", "offset": 24, "shader_location": 2},
-                        {"format": "uint32", "offset": 32, "shader_location": 3},
-                    ],
-                }
-            ],
-        },
+        vertex={"module": mod, "entry_point": "vs_main", "buffers": [VERTEX_BUFFER]},
         primitive={"topology": "triangle-list", "cull_mode": "none"},
         depth_stencil={
             "format": DEPTH_FORMAT,
@@ -166,23 +162,14 @@ class EyeTargets:
         self.size = (width, height)
         self.target = target
         storage = tu.STORAGE_BINDING if target == "hdr" else 0  # the screen pass writes HDR
-        self.colour = dev.create_texture(
-            size=(width, height, 1),
-            format=TARGETS[target],
-            usage=tu.RENDER_ATTACHMENT | tu.COPY_SRC | storage | tu.TEXTURE_BINDING,
-        )
-        self.depth = dev.create_texture(
-            size=(width, height, 1), format=DEPTH_FORMAT, usage=tu.RENDER_ATTACHMENT
-        )
-        self.vis = (
-            dev.create_texture(
-                size=(width, height, 1),
-                format=VIS_FORMAT,
-                usage=tu.RENDER_ATTACHMENT | tu.TEXTURE_BINDING,
-            )
-            if vis
-            else None
-        )
+
+        def texture(fmt: str, usage):
+            return dev.create_texture(size=(width, height, 1), format=fmt, usage=usage)
+
+        rt = tu.RENDER_ATTACHMENT
+        self.colour = texture(TARGETS[target], rt | tu.COPY_SRC | storage | tu.TEXTURE_BINDING)
+        self.depth = texture(DEPTH_FORMAT, rt)
+        self.vis = texture(VIS_FORMAT, rt | tu.TEXTURE_BINDING) if vis else None
         self.colour_view = self.colour.create_view()
         self.depth_view = self.depth.create_view()
         self.vis_view = self.vis.create_view() if vis else None

@@ -31,11 +31,9 @@ from vrneural.runtime.reference import block_geometry
 def _words(tex: np.ndarray) -> np.ndarray:
     """``[H, W, C]`` float16 -> ``[layers, H, W, 4]`` u32: 8 channels per texel and layer."""
     h, w, c = tex.shape
-    layers = (c + 7) // 8
-    data = np.zeros((layers, h, w, 8), np.float16)
-    for i in range(layers):
-        part = np.asarray(tex[:, :, 8 * i : 8 * i + 8], np.float16)
-        data[i, :, :, : part.shape[2]] = part
+    data = np.zeros((h, w, -(-c // 8) * 8), np.float16)
+    data[..., :c] = tex
+    data = data.reshape(h, w, -1, 8).transpose(2, 0, 1, 3)
     return np.ascontiguousarray(np.ascontiguousarray(data).view("<u4"))  # (lo, hi) half pairs
 
 
@@ -82,24 +80,17 @@ class GpuMaterial:
         #: the height field of a parallax material (r32float ``[H, W]``), else None
         self.height = upload_height_texture(mat.height) if mat.parallax_steps else None
         #: the offset texture of a neural-offset material (as the neural textures), else None
-        self.offset = (
-            upload_feature_texture(mat.offset_tex, "neural.offset")
-            if mat.parallax_kind == "neural"
-            else None
-        )
-        self.weights = (
-            upload_buffer(packed_weights(mat), wgpu.BufferUsage.STORAGE, "weights")
-            if weights in ("storage", "streamed")
-            else None
-        )
-        self.uniforms = (
-            [
-                upload_buffer(w, wgpu.BufferUsage.UNIFORM, f"weights.{i}")
-                for i, w in enumerate(uniform_weights(mat))
+        self.offset = None
+        if mat.parallax_kind == "neural":
+            self.offset = upload_feature_texture(mat.offset_tex, "neural.offset")
+        self.weights, self.uniforms = None, []
+        if weights in ("storage", "streamed"):
+            self.weights = upload_buffer(packed_weights(mat), wgpu.BufferUsage.STORAGE, "weights")
+        elif weights == "uniform":
+            u = wgpu.BufferUsage.UNIFORM
+            self.uniforms = [
+                upload_buffer(w, u, f"weights.{i}") for i, w in enumerate(uniform_weights(mat))
             ]
-            if weights == "uniform"
-            else []
-        )
 
     def resources(self) -> dict:
         """Its resources by binding name (runtime/interface.py:material_bindings)."""
@@ -202,14 +193,11 @@ class GpuAtlas:
         import wgpu
 
         if period not in self._lists:
-            by = self.geometry()["by"]
-            idx, spans, off = [], [], 0
-            for ph in range(period):
-                sel = np.nonzero(by % period == ph)[0]
-                idx.append(sel.astype(np.uint32))
-                spans.append((off, len(sel)))
-                off += len(sel)
-            data = np.concatenate([*idx, np.zeros(1, np.uint32)])  # never an empty buffer
+            phase = self.geometry()["by"] % period
+            idx = np.argsort(phase, kind="stable").astype(np.uint32)  # row-major in each phase
+            n = np.bincount(phase, minlength=period)
+            spans = [(int(o), int(k)) for o, k in zip(np.cumsum(n) - n, n, strict=True)]
+            data = np.concatenate([idx, np.zeros(1, np.uint32)])  # never an empty buffer
             buf = upload_buffer(
                 data, wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC, f"blocks/{period}"
             )

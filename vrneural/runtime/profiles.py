@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 from vrneural.errors import VrnError
 
@@ -19,9 +19,6 @@ class Profile:
     lights: int  # point lights in the default scene
     fov_y: float  # vertical field of view, degrees
     ipd: float = 0.063  # metres
-
-    def to_dict(self) -> dict:
-        return asdict(self)
 
 
 PROFILES: dict[str, Profile] = {

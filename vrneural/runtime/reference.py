@@ -101,11 +101,6 @@ def non_empty_blocks(tri_ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.nonzero(b)
 
 
-def count_non_empty_blocks(tri_ids: np.ndarray) -> int:
-    """2x2 blocks of ``tri_ids: [R, R]`` with at least one triangle."""
-    return len(non_empty_blocks(tri_ids)[0])
-
-
 def block_lod(mat: NeuralMaterial, foot: np.ndarray) -> np.ndarray | None:
     """Each block's level of detail in ``mat``'s prefiltered neural textures (None without
     pyramids): ``log2`` of its footprint in the full-resolution texture's texels (at least 1):
@@ -158,11 +153,12 @@ def shade_points(
 def block_geometry(atlas: Atlas) -> dict:
     """What the texture-space pass needs of the atlas, once per atlas (the GPU's "geometry
     atlas", ``GpuAtlas.geometry``): for each non-empty 2x2 block in :func:`non_empty_blocks`
-    order, ``by, bx: [N]``, the object-space attributes at the block centre ``pos, nrm: [N, 3]``,
-    ``tan: [N, 4]`` through the first non-empty texel's triangle, and the untiled material UVs
-    of its 4 texels ``uv: [N, 4, 2]`` (texel order (0,0), (1,0), (0,1), (1,1); each texel through
-    its own triangle, empty texels through the centre's, extrapolated) and ``foot: [N]``, the
-    untiled material-UV length of one atlas texel on the centre's triangle (:func:`texel_foot`).
+    order, ``by, bx: [N]``, its texels' coordinates ``tx, ty: [N, 4]``, the object-space
+    attributes at the block centre ``pos, nrm: [N, 3]``, ``tan: [N, 4]`` through the first
+    non-empty texel's triangle, and the untiled material UVs of its 4 texels ``uv: [N, 4, 2]``
+    (texel order (0,0), (1,0), (0,1), (1,1); each texel through its own triangle, empty texels
+    through the centre's, extrapolated) and ``foot: [N]``, the untiled material-UV length of
+    one atlas texel on the centre's triangle (:func:`texel_foot`).
     """
     R = atlas.resolution
     nb = R // 2
@@ -180,8 +176,8 @@ def block_geometry(atlas: Atlas) -> dict:
     (uv,) = _interpolate(atlas, tri.ravel(), p.reshape(-1, 2), atlas.mesh.uv)
     foot = texel_foot(atlas, tc)
     return {
-        "by": by, "bx": bx, "pos": pos, "nrm": nrm, "tan": tan, "uv": uv.reshape(-1, 4, 2),
-        "foot": foot,
+        "by": by, "bx": bx, "tx": tx, "ty": ty, "pos": pos, "nrm": nrm, "tan": tan,
+        "uv": uv.reshape(-1, 4, 2), "foot": foot,
     }  # fmt: skip
 
 
@@ -209,13 +205,11 @@ def texture_blocks(atlas: Atlas, model: np.ndarray, tiling=(1.0, 1.0, 0.0, 0.0),
     tiled material UVs ``uvs: [N, 4, 2]`` (from :func:`block_geometry`)."""
     g = block_geometry(atlas)
     sel = g["by"] % period == phase
-    by, bx = g["by"][sel], g["bx"][sel]
     pos, n, t, b = world_frames(g["pos"][sel], g["nrm"][sel], g["tan"][sel], model)
     tl = np.asarray(tiling, np.float32)
     uvs = g["uv"][sel] * tl[:2] + tl[2:]
-    tx = 2 * bx[:, None] + np.array([0, 1, 0, 1])
-    ty = 2 * by[:, None] + np.array([0, 0, 1, 1])
     foot = g["foot"][sel] * np.float32(max(tl[0], tl[1]))  # tiled
+    tx, ty = g["tx"][sel], g["ty"][sel]
     return {"tx": tx, "ty": ty, "pos": pos, "n": n, "t": t, "b": b, "uvs": uvs, "foot": foot}
 
 
@@ -252,7 +246,6 @@ def shade_texture_space(
     w = front
     out[ty[w], tx[w], :3] = rad[w]
     out[ty[w], tx[w], 3] = 1.0
-    if mat.arch == "single":
-        nc, nf = 0, nf
+    nc = 0 if mat.arch == "single" else nc
     counters = np.array([int(w.sum()), int((~front).sum()), nc, nf], np.int64)
     return out, counters

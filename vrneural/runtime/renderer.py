@@ -132,8 +132,9 @@ class Renderer(FrameEncoding):
     def _add_object(self, i: int, o, passes: dict, progress) -> None:
         """Load object ``i``'s mesh; a neural one also gets its atlas, pass and targets."""
         scene, s = self.scene, self.s
-        if progress:
-            progress(f"{o.name}: load mesh {o.mesh}")
+        say = progress or (lambda text: None)
+        where = f"{scene.src}: objects[{i}] ({o.name})"  # what its errors and warnings name
+        say(f"{o.name}: load mesh {o.mesh}")
         mesh = get_mesh(o.mesh, scene.base, f"{scene.src}: objects[{i}].mesh", o.crease_angle)
         if o.material.kind == "plain":
             m = o.material
@@ -146,26 +147,21 @@ class Renderer(FrameEncoding):
             res, knob = o.texture_res, "its texture_res"
         elif o.texture_res and res != o.texture_res:
             self.warnings.append(
-                f"{scene.src}: objects[{i}] ({o.name}): --texture-res {s.texture_res} overrides "
-                f"its texture_res = {o.texture_res}"
+                f"{where}: --texture-res {s.texture_res} overrides its texture_res = "
+                f"{o.texture_res}"
                 + (f" (min_texture_res {o.min_texture_res} kept)" if res != s.texture_res else "")
             )
-        if progress:
-            progress(f"{o.name}: atlas {res}^2, {len(mesh.faces)} triangles")
+        say(f"{o.name}: atlas {res}^2, {len(mesh.faces)} triangles")
         try:
             atlas = get_atlas(mesh, res, atlas_uv=o.atlas_uv, progress=progress is not None)
         except VrnError as e:  # name the object and the knobs that set its resolution
-            raise VrnError(
-                f"{scene.src}: objects[{i}] ({o.name}) at {res}^2 texels ({knob}): {e}"
-            ) from None
+            raise VrnError(f"{where} at {res}^2 texels ({knob}): {e}") from None
         lost = lost_triangles(atlas.stats, res, "they show their neighbours' shading")
         if lost and s.mode == "texture":  # the other modes shade pixels, not texels
-            self.warnings.append(
-                f"{scene.src}: objects[{i}] ({o.name}): {lost}; raise texture_res / min_texture_res"
-            )
+            self.warnings.append(f"{where}: {lost}; raise texture_res / min_texture_res")
         flat = collapsed_triangles(atlas.stats)
         if flat and s.mode == "texture":
-            self.warnings.append(f"{scene.src}: objects[{i}] ({o.name}): {flat}")
+            self.warnings.append(f"{where}: {flat}")
         c, r = bounding_sphere(atlas.mesh)
         n = NeuralObject(i, o, atlas, GpuAtlas(atlas), c, r)
         n.side, n.mesh = res, mesh
@@ -174,8 +170,7 @@ class Renderer(FrameEncoding):
             sides = []
             for side in level_sides(res):  # every level's atlas now (cached on disk after)
                 try:
-                    if progress:
-                        progress(f"object {o.name}: atlas {side}^2")
+                    say(f"object {o.name}: atlas {side}^2")
                     n.levels[side] = (get_atlas(mesh, side), None, None, None)
                     sides.append(side)
                 except VrnError:  # too small for the mesh's charts: the larger ones only
@@ -192,20 +187,19 @@ class Renderer(FrameEncoding):
                     else "set material.reference in the scene or pass --reference TEACHER.vrnm"
                 )
                 raise VrnError(
-                    f"{scene.src}: objects[{i}] ({o.name}): --mode reference needs a teacher "
-                    f"for {Path(o.material.source).name}: {how}"
+                    f"{where}: --mode reference needs a teacher for "
+                    f"{Path(o.material.source).name}: {how}"
                 )
             method = ref.meta.get("method") if ref is not None else None
             if method not in (None, "teacher"):  # allowed (a comparison), but not ground truth
                 self.warnings.append(
-                    f"{scene.src}: objects[{i}] ({o.name}): the reference is a {method} pack, "
-                    "not a teacher: reference mode shows that network, not the ground truth"
+                    f"{where}: the reference is a {method} pack, not a teacher: reference mode "
+                    "shows that network, not the ground truth"
                 )
             mat = ref or mat  # a procedural material is its own ground truth
         key = id(mat)
         if key not in passes:
-            if progress:
-                progress(f"{o.name}: compile shaders ({s.mode} mode)")
+            say(f"{o.name}: compile shaders ({s.mode} mode)")
             try:
                 passes[key] = self._make_pass(mat)
             except VrnError as e:  # name the object and its pack, not the BTF inside
@@ -327,7 +321,7 @@ class Renderer(FrameEncoding):
         sl = frame_slice(f, s.reuse, s.schedule)
         adaptive = s.reuse_budget is not None
         centre = np.mean([e.position for e in eyes], axis=0) if adaptive else None
-        todo, updated, culled = [], 0, 0
+        todo, culled = [], 0
         for k, n in enumerate(self.neural):
             if not self._visible(n, eyes):
                 culled += 1
@@ -354,8 +348,7 @@ class Renderer(FrameEncoding):
                     todo.append((k, n, a.phase, a.period))
             elif sl.update:
                 todo.append((k, n, sl.phase, sl.period))
-        updated = len(todo)
-        return todo, updated, culled
+        return todo, len(todo), culled
 
     def _coverage(self, n: NeuralObject, eye) -> float:
         """The fraction of the (whole) eye image the object's bounding sphere covers."""

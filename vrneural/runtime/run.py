@@ -27,7 +27,13 @@ from vrneural.runtime.output import (
     write_png,
 )
 from vrneural.runtime.pack_teacher import teacher_beside
-from vrneural.runtime.scene import MaterialDesc, builtin_lights, builtin_scene, load_scene
+from vrneural.runtime.scene import (
+    MaterialDesc,
+    Scene,
+    builtin_lights,
+    builtin_scene,
+    load_scene,
+)
 
 
 def selected_frames(spec: str, frames: int) -> list[int]:
@@ -106,10 +112,33 @@ def use_pack(scene, path: str) -> None:
             )
 
 
-def new_output_dir(base: str) -> Path:
-    """Create a fresh directory ``base`` (``base-2``, ``base-3``... if taken): the name is
-    claimed with an exclusive ``mkdir``, so two runs started in the same second never share
-    it."""
+def load_run_scene(cfg: RunConfig, scene=None) -> Scene:
+    """The scene `run` renders: ``scene`` (a :class:`~vrneural.runtime.scene.Scene` or a scene
+    file; default ``cfg.scene``), else the built-in one with ``--lights`` and ``--pack``
+    applied. ``--pack`` with a scene of one's own is refused."""
+    scene = scene if scene is not None else cfg.scene or None
+    if scene is not None and cfg.pack:
+        raise VrnError(
+            f"--pack = {cfg.pack!r} replaces the built-in scene's materials; with a SCENE file, "
+            "set pack = ... in its [[objects]] instead"
+        )
+    if isinstance(scene, Scene):
+        return scene
+    if scene is not None:
+        return load_scene(scene)
+    # its three lights (more generated for --lights N > 3); the profile shades the first
+    if cfg.lights is not None:  # named as the option, before the scene would name it
+        check_int("--lights", cfg.lights, 0, LIGHTS_MAX)
+    sc = builtin_scene(max(len(builtin_lights()), cfg.lights or 0))
+    if cfg.pack:
+        use_pack(sc, cfg.pack)
+    return sc
+
+
+def default_out() -> Path:
+    """Create a new ``out/run-YYYYmmdd-HHMMSS`` (suffixed ``-2``, ``-3``... if taken; claimed
+    by an exclusive mkdir, so two runs started in the same second get two directories)."""
+    base = time.strftime("out/run-%Y%m%d-%H%M%S")
     k = 1
     while True:
         p = Path(base if k == 1 else f"{base}-{k}")
@@ -124,12 +153,6 @@ def new_output_dir(base: str) -> Path:
             raise VrnError(f"{p}: cannot create output directory ({why(p, e)})") from None
         except OSError as e:
             raise VrnError(f"{p}: cannot create output directory ({why(p, e)})") from None
-
-
-def default_out() -> Path:
-    """Create a new ``out/run-YYYYmmdd-HHMMSS`` (suffixed ``-2``, ``-3``... if taken; claimed
-    by an exclusive mkdir, so two runs started in the same second get two directories)."""
-    return new_output_dir(time.strftime("out/run-%Y%m%d-%H%M%S"))
 
 
 def percentiles(x) -> dict:
@@ -173,20 +196,7 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
     chosen = given(cfg)  # the fields given (None: not given): a knob that does nothing is named
     cfg = resolved(dataclasses.replace(cfg, out=str(out)))
     n_builtin = len(builtin_lights())
-    if cfg.scene and cfg.pack:
-        raise VrnError(
-            f"--pack = {cfg.pack!r} replaces the built-in scene's materials; with a SCENE file, "
-            "set pack = ... in its [[objects]] instead"
-        )
-    if cfg.scene:
-        scene = load_scene(cfg.scene)
-    else:
-        # its three lights (more generated for --lights N > 3); the profile shades the first
-        if cfg.lights is not None:  # named as the option, before the scene would name it
-            check_int("--lights", cfg.lights, 0, LIGHTS_MAX)
-        scene = builtin_scene(max(n_builtin, cfg.lights or 0))
-        if cfg.pack:
-            use_pack(scene, cfg.pack)
+    scene = load_run_scene(cfg)
     adapter = adapter_summary()
     s = resolve(dataclasses.replace(cfg, scene=None, pack=None), scene, adapter)  # both applied
     save = selected_frames(cfg.save_frames, s.frames)
@@ -217,8 +227,7 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
         r.warnings.append(
             f"{scene.src}: the scene has {count(len(scene.lights), 'light')} and the "
             f"{cfg.profile or scene.profile or 'quest3'} profile shades the first "
-            f"{s.n_lights}; "
-            f"--lights {len(scene.lights)} shades them all"
+            f"{s.n_lights}; --lights {len(scene.lights)} shades them all"
         )
     if r.neural and not scene.lights:
         r.warnings.append(f"{scene.src}: the scene has no [[lights]]: neural objects are black")
@@ -238,8 +247,7 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
     if s.mode != "texture" and unused:  # texture space's knobs: say they do nothing here
         r.warnings.append(
             f"{' and '.join(unused)} only {'apply' if len(unused) > 1 else 'applies'} to "
-            f"--mode texture; --mode {s.mode} shades "
-            "every pixel every frame"
+            f"--mode texture; --mode {s.mode} shades every pixel every frame"
         )
     if not cfg.video and "video_scale" in chosen:  # does nothing: say so
         r.warnings.append("--video-scale only applies to the video, and --no-video writes none")
@@ -385,7 +393,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
             k: percentiles(per_frame["gpu_ms"][k][1:] or per_frame["gpu_ms"][k]) for k in gpu_names
         },
         # passes whose timestamps this adapter does not cover (runtime/timecheck.py)
-        "gpu_untimed": {k: UNTIMED_NOTE for k in r.untimed if k in _passes_run(s)},
+        "gpu_untimed": dict.fromkeys(r.untimed, UNTIMED_NOTE),
         # the work of frame 0 is a full first update whatever the schedule: left out as well
         f"{unit}_shaded_per_frame": percentiles(shaded[1:] or shaded),
         "mlp_evaluations_per_frame": percentiles(evals[1:] or evals),
@@ -407,10 +415,6 @@ UNTIMED_NOTE = (
     "first frame: runtime/timecheck.py); its time is in frame_wall_ms, and `vrneural bench "
     "frame` times it by the wall clock"
 )
-
-
-def _passes_run(s) -> tuple:
-    return ("texture", "forward") if s.mode == "texture" else ("forward", "screen")
 
 
 def reference_of(cfg, material) -> str | None:

@@ -35,7 +35,7 @@ Format (all lengths in metres, angles in degrees)::
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from importlib.resources import files
 from pathlib import Path
 
@@ -173,7 +173,7 @@ class _Fields:
         """A .vrnm path: relative to the scene file, else a bundled pack of that name."""
         name = self.str(key)
         p = Path(name)
-        here = p if p.is_absolute() else base / p
+        here = base / p  # an absolute path stays as it is
         if not here.is_file() and p.parent == Path(".") and bundled_path(name).is_file():
             return bundled_path(name)
         if not here.is_file():
@@ -240,6 +240,12 @@ def _material(src: str, path: str, t: dict, base: Path) -> MaterialDesc:
     return MaterialDesc("neural", mat, proc, tiling, reference=ref, reference_source=ref_src)
 
 
+#: the fields of an [[objects]] table: ObjectDesc's, its model as position, rotation and scale
+OBJECT_KEYS = {f.name for f in fields(ObjectDesc)} - {"model"} | {"position", "rotation", "scale"}
+#: the fields of a [[lights]] table: PointLight's, "color" as well as "colour"
+LIGHT_KEYS = {f.name for f in fields(PointLight)} | {"color"}
+
+
 def parse_scene(data: dict, src: str, base: Path) -> Scene:
     top = _Fields(src, "", data)
     top.unknown(("name", "profile", "ipd", "head", "objects", "lights"))
@@ -252,8 +258,7 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         h.unknown(("path",))
         head = h.str("path", "orbit")
         if head != "orbit":
-            p = Path(head)
-            p = p if p.is_absolute() else base / p
+            p = base / head  # an absolute path stays as it is
             if not p.is_file():
                 raise h.err(
                     "path", f"= {head!r}: pose log not found ({p}); the built-in path is orbit"
@@ -265,20 +270,7 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
     objects, taken = [], set()  # taken: the object names given so far
     for i, o in enumerate(objs_raw):
         f = _Fields(src, f"objects[{i}]", o)
-        f.unknown(
-            (
-                "name",
-                "mesh",
-                "position",
-                "rotation",
-                "scale",
-                "material",
-                "texture_res",
-                "min_texture_res",
-                "crease_angle",
-                "atlas_uv",
-            )
-        )
+        f.unknown(OBJECT_KEYS)
         mesh = f.str("mesh")
         atlas_uv = f.str("atlas_uv", "auto", MODES)
         crease = f.num("crease_angle", 0.0, 0.0, 180.0) if "crease_angle" in o else None
@@ -319,9 +311,7 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
         raise VrnError(f"{src}: lights must be an array of tables ([[lights]])")
     for i, lt in enumerate(data.get("lights", [])):
         f = _Fields(src, f"lights[{i}]", lt)
-        f.unknown(
-            ("position", "colour", "color", "intensity", "motion", "radius", "period", "phase")
-        )
+        f.unknown(LIGHT_KEYS)
         f.one_of("colour", "color")
         colour = f.vec("colour" if "colour" in lt else "color", (1, 1, 1), lo=0.0)
         intensity = f.num("intensity", 1.0, 0.0, MAX_INTENSITY)

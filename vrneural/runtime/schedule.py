@@ -36,8 +36,3 @@ def frame_slice(frame: int, reuse: int, schedule: str) -> Slice:
     if schedule == "staggered":
         return Slice(True, frame % n1, n1)
     raise ValueError(f"schedule {schedule!r} not in {SCHEDULES}")
-
-
-def rows_of(s: Slice, n_block_rows: int) -> range:
-    """Block rows a slice covers (empty when it does not update)."""
-    return range(s.phase, n_block_rows, s.period) if s.update else range(0)

@@ -23,7 +23,6 @@ from vrneural.runtime.reference import normal_matrix
 from vrneural.runtime.texture_pass import (
     ARGS_BINDINGS,
     CompactionBuffers,
-    CounterBuffer,
     dispatch_compacted,
     pack_lights_into,
 )
@@ -32,12 +31,11 @@ PARAMS_BYTES = SCREEN_PARAMS.size  # 256
 
 
 def pack_screen_params(
-    model, eye, tiling, inv_view_proj, width, height, slot, obj_id, rect=None
-) -> bytes:
-    """The ``Params`` uniform of screen_space.wgsl
-    (:data:`~vrneural.runtime.interface.SCREEN_PARAMS`) as bytes; ``rect``: the pixels to
-    cover (default: the whole eye)."""
-    p = SCREEN_PARAMS.zeros()
+    p: np.ndarray, model, eye, tiling, inv_view_proj, width, height, slot, obj_id, rect=None
+) -> None:
+    """Write the ``Params`` uniform of screen_space.wgsl into the record ``p``
+    (:data:`~vrneural.runtime.interface.SCREEN_PARAMS`); ``rect``: the pixels to cover
+    (default: the whole eye)."""
     m32 = np.asarray(model, np.float32)
     p["model"] = m32.T
     p["normal_mat"] = normal_matrix(m32).T
@@ -46,7 +44,6 @@ def pack_screen_params(
     p["inv_view_proj"] = np.asarray(inv_view_proj, np.float32).T
     p["screen"] = (width, height, slot, obj_id)
     p["rect"] = rect or (0, 0, width, height)
-    return p.tobytes()
 
 
 def screen_rect(centre, radius, view_proj, width, height) -> tuple[int, int, int, int]:
@@ -81,7 +78,6 @@ class ScreenSpacePass:
             e: compute_pipeline(self.code, e, label=f"screen_space/{e}")
             for e in ("cull", "args", "main")
         }
-        self.pipe = self.pipes["main"]
 
 
 _SCRATCH: dict = {}
@@ -146,16 +142,11 @@ class ScreenTarget:
         w, h = self.size
         self.rect = rect
         ar = self.arena
-        packed = pack_screen_params(model, eye, tiling, inv_view_proj, w, h, slot, obj_id, rect)
-        ar.view(self.p_off, len(packed), np.uint8)[:] = np.frombuffer(packed, np.uint8)
+        p = SCREEN_PARAMS.view(ar.view(self.p_off, PARAMS_BYTES, np.uint8))[0]
+        pack_screen_params(p, model, eye, tiling, inv_view_proj, w, h, slot, obj_id, rect)
         lights = LIGHT.view(ar.view(self.l_off, LIGHT.size * self.spass.n_lights, np.uint8))
         pack_lights_into(lights, light_pos, light_rgb)
         ar.written()
-
-    def encode(self, encoder, timestamp_writes=None) -> None:
-        cp = encoder.begin_compute_pass(timestamp_writes=timestamp_writes)
-        self.dispatch(cp)
-        cp.end()
 
     def dispatch(self, cp) -> None:
         """Record this target's dispatches into compute pass ``cp``: list the rectangle's pixels
@@ -164,6 +155,3 @@ class ScreenTarget:
         if w and h:
             cull_grid = (math.ceil(w / 8), math.ceil(h / 8))
             dispatch_compacted(cp, self.spass.pipes, self.binds, cull_grid, self.compact.ind)
-
-
-__all__ = ["CounterBuffer", "ScreenSpacePass", "ScreenTarget", "pack_screen_params"]

@@ -79,7 +79,10 @@ class FrameStats:
         self._waiter = waiter
         self._start = 0.0
         self._end: float | None = None
-        self._raw = None  # (bytes read back, timed pass names, screen counters?), undecoded
+        #: the read-back bytes (timestamps, then ``slots x 4`` u32 counters), the timed pass
+        #: names, the timestamps' bytes, screen counters?, per-pass wall ms (``pass_clock``
+        #: "wall") or None: decoded when a GPU field is first read
+        self._raw = None
 
     def __getattr__(self, name: str):
         if name in GPU_FIELDS:
@@ -96,12 +99,6 @@ class FrameStats:
     def ready(self) -> bool:
         """Whether the GPU fields are in (reading them does not wait)."""
         return self.__dict__.get("_waiter") is None
-
-    def _arrived(self, raw: bytes, names, ts_bytes: int, screen: bool, wall=None) -> None:
-        """The frame's read-back bytes (timestamps, then ``slots x 4`` u32 counters), decoded
-        when a field is first read; ``wall``: per-pass wall ms (``pass_clock`` "wall")."""
-        self._raw = (raw, names, ts_bytes, screen, wall)
-        self._waiter = None
 
     def _decode(self) -> None:
         raw, names, ts_bytes, screen, wall = self._raw
@@ -209,5 +206,5 @@ class FrameResults:
         (st, names, wall), raw = self.ring.take(slot)
         if st._end is None:
             st._end = time.perf_counter()
-        st._arrived(raw, names, self.ts_bytes, self.screen, wall)
+        st._raw, st._waiter = (raw, names, self.ts_bytes, self.screen, wall), None
         self.latest = st  # frames are taken in the order they were submitted

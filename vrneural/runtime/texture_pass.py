@@ -101,7 +101,6 @@ class TextureSpacePass:
         precision: str = "f32",
         n_lights: int = 1,
         weights: str = "constants",
-        gmat: GpuMaterial | None = None,
         radiance_format: str = "rgba16float",
         subgroups: bool | None = None,
     ):
@@ -112,10 +111,10 @@ class TextureSpacePass:
         self.code = texture_space_wgsl(
             mat, precision, n_lights, weights, radiance_format, self.subgroups
         )
-        self.gmat = gmat or GpuMaterial(mat, weights)
+        self.gmat = GpuMaterial(mat, weights)
         self.bindings = texture_bindings(material_spec(mat, weights), n_lights, radiance_format)
 
-    def pipeline(self, resolution: int | None = None, entry: str = "main"):
+    def pipeline(self, entry: str = "main"):
         """The compiled entry point (one for every texture side: the kernel takes its texels
         from the geometry atlas, so no side is compiled in)."""
         return compute_pipeline(self.code, entry, label=f"texture_space/{entry}")
@@ -194,8 +193,7 @@ class TextureTarget:
         self.tpass = tpass
         self.gatlas = gatlas
         self.R = gatlas.resolution
-        self.pipes = {e: tpass.pipeline(self.R, e) for e in ("main",)}
-        self.pipe = self.pipes["main"]
+        self.pipes = {"main": tpass.pipeline()}
         self.arena = arena or UniformArena("texture target", auto_flush=True)
         self.p_off = self.arena.alloc(PARAMS_BYTES)
         self.l_off = self.arena.alloc(LIGHT.size * tpass.n_lights)
@@ -215,7 +213,7 @@ class TextureTarget:
         key = (entry, period if entry not in ("args", "main_compacted") else 0)
         if key not in self.binds:
             if entry not in self.pipes:
-                self.pipes[entry] = self.tpass.pipeline(self.R, entry)
+                self.pipes[entry] = self.tpass.pipeline(entry)
             g, tp, ar = self.gatlas, self.tpass, self.arena
             geo = g.geometry()
             res = {

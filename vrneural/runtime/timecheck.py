@@ -14,8 +14,6 @@ wall time is *untimed*: left out of ``FrameStats.gpu_ms`` and named in ``FrameSt
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from vrneural.gpu.timing import GpuTimer
@@ -29,11 +27,7 @@ MIN_MS = 2.0
 def _wall(r, encode) -> float:
     enc = r.dev.create_command_encoder()
     encode(enc, None)
-    r.arena.flush()
-    t0 = time.perf_counter()
-    r.dev.queue.submit([enc.finish()])
-    r.dev.queue.read_buffer(r.counters.buf, 0, 16)  # a copy after the pass: waits for it
-    return (time.perf_counter() - t0) * 1e3
+    return r._submit_and_wait(enc)
 
 
 def _passes(r) -> dict:
@@ -42,19 +36,12 @@ def _passes(r) -> dict:
     eyes, lp, lc = r._last
     out = {}
     if r.s.mode == "texture" and r.neural:
+        # the objects the frame updated in full (one out of view is left as it is)
+        todo = [(k, n, 0, 1) for k, n in enumerate(r.neural) if n.fresh]
 
         def texture(enc, timer):
             cp = enc.begin_compute_pass(timestamp_writes=timer and timer.writes("texture"))
-            bound = None
-            for k, n in enumerate(r.neural):
-                if not n.fresh:  # not updated by the frame (out of view): left as it is
-                    continue
-                tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
-                for e, ((pos, margin), tgt) in enumerate(
-                    zip(r._shading_eyes(eyes), n.targets, strict=True)
-                ):
-                    tgt.update(n.desc.model, pos, tiling, lp, lc, 0, 1, k * r.s.eyes + e, margin)
-                    bound = tgt.dispatch(cp, 0, 1, bound=bound)
+            r._dispatch_updates(cp, todo, eyes, lp, lc)
             cp.end()
 
         out["texture"] = texture

@@ -12,10 +12,11 @@ import time
 
 from vrneural.runtime.lights import PointLight
 from vrneural.runtime.schedule import SCHEDULES
+from vrneural.runtime.settings import MODES, RADIANCE
 from vrneural.viewer.camera import drag_point
 from vrneural.viewer.config import SPLITS
 from vrneural.viewer.keys import HELD
-from vrneural.viewer.state import cycle, next_mode, step_reuse, step_texture
+from vrneural.viewer.state import cycle, step_reuse, step_texture
 
 #: held key -> (right, up, forward)
 MOVES = {
@@ -25,6 +26,16 @@ MOVES = {
     "right": (1, 0, 0),
     "down": (0, -1, 0),
     "up": (0, 1, 0),
+}
+#: key action -> the :class:`~.state.Live` switch it flips
+TOGGLES = {"help": "help", "hud": "hud", "adaptive": "adaptive", "pause": "paused"}
+#: key action -> (the :class:`~.state.Live` knob it steps, its values in order)
+CYCLES = {
+    "mode": ("mode", MODES),
+    "schedule": ("schedule", SCHEDULES),
+    "precision": ("precision", ("f32", "f16")),
+    "radiance": ("radiance", RADIANCE),
+    "split": ("split", SPLITS),
 }
 
 
@@ -72,22 +83,13 @@ class Controls:
         """Do what key ``action`` (:data:`~.keys.ACTIONS`) does."""
         v = self.view
         live = v.live
-        if action == "help":
-            live.help = not live.help
-        elif action == "hud":
-            live.hud = not live.hud
-        elif action == "mode":
-            live.mode = next_mode(live)
+        if action in TOGGLES:
+            setattr(live, TOGGLES[action], not getattr(live, TOGGLES[action]))
+        elif action in CYCLES:
+            knob, values = CYCLES[action]
+            setattr(live, knob, cycle(getattr(live, knob), values))
         elif action in ("reuse_up", "reuse_down"):
             step_reuse(live, 1 if action == "reuse_up" else -1)
-        elif action == "schedule":
-            live.schedule = cycle(live.schedule, SCHEDULES)
-        elif action == "precision":
-            live.precision = "f16" if live.precision == "f32" else "f32"
-        elif action == "radiance":
-            live.radiance = "shared" if live.radiance == "per-eye" else "per-eye"
-        elif action == "adaptive":
-            live.adaptive = not live.adaptive
         elif action in ("texture_up", "texture_down"):
             step_texture(live, action == "texture_up", v.adapter)
         elif action == "lights":
@@ -111,10 +113,6 @@ class Controls:
         elif action == "reset_camera":
             live.follow_head = False
             v.reset_camera()
-        elif action == "pause":
-            live.paused = not live.paused
-        elif action == "split":
-            live.split = cycle(live.split, SPLITS)
         elif action == "screenshot":
             v.request_screenshot()
         elif action == "quit":

@@ -57,7 +57,7 @@ class FrameRecord:
 class FrameWork:
     """The per-frame half of the viewer (state lives on the :class:`View`)."""
 
-    def _init_frame_work(self, s) -> None:
+    def _init_frame_work(self) -> None:
         self.want_shot = False
         self.shots: list = []
         self.recorder = None
@@ -296,7 +296,7 @@ class FrameWork:
             )
 
     def _layout(self, r, right, display: bool):
-        from vrneural.viewer.present import fit
+        from vrneural.viewer.present import Layout, fit
 
         size = self.image_size()
         eyes = r.colour_textures()
@@ -311,14 +311,10 @@ class FrameWork:
                 else:
                     markers.append((-100.0, -100.0, on))  # off screen: drawn nowhere
         if self.live.split == "off":
-            return dataclasses.replace(
-                _layout(eyes, size), markers=markers, selected=self.live.selected
-            )
-        return dataclasses.replace(
-            _layout(eyes[:1], size, size[0] // 2, right, display),
-            markers=markers,
-            selected=self.live.selected,
-            split_line=self.live.hud,
+            return Layout(eyes, size, markers=markers, selected=self.live.selected)
+        live = self.live
+        return Layout(
+            eyes[:1], size, size[0] // 2, right, display, markers, live.selected, live.hud
         )
 
     def _hud_panel(self, st, last):
@@ -329,15 +325,11 @@ class FrameWork:
 
     def _read(self, tex) -> np.ndarray:
         """``[H, W, 3]`` uint8 RGB of the canvas texture just drawn."""
+        from vrneural.gpu.readback import read_texture
+
         if not self.can_read:
             raise VrnError("this canvas's texture cannot be read back (no COPY_SRC usage)")
-        w, h = tex.size[0], tex.size[1]
-        mem = self.dev.queue.read_texture(
-            {"texture": tex, "origin": (0, 0, 0), "mip_level": 0},
-            {"offset": 0, "bytes_per_row": w * 4, "rows_per_image": h},
-            (w, h, 1),
-        )
-        a = np.frombuffer(mem, np.uint8).reshape(h, w, 4)
+        a = read_texture(tex)
         return np.ascontiguousarray(
             a[..., [2, 1, 0]] if str(tex.format).startswith("bgra") else a[..., :3]
         )
@@ -376,9 +368,3 @@ class FrameWork:
             return
         self.shots += paths
         self.say(f"saved {paths[0]} (+ .exr, .json)")
-
-
-def _layout(eyes, size, split=None, right=None, display=False):
-    from vrneural.viewer.present import Layout
-
-    return Layout(eyes, size, split, right, display)

@@ -22,12 +22,13 @@ import os
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 
 from vrneural.bench.report import pyplot, save_png
 from vrneural.errors import VrnError
-from vrneural.outputs import check_output, write_json
+from vrneural.outputs import check_outputs, write_json
 from vrneural.viewer.view import View
 from vrneural.viewer.xvfb import on_a_display
 
@@ -253,9 +254,8 @@ def main(argv=None) -> int:
     try:
         if not a.out.endswith(".json"):
             raise VrnError(f"{a.out}: the results file must end in .json")
-        out = check_output(a.out, a.force)
-        for sib in (out.with_suffix(".md"), out.with_suffix(".png")):
-            check_output(sib, a.force)
+        out = Path(a.out)
+        check_outputs([out, out.with_suffix(".md"), out.with_suffix(".png")], a.force)
         res = on_a_display(lambda: measure(a.quick), 2400, 2400)
         write_json(out, res)
         from vrneural.outputs import atomic_path

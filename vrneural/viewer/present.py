@@ -196,10 +196,14 @@ class Presenter:
         out = []
         one = (1.0, 1.0, 1.0, 1.0)
 
-        def panel(tex, a, b, origin_x, entry="fs_panel"):
-            rect = _clip((x0 + a * s, y0, x0 + b * s, y0 + h), window)
+        def add(entry, tex, rect, origin=None, scale=1.0, kind=0, tint=one):
+            """A draw of ``tex`` into ``rect`` cut to the window (none when nothing is left)."""
+            rect = _clip(rect, window)
             if rect:
-                out.append((entry, tex, rect, (origin_x, y0), s, 0, one))
+                out.append((entry, tex, rect, origin or (rect[0], rect[1]), scale, kind, tint))
+
+        def panel(tex, a, b, origin_x, entry="fs_panel"):
+            add(entry, tex, (x0 + a * s, y0, x0 + b * s, y0 + h), (origin_x, y0), s)
 
         if lay.split is None:
             for e, tex in enumerate(lay.eyes):
@@ -207,27 +211,17 @@ class Presenter:
                 panel(tex, e * w, (e + 1) * w, x0 + e * w * s)
         else:
             panel(lay.eyes[0], 0, lay.split, x0)
-            panel(
-                lay.right,
-                lay.split,
-                lay.image[0],
-                x0,
-                ("fs_panel", "fs_display")[lay.right_is_display],
-            )
-            if lay.split_line:
-                rect = _clip((x0 + lay.split * s, y0, x0 + lay.split * s + 1, y0 + h), window)
-                if rect:
-                    out.append(("fs_overlay", self.white, rect, (0, 0), 1.0, 1, (0.85,) * 3 + (1,)))
+            entry = "fs_display" if lay.right_is_display else "fs_panel"
+            panel(lay.right, lay.split, lay.image[0], x0, entry)
+            if lay.split_line:  # a grey line (kind 1: filled with the tint)
+                xs, grey = x0 + lay.split * s, (0.85, 0.85, 0.85, 1.0)
+                add("fs_overlay", self.white, (xs, y0, xs + 1, y0 + h), (0, 0), 1.0, 1, grey)
         for k, (mx, my, on) in enumerate(lay.markers[:MAX_MARKERS]):
             c = RING // 2
-            rect = _clip((mx - c, my - c, mx - c + RING, my - c + RING), window)
             tint = (1.0, 0.85, 0.1, 1.0) if k == lay.selected else one if on else (0.45,) * 3 + (1,)
-            if rect:
-                out.append(("fs_overlay", self.ring, rect, (rect[0], rect[1]), 1.0, 0, tint))
+            add("fs_overlay", self.ring, (mx - c, my - c, mx - c + RING, my - c + RING), tint=tint)
         if self.hud_size[0] and self.hud is not None:
-            rect = _clip((8, 8, 8 + self.hud_size[0], 8 + self.hud_size[1]), window)
-            if rect:
-                out.append(("fs_overlay", self.hud, rect, (8, 8), 1.0, 0, one))
+            add("fs_overlay", self.hud, (8, 8, 8 + self.hud_size[0], 8 + self.hud_size[1]), (8, 8))
         return out[:SLOTS]
 
     def encode(self, encoder, target, window: tuple[int, int], lay: Layout, view_format=None):

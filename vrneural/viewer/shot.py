@@ -13,26 +13,10 @@ from vrneural.viewer.controls import effective_lights
 
 
 def quaternion(rot) -> list[float]:
-    """Unit quaternion ``[x, y, z, w]`` of a rotation ``[3, 3]`` (pose logs' convention;
-    Shepperd's method: from the largest of the four diagonal combinations, stable near
-    half turns)."""
-    m = np.asarray(rot, np.float64)
-    t = np.trace(m)
-    k = int(np.argmax([t, m[0, 0], m[1, 1], m[2, 2]]))
-    if k == 0:
-        s = 2 * np.sqrt(1 + t)
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
-    elif k == 1:
-        s = 2 * np.sqrt(1 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
-    elif k == 2:
-        s = 2 * np.sqrt(1 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
-    else:
-        s = 2 * np.sqrt(1 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4, (m[1, 0] - m[0, 1]) / s]
-    q = np.asarray(q)
-    return (q / np.linalg.norm(q)).tolist()
+    """Unit quaternion ``[x, y, z, w]`` of a rotation ``[3, 3]`` (pose logs' convention)."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_matrix(np.asarray(rot, np.float64)).as_quat().tolist()
 
 
 def shot_settings(view) -> dict:
@@ -48,7 +32,7 @@ def shot_settings(view) -> dict:
         "frame": view.f,
         "t": view.t,
         "resolved": resolved,
-        "knobs": view.live.settings_dict(),
+        "knobs": dataclasses.asdict(view.live),
         "head": {
             "position": np.asarray(pos).tolist(),
             "rotation": np.asarray(rot).tolist(),

@@ -7,11 +7,10 @@ import dataclasses
 from pathlib import Path
 
 from vrneural.config import resolved
-from vrneural.errors import VrnError, check_int
+from vrneural.errors import VrnError
 from vrneural.runtime.config import RunConfig, resolve
-from vrneural.runtime.lights import LIGHTS_MAX
-from vrneural.runtime.run import use_pack
-from vrneural.runtime.scene import Scene, builtin_lights, builtin_scene, load_scene
+from vrneural.runtime.run import load_run_scene
+from vrneural.runtime.scene import Scene
 from vrneural.viewer.config import RUN_ONLY, ViewConfig
 from vrneural.viewer.state import Live
 
@@ -52,27 +51,11 @@ def configs(config=None, view=None, options: dict | None = None) -> tuple[RunCon
 def load(scene, cfg: RunConfig):
     """The scene: a :class:`~vrneural.runtime.scene.Scene`, a scene file, or None for the
     built-in one (``--pack`` applied), with `run`'s checks and messages."""
-    if scene is None and cfg.scene:
-        scene = cfg.scene
-    if scene is not None and cfg.pack:
-        raise VrnError(
-            f"--pack = {cfg.pack!r} replaces the built-in scene's materials; with a SCENE file, "
-            "set pack = ... in its [[objects]] instead"
-        )
-    if isinstance(scene, Scene):
-        return scene
-    if isinstance(scene, (str, Path)):
-        return load_scene(scene)
-    if scene is not None:
+    if scene is not None and not isinstance(scene, (Scene, str, Path)):
         raise VrnError(
             f"View: scene is a {type(scene).__name__}; pass a Scene, a scene file or None"
         )
-    if cfg.lights is not None:
-        check_int("--lights", cfg.lights, 0, LIGHTS_MAX)
-    sc = builtin_scene(max(len(builtin_lights()), cfg.lights or 0))
-    if cfg.pack:
-        use_pack(sc, cfg.pack)
-    return sc
+    return load_run_scene(cfg, scene)
 
 
 def start_live(renderers, vc: ViewConfig):

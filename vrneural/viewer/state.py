@@ -17,7 +17,6 @@ from dataclasses import dataclass, field
 
 from vrneural.atlas.config import MIN_RESOLUTION
 from vrneural.runtime.config import REUSE_MAX, max_texture_res, resolve
-from vrneural.runtime.settings import MODES
 
 #: renderers kept (the active one, the split view's reference, the one before)
 CACHE = 3
@@ -50,9 +49,6 @@ class Live:
         precision = "f32" if mode == "reference" else self.precision
         radiance = self.radiance if mode == "texture" else "per-eye"
         return (mode, precision, self.texture_res, self.texture_res_given, radiance)
-
-    def settings_dict(self) -> dict:
-        return dataclasses.asdict(self)
 
 
 class Renderers:
@@ -121,7 +117,3 @@ def step_texture(live: Live, up: bool, adapter) -> None:
     r = min(max(r, MIN_RESOLUTION), max_texture_res(adapter))
     live.texture_res = r - r % 2
     live.texture_res_given = True
-
-
-def next_mode(live: Live) -> str:
-    return cycle(live.mode, MODES)

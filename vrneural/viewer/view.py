@@ -54,7 +54,6 @@ class View(FrameWork):
         self.r, _ = self.renderers.get(self.live)
         for w in self.r.warnings:
             print(f"warning: {w}", file=sys.stderr)
-        s = self.r.s
         self.head_path = self.r.head  # the scene's (orbit or pose log), as run plays it
         self.lights = [dataclasses.replace(lt) for lt in self.r.lights]
         self.live.lights_on = [True] * len(self.lights)
@@ -72,7 +71,7 @@ class View(FrameWork):
         self.hooks: list = []
         self.failure: BaseException | None = None
         self.fps_window: deque = deque(maxlen=240)
-        self._init_frame_work(s)
+        self._init_frame_work()
 
     # ----- public API
 
@@ -148,11 +147,8 @@ class View(FrameWork):
 
     def fps(self) -> float:
         """Frames per second over the last second (wall clock between frames' ends)."""
-        ends = (
-            [e for e in self.fps_window if e >= self.fps_window[-1] - 1.0]
-            if self.fps_window
-            else []
-        )
+        last = self.fps_window[-1] if self.fps_window else 0.0
+        ends = [e for e in self.fps_window if e >= last - 1.0]
         if len(ends) < 2:
             return 0.0
         return (len(ends) - 1) / max(ends[-1] - ends[0], 1e-9)

@@ -19,10 +19,6 @@ from vrneural.errors import VrnError
 INSTALL = "apt-get install -y xvfb"
 
 
-def have_xvfb() -> bool:
-    return shutil.which("Xvfb") is not None
-
-
 def on_a_display(fn, width: int = 2200, height: int = 1400):
     """``fn()`` on the display there is, or on a virtual one of ``width x height`` (Xvfb)
     while there is none."""
