@@ -20,6 +20,7 @@ has its centre at material UV ``((x + 0.5) / W, (y + 0.5) / H)``; tiles repeat (
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -326,6 +327,30 @@ class BtfWriter:
                   "continue", file=sys.stderr)  # fmt: skip
             raise
         bar.close()
+
+    def put_view(self, v: int, view: np.ndarray) -> None:
+        """Store rendered view ``v`` (every light, ``[L, H, W, 3]``), clamped into the float16
+        range, and mark it done; a non-finite value is an internal error (a renderer's bug)."""
+        if not np.isfinite(view).all():
+            raise VrnError(f"internal error: non-finite BTF values rendered at view {v}")
+        self.values[:, v] = np.clip(view, 0.0, F16_MAX).astype(np.float16)
+        self.mark_done(v)
+
+    @contextlib.contextmanager
+    def keep_on_interrupt(self, out):
+        """A Ctrl-C in the block keeps the views written so far in the ``.partial`` and says
+        how to continue (``--resume``) before it is raised again."""
+        try:
+            yield
+        except KeyboardInterrupt:
+            self.values.flush()
+            print(
+                f"\n{out}: interrupted after {len(self.done)}/{self.values.shape[1]} views; "
+                f"partial data kept in {self.partial}; rerun the same command with --resume to "
+                "continue",
+                file=sys.stderr,
+            )
+            raise
 
     def report_clamped(self, src) -> None:
         """One line on stderr per kind of value :meth:`put_clamped` clamped, naming ``src``."""
