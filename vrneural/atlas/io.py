@@ -39,7 +39,7 @@ import numpy as np
 
 from vrneural.atlas.geometry import CREASE_DEG, MeshWarning, check_uv, make_mesh
 from vrneural.atlas.types import Mesh
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, input_file
 
 MESH_SUFFIXES = (".obj", ".ply", ".glb", ".gltf", ".stl", ".off")
 
@@ -52,11 +52,7 @@ def load_mesh(path, crease_deg: float | None = None) -> list[Mesh]:
     """
     import trimesh
 
-    p = Path(path)
-    if not p.exists():
-        raise VrnError(f"{p}: no such file")
-    if p.is_dir():
-        raise VrnError(f"{p}: is a directory, expected a mesh file")
+    p = input_file(path, "a mesh file")
     if p.suffix.lower() not in MESH_SUFFIXES:
         allowed = ", ".join(MESH_SUFFIXES)
         raise VrnError(f"{p}: unsupported mesh type {p.suffix or '(none)'!r}; allowed {allowed}")

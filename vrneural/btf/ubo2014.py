@@ -24,7 +24,7 @@ import numpy as np
 
 from vrneural.btf.dirs import spherical
 from vrneural.btf.format import BtfWriter, check_partial_settings
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, input_file
 
 INSTALL_HINT = "pip install 'vrneural[ubo]' (or: pip install btf-extractor)"
 _COMMON = struct.Struct("<II80s80s80sf3f")  # BTFCommonHeader, 264 bytes
@@ -75,11 +75,7 @@ def parse_header(path) -> dict:
     Returns ``{"format", "width", "height", "light_angles" [L, 2], "view_angles" [V, 2]}``
     (angles in radians, as stored). Raises :class:`VrnError` on anything LoadBTF would reject.
     """
-    p = Path(path)
-    if not p.exists():
-        raise VrnError(f"{p}: no such file")
-    if p.is_dir():
-        raise VrnError(f"{p}: is a directory, expected a UBO2014 .btf file")
+    p = input_file(path, "a UBO2014 .btf file")
     size = p.stat().st_size
     with open(p, "rb") as f:
         head = f.read(min(size, 1 << 24))  # direction tables and headers are small

@@ -30,7 +30,7 @@ import torch
 from vrneural.btf.format import BTF_MAGIC
 from vrneural.btf.identity import moved_btf
 from vrneural.distill.models import NeuralModel
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, input_file
 from vrneural.formats.vrnm import VRNM_MAGIC
 from vrneural.grazing import DEFAULT_THETA_MAX_DEG
 from vrneural.outputs import make_parent
@@ -76,11 +76,7 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
     Refuses files that need arbitrary unpickling (``weights_only=True``), corrupt or foreign
     files, other formats/versions, and (with ``kind``) checkpoints of another kind.
     """
-    p = Path(path)
-    if not p.exists():
-        raise VrnError(f"{p}: no such checkpoint")
-    if p.is_dir():
-        raise VrnError(f"{p}: is a directory, expected a checkpoint (.pt)")
+    p = input_file(path, "a checkpoint (.pt)", missing="no such checkpoint")
     _refuse_our_other_formats(p)
     _check_crcs(p)
     try:
