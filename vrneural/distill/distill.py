@@ -444,18 +444,7 @@ def _train(asked: DistillConfig, on_step=None, epochs_flag: str = "--epochs") ->
     }
     if cfg.force and resume is None and rank == 0:
         clear_outputs(outs)
-    ck = fit(
-        net,
-        lambda: mean_l1(model, data, pairs),
-        data,
-        cfg,
-        cfg.output,
-        payload,
-        resume,
-        tex_params=model.texture_parameters(),
-        on_step=on_step,
-        epochs_flag=epochs_flag,
-    )
+    ck = fit(net, model, data, pairs, cfg, payload, resume, on_step, epochs_flag)
     if rank == 0:
         finish_outputs(ck, cfg, data, export, missing_only=ck is resume)
     return ck
