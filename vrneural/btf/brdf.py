@@ -130,11 +130,6 @@ def prepare(p: dict) -> dict:
     }
 
 
-def lambert_btf(albedo, wi_z) -> np.ndarray:
-    """Analytic flat Lambertian BTF ``albedo / pi * wi.z`` (the convention's reference)."""
-    return np.asarray(albedo, np.float64) / np.pi * max(float(wi_z), 0.0)
-
-
 def params(
     albedo=(0.5, 0.5, 0.5), f0=(0.0, 0.0, 0.0), alpha=(0.3, 0.3), sheen=(0, 0, 0), sheen_rough=0.5
 ) -> dict:

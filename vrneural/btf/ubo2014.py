@@ -1,4 +1,4 @@
-"""UBO2014 ``.btf`` import through the ``btf-extractor`` package, plus a minimal writer.
+"""UBO2014 ``.btf`` import through the ``btf-extractor`` package.
 
 The UBO2014 files are read by btf-extractor's ``Ubo2014`` (a Cython wrapper around Zdravko
 Velinov's ``btf.hh``), which returns BGR float32 images ``[H, W, 3]`` per (light, view) angle
@@ -9,9 +9,8 @@ angles -> unit vectors, and stream every slice into our format.
 (a segfault), so :func:`parse_header` validates the file in Python first: magic, header, the
 direction tables and the exact file length of the factorised data ("DFMF" and "FMF0/1").
 
-:func:`write_dfmf` writes a small file in the "!DFMF08FC" layout (the one btf.hh reads for
-UBO2014) from a dense ``[L, L, H, W, 3]`` array, for tests: an exact SVD factorisation per colour
-channel, stored bottom-up as btf.hh expects (it flips rows on load).
+Files in the "!DFMF08FC" layout for the tests are written by ``write_dfmf`` of
+``tests/btf_helpers.py``.
 """
 
 from __future__ import annotations
@@ -286,31 +285,3 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True, height=Non
             file=sys.stderr,
         )
     return w.finalize()
-
-
-def write_dfmf(path, values: np.ndarray, light_angles: np.ndarray, view_angles: np.ndarray):
-    """Write a UBO2014-style "!DFMF08FC" file (for tests). ``values``: ``[L, V, H, W, 3]`` RGB
-    (``L == V``, as btf.hh's DFMF reader requires); angles ``[N, 2]`` (theta, phi) radians."""
-    L, V, H, W, _ = values.shape
-    if L != V:
-        raise ValueError("DFMF needs as many views as lights")
-    out = bytearray(b"!DFMF08FC")
-    out += _COMMON.pack(_COMMON.size, 1, b"vrneural test", b"none", b"none", 1.0, 1, 1, 1)
-    out += struct.pack("<I", V)
-    for v in range(V):
-        out += struct.pack("<2fI", *view_angles[v], L)
-        for li in range(L):
-            out += struct.pack("<2f", *light_angles[li])
-    out += struct.pack("<II", W, H)
-    k = min(L * V, H * W)
-    out += struct.pack("<II3f9f", k, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1)
-    flipped = values[:, :, ::-1]  # stored bottom-up; btf.hh flips rows on load
-    for c in range(3):
-        # rows: lv = view * L + light; columns: xy = y * W + x
-        a = np.transpose(flipped[..., c], (1, 0, 2, 3)).reshape(V * L, H * W).astype(np.float64)
-        u, s, vt = np.linalg.svd(a, full_matrices=False)
-        out += struct.pack("<BIII", 4, k, V * L, H * W)
-        out += s[:k].astype("<f4").tobytes()
-        out += np.ascontiguousarray(u[:, :k]).astype("<f4").tobytes()
-        out += np.ascontiguousarray((s[:k, None] * vt[:k]).T).astype("<f4").tobytes()
-    Path(path).write_bytes(bytes(out))
