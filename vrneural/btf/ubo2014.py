@@ -16,7 +16,6 @@ Files in the "!DFMF08FC" layout for the tests are written by ``write_dfmf`` of
 from __future__ import annotations
 
 import struct
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -276,12 +275,4 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True, height=Non
     def nonfinite(li, v, rgb):
         return f"{src}: non-finite values at light {li}, view {v}"
 
-    w.import_views(read, nonfinite, progress)
-    w.report_clamped(src)
-    if h_img % 2 or w_img % 2:
-        print(
-            f"warning: {out}: {h_img}x{w_img} texels, odd: packs shade 2x2 blocks, so teach, "
-            "distill and eval refuse it; crop it to an even size",
-            file=sys.stderr,
-        )
-    return w.finalize()
+    return w.import_views(read, nonfinite, src, "it", progress)
