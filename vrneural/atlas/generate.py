@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrneural.atlas import layout as lay
-from vrneural.atlas.charts import chart_faces, face_adjacency, project
+from vrneural.atlas.charts import chart_faces, face_adjacency, face_normals, project
 from vrneural.atlas.pack import pack_scale
 from vrneural.atlas.raster import overlapping_faces
 from vrneural.atlas.types import Mesh
@@ -79,9 +79,7 @@ def generated_layout(mesh: Mesh, R: int, padding: int, method: str, bar=None) ->
         scale, cut = float("nan"), 0
     # a triangle without 3D area gets none in the atlas either (all corners on one point; a
     # rotated line of three points would not stay exactly straight)
-    flat = ~np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]]).any(
-        1
-    )
+    flat = face_normals(pos, faces)[1] == 0
     px[flat] = px[flat][:, :1]
     vmap, new_faces, uv = lay.chart_vertices(faces, chart, px / R)
     info = {
