@@ -52,8 +52,8 @@ def test_score_pairs_and_atlas_sizes_are_checked(tmp_path):
 
 
 def test_eval_config_from_python(tmp_path):
+    from vrneural.scoring.config import EvalConfig
     from vrneural.scoring.run import evaluate
-    from vrneural.scoring.score import EvalConfig
 
     with pytest.raises(VrnError, match=r"--precision = 'half'.*f32, f16, both"):
         evaluate(EvalConfig(packs=("x.vrnm",), precision="half"), progress=False)

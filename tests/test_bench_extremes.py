@@ -10,7 +10,7 @@ import re
 
 from extremes import geometry, precision, shading
 
-from vrneural.bench.extremes import CASES
+from vrneural.bench.configs import CASES
 from vrneural.cli import main
 
 

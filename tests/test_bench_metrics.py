@@ -104,9 +104,8 @@ def test_int_list_errors_are_one_line():
 def test_list_fields_hold_tuples_parsed_when_the_config_is_built():
     """A list option is a tuple in the config, from the command line's comma-separated text
     or from any sequence in Python, checked once when the config is built."""
-    from vrneural.bench.frames import FramesConfig
-    from vrneural.bench.lights import LightsConfig
-    from vrneural.bench.tradeoff import TradeoffConfig
+    from vrneural.bench.configs import FramesConfig, LightsConfig
+    from vrneural.bench.train_configs import TradeoffConfig
     from vrneural.cli import build_parser
     from vrneural.config import config_from_args
 
@@ -131,8 +130,8 @@ def test_stats_percentiles():
 
 
 def test_quick_keeps_explicit_flags():
-    from vrneural.bench.frames import FramesConfig
-    from vrneural.bench.quality import QualityConfig
+    from vrneural.bench.configs import FramesConfig
+    from vrneural.bench.train_configs import QualityConfig
 
     c = FramesConfig(quick=True, texture_res="64").resolved()
     assert c.texture_res == (64,) and c.reuse == FramesConfig.QUICK.reuse == (0, 2, 4)  # given
@@ -142,7 +141,7 @@ def test_quick_keeps_explicit_flags():
 
 
 def test_quick_keeps_explicit_flags_even_at_their_default_value():
-    from vrneural.bench.quality import QualityConfig
+    from vrneural.bench.train_configs import QualityConfig
     from vrneural.cli import build_parser
     from vrneural.config import config_from_args
 
@@ -176,8 +175,7 @@ def test_a_bench_sets_its_own_defaults_for_a_shared_part(capsys):
     """bench distance trains its packs 24 epochs (DistanceConfig.DEFAULTS) where bench tradeoff,
     sharing the PackBudget part, keeps 4; --quick and flags given still win, and --help and
     the CLI reference show the bench's own default."""
-    from vrneural.bench.distance import DistanceConfig
-    from vrneural.bench.tradeoff import TradeoffConfig
+    from vrneural.bench.train_configs import DistanceConfig, TradeoffConfig
     from vrneural.cli import build_parser, main
     from vrneural.config import config_from_args
 

@@ -149,7 +149,7 @@ def test_lights_and_materials_say_fps_is_from_the_mean_frame_time(tmp_path, benc
 
 
 def test_list_options_refuse_a_value_named_twice():
-    from vrneural.bench.kernels import KernelsConfig
+    from vrneural.bench.configs import KernelsConfig
     from vrneural.errors import VrnError
 
     assert KernelsConfig(precisions="f16, f32").precisions == ("f16", "f32")

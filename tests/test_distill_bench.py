@@ -56,8 +56,8 @@ def test_bench_quality_smoke(tmp_path, capsys):
         if k != "lafortune":
             assert 0 < m["ssim"] <= 1 and np.isfinite(m["psnr_db"]), k
     assert "PSNR and SSIM of the BTF slices" in md
+    from vrneural.scoring.config import EvalConfig
     from vrneural.scoring.run import evaluate
-    from vrneural.scoring.score import EvalConfig
 
     pack = out / "leather" / "student.vrnm"
     ev = evaluate(EvalConfig(packs=(str(pack),), btf=str(out / "btf" / "leather.btf")), False)

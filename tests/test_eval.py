@@ -14,15 +14,9 @@ from vrneural.btf.identity import btf_fingerprint, split_pairs
 from vrneural.errors import VrnError
 from vrneural.formats.vrnm import read_vrnm, write_vrnm
 from vrneural.material import material_forward, random_material
+from vrneural.scoring.config import EvalConfig
 from vrneural.scoring.run import evaluate, labels, trainer_test
-from vrneural.scoring.score import (
-    EvalConfig,
-    from_blocks,
-    pick_slices,
-    score,
-    texel_blocks,
-    to_blocks,
-)
+from vrneural.scoring.score import from_blocks, pick_slices, score, texel_blocks, to_blocks
 
 
 def _own_btf(path, mat, res=8, n_dirs=4, offset=0.0):

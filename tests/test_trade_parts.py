@@ -168,7 +168,8 @@ def test_reference_noise_falls_with_the_sample_count():
     from vrneural.bench import trade_scene as ts
     from vrneural.bench.parts import Scored
     from vrneural.bench.supersample import SupersampledReference
-    from vrneural.bench.tradeoff import TradeoffConfig, settings_for, variant
+    from vrneural.bench.tradeoff import settings_for, variant
+    from vrneural.bench.train_configs import TradeoffConfig
     from vrneural.material import random_material
     from vrneural.runtime.profiles import get_profile
 

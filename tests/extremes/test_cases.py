@@ -1,4 +1,4 @@
-"""Every case of ``vrneural bench extremes`` (:data:`vrneural.bench.extremes.CASES`), one test
+"""Every case of ``vrneural bench extremes`` (:data:`vrneural.bench.configs.CASES`), one test
 each, marked ``extremes``: a case that should work returns its measured values with ``ok``
 true; one that should be rejected raises a one-line :class:`VrnError`. The suite runs them at
 the ``--quick`` sizes; ``--extremes-full`` runs the full sizes and ``--extremes-report DIR``
@@ -14,7 +14,7 @@ import re
 import pytest
 
 from extremes import geometry, precision, settings, shading, terminator, training
-from vrneural.bench.extremes import CASES, R
+from vrneural.bench.configs import CASES, R
 from vrneural.errors import VrnError
 
 MODULES = (shading, terminator, precision, geometry, settings, training)

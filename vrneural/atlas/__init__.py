@@ -6,8 +6,8 @@ Public API (used by the runtime): :func:`load_mesh`, :func:`builtin_mesh`,
 :class:`Mesh`, :class:`Atlas`, :data:`EMPTY`. Conventions are in :mod:`vrneural.atlas.types`.
 """
 
-from vrneural.atlas.build import MAX_RESOLUTION, AtlasConfig, build_atlas
 from vrneural.atlas.builtin import BUILTIN_MESHES, builtin_mesh
+from vrneural.atlas.config import MAX_RESOLUTION, AtlasConfig
 from vrneural.atlas.geometry import MeshWarning, make_mesh
 from vrneural.atlas.io import load_mesh
 from vrneural.atlas.raster import texel_barycentrics
@@ -27,3 +27,11 @@ __all__ = [
     "make_mesh",
     "texel_barycentrics",
 ]
+
+
+def __getattr__(name: str):  # build_atlas loads scipy: on first use, not with the package
+    if name == "build_atlas":
+        from vrneural.atlas.build import build_atlas
+
+        return build_atlas
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -18,14 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.atlas.build import (
+from vrneural.atlas.build import build_atlas
+from vrneural.atlas.builtin import BUILTIN_MESHES, builtin_mesh
+from vrneural.atlas.config import (
     MAX_PADDING,
     MAX_RESOLUTION,
     MIN_RESOLUTION,
-    build_atlas,
     check_texture_resolution,
 )
-from vrneural.atlas.builtin import BUILTIN_MESHES, builtin_mesh
 from vrneural.errors import ArgumentParser, VrnError, check_range
 from vrneural.outputs import atomic_path, check_output, write_json
 

@@ -4,62 +4,26 @@ gutter, cached on disk."""
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
 from vrneural.atlas import meshuv
 from vrneural.atlas.cache import cache_key, load_cached, split_mesh, store
 from vrneural.atlas.charts import face_normals
+from vrneural.atlas.config import MAX_PADDING, MAX_RESOLUTION, MIN_RESOLUTION, MODES
 from vrneural.atlas.generate import Layout, generated_layout
 from vrneural.atlas.geometry import check_geometry, check_uv
 from vrneural.atlas.layout import uv_area
-from vrneural.atlas.meshuv import MODES, density_spread
+from vrneural.atlas.meshuv import density_spread
 from vrneural.atlas.progress import Stages
 from vrneural.atlas.raster import rasterize_ids
 from vrneural.atlas.types import EMPTY, Atlas, Mesh
 from vrneural.atlas.visualize import uv_charts
-from vrneural.config import opt
-from vrneural.errors import VrnError, check_choice, check_int, check_range, count
+from vrneural.errors import VrnError, check_choice, check_int, count
 
-#: largest accepted resolution (WebGPU guarantees 8192 for 2D textures; memory ~1.2 GB there)
-MAX_RESOLUTION = 8192
-MIN_RESOLUTION = 8
-MAX_PADDING = 64
 #: more triangles than this many per texel of R x R cannot be shown (at most a quarter of
 #: them could own a texel even in a full atlas): refused before any work
 MAX_TRIANGLES_PER_TEXEL = 4
-
-
-@dataclass
-class AtlasConfig:
-    """Settings of the atlas stage (the CLI parses into this)."""
-
-    res: int = opt(
-        1200, "atlas resolution R, even, in [8, 8192]: the radiance texture is R x R texels"
-    )
-    padding: int = opt(2, "gutter width in texels around charts (>= 1 for bilinear sampling)")
-    cache: bool = opt(True, "reuse atlases cached on disk ($VRNEURAL_CACHE/atlas)")
-    atlas_uv: str = opt(
-        "auto",
-        "atlas UVs: auto (the mesh's own lightmap/UV set when it serves, else generated), mesh "
-        "(insist on the mesh's own), charts (generate: normal-direction charts), xatlas "
-        "(generate with xatlas, falling back to charts)",
-        choices=MODES,
-    )
-
-
-def check_texture_resolution(name: str, resolution: int) -> None:
-    """Raise :class:`VrnError` unless ``resolution`` is in [:data:`MIN_RESOLUTION`,
-    :data:`MAX_RESOLUTION`] and even: the radiance texture the runtime shades on this atlas
-    works in 2x2 texel blocks (``vrneural run --texture-res`` rejects odd values too).
-    :func:`build_atlas` itself accepts any resolution in range."""
-    check_range(name, resolution, MIN_RESOLUTION, MAX_RESOLUTION)
-    if resolution % 2:
-        raise VrnError(
-            f"{name} = {resolution} must be even (2x2 blocks); allowed: even values in "
-            f"[{MIN_RESOLUTION}, {MAX_RESOLUTION}]"
-        )
 
 
 def validate_mesh(mesh: Mesh) -> None:
@@ -109,7 +73,7 @@ def build_atlas(
 ) -> Atlas:
     """The R x R atlas of ``mesh``: atlas UVs, triangle IDs with a ``padding``-texel gutter.
 
-    ``atlas_uv`` (:data:`vrneural.atlas.meshuv.MODES`): ``auto`` uses the mesh's own lightmap
+    ``atlas_uv`` (:data:`vrneural.atlas.config.MODES`): ``auto`` uses the mesh's own lightmap
     or UV set when it passes the checks of :mod:`vrneural.atlas.meshuv`, else generates one
     (:mod:`vrneural.atlas.generate`); ``mesh`` insists on the mesh's own (an unusable set is a
     :class:`VrnError`); ``charts`` and ``xatlas`` always generate. Returns an :class:`Atlas`

@@ -35,8 +35,6 @@ from vrneural.atlas.types import Mesh
 from vrneural.atlas.visualize import uv_charts
 from vrneural.errors import VrnError, count
 
-#: ``atlas_uv`` choices: the mesh's UVs when they serve, always, or a generated unwrap
-MODES = ("auto", "mesh", "charts", "xatlas")
 #: largest texel density spread (95th / 5th percentile) that ``auto`` accepts
 MAX_DENSITY_SPREAD = 2.0
 #: the asset's own packing is kept when it covers at least this fraction of a re-packing's

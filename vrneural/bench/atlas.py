@@ -18,40 +18,14 @@ import os
 import resource
 import tempfile
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from vrneural.bench import report as rp
-from vrneural.bench.atlas_meshes import NAMES, RESOLUTION, write_mesh
-from vrneural.config import QuickConfig, opt, unset, words
-from vrneural.errors import VrnError, check_range
-
-
-def mesh_names(flag: str, value) -> tuple[str, ...]:
-    """``--meshes``: at least one, each one of :data:`~vrneural.bench.atlas_meshes.NAMES`."""
-    names = words(flag, value)
-    bad = [n for n in names if n not in NAMES]
-    if bad or not names:
-        raise VrnError(f"{flag}: {', '.join(bad) or '(none)'} not in {', '.join(NAMES)}")
-    return names
-
-
-@dataclass
-class AtlasBenchConfig(QuickConfig):
-    """`vrneural bench atlas`."""
-
-    out: str = opt("bench-atlas", "output directory", cli=False)
-    meshes: tuple[str, ...] = opt(NAMES, "meshes to run (comma-separated)", items=mesh_names)
-    seams: bool = opt(True, "render each atlas (Lambertian, texture vs screen) for the seam error")
-    eye: int | None = unset(384, "seam renders: image side in pixels")
-    quick: bool = opt(False, "CI-sized: each mesh a few thousand triangles, 128-256^2, 128 px")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
-
-
-AtlasBenchConfig.QUICK = AtlasBenchConfig(eye=128)
+from vrneural.bench.atlas_meshes import RESOLUTION, write_mesh
+from vrneural.bench.configs import AtlasBenchConfig
+from vrneural.errors import check_range
 
 
 def _resolution(name: str, quick: bool) -> int:

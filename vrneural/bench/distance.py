@@ -17,16 +17,13 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from dataclasses import dataclass
-from typing import ClassVar
 
 import numpy as np
 
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench import tradeoff as tr
-from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored
-from vrneural.config import QuickConfig, floats, opt, part, unset
+from vrneural.bench.train_configs import DistanceConfig
 from vrneural.scoring import metrics
 
 #: name -> (mips, screen_res, prefiltered neural textures)
@@ -37,48 +34,6 @@ VARIANTS = {
     "neural LOD": (False, False, True),
     "all on": (True, True, True),
 }
-
-
-@dataclass
-class DistanceConfig(QuickConfig):
-    """`vrneural bench distance`."""
-
-    out: str = opt("bench-distance", "output directory", cli=False)
-    distances: tuple[float, ...] | None = unset(
-        (0.3, 1, 3, 10, 20), "sphere distances (m)", items=floats(0.2, 100.0)
-    )
-    tilings: tuple[float, ...] | None = unset(
-        (1, 4, 8, 16), "material tilings, at 1 m", items=floats(0.01, 1000.0)
-    )
-    size: float = opt(0.5, "sphere diameter (m)")
-    texture_res: int | None = unset(
-        1200, "radiance texture side (the cap screen-res chooses under)"
-    )
-    reuse: int = opt(4, "N (staggered)")
-    score: Scored = part(Scored)
-    preset: str = opt("leather", "synthetic BTF preset of the trained packs")
-    budget: PackBudget = part(PackBudget)
-    quick: bool = opt(
-        False,
-        "CI-sized: distances 1,10, tiling 8, 48-pixel crops, 2 spp, 3 frames, texture 256, tiny "
-        "training",
-    )
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
-
-    #: packs trained 24 epochs, not the shared 4: with 4, the LOD pack's level 0 is noisier
-    #: than the plain student's and flickers more at 0.3 m (docs/lod.md); 24 cost a minute
-    DEFAULTS: ClassVar[dict] = {"teacher_epochs": 24, "epochs": 24}
-
-
-#: ``--quick``: the CI-sized run, under the flags given
-DistanceConfig.QUICK = DistanceConfig(
-    distances=(1, 10),
-    tilings=(8,),
-    score=QUICK_SCORED,
-    texture_res=256,
-    budget=QUICK_BUDGET,
-)
 
 
 def conditions(c: DistanceConfig) -> list[ts.Condition]:

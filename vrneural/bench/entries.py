@@ -10,38 +10,40 @@ import importlib
 import time
 from pathlib import Path
 
+from vrneural.bench import configs as c
+from vrneural.bench import train_configs as tc
 from vrneural.config import add_config_args, config_from_args
 from vrneural.outputs import OutputDir, atomic_path, write_json
 
-#: name -> (config class, help); each in ``vrneural.bench.<name>``, run by ``run_<name>``
+#: name -> (config class, help); each run by ``run_<name>`` of ``vrneural.bench.<name>``
 SPECS = {
     "frames": (
-        "FramesConfig",
+        c.FramesConfig,
         "paper Table 2: frame time over texture resolution x update interval N",
     ),
     "lights": (
-        "LightsConfig",
+        c.LightsConfig,
         "paper Fig. 10: frame time over the number of point lights (1 to 8 by default)",
     ),
-    "materials": ("MaterialsConfig", "paper Table 3: 1 to 4 materials, 3 lights, 1024^2, N = 7"),
+    "materials": (c.MaterialsConfig, "paper Table 3: 1 to 4 materials, 3 lights, 1024^2, N = 7"),
     "frame": (
-        "FrameConfig",
+        c.FrameConfig,
         "one frame's time: host, GPU per pass, frames in flight, against the adapter's floors",
     ),
     "kernels": (
-        "KernelsConfig",
+        c.KernelsConfig,
         "MLP kernels: constants vs buffer vs torch vs NeuMIP-sized, f32 vs f16",
     ),
     "tradeoff": (
-        "TradeoffConfig",
+        tc.TradeoffConfig,
         "speed/accuracy: each knob vs the per-pixel teacher (FLIP, PSNR, SSIM)",
     ),
     "atlas": (
-        "AtlasBenchConfig",
+        c.AtlasBenchConfig,
         "atlas stage: time, memory, coverage, charts and seam error over a fixed mesh set",
     ),
     "distance": (
-        "DistanceConfig",
+        tc.DistanceConfig,
         "level of detail: a neural sphere from 0.3 to 20 m and tiled 1-16x, with and without "
         "radiance mips, resolution from the screen and prefiltered neural textures",
     ),
@@ -49,8 +51,7 @@ SPECS = {
 
 
 def _load(name: str):
-    m = importlib.import_module(f"vrneural.bench.{name}")
-    return getattr(m, SPECS[name][0]), getattr(m, f"run_{name}")
+    return SPECS[name][0], getattr(importlib.import_module(f"vrneural.bench.{name}"), f"run_{name}")
 
 
 def _summary(name: str, doc: dict, out: str) -> None:
@@ -73,7 +74,7 @@ def add_bench(sub, name: str, cls, run, help_: str, description: str, **config_k
 def _entry(name: str):
     def register(sub) -> None:
         help_ = SPECS[name][1]
-        add_bench(sub, name, _load(name)[0], lambda args: _run(name, args), help_, help_ + ".")
+        add_bench(sub, name, SPECS[name][0], lambda args: _run(name, args), help_, help_ + ".")
 
     return register
 

@@ -16,117 +16,15 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
 
+from vrneural.bench.configs import CASES, ExtremesConfig
 from vrneural.bench.extremes_report import write_report
 from vrneural.bench.report import header, prepare_out
-from vrneural.config import Config, opt
 from vrneural.errors import VrnError
-
-W, R = "works", "rejected"
-
-
-class Case(NamedTuple):
-    name: str
-    group: str
-    function: str  #: its function in ``tests/extremes/*.py``
-    expect: str  #: ``works`` or ``rejected``
-    checks: str  #: what it checks (the report's column)
-
-
-def _group(group: str, rows: list[tuple]) -> list[Case]:
-    """The cases of ``group``: rows of (name, function, expect, checks)."""
-    return [Case(name, group, fn, expect, checks) for name, fn, expect, checks in rows]
-
-
-CASES = [
-    *_group("directions", [
-        ("grazing_89.99deg", "case_dir_grazing", W, "finite, >= 0, Lipschitz-continuous"),
-        ("normal_and_wi=-wo", "case_dir_normal_and_opposite", W, "h fallback (0,0,1)"),
-        ("horizon_twin", "case_dir_horizon", W, "tapers to 0, no jump; 0 below"),
-        ("horizon_gpu", "case_dir_horizon_gpu", W, "same on the GPU, f32 + f16"),
-        ("grazing_gpu", "case_dir_grazing_gpu", W, "GPU vs twin at 89.99 deg"),
-        ("terminator", "case_dir_terminator", W, "step <= 1% of peak, 3 modes"),
-        ("unnormalized_frames", "case_dir_unnormalized", W, "scaled frames = unit"),
-    ]),
-    *_group("precision", [
-        ("f16_vs_f32", "case_prec_f16_vs_f32", W, "max / p99.9 relative error"),
-        ("clamp_1e6_at_1e-4m", "case_prec_clamp", W, "clamped to 65504, finite"),
-        ("no_flush_to_zero", "case_prec_no_flush", W, "values >= 2^-14 kept"),
-        ("wide_rgba32float", "case_prec_wide_storage", W, "option: cost + error"),
-        ("intensity_above_1e6", "case_intensity_limit", R, "scene loader limit"),
-    ]),
-    *_group("geometry", [
-        ("zero_area_3d", "case_geo_zero_area_3d", W, "skipped with a warning"),
-        ("zero_area_uv", "case_geo_zero_area_uv", W, "fallback tangent frame"),
-        ("slivers_1e-5", "case_geo_sliver", W, "atlas + kernel finite"),
-        ("one_triangle", "case_geo_one_triangle", W, "atlas + kernel"),
-        ("non_manifold", "case_geo_non_manifold", W, "fin + bow-tie"),
-        ("nan_vertex", "case_geo_nan_vertex", R, "make_mesh"),
-        ("inf_vertex_obj", "case_geo_inf_vertex_file", R, "load_mesh"),
-        ("far_1e5m", "case_geo_far_origin", W, "camera-relative = at origin"),
-        ("many_triangles", "case_geo_many_triangles", W, "1M (quick: 20k)"),
-        ("far_1e5m_render", "case_set_far_origin_render", W, "image = at origin"),
-    ]),
-    *_group("settings", [
-        ("tex_res_2_kernel", "case_set_kernel_res_2", W, "kernel alone, one block"),
-        ("tex_res_2_run", "case_set_tex_res_2", R, "atlas needs R >= 8"),
-        ("tex_res_odd", "case_set_tex_res_odd", R, "2x2 blocks"),
-        ("tex_res_max", "case_set_tex_res_max", W, "largest accepted (quick: 1024)"),
-        ("tex_res_above_max", "case_set_tex_res_above_max", R, "adapter max + 2"),
-        ("reuse_N=0", "case_set_reuse_0", W, "update every frame"),
-        ("reuse_N=1000", "case_set_reuse_1000", W, "staggered 1/1001"),
-        ("lights_0", "case_set_lights_0", W, "black, no MLP work"),
-        ("lights_16", "case_set_lights_16", W, "16 lights"),
-        ("1_eye_1_frame", "case_set_one_eye_one_frame", W, "minimal run"),
-    ]),
-    *_group("training", [
-        ("btf_all_zeros", "case_train_zeros", W, "finite, loss falls"),
-        ("btf_hdr_1e4", "case_train_hdr", W, "finite (linear + log space)"),
-        ("btf_nan", "case_train_nan", R, "one-line error"),
-        ("lr_floor", "case_train_lr_floor", W, "reaches and keeps lr_min"),
-        ("1_epoch", "case_train_one_epoch", W, "one epoch"),
-    ]),
-]  # fmt: skip
 
 #: the pytest module of the cases, in the source checkout
 TESTS = Path(__file__).resolve().parents[2] / "tests" / "extremes" / "test_cases.py"
-
-
-def case_names(flag: str, value) -> tuple[str, ...]:
-    """``--only``: case names or groups of :data:`CASES`, at least one (one-line VrnError)."""
-    text = value if isinstance(value, str) else ",".join(map(str, value))
-    items = tuple(t.strip() for t in text.split(","))
-    groups = ", ".join(sorted({c[1] for c in CASES}))
-    if not all(items):
-        what = "is empty" if not any(items) else f"= {text!r} has an empty item"
-        raise VrnError(f"{flag} {what}; name cases or groups ({groups}), or leave it out")
-    bad = sorted(set(items) - {c[0] for c in CASES} - {c[1] for c in CASES})
-    if bad:
-        raise VrnError(
-            f"{flag} = {text!r}: unknown case or group {bad[0]!r}; groups: {groups}; "
-            f"cases: {', '.join(c[0] for c in CASES)}"
-        )
-    return items
-
-
-@dataclass
-class ExtremesConfig(Config):
-    """``vrneural bench extremes`` settings."""
-
-    quick: bool = opt(
-        False, "small sizes for the heavy cases (1M triangles -> 20k, max texture -> 1024)"
-    )
-    only: tuple[str, ...] | None = opt(
-        None,
-        "comma-separated case names or groups to run: "
-        f"{', '.join(sorted({c[1] for c in CASES}))} (default: all)",
-        items=case_names,
-    )
-    force: bool = opt(False, "overwrite an existing --out directory")
-    progress: bool = opt(True, "show a progress bar (--no-progress: none)")
 
 
 def selected(only: tuple[str, ...] | None) -> list:

@@ -29,14 +29,13 @@ summed, amortised as the frame loop runs them).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
+from vrneural.bench.configs import FrameConfig
 from vrneural.bench.frame_report import markdown, plot, summarise
-from vrneural.config import QuickConfig, opt, unset
 from vrneural.errors import check_range
 from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
 from vrneural.runtime.lights import light_arrays
@@ -52,36 +51,6 @@ TARGETS = {
     "parallax_block_vs_texture": 1.5,
     "parallax_auto_vs_texture": 1.5,
 }
-
-
-@dataclass
-class FrameConfig(QuickConfig):
-    """`vrneural bench frame`."""
-
-    out: str = opt("bench-frame", "output directory", cli=False)
-    texture_res: int | None = unset(1200, "radiance texture side")
-    reuse: int = opt(4, "update interval N (staggered)")
-    eye_res: str | None = unset("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
-    lights: int = opt(1, "point lights")
-    frames: int | None = unset(20, "frames per loop measurement (after one cycle of warm-up)")
-    repeats: int | None = unset(3, "passes timed alone per round (the median is kept)")
-    rounds: int | None = unset(3, "interleaved rounds (the median over rounds is reported)")
-    parallax_steps: int = opt(
-        0,
-        "also time the texture-space update of the same materials with height-field parallax "
-        "of this many march steps, 1 to 64 (0 = off; see docs/parallax.md)",
-    )
-    neural_offset: bool = opt(
-        False,
-        "also time the texture-space update of the same materials with NeuMIP's neural offset "
-        "(the student's module: 4 channels, 6 -> 8 -> 8 -> 1), per texel and per 2x2 block",
-    )
-    quick: bool = opt(False, "CI-sized: texture 128, eyes 96x96, 6 frames, 2 rounds")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
-
-
-FrameConfig.QUICK = FrameConfig(texture_res=128, eye_res="96x96", frames=6, repeats=2, rounds=2)
 
 
 def _wait(r) -> None:

@@ -9,44 +9,13 @@ student. Shown as FPS (from the mean frame time) and ms (median, p99).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.bench.parts import QUICK_LOOP, Loop
-from vrneural.config import QuickConfig, choices, ints, opt, part, unset
+from vrneural.bench.configs import FramesConfig
 from vrneural.errors import check_range, count
-from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
+from vrneural.runtime.config import LIGHTS_MAX
 from vrneural.runtime.profiles import get_profile
-from vrneural.runtime.schedule import SCHEDULES
-
-
-@dataclass
-class FramesConfig(QuickConfig):
-    """`vrneural bench frames`."""
-
-    out: str = opt("bench-frames", "output directory", cli=False)
-    texture_res: tuple[int, ...] | None = unset(
-        (800, 1200, 1600, 2000), "radiance texture sides (comma-separated)", items=ints()
-    )
-    reuse: tuple[int, ...] | None = unset(
-        (0, 1, 2, 4, 6), "update intervals N (comma-separated)", items=ints(0, REUSE_MAX)
-    )
-    schedules: tuple[str, ...] = opt(
-        ("burst", "staggered"), "reuse schedules (comma-separated)", items=choices(SCHEDULES)
-    )
-    loop: Loop = part(Loop)
-    lights: int = opt(1, "point lights")
-    min_frames: int | None = unset(3, "at least this many measured frames per configuration")
-    screen: bool = opt(True, "also measure per-pixel screen-space shading")
-    quick: bool = opt(False, "CI-sized: textures 128,256; N 0,2,4; eyes 258x276; >= 2 frames")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
-
-
-FramesConfig.QUICK = FramesConfig(
-    texture_res=(128, 256), reuse=(0, 2, 4), loop=QUICK_LOOP, min_frames=2
-)
 
 
 def run_frames(cfg: FramesConfig) -> dict:

@@ -20,91 +20,18 @@ import os
 import subprocess
 import sys
 import time
-from dataclasses import dataclass
 
 import numpy as np
 from tqdm import tqdm
 
 from vrneural.bench import report as rp
+from vrneural.bench.configs import KernelsConfig, network_width
 from vrneural.bench.runtime import torch_net
 from vrneural.bench.runtime_frames import median_ms, wall_ms
-from vrneural.config import QuickConfig, choices, opt, unset
 from vrneural.errors import VrnError, check_range, count
 from vrneural.neural_offset import OFFSET_SIZES
 
-#: ``*_offset``: the network with NeuMIP's neural offset module of its size (issue #44), its
-#: offset MLP per texel (``--parallax neural``, march per texel) beside the material's
-NETWORKS = ("student", "single8", "neumip", "student_offset", "neumip_offset")
 VARIANTS = ("constants", "buffer", "torch")
-
-
-#: the networks ``--networks`` also takes at another width, ``NAME:W`` (distill --width W)
-WIDENED = ("student", "single8")
-
-
-def network_width(name: str) -> tuple[str, int] | None:
-    """``(method, width)`` of ``student``/``single8`` (8 wide, the paper's) or ``student:W``/
-    ``single8:W`` (``--networks``; W in [1, 64], as `distill --width`); None for another
-    name. Raises a one-line error for such a name whose width is not such an integer."""
-    method, sep, w = name.partition(":")
-    if method not in WIDENED:
-        return None
-    if not sep:
-        return method, 8
-    if not (w.isdigit() and 1 <= int(w) <= 64):
-        raise VrnError(
-            f"--networks: {name!r}: {method}:W needs a width W in [1, 64] (distill --width)"
-        )
-    return method, int(w)
-
-
-def network_names(flag: str, value) -> tuple[str, ...]:
-    """``--networks``: each one of :data:`NETWORKS`, ``student:W`` or ``single8:W``, none
-    twice."""
-    # network_width: a pair for student(:W) and single8(:W), None otherwise, an error for a bad W
-    patterns = tuple(f"{m}:W" for m in WIDENED)
-    vals = choices((*NETWORKS, *patterns), network_width)(flag, value)
-    seen: dict = {}
-    for v in vals:  # student and student:8 are one network: measured and reported twice
-        key = network_width(v) or v
-        if key in seen:
-            raise VrnError(f"{flag} names {seen[key]} and {v}, the same network")
-        seen[key] = v
-    return vals
-
-
-@dataclass
-class KernelsConfig(QuickConfig):
-    """`vrneural bench kernels`."""
-
-    out: str = opt("bench-kernels", "output directory", cli=False)
-    texels: int | None = unset(
-        1 << 18, "texels per evaluation (the student's coarse net runs on 1/4)"
-    )
-    repeats: int | None = unset(3, "timed repeats (median)")
-    networks: tuple[str, ...] | None = unset(
-        ("student", "single8", "neumip"),
-        "networks (comma-separated): student, single8, neumip, or student:W / single8:W (W "
-        "wide, as distill --width W)",
-        items=network_names,
-    )
-    precisions: tuple[str, ...] = opt(
-        ("f32", "f16"), "GPU precisions (f16 needs shader-f16)", items=choices(("f32", "f16"))
-    )
-    sgemm_n: int | None = unset(1024, "matrix side of the numpy sgemm roofline")
-    threads: int = opt(
-        0,
-        "CPU threads of PyTorch and of numpy's sgemm (0: their default, every core; 1 avoids "
-        "the oversubscription that makes both many times slower on a loaded machine)",
-    )
-    quick: bool = opt(False, "CI-sized: student and NeuMIP, 16384 texels, 2 repeats, sgemm 256")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
-
-
-KernelsConfig.QUICK = KernelsConfig(
-    texels=16384, repeats=2, sgemm_n=256, networks=("student", "neumip")
-)
 
 
 def network(name: str):

@@ -11,34 +11,12 @@ shading work grows linearly with k.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.bench.parts import QUICK_LOOP, Loop
-from vrneural.config import QuickConfig, ints, opt, part, unset
+from vrneural.bench.configs import LightsConfig
 from vrneural.errors import check_range, count
-from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
-
-
-@dataclass
-class LightsConfig(QuickConfig):
-    """`vrneural bench lights`."""
-
-    out: str = opt("bench-lights", "output directory", cli=False)
-    lights: tuple[int, ...] | None = unset(
-        tuple(range(1, 9)), "light counts (comma-separated, 1..64)", items=ints(1, LIGHTS_MAX)
-    )
-    texture_res: int | None = unset(1200, "radiance texture side")
-    reuse: int = opt(4, "update interval N")
-    schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
-    loop: Loop = part(Loop)
-    quick: bool = opt(False, "CI-sized: lights 1,2,4; texture 256; eyes 258x276")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
-
-
-LightsConfig.QUICK = LightsConfig(lights=(1, 2, 4), texture_res=256, loop=QUICK_LOOP)
+from vrneural.runtime.config import REUSE_MAX
 
 
 def run_lights(cfg: LightsConfig) -> dict:

@@ -8,38 +8,15 @@ resolution. Radiance textures are RGBA float16 here (8 B/texel): ``res^2 * 8 * e
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 from vrneural.bench import report as rp
 from vrneural.bench import timing
-from vrneural.bench.parts import QUICK_LOOP, Loop
-from vrneural.config import QuickConfig, ints, opt, part, unset
+from vrneural.bench.configs import MaterialsConfig
 from vrneural.errors import check_range, count
 from vrneural.material import random_material
 from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 from vrneural.runtime.lights import default_lights
 from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
-
-
-@dataclass
-class MaterialsConfig(QuickConfig):
-    """`vrneural bench materials`."""
-
-    out: str = opt("bench-materials", "output directory", cli=False)
-    materials: tuple[int, ...] | None = unset(
-        (1, 2, 3, 4), "material counts (comma-separated, 1..8)", items=ints(1, 8)
-    )
-    texture_res: int | None = unset(1024, "radiance texture side per material")
-    reuse: int = opt(7, "update interval N")
-    schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
-    lights: int = opt(3, "point lights")
-    loop: Loop = part(Loop)
-    quick: bool = opt(False, "CI-sized: materials 1,2,3; texture 256; eyes 258x276")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
-
-
-MaterialsConfig.QUICK = MaterialsConfig(materials=(1, 2, 3), texture_res=256, loop=QUICK_LOOP)
 
 
 def squares_scene(k: int, n_lights: int):

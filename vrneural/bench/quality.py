@@ -27,7 +27,6 @@ import dataclasses
 import os
 import statistics
 import time
-from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
@@ -35,7 +34,6 @@ from vrneural.bench.quality_btf import btf_path as btf_file
 from vrneural.bench.quality_checks import validate
 from vrneural.bench.quality_lafortune import img, lafortune, slice_pairs
 from vrneural.bench.quality_parallax import (
-    BENCH_PARALLAX,
     PARALLAX_LABELS,
     VIEW_BINS,
     parallax_record,
@@ -58,10 +56,11 @@ from vrneural.bench.quality_train import (
     wide_start_record,
     with_wide_start,
 )
+from vrneural.bench.train_configs import QualityConfig
 from vrneural.btf.format import read_btf
 from vrneural.btf.identity import btf_fingerprint
-from vrneural.config import QuickConfig, config_dict, opt, unset, words
-from vrneural.distill.config import DistillConfig, StudentShape, TeachConfig, TrainBudget
+from vrneural.config import config_dict
+from vrneural.distill.config import DistillConfig, TeachConfig
 from vrneural.outputs import file_sha256, write_json
 from vrneural.scoring.score import score
 from vrneural.versions import package_versions
@@ -86,68 +85,6 @@ def labels(width: int = 8) -> dict[str, str]:
     out["student_nodistill"] = f"Ours w/o distillation ({width} wide)"
     out["student"] = f"Ours (coarse-to-fine, distilled, {width} wide)"
     return out
-
-
-@dataclass
-class QualityConfig(QuickConfig, TrainBudget, StudentShape):
-    """`vrneural bench quality`: the training fields it shares with `distill` (seed, --ema,
-    --lr-patience, --device, --compile, --neumip-dirs, --width, --wide-start) apply to every
-    network but the teacher, as `distill` takes them."""
-
-    presets: tuple[str, ...] | None = unset(
-        ("leather", "fabric", "wood"),
-        "comma-separated synthetic BTF presets (none by default when --btf is given)",
-        items=words,
-    )
-    btf: tuple[str, ...] = opt(
-        (),
-        "comma-separated .btf files to bench beside --presets, each labelled by its file name "
-        "(--res and --dirs apply to the presets only)",
-        items=words,
-    )
-    out: str = opt("bench-quality", "output directory", cli=False)
-    res: int | None = unset(32, "BTF texels per side")
-    dirs: int | None = unset(30, "light and view directions (dirs^2 slices)")
-    teacher_epochs: int | None = unset(12, "teacher epochs")
-    epochs: int | None = unset(12, "epochs of every student and baseline network")
-    lafortune_iters: int | None = unset(30, "Levenberg-Marquardt iterations of the Lafortune fit")
-    repeats: int = opt(
-        1, "train every network but the teacher with this many seeds (seed, seed+1, ...)"
-    )
-    parallax: str = opt(
-        "off",
-        "height: also train the height-field parallax variants (a teacher, the distilled "
-        "student and NeuMIP, each with --parallax height) beside the others, which train "
-        "without parallax; neural: the neural-offset variants (NeuMIP with offset, the paper's "
-        "full model, and a teacher and student with the module); both: all of them (see "
-        "docs/parallax.md)",
-        choices=BENCH_PARALLAX,
-    )
-    jobs: int = opt(
-        1,
-        "train this many networks at once, each in its own process (teachers first, then "
-        "every network and seed of every preset; with --device cuda see docs/training.md on MPS)",
-    )
-    quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(
-        False,
-        "use an existing --out: retrain every network and rewrite the reports (other files "
-        "in it are kept)",
-    )
-    resume: bool = opt(
-        False,
-        "reuse the checkpoints in OUT that match this run (same config, BTF and teacher): "
-        "finished ones as they are, interrupted or shorter ones continued; train the rest",
-    )
-
-    def resolved(self) -> QualityConfig:
-        """The fields not given: ``--quick``'s (``QUICK``) or the defaults; no
-        presets by default when ``--btf`` names files."""
-        return super().resolved({"presets": ()} if self.btf else {})
-
-
-QualityConfig.QUICK = QualityConfig(res=16, dirs=8, teacher_epochs=2, epochs=2, lafortune_iters=5)
 
 
 RUNS = {

@@ -37,8 +37,6 @@ from vrneural.parallax import parallax_fetches
 #: view polar-angle bins, degrees
 VIEW_BINS = ((0.0, 30.0), (30.0, 50.0), (50.0, 65.0), (65.0, 76.0))
 
-#: ``bench quality --parallax``: which variants it adds
-BENCH_PARALLAX = ("off", "height", "neural", "both")
 #: the suffix of each kind's variants
 SUFFIX = {"height": "_parallax", "neural": "_neural"}
 

@@ -11,6 +11,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+from vrneural.atlas.config import MIN_RESOLUTION
 from vrneural.config import config_dict, int_items
 from vrneural.errors import VrnError, check_range
 from vrneural.outputs import OutputDir, atomic_path, write_json
@@ -137,7 +138,6 @@ def finish(root: Path, doc: dict, md: list[str], t0: float) -> dict:
 
 def texture_res_range() -> tuple[int, int]:
     """``[lo, hi]`` of a radiance texture side on this adapter (the same bounds as `run`)."""
-    from vrneural.atlas.build import MIN_RESOLUTION
     from vrneural.gpu.device import adapter_summary
 
     return MIN_RESOLUTION, max_texture_res(adapter_summary())

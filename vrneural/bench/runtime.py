@@ -20,15 +20,13 @@ GPU times are medians over repeats, from timestamps (one compute pass per measur
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 from tqdm import tqdm
 
+from vrneural.bench.configs import MEASUREMENTS, RuntimeConfig
 from vrneural.bench.report import adapter_line, finish, header, prepare_out, table
 from vrneural.bench.runtime_frames import make_renderer, median_ms, schedules, wall_ms
-from vrneural.config import Config, opt, words
-from vrneural.errors import VrnError
 from vrneural.material import half_vector, random_material, sample_bilinear_wrap
 
 
@@ -299,14 +297,6 @@ def mlp_only(n_blocks=65536, repeats=3) -> dict:
     return out
 
 
-#: Each measurement with its quick (smoke-run) arguments; the full run uses the defaults.
-MEASUREMENTS = {
-    "texture_vs_screen": {"texture_res": 256, "eye_res": (400, 440), "frames": 2},
-    "constants_vs_buffer": {"res": 128, "repeats": 2},
-    "vs_torch": {"res": 128, "repeats": 2},
-    "mlp_only": {"n_blocks": 4096, "repeats": 2},
-    "schedules": {"texture_res": 64, "eye_res": (96, 96), "frames": 16, "quality_frames": 12},
-}
 RUN = {
     "texture_vs_screen": texture_vs_screen,
     "constants_vs_buffer": constants_vs_buffer,
@@ -323,33 +313,6 @@ HEADLINES = {
     "mlp_only": ("constants_vs_buffer", "constants_vs_torch"),
     "schedules": ("burst.p99_over_median", "staggered.p99_over_median"),
 }
-
-
-def selected(flag: str, value) -> tuple[str, ...]:
-    """The measurements ``--only`` names, in its order (one-line VrnError if one is unknown)."""
-    names = words(flag, value)
-    if not names:
-        raise VrnError(f"{flag} is empty; choose from {', '.join(MEASUREMENTS)}")
-    for k in names:
-        if k not in MEASUREMENTS:
-            raise VrnError(
-                f"{flag}: unknown measurement {k!r}; choose from {', '.join(MEASUREMENTS)}"
-            )
-    return names
-
-
-@dataclass
-class RuntimeConfig(Config):
-    """`vrneural bench runtime`."""
-
-    only: tuple[str, ...] = opt(
-        tuple(MEASUREMENTS),
-        f"comma-separated subset of: {', '.join(MEASUREMENTS)}",
-        items=selected,
-    )
-    quick: bool = opt(False, "small sizes (a smoke run)")
-    force: bool = opt(False, "overwrite an existing --out directory")
-    progress: bool = opt(True, "show a progress bar (--no-progress: none)")
 
 
 def measure_all(quick: bool = False, only: list[str] | None = None, progress: bool = False):

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import itertools
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -30,91 +29,13 @@ from tqdm import tqdm
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench.packs import REQUIRED, load_packs, pack_paths, train_packs
-from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored
 from vrneural.bench.trade_scene import reference, render, scheduled_candidates
 from vrneural.bench.tradeoff_report import finish_report, label
-from vrneural.config import QuickConfig, floats, ints, listed, opt, part, unset
+from vrneural.bench.train_configs import TradeoffConfig
 from vrneural.errors import VrnError, check_range
 from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 from vrneural.runtime.profiles import get_profile
 from vrneural.scoring import metrics
-
-
-@dataclass
-class TradeoffConfig(QuickConfig):
-    """`vrneural bench tradeoff`."""
-
-    out: str = opt("bench-tradeoff", "output directory", cli=False)
-    score: Scored = part(Scored)
-    speeds: tuple[float, ...] | None = unset(
-        (0, 100, 200, 300, 400),
-        "head-turn speeds (deg/s) of the built-in logs",
-        items=floats(0.0, 2000.0),
-    )
-    turn: float = opt(30.0, "yaw of each built-in head turn, degrees")
-    near: float = opt(0.5, "distance (m) of the sphere in the head-turn conditions (arm's length)")
-    poses: tuple[str, ...] = opt(
-        (), "more pose logs (CSV: t,x,y,z,qx,qy,qz,qw) scored as conditions", items=listed()
-    )
-    light_speed: float | None = unset(
-        120.0, "the moving light's speed about the sphere, deg/s (0: none)"
-    )
-    distances: tuple[float, ...] | None = unset(
-        (),
-        "sphere distances (m) of a distance sweep (default none: `bench distance` has it)",
-        items=floats(0.2, 100.0),
-    )
-    tilings: tuple[float, ...] | None = unset(
-        (),
-        "material tilings of a tiling sweep (default none: `bench distance`)",
-        items=floats(0.01, 1000.0),
-    )
-    texture_res: tuple[int, ...] | None = unset(
-        (256, 512, 1024), "texture sides compared", items=ints()
-    )
-    base_res: int | None = unset(
-        512, "texture side of the base setting (the sphere is ~105 px across)"
-    )
-    reuse: tuple[int, ...] | None = unset(
-        (0, 2, 4, 8), "update intervals N compared", items=ints(0, REUSE_MAX)
-    )
-    base_reuse: int = opt(4, "N of the base setting")
-    lights: int = opt(2, "point lights (the key light moves in the moving-light condition)")
-    presets: tuple[str, ...] | None = unset(
-        ("leather", "metal"),
-        "synthetic BTF presets of the trained packs: the first for every condition, the others "
-        "(glossy metal: staleness and eye disparity show on highlights) for the base and the "
-        "fastest turn",
-        items=listed(empty=False),
-    )
-    budget: PackBudget = part(PackBudget)
-    packs: str | None = opt(
-        None,
-        "directory with teacher/student/student_nodistill/single8/neumip.vrnm (skips training; "
-        "each must be what its name says, all from one BTF and its teacher); replaces --presets",
-    )
-    quick: bool = opt(
-        False,
-        "CI-sized: 48-pixel crops, 2 spp, 3 frames, rest and one 300 deg/s turn, no light, "
-        "distance or tiling sweep, textures 128,256 (base 256), N 0,4, one tiny-trained preset",
-    )
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
-
-
-TradeoffConfig.QUICK = TradeoffConfig(
-    score=QUICK_SCORED,
-    speeds=(0, 300),
-    light_speed=0.0,
-    distances=(),
-    tilings=(),
-    texture_res=(128, 256),
-    base_res=256,
-    reuse=(0, 4),
-    presets=("leather",),
-    budget=QUICK_BUDGET,
-)
-
 
 #: the full quest3 eye image the crops are cut from (pixels) and its pixels per degree
 QUEST3 = "quest3"

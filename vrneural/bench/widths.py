@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.bench.quality import QualityConfig, _teach_config
+from vrneural.bench.quality import _teach_config
 from vrneural.bench.quality import network_runs as one
 from vrneural.bench.quality_checks import validate as quality_validate
 from vrneural.bench.quality_train import (
@@ -43,13 +43,12 @@ from vrneural.bench.quality_train import (
     train_in_process,
     with_wide_start,
 )
-from vrneural.bench.widths_report import METHODS, STARTS, within, write_report
+from vrneural.bench.train_configs import METHODS, QualityConfig, WidthsConfig
+from vrneural.bench.widths_report import within, write_report
 from vrneural.btf.format import read_btf
 from vrneural.btf.identity import btf_fingerprint
-from vrneural.btf.presets import PRESETS
 from vrneural.btf.synth import BtfConfig
-from vrneural.config import QuickConfig, choices, config_dict, ints, opt, unset
-from vrneural.distill.config import COMPILE_MODES
+from vrneural.config import config_dict
 from vrneural.errors import VrnError, check_range, check_seed
 from vrneural.outputs import file_sha256, write_json
 from vrneural.versions import package_versions
@@ -58,65 +57,6 @@ from vrneural.versions import package_versions
 NEUMIP = dict(method="neumip", distill=False)
 #: --wide-start trains 2W wide, and distill's widths end at 64
 MAX_WIDE = 32
-
-
-@dataclass
-class WidthsConfig(QuickConfig):
-    """`vrneural bench widths`."""
-
-    preset: str = opt(
-        "leather", "synthetic BTF preset: " + ", ".join(sorted(PRESETS)) + " (btf synth)"
-    )
-    out: str = opt("bench-widths", "output directory", cli=False)
-    res: int | None = unset(32, "BTF texels per side")
-    dirs: int | None = unset(16, "light and view directions (dirs^2 slices)")
-    teacher_epochs: int | None = unset(24, "teacher epochs")
-    epochs: int | None = unset(
-        24, "epochs of every other network (a wide start takes half of them)"
-    )
-    widths: tuple[int, ...] | None = unset(
-        (4, 8, 12, 16),
-        "comma-separated hidden widths W, each in [1, 64] (at most 32 with wide)",
-        items=ints(1, 64),
-    )
-    methods: tuple[str, ...] = opt(
-        ("student",),
-        "comma-separated networks trained at every width: student (coarse-to-fine, "
-        "distilled), student_nodistill (on ground truth alone), single8 (the single-level "
-        "4-layer net, W wide; distill --method single8 --width W); NeuMIP (4 x 25) is always "
-        "trained as the reference",
-        items=choices(list(METHODS)),
-    )
-    starts: tuple[str, ...] = opt(
-        ("plain", "wide"),
-        "comma-separated: plain (from random weights), wide (2W wide for epochs // 2, then "
-        "pruned to W for the rest: distill --wide-start 2W)",
-        items=choices(list(STARTS)),
-    )
-    seed: int = opt(0, "seed of synthesis, initialisation and data order")
-    repeats: int | None = unset(3, "seeds of every network but the teacher (seed, seed+1, ...)")
-    device: str = opt("cpu", "train on cpu, cuda or cuda:N (teach/distill --device)")
-    compile: str = opt(
-        "off", "torch.compile the networks (teach/distill --compile)", choices=COMPILE_MODES
-    )
-    jobs: int = opt(1, "train this many networks at once, each in its own process")
-    quick: bool = opt(
-        False,
-        "CI-sized run: 16^2 texels, 8 directions, 2 epochs, widths 4,8, 1 seed (options "
-        "given explicitly win)",
-    )
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "use an existing --out: retrain every network, rewrite the reports")
-    resume: bool = opt(
-        False,
-        "reuse the checkpoints in OUT that match this run (same settings, BTF and teacher): "
-        "finished ones as they are, interrupted ones continued; train the rest",
-    )
-
-
-WidthsConfig.QUICK = WidthsConfig(
-    res=16, dirs=8, teacher_epochs=2, epochs=2, widths=(4, 8), repeats=1
-)
 
 
 @dataclass(frozen=True)

@@ -5,18 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from vrneural.bench.report import pyplot, save_png
+from vrneural.bench.train_configs import METHODS, STARTS
 from vrneural.errors import count
 from vrneural.outputs import atomic_path
-
-METHODS = {
-    "student": (dict(method="student"), "student (coarse-to-fine, distilled)"),
-    "student_nodistill": (
-        dict(method="student", distill=False),
-        "student w/o distillation",
-    ),
-    "single8": (dict(method="single8"), "single-level (distilled)"),
-}
-STARTS = {"plain": "from random weights", "wide": "wide start (2W, pruned to W)"}
 
 
 def describe(cfg: dict) -> str:

@@ -1,5 +1,7 @@
-"""The `vrneural` command. Each subcommand is a module here with ``register(subparsers)``;
-modules import heavy libraries (torch, wgpu) only inside their handlers, so `--help` is fast.
+"""The `vrneural` command. Each subcommand is a module here with ``register(subparsers)``: at
+its top it imports the config dataclasses its parser is built from (light modules: numpy at
+most), and its handler imports the stage when the command runs, so start-up and `--help` load
+no stage (tests/test_cli_startup.py).
 
 User errors (:class:`~vrneural.errors.VrnError`) print one line and exit with code 2.
 """

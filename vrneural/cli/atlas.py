@@ -9,8 +9,7 @@ import warnings
 from pathlib import Path
 
 from vrneural.atlas import BUILTIN_MESHES, builtin_mesh, load_mesh
-from vrneural.atlas.build import MAX_PADDING, AtlasConfig, build_atlas, check_texture_resolution
-from vrneural.atlas.visualize import atlas_image, gutter_mask
+from vrneural.atlas.config import MAX_PADDING, AtlasConfig, check_texture_resolution
 from vrneural.config import add_config_args, config_dict, config_from_args
 from vrneural.errors import VrnError, check_range
 from vrneural.outputs import atomic_path, check_output, write_json
@@ -88,6 +87,7 @@ def _meshes(spec: str, crease: float | None = None):
 
 
 def run(args) -> int:
+    from vrneural.atlas.build import build_atlas  # the stage (scipy), when it runs
     from vrneural.runtime.assets import collapsed_triangles, lost_triangles
 
     cfg = config_from_args(AtlasConfig, args)
@@ -162,6 +162,8 @@ def sidecar_path(out: Path) -> Path:
 
 def _write_png(path: Path, atlas, color: str) -> None:
     import imageio.v3 as iio
+
+    from vrneural.atlas.visualize import atlas_image, gutter_mask
 
     img = atlas_image(atlas, by=color, gutter=gutter_mask(atlas))
     with atomic_path(path) as tmp:

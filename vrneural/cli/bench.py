@@ -8,11 +8,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from vrneural.bench.configs import ExtremesConfig, RuntimeConfig
 from vrneural.bench.entries import ENTRIES, add_bench
-from vrneural.bench.extremes import ExtremesConfig, run_extremes
-from vrneural.bench.quality import QualityConfig, run_quality
-from vrneural.bench.runtime import HEADLINES, RuntimeConfig, headline, run_runtime
-from vrneural.bench.widths import WidthsConfig, run_widths
+from vrneural.bench.train_configs import QualityConfig, WidthsConfig
 from vrneural.config import config_from_args
 
 
@@ -48,6 +46,8 @@ def _register_quality(sub) -> None:
 
 
 def _run_quality(args) -> int:
+    from vrneural.bench.quality import run_quality  # each bench, when it runs
+
     doc = run_quality(config_from_args(QualityConfig, args))
     print(
         f"{args.out}: results.json, results.md, curves.png, slices.png "
@@ -71,6 +71,8 @@ def _register_widths(sub) -> None:
 
 
 def _run_widths(args) -> int:
+    from vrneural.bench.widths import run_widths
+
     doc = run_widths(config_from_args(WidthsConfig, args))
     print(f"{args.out}: results.json, results.md, widths.png ({doc['total_seconds'] / 60:.1f} min)")
     return 0
@@ -89,6 +91,8 @@ def _register_extremes(sub) -> None:
 
 
 def _run_extremes(args) -> int:
+    from vrneural.bench.extremes import run_extremes
+
     doc = run_extremes(config_from_args(ExtremesConfig, args), args.out)
     png = ", f16_error.png" if (Path(args.out) / "f16_error.png").is_file() else ""
     print(
@@ -113,6 +117,8 @@ def _register_runtime(sub) -> None:
 
 
 def _run_runtime(args) -> int:
+    from vrneural.bench.runtime import HEADLINES, headline, run_runtime
+
     doc = run_runtime(config_from_args(RuntimeConfig, args), args.out)
     print(f"bench runtime: {args.out}/ results.json, results.md ({doc['total_seconds']:.0f} s)")
     for name, paths in HEADLINES.items():

@@ -19,7 +19,6 @@ from pathlib import Path
 from vrneural.btf.format import read_btf
 from vrneural.btf.pathtrace import load_mitsuba
 from vrneural.btf.pt_render import RenderConfig, render_btf
-from vrneural.btf.sheet import contact_sheet, sheet_panels, summary
 from vrneural.btf.synth import BtfConfig, synthesize
 from vrneural.config import add_config_args, config_from_args, config_path, write_config
 from vrneural.errors import VrnError, check_range
@@ -200,6 +199,8 @@ def _warn_nonfinite(file: str, s: dict) -> None:
 
 
 def run_info(args) -> int:
+    from vrneural.btf.sheet import summary
+
     s = summary(read_btf(args.file))
     _warn_nonfinite(args.file, s)
     if args.json:
@@ -237,14 +238,14 @@ def run_info(args) -> int:
     gen = m.get("generator")
     print(f"generator {json.dumps(gen)}")
     if isinstance(gen, dict) and gen.get("grid") == 0 and isinstance(gen.get("res"), int):
-        from vrneural.btf.synth import BtfConfig
-
         used = BtfConfig(res=gen["res"], grid=0).grid_size  # the header keeps the 0 as given
         print(f"          grid 0 = auto: the heightfield was {used}^2 (as the .config.json says)")
     return 0
 
 
 def run_show(args) -> int:
+    from vrneural.btf.sheet import contact_sheet, sheet_panels, summary
+
     check_suffix(args.output, ".png", "image", "sheet.png", ignore_case=True)
     btf = read_btf(args.file)
     if args.texel:

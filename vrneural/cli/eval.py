@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from vrneural.config import add_config_args, config_from_args
-from vrneural.scoring.score import EvalConfig
+from vrneural.scoring.config import EvalConfig
 
 
 def register(sub) -> None:

@@ -8,8 +8,6 @@ from pathlib import Path
 
 from vrneural.config import config_path
 from vrneural.errors import check_range
-from vrneural.formats.vrnm import read_vrnm
-from vrneural.material import width_words
 from vrneural.outputs import check_outputs, check_suffix, write_json
 
 
@@ -40,6 +38,8 @@ def register(sub) -> None:
 def run(args) -> int:
     from vrneural.distill.checkpoint import load_checkpoint
     from vrneural.distill.export import export_checkpoint, ranges_table
+    from vrneural.formats.vrnm import read_vrnm
+    from vrneural.material import width_words
 
     check_suffix(args.output, ".vrnm", "pack", "material.vrnm")
     sidecar = config_path(args.output)

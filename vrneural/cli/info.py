@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 
 from vrneural.errors import check_range
-from vrneural.versions import package_versions
 
 
 def register(sub) -> None:
@@ -35,6 +34,7 @@ def collect(texels: int) -> dict:
     from vrneural.gpu import adapter_summary, has_feature
     from vrneural.gpu.probe import mlp_throughput
     from vrneural.gpu.timing import timestamp_period_ns
+    from vrneural.versions import package_versions  # importlib.metadata: 30 ms
 
     check_range("--texels", texels, 1024, 1 << 24)
     summary = adapter_summary().to_dict()

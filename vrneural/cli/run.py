@@ -7,7 +7,6 @@ from pathlib import Path
 
 from vrneural.config import add_config_args, config_from_args
 from vrneural.runtime.config import RunConfig
-from vrneural.runtime.run import human_summary, run
 
 
 def register(sub) -> None:
@@ -27,6 +26,8 @@ def register(sub) -> None:
 
 
 def main(args) -> int:
+    from vrneural.runtime.run import human_summary, run  # the stage, when it runs
+
     cfg = config_from_args(RunConfig, args, scene=args.scene)
     sm = run(cfg, progress=not args.quiet)
     print(human_summary(sm))

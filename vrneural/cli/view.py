@@ -10,7 +10,6 @@ from vrneural.config import add_config_args, config_from_args
 from vrneural.runtime.config import RunConfig
 from vrneural.viewer.backends import check_display, import_glfw
 from vrneural.viewer.config import RUN_ONLY, ViewConfig
-from vrneural.viewer.view import View
 
 
 def register(sub) -> None:
@@ -34,6 +33,8 @@ def register(sub) -> None:
 
 
 def main(args) -> int:
+    from vrneural.viewer.view import View  # the stage, when it runs
+
     check_display()  # before the scene and its shaders take their seconds
     import_glfw()
     cfg = config_from_args(RunConfig, args)

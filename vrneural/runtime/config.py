@@ -7,12 +7,12 @@ import math
 import re
 from dataclasses import dataclass
 
+from vrneural.atlas.config import MAX_RESOLUTION, MIN_RESOLUTION
 from vrneural.config import opt, resolved, unset
 from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.parallax import RENDER_MARCHES
 from vrneural.runtime.lights import LIGHTS_MAX
 from vrneural.runtime.profiles import PROFILES, get_profile
-from vrneural.runtime.scene import Scene
 from vrneural.runtime.schedule import SCHEDULES
 from vrneural.runtime.settings import FRAMES_IN_FLIGHT_MAX, MODES, RADIANCE, Settings
 
@@ -120,8 +120,6 @@ def max_texture_res(adapter) -> int:
     adapter's 2D texture limit, and its storage-binding limit for the largest per-atlas buffer,
     the geometry atlas's ``vec4`` per 2x2 block (``R * R / 4 * 16`` bytes, like an ``R * R`` u32
     image: 128 MiB on lavapipe -> 5792), rounded down to even."""
-    from vrneural.atlas.build import MAX_RESOLUTION
-
     lim = adapter.limits
     ids = math.isqrt(int(lim.get("max_storage_buffer_binding_size", 2**27)) // 4)  # R^2 / 4 * 16
     r = min(int(lim["max_texture_dimension_2d"]), MAX_RESOLUTION, ids)
@@ -132,6 +130,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     """Profile < scene < CLI (``--texture-res`` also beats objects' ``texture_res``);
     validates ranges against the adapter (``AdapterSummary``)."""
     from vrneural.runtime.codegen import resolve_precision
+    from vrneural.runtime.scene import Scene  # tomllib, packs: when a run resolves, not for --help
 
     if not isinstance(cfg, RunConfig):
         raise VrnError(f"resolve: cfg is a {type(cfg).__name__}, expected a RunConfig")
@@ -179,8 +178,6 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     check_range("--frames", cfg.frames, 1, 1_000_000)
     tex = prof.texture_res if cfg.texture_res is None else cfg.texture_res
     max_tex = adapter.limits["max_texture_dimension_2d"]
-    from vrneural.atlas.build import MIN_RESOLUTION
-
     # [8, max_texture_res]: the atlas stage's bounds and the adapter's; odd is rejected below
     check_range("--texture-res", tex, MIN_RESOLUTION, max_texture_res(adapter))
     for i, o in enumerate(scene.objects):

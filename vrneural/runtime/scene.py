@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 import tomllib
 
+from vrneural.atlas.config import MAX_RESOLUTION, MIN_RESOLUTION, MODES
 from vrneural.errors import SEED_MAX, VrnError, check_int, number_text
 from vrneural.formats.vrnm import read_vrnm
 from vrneural.material import NeuralMaterial, lambertian_material, random_material
@@ -78,7 +79,7 @@ class ObjectDesc:
     texture_res: int | None = None
     min_texture_res: int | None = None  # floor under the profile's (dense meshes need texels)
     crease_angle: float | None = None  # degrees, for computed normals (None: the mesh's default)
-    atlas_uv: str = "auto"  # the atlas's UVs: vrneural.atlas.meshuv.MODES
+    atlas_uv: str = "auto"  # the atlas's UVs: vrneural.atlas.config.MODES
 
 
 @dataclass
@@ -279,8 +280,6 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
             )
         )
         mesh = f.str("mesh")
-        from vrneural.atlas.meshuv import MODES
-
         atlas_uv = f.str("atlas_uv", "auto", MODES)
         crease = f.num("crease_angle", 0.0, 0.0, 180.0) if "crease_angle" in o else None
         model = model_matrix(
@@ -353,8 +352,6 @@ def parse_scene(data: dict, src: str, base: Path) -> Scene:
 
 def _texture_res(f: _Fields, key: str) -> int | None:
     """An object's ``texture_res`` / ``min_texture_res``: even, in the atlas stage's range."""
-    from vrneural.atlas.build import MAX_RESOLUTION, MIN_RESOLUTION
-
     if key not in f.t:
         return None
     v = f.num(key, None, MIN_RESOLUTION, MAX_RESOLUTION, integer=True)

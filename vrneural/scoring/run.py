@@ -26,13 +26,8 @@ from vrneural.formats.vrnm import read_vrnm
 from vrneural.interrupt import Stop
 from vrneural.material import distilled, width_words
 from vrneural.outputs import OutputDir, atomic_path, write_json
-from vrneural.scoring.score import (
-    PRECISION_CHOICES,
-    EvalConfig,
-    pick_slices,
-    precisions,
-    score,
-)
+from vrneural.scoring.config import PRECISION_CHOICES, EvalConfig
+from vrneural.scoring.score import pick_slices, precisions, score
 
 #: the fields of a BTF record compared (not the name, which a renamed copy changes)
 COMPARED = ("shape", "sha256", "values_sha256")  # the shape first: the plainest to name

@@ -11,6 +11,13 @@ into the window's own swap chain (:mod:`vrneural.viewer.present`).
 """
 
 from vrneural.viewer.config import ViewConfig
-from vrneural.viewer.view import View
 
 __all__ = ["View", "ViewConfig"]
+
+
+def __getattr__(name: str):  # View loads the renderer: on first use (`vrneural view`'s parser
+    if name == "View":  # needs ViewConfig alone)
+        from vrneural.viewer.view import View
+
+        return View
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -15,6 +15,7 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
+from vrneural.atlas.config import MIN_RESOLUTION
 from vrneural.runtime.config import REUSE_MAX, max_texture_res, resolve
 from vrneural.runtime.settings import MODES
 
@@ -116,8 +117,6 @@ def step_reuse(live: Live, delta: int) -> None:
 
 def step_texture(live: Live, up: bool, adapter) -> None:
     """Double or halve the radiance texture side (even, within the atlas and adapter bounds)."""
-    from vrneural.atlas.build import MIN_RESOLUTION
-
     r = live.texture_res * 2 if up else live.texture_res // 2
     r = min(max(r, MIN_RESOLUTION), max_texture_res(adapter))
     live.texture_res = r - r % 2

@@ -1,0 +1,58 @@
+"""What `vrneural`'s start-up loads: the parser needs each command's config dataclass and light
+modules (numpy at most), never a stage's run-time code; each handler imports its stage when the
+command runs (vrneural/cli/__init__.py)."""
+
+import json
+import subprocess
+import sys
+
+#: loaded by no parser: heavy libraries, process pools, and the stages' run-time modules
+RUN_TIME = (
+    "multiprocessing",
+    "concurrent.futures.process",
+    "tomllib",
+    "torch",
+    "wgpu",
+    "mitsuba",
+    "scipy",
+    "jinja2",
+    "matplotlib",
+    "imageio",
+    "trimesh",
+    "glfw",
+    "rendercanvas",
+    "vrneural.atlas.build",
+    "vrneural.bench.report",
+    "vrneural.bench.quality",
+    "vrneural.bench.quality_report",
+    "vrneural.bench.quality_train",
+    "vrneural.bench.frame",
+    "vrneural.bench.frame_report",
+    "vrneural.bench.packs",
+    "vrneural.bench.timing",
+    "vrneural.bench.trade_scene",
+    "vrneural.bench.tradeoff",
+    "vrneural.btf.sheet",
+    "vrneural.distill.teach",
+    "vrneural.formats.vrnm",
+    "vrneural.material",
+    "vrneural.runtime.run",
+    "vrneural.runtime.scene",
+    "vrneural.scoring.score",
+    "vrneural.viewer.view",
+    "vrneural.viewer.frame",
+)
+#: vrneural modules build_parser() loads (61 when this was written): a new one is a choice
+MAX_VRNEURAL = 61
+
+
+def test_build_parser_loads_configs_not_stages():
+    code = (
+        "import json, sys; from vrneural.cli import build_parser; build_parser(); "
+        "print(json.dumps(sorted(sys.modules)))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    loaded = json.loads(out.stdout)
+    assert [m for m in RUN_TIME if m in loaded] == []
+    ours = [m for m in loaded if m.split(".")[0] == "vrneural"]
+    assert len(ours) <= MAX_VRNEURAL, ours
