@@ -136,13 +136,12 @@ def _non_finite(obj, name: str = "") -> str | None:
     if isinstance(obj, torch.Tensor):
         ok = not obj.is_floating_point() or bool(torch.isfinite(obj).all())
         return None if ok else name
-    items = (
-        obj.items()
-        if isinstance(obj, dict)
-        else enumerate(obj)
-        if isinstance(obj, (list, tuple))
-        else ()
-    )
+    if isinstance(obj, dict):
+        items = obj.items()
+    elif isinstance(obj, (list, tuple)):
+        items = enumerate(obj)
+    else:
+        return None
     for k, v in items:
         bad = _non_finite(v, f"{name}.{k}" if name else str(k))
         if bad is not None:
