@@ -122,7 +122,7 @@ def chart_faces(
     comp = components(len(faces), fa[same], fb[same])
     comp_axis = np.zeros((comp.max() + 1, 3))
     comp_axis[comp] = axes[label]
-    comp = _merge_islands(comp, comp_axis, normals, areas, fa, fb, pos, faces)
+    comp = _merge_islands(comp, comp_axis, normals, areas, fa, fb)
     _, chart = np.unique(comp, return_inverse=True)
     chart = chart.reshape(-1)
     axis = np.zeros((chart.max() + 1, 3))
@@ -139,7 +139,7 @@ def chart_faces(
     return chart, axis
 
 
-def _merge_islands(comp, comp_axis, normals, areas, fa, fb, pos, faces) -> np.ndarray:
+def _merge_islands(comp, comp_axis, normals, areas, fa, fb) -> np.ndarray:
     """Small components join the neighbour they share the longest border with (module doc)."""
     cos_merge = np.cos(np.radians(MERGE_DEG))
     comp = comp.copy()

@@ -73,7 +73,7 @@ class RenderConfig:
         return self.height_grid or int(min(512, 2 * self.res))
 
 
-def build(cfg: RenderConfig, progress: bool = False):
+def build(cfg: RenderConfig):
     """The preset's scene (Mitsuba loaded, tile copies around it) and its height field
     ``[N, N]`` relative to the reference plane (whose height is set on the scene)."""
     pt.load_mitsuba()
