@@ -211,15 +211,11 @@ def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
     model.eval()
     for p in model.parameters():
         p.requires_grad_(False)
-    model.dir_range = recorded_dir_range(ck)
-    return model
-
-
-def recorded_dir_range(ck: dict) -> tuple[float, float]:
-    """The direction range of a checkpoint's BTF (its record; checkpoints from before it was
-    recorded: the default, which is what ``btf synth`` and UBO2014 hold)."""
+    # its BTF's direction range; checkpoints from before it was recorded: the default, which
+    # is what ``btf synth`` and UBO2014 hold
     rng = ck.get("btf", {}).get("dir_range")
-    return tuple(rng) if rng else (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
+    model.dir_range = tuple(rng) if rng else (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
+    return model
 
 
 def _state_mismatch(want: dict, have: dict) -> str | None:
