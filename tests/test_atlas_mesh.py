@@ -113,7 +113,8 @@ def test_mesh_warning_prints_as_one_line(tmp_path):
 
 def test_box_uv_splits_vertices_and_is_planar():
     box = trimesh.creation.box(extents=(0.4, 0.2, 0.1))
-    pos, faces, uv, _ = box_uv(np.asarray(box.vertices), np.asarray(box.faces), None)
+    src, faces, uv = box_uv(np.asarray(box.vertices), np.asarray(box.faces))
+    pos = np.asarray(box.vertices)[src]
     assert len(pos) == 24  # 8 corners x 3 projections
     # each face keeps its 3D shape in UV (planar projection along its own axis): equal areas
     p = pos[faces]

@@ -5,10 +5,11 @@ import sys
 
 import numpy as np
 import pytest
+from btf_helpers import write_dfmf
 
 from vrneural.btf import read_btf
 from vrneural.btf.dirs import spherical
-from vrneural.btf.ubo2014 import load_extractor, parse_header, write_dfmf
+from vrneural.btf.ubo2014 import load_extractor, parse_header
 from vrneural.cli import main
 from vrneural.errors import VrnError
 

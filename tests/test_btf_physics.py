@@ -4,11 +4,11 @@ reciprocity holds, tiles continue across their edges."""
 
 import numpy as np
 import pytest
+from btf_helpers import flat_maps
 
 from vrneural.btf import direction_set
 from vrneural.btf.brdf import brdf, params
 from vrneural.btf.dirs import spherical
-from vrneural.btf.heightfield import flat_maps
 from vrneural.btf.presets import PRESETS
 from vrneural.btf.render import make_scene, render_view
 from vrneural.btf.synth import BtfConfig, build_maps, subsamples

@@ -387,13 +387,13 @@ def test_non_finite_loss_stops_with_one_line_and_keeps_the_checkpoint(
 ):
     import json
 
-    from vrneural.distill.teach import GroundTruthNet
+    from vrneural.distill.core import DistillNet
 
     out = tmp_path / "t.pt"
     code, err = run_cli("teach", trained["btf"], "-o", out, "--epochs", 1, *FAST)
     assert code == 0, err
     good = out.read_bytes()
-    real = GroundTruthNet.forward
+    real = DistillNet.forward
     calls = []
 
     def forward(self, *a):
@@ -401,7 +401,7 @@ def test_non_finite_loss_stops_with_one_line_and_keeps_the_checkpoint(
         calls.append(1)
         return (loss * float("nan") if len(calls) > 3 else loss), parts
 
-    monkeypatch.setattr(GroundTruthNet, "forward", forward)
+    monkeypatch.setattr(DistillNet, "forward", forward)
     expect_one_line_error(
         ["teach", trained["btf"], "-o", out, "--epochs", 2, "--resume", *FAST],
         "training diverged: loss is nan at epoch 2 step 4/",

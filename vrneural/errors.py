@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import numbers
+from pathlib import Path
 
 
 class VrnError(Exception):
@@ -54,6 +55,17 @@ class ArgumentParser(argparse.ArgumentParser):
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
+def input_file(path, what: str, missing: str = "no such file") -> Path:
+    """``path`` as a :class:`Path`; a one-line error where nothing is there (``missing``) or
+    a directory is (``what``: the file expected, e.g. "a mesh file")."""
+    p = Path(path)
+    if not p.exists():
+        raise VrnError(f"{p}: {missing}")
+    if p.is_dir():
+        raise VrnError(f"{p}: is a directory, expected {what}")
+    return p
 
 
 def count(n: int, noun: str, plural: str | None = None) -> str:

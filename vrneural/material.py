@@ -302,16 +302,14 @@ def material_forward(
 
         uv = offset_uv(mat.offset_net, mat.offset_tex, wo, uv, march, precision)
     dirs = np.concatenate([wi, wo, half_vector(wi, wo)], -1)  # [N, 9]
+    lod4 = None if lod is None else np.repeat(np.asarray(lod, np.float32), 4)  # per texel
     if mat.arch == "coarse_fine":
-        uc = uv.mean(axis=1)
-        fc = sample_lod(mat, "coarse", uc, lod)
+        fc = sample_lod(mat, "coarse", uv.mean(axis=1), lod)
         z = mlp_forward(np.concatenate([dirs, fc], -1), mat.networks["coarse"], precision)
-        lod4 = None if lod is None else np.repeat(np.asarray(lod, np.float32), 4)
         ff = sample_lod(mat, "fine", uv.reshape(-1, 2), lod4)  # [N*4, Cf]
         zk = np.repeat(z, 4, axis=0)
         raw = mlp_forward(np.concatenate([zk, ff], -1), mat.networks["fine"], precision)
     else:
-        lod4 = None if lod is None else np.repeat(np.asarray(lod, np.float32), 4)
         f = sample_lod(mat, "features", uv.reshape(-1, 2), lod4)
         raw = mlp_forward(
             np.concatenate([np.repeat(dirs, 4, axis=0), f], -1), mat.networks["mlp"], precision

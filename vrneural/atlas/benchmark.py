@@ -170,6 +170,4 @@ def _check_args(a: argparse.Namespace) -> Path:
 
 
 if __name__ == "__main__":
-    import sys
-
     sys.exit(main())

@@ -113,7 +113,7 @@ def build_atlas(
         "vertices_split": len(lay.vmap),
         **uv_stats,
         **layout_stats(split, lay.uv, resolution),
-        **texel_stats(ids, rinfo, len(mesh.faces)),
+        **texel_stats(ids, rinfo),
         "unwrap_s": t2 - t0,
         "raster_s": rinfo["raster_s"],
         "sliver_s": rinfo["sliver_s"],
@@ -181,7 +181,7 @@ def layout_stats(split: Mesh, uv: np.ndarray, R: int) -> dict:
     }
 
 
-def texel_stats(ids: np.ndarray, rinfo: dict, n_faces: int) -> dict:
+def texel_stats(ids: np.ndarray, rinfo: dict) -> dict:
     """Coverage and texels-per-triangle numbers for ``stats`` (JSON-ready)."""
     own = rinfo["owned"]
     nz = own[rinfo["nonzero_area"]]

@@ -24,6 +24,7 @@ import numpy as np
 from vrneural.atlas.types import Atlas, Mesh
 from vrneural.errors import VrnError
 from vrneural.formats.container import read_container, write_container
+from vrneural.outputs import atomic_path
 from vrneural.warn import VrnWarning
 
 ATLAS_CODE_VERSION = 6
@@ -101,30 +102,25 @@ def load_cached(mesh: Mesh, key: str, resolution: int, padding: int) -> Atlas | 
 
 
 def store(atlas: Atlas, vmap: np.ndarray, key: str) -> Path | None:
-    """Write an entry atomically; on an unwritable cache dir warn and return None."""
+    """Write an entry atomically; where it cannot be written, warn and return None."""
     path = cache_path(key)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        write_container(
-            tmp,
-            MAGIC,
-            FORMAT_VERSION,
-            {"key": key, "code_version": ATLAS_CODE_VERSION, "stats": atlas.stats},
-            {
-                "vmap": vmap.astype(np.int64),
-                "faces": atlas.mesh.faces,
-                "uv_atlas": atlas.uv_atlas,
-                "tri_ids": atlas.tri_ids,
-            },
-        )
-        os.replace(tmp, path)
-    except OSError as e:
+        with atomic_path(path) as tmp:
+            write_container(
+                tmp,
+                MAGIC,
+                FORMAT_VERSION,
+                {"key": key, "code_version": ATLAS_CODE_VERSION, "stats": atlas.stats},
+                {
+                    "vmap": vmap.astype(np.int64),
+                    "faces": atlas.mesh.faces,
+                    "uv_atlas": atlas.uv_atlas,
+                    "tri_ids": atlas.tri_ids,
+                },
+            )
+    except (OSError, VrnError) as e:
         warnings.warn(f"atlas cache: cannot write {path} ({e})", CacheWarning, stacklevel=3)
         return None
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return path
 
 

@@ -103,7 +103,8 @@ def cover_directions(normals: np.ndarray, areas: np.ndarray, cone_deg: float) ->
     return ax
 
 
-def _components(n_faces: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def components(n_faces: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """[F] connected component of each face over the face pairs ``(a, b)``."""
     g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(n_faces, n_faces))
     return connected_components(g, directed=False)[1]
 
@@ -118,10 +119,10 @@ def chart_faces(
     axes = cover_directions(normals[areas > 0], areas[areas > 0], cone_deg)
     label = np.argmax(normals @ axes.T, axis=1)
     same = (label[fa] == label[fb]) & (areas[fa] > 0) & (areas[fb] > 0)
-    comp = _components(len(faces), fa[same], fb[same])
+    comp = components(len(faces), fa[same], fb[same])
     comp_axis = np.zeros((comp.max() + 1, 3))
     comp_axis[comp] = axes[label]
-    comp = _merge_islands(comp, comp_axis, normals, areas, fa, fb, pos, faces)
+    comp = _merge_islands(comp, comp_axis, normals, areas, fa, fb)
     _, chart = np.unique(comp, return_inverse=True)
     chart = chart.reshape(-1)
     axis = np.zeros((chart.max() + 1, 3))
@@ -138,7 +139,7 @@ def chart_faces(
     return chart, axis
 
 
-def _merge_islands(comp, comp_axis, normals, areas, fa, fb, pos, faces) -> np.ndarray:
+def _merge_islands(comp, comp_axis, normals, areas, fa, fb) -> np.ndarray:
     """Small components join the neighbour they share the longest border with (module doc)."""
     cos_merge = np.cos(np.radians(MERGE_DEG))
     comp = comp.copy()

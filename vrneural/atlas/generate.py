@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrneural.atlas import layout as lay
-from vrneural.atlas.charts import chart_faces, face_adjacency, project
+from vrneural.atlas.charts import chart_faces, face_adjacency, face_normals, project
 from vrneural.atlas.pack import pack_scale
 from vrneural.atlas.raster import overlapping_faces
 from vrneural.atlas.types import Mesh
@@ -50,17 +50,17 @@ class Layout:
     info: dict
 
 
-def generated_layout(mesh: Mesh, R: int, padding: int, method: str, bar=None) -> Layout:
-    """Unwrap and pack ``mesh`` into R x R texels (module doc). ``bar``: a
-    :class:`vrneural.atlas.progress.Stages` or None."""
+def generated_layout(mesh: Mesh, R: int, padding: int, method: str, bar) -> Layout:
+    """Unwrap and pack ``mesh`` into R x R texels (module doc). ``bar``: the build's
+    :class:`vrneural.atlas.progress.Stages`."""
     pos = np.asarray(mesh.positions, np.float64)
     faces = np.asarray(mesh.faces, np.int64)
     path: list[str] = []
     found = _xatlas(mesh, R, padding, path, bar) if method == "xatlas" else None
-    _stage(bar, "adjacency", 1)
+    bar.stage("adjacency")
     fa, fb = face_adjacency(pos, faces)
     if found is None:
-        _stage(bar, "charts by normal direction", 1)
+        bar.stage("charts by normal direction")
         chart, axis = chart_faces(pos, faces)
         cuv = project(pos, faces, chart, axis)
         path.append("charts")
@@ -72,16 +72,14 @@ def generated_layout(mesh: Mesh, R: int, padding: int, method: str, bar=None) ->
         from vrneural.atlas.strips import strip_layout
 
         path.append(f"strips ({int(chart.max()) + 1} charts do not fit {R}x{R})")
-        _stage(bar, "strips", 1)
+        bar.stage("strips")
         _, weld = np.unique(pos, axis=0, return_inverse=True)
         px, _ = strip_layout(weld.reshape(-1)[faces], fa, fb, R, padding)
         chart = np.arange(len(faces))
         scale, cut = float("nan"), 0
     # a triangle without 3D area gets none in the atlas either (all corners on one point; a
     # rotated line of three points would not stay exactly straight)
-    flat = ~np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]]).any(
-        1
-    )
+    flat = face_normals(pos, faces)[1] == 0
     px[flat] = px[flat][:, :1]
     vmap, new_faces, uv = lay.chart_vertices(faces, chart, px / R)
     info = {
@@ -92,16 +90,16 @@ def generated_layout(mesh: Mesh, R: int, padding: int, method: str, bar=None) ->
     return Layout(vmap, new_faces, np.clip(uv, 0.0, 1.0).astype(np.float32), info)
 
 
-def pack_charts(cuv, chart, fa, fb, R: int, padding: int, bar=None):
+def pack_charts(cuv, chart, fa, fb, R: int, padding: int, bar):
     """Cut, orient and pack charts (module doc). Returns ``(texel coords [F, 3, 2], chart [F],
     scale (texels per unit), charts added by cuts)``; ValueError when they cannot fit."""
     area = float(np.abs(lay.uv_area(cuv)).sum())
     s0 = R * np.sqrt(lay.EXPECTED_FILL / max(area, 1e-300))
     n0 = int(chart.max()) + 1
-    _stage(bar, f"cut {n0} charts", 1)
+    bar.stage(f"cut {n0} charts")
     chart = lay.cut_charts(cuv, chart, fa, fb, lay.MIN_CUT_TEXELS / s0)
     for _ in range(OVERLAP_ROUNDS):
-        _stage(bar, f"pack {int(chart.max()) + 1} charts", 1)
+        bar.stage(f"pack {int(chart.max()) + 1} charts")
         oriented, extent = lay.orient(cuv, chart)
         scale, xy, rot = pack_scale(extent, R, padding, s0)
         px = lay.place(oriented, chart, extent, scale, xy, rot, padding)
@@ -131,7 +129,7 @@ def _xatlas(mesh: Mesh, R: int, padding: int, path: list, bar):
     None (with the reasons in ``path``) when both tries fail."""
     tries = (("xatlas", mesh, None), ("xatlas retry", _jittered(mesh), RETRY_OPTIONS))
     for label, m, options in tries:
-        _stage(bar, f"{label} ({len(mesh.faces)} triangles, child process)", 1)
+        bar.stage(f"{label} ({len(mesh.faces)} triangles, child process)")
         try:
             rx = max(R, 1024)  # xatlas packs too; any size does, its charts are re-packed
             _, uv, info = unwrap(m, rx, padding, chart_options=options)
@@ -161,8 +159,3 @@ def _short(message: str, name: str) -> str:
     """An unwrap error without the mesh name and the advice (the path records what happened)."""
     text = message.split(": ", 1)[1] if message.startswith(name) else message
     return text.split(", a known xatlas bug")[0]
-
-
-def _stage(bar, text: str, steps: int) -> None:
-    if bar is not None:
-        bar.stage(text, steps)

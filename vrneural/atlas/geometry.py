@@ -128,7 +128,7 @@ def make_mesh(
             every = "its only triangle is" if n == 1 else f"all {n} triangles are"
             raise VrnError(f"{name}: {every} degenerate")
     if uv is None:
-        src, fac, uv = _box_uv_src(pos, fac)
+        src, fac, uv = box_uv(pos, fac)
         pos, uv_source = pos[src], "box"
         normals = None if normals is None else normals[src]
         lm = None if lm is None else lm[src]
@@ -318,23 +318,15 @@ def _any_perpendicular(n: np.ndarray) -> np.ndarray:
     return t / np.linalg.norm(t, axis=1, keepdims=True)
 
 
-def box_uv(
-    pos: np.ndarray, faces: np.ndarray, normals: np.ndarray | None, scale: float | None = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
-    """Generate material UVs by box (cube) projection; vertices split between projections.
+def box_uv(pos: np.ndarray, faces: np.ndarray, scale: float | None = None):
+    """Material UVs by box (cube) projection, vertices split between projections:
+    ``(src [V'], faces [F, 3], uv [V', 2])``, new vertex ``i`` a copy of ``src[i]``.
 
     Each face is projected along the axis its normal is most aligned with (x -> (z, y),
     y -> (x, z), z -> (x, y)), so every face gets an undistorted planar UV. ``uv = coord /
     scale`` with ``scale`` = the largest bounding-box extent by default, so the whole object
-    spans about one BTF tile. Returns (positions, faces, uv, normals) with split vertices.
+    spans about one BTF tile.
     """
-    src, new_faces, uv = _box_uv_src(pos, faces, scale)
-    return pos[src], new_faces, uv, None if normals is None else normals[src]
-
-
-def _box_uv_src(pos, faces, scale: float | None = None):
-    """:func:`box_uv` as ``(src [V'], faces [F, 3], uv [V', 2])``: new vertex ``i`` copies
-    ``src[i]``."""
     fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
     axis = np.argmax(np.abs(fn), axis=1)
     ext = np.ptp(pos, axis=0)

@@ -39,7 +39,7 @@ import numpy as np
 
 from vrneural.atlas.geometry import CREASE_DEG, MeshWarning, check_uv, make_mesh
 from vrneural.atlas.types import Mesh
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, input_file
 
 MESH_SUFFIXES = (".obj", ".ply", ".glb", ".gltf", ".stl", ".off")
 
@@ -52,18 +52,14 @@ def load_mesh(path, crease_deg: float | None = None) -> list[Mesh]:
     """
     import trimesh
 
-    p = Path(path)
-    if not p.exists():
-        raise VrnError(f"{p}: no such file")
-    if p.is_dir():
-        raise VrnError(f"{p}: is a directory, expected a mesh file")
+    p = input_file(path, "a mesh file")
     if p.suffix.lower() not in MESH_SUFFIXES:
         allowed = ", ".join(MESH_SUFFIXES)
         raise VrnError(f"{p}: unsupported mesh type {p.suffix or '(none)'!r}; allowed {allowed}")
     obj = p.suffix.lower() == ".obj"
-    source, kw = p, {}
+    source, kw, nodes = p, {}, []
     if p.suffix.lower() in (".glb", ".gltf"):
-        source, kw = _gltf_with_uv_sets(p)
+        source, kw, nodes = _gltf_with_uv_sets(p)
     if obj:
         # decoded here: trimesh needs charset_normalizer for anything but UTF-8 (a Latin-1
         # comment or object name is common in OBJs from older tools)
@@ -91,7 +87,7 @@ def load_mesh(path, crease_deg: float | None = None) -> list[Mesh]:
         if obj:
             parts = _scene_parts(p, loaded, _obj_object_names(text), unnamed_first=True)
         else:
-            parts = _scene_parts(p, loaded, _gltf_node_names(p))
+            parts = _scene_parts(p, loaded, nodes)
     else:
         parts = [(p.name, loaded, None)]
     meshes = []
@@ -129,10 +125,11 @@ UV_COPIES = {"TEXCOORD_0": "_VRN_TEXCOORD_0", "TEXCOORD_1": "_VRN_TEXCOORD_1"}
 
 
 def _gltf_with_uv_sets(p: Path):
-    """``(file object, trimesh.load keywords)`` of the glTF at ``p`` with every primitive's
-    ``TEXCOORD_0``/``TEXCOORD_1`` also listed under a custom name (:data:`UV_COPIES`), which
-    trimesh loads as a vertex attribute as it is (its own ``TEXCOORD_0`` needs a material and
-    ``TEXCOORD_1`` is dropped). Anything unreadable is left to trimesh, as the file is."""
+    """``(file object, trimesh.load keywords, node names in file order)`` of the glTF at
+    ``p`` with every primitive's ``TEXCOORD_0``/``TEXCOORD_1`` also listed under a custom name
+    (:data:`UV_COPIES`), which trimesh loads as a vertex attribute as it is (its own
+    ``TEXCOORD_0`` needs a material and ``TEXCOORD_1`` is dropped). Anything unreadable is left
+    to trimesh, as the file is (and its order of the nodes stands)."""
     import trimesh
 
     try:
@@ -143,6 +140,7 @@ def _gltf_with_uv_sets(p: Path):
             doc, rest = json.loads(data[20 : 20 + n]), data[20 + n :]
         else:
             doc = json.loads(data)
+        nodes = [nd.get("name") for nd in doc.get("nodes", []) if isinstance(nd, dict)]
         for mesh in doc.get("meshes", []):
             for prim in mesh.get("primitives", []):
                 attr = prim.get("attributes", {})
@@ -155,28 +153,11 @@ def _gltf_with_uv_sets(p: Path):
         else:
             data = text
     except (OSError, ValueError, struct.error, AttributeError, TypeError):
-        return p, {}
+        return p, {}, []
     kw = {"file_type": "glb" if glb else "gltf"}
     if not glb:
         kw["resolver"] = trimesh.resolvers.FilePathResolver(p)
-    return io.BytesIO(data), kw
-
-
-def _gltf_node_names(p: Path) -> list:
-    """The node names of a .gltf/.glb in file order ([] for other files or anything odd: then
-    trimesh's order stands)."""
-    try:
-        if p.suffix.lower() == ".glb":
-            data = p.read_bytes()
-            (n,) = struct.unpack_from("<I", data, 12)
-            doc = json.loads(data[20 : 20 + n])
-        elif p.suffix.lower() == ".gltf":
-            doc = json.loads(p.read_bytes())
-        else:
-            return []
-        return [nd.get("name") for nd in doc.get("nodes", []) if isinstance(nd, dict)]
-    except (OSError, ValueError, struct.error, AttributeError):
-        return []
+    return io.BytesIO(data), kw, nodes
 
 
 def _obj_object_names(text: str) -> list:

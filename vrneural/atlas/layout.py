@@ -17,9 +17,8 @@ atlas, so texel density stays what the flattening gave). Steps:
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
+from vrneural.atlas.charts import components
 from vrneural.atlas.pack import chart_offset
 from vrneural.atlas.raster import uv_area_px
 
@@ -94,9 +93,7 @@ def orient(cuv: np.ndarray, chart: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def relabel(chart: np.ndarray, fa: np.ndarray, fb: np.ndarray) -> np.ndarray:
     """Connected components of faces with the same ``chart`` label over adjacency (fa, fb)."""
     same = chart[fa] == chart[fb]
-    n = len(chart)
-    g = coo_matrix((np.ones(int(same.sum()), np.int8), (fa[same], fb[same])), shape=(n, n))
-    comp = connected_components(g, directed=False)[1]
+    comp = components(len(chart), fa[same], fb[same])
     # components never join different labels (edges only within a label)
     _, out = np.unique(comp, return_inverse=True)
     return out.reshape(-1)
@@ -108,7 +105,6 @@ def cut_charts(
     fa: np.ndarray,
     fb: np.ndarray,
     min_len: float,
-    progress=None,
 ) -> np.ndarray:
     """Step 2 of the module doc: the new chart of every face (connected pieces)."""
     area = np.abs(uv_area(cuv))
@@ -145,8 +141,6 @@ def cut_charts(
         if np.array_equal(new, chart):
             break
         chart = relabel(new, fa, fb)
-        if progress:
-            progress(int(chart.max()) + 1)
     return chart
 
 

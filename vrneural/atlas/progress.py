@@ -1,8 +1,8 @@
 """One progress bar over the stages of an atlas build (tqdm, on stderr).
 
 The bar counts stages; each names itself and its size in the bar's postfix ("charts by normal
-direction", "cut 462 charts", "rasterize 1200^2: chunk 3/9"), so a long stage is visible as it
-runs rather than as a bar that sits still.
+direction", "cut 462 charts", "rasterize 1200^2 + gutter, 9216 triangles"), so a long stage is
+visible as it runs rather than as a bar that sits still.
 """
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from tqdm import tqdm
 
 
 class Stages:
-    """``Stages(name, total, enabled)``; :meth:`stage` starts the next stage, :meth:`note`
-    updates the current one's text. Usable as a context manager (closes the bar)."""
+    """``Stages(name, total, enabled)``; :meth:`stage` starts the next stage. Usable as a
+    context manager (closes the bar)."""
 
     def __init__(self, name: str, total: int, enabled: bool):
         self.bar = tqdm(total=total, desc=f"atlas {name}", disable=not enabled, leave=False)
@@ -22,9 +22,6 @@ class Stages:
         if self.started:
             self.bar.update(steps)
         self.started = True
-        self.bar.set_postfix_str(text)
-
-    def note(self, text: str) -> None:
         self.bar.set_postfix_str(text)
 
     def __enter__(self) -> Stages:

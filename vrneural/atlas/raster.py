@@ -328,10 +328,7 @@ def _cover_slivers(px, es, slivers, ids, counts, R: int) -> int:
     """Give each triangle in ``slivers`` one texel it touches (see module docstring)."""
     if len(slivers) == 0:
         return 0
-    cand = [(t, x, y) for t, x, y in _pairs(px, slivers, R, 0.5)]
-    t = np.concatenate([c[0] for c in cand])
-    x = np.concatenate([c[1] for c in cand])
-    y = np.concatenate([c[2] for c in cand])
+    t, x, y = (np.concatenate(c) for c in zip(*_pairs(px, slivers, R, 0.5), strict=True))
     _, d = _edge_terms(es, t, x + 0.5, y + 0.5)
     keep = d <= 0.5
     t, tex, d = t[keep], (y * R + x)[keep], d[keep]

@@ -70,8 +70,7 @@ def strip_layout(welded: np.ndarray, fa: np.ndarray, fb: np.ndarray, R: int, pad
     corner = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])  # lone, u, v of the first face
     paired = mate[first] >= 0
     i = first
-    lone = np.zeros(len(i), np.int64)
-    lone_p, cu, cv = (np.zeros(len(i), np.int64) for _ in range(3))
+    lone, cu, cv = (np.zeros(len(i), np.int64) for _ in range(3))
     if paired.any():
         lone[paired], cu[paired], cv[paired] = _shared(welded[i[paired]], welded[mate[i[paired]]])
     base = np.stack([cx, cy], 1)[:, None, :]

@@ -13,7 +13,7 @@ Every term is symmetric in ``(wi, wo)``, so ``f`` is reciprocal. Directions are 
 frame (x = tangent, y = bitangent, z = normal), given as separate component arrays so that
 callers broadcast ``[lights, 1]`` against ``[1, samples]`` without building ``[..., 3]`` stacks.
 
-The BTF value (docs/conventions.md section 2) is ``f * cos_i``: :func:`btf_value`.
+The BTF value (docs/conventions.md section 2) is ``f * cos_i``.
 """
 
 from __future__ import annotations
@@ -128,16 +128,6 @@ def prepare(p: dict) -> dict:
         "_sheen": planes(lambda c: sheen[..., c]),
         "_has_sheen": bool(np.any(sheen > 0)),
     }
-
-
-def btf_value(wi, wo, p: dict) -> np.ndarray:
-    """BTF value of a flat patch with this BRDF: ``f(wi, wo) * cos_i`` ``[*S, 3]``."""
-    return brdf(wi, wo, p) * np.maximum(wi[2], 0.0)[..., None]
-
-
-def lambert_btf(albedo, wi_z) -> np.ndarray:
-    """Analytic flat Lambertian BTF ``albedo / pi * wi.z`` (the convention's reference)."""
-    return np.asarray(albedo, np.float64) / np.pi * max(float(wi_z), 0.0)
 
 
 def params(

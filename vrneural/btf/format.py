@@ -20,6 +20,7 @@ has its centre at material UV ``((x + 0.5) / W, (y + 0.5) / H)``; tiles repeat (
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -223,6 +224,7 @@ class BtfWriter:
                 raise VrnError(f"{path}: height has shape {list(height.shape)}, expected [N, N]")
             specs["height"] = (height.shape, "float32")
             version = BTF_VERSION_HEIGHT
+        self.path = path  #: the output, as given
         self._w = ContainerWriter(path, BTF_MAGIC, version, header, specs, resume=resume)
         self.partial = self._w.partial  #: the file being written (``<path>.partial``)
         self.resumed = self._w.resumed  #: True when an identical unfinished write was reopened
@@ -234,7 +236,6 @@ class BtfWriter:
                 self._w.array("height")[:] = height
             self.progress_file.unlink(missing_ok=True)
         self.values = self._w.array("values")
-        self.clamped = (0, 0)  # values put_clamped clamped: (negative, above F16_MAX)
         self.done: set[int] = set()  #: view indices already written (from the sidecar)
         if self._w.resumed and self.progress_file.exists():
             self.done = self._read_progress(V)
@@ -288,21 +289,16 @@ class BtfWriter:
                 ) from None
         return done
 
-    def put_clamped(self, li: int, v: int, rgb: np.ndarray) -> None:
-        """Store slice (light ``li``, view ``v``) from ``rgb: [H, W, 3]`` (finite), clamped to
-        the float16 range [0, F16_MAX]; :attr:`clamped` counts (negative, too large) values."""
-        rgb = np.asarray(rgb, np.float32)
-        neg, huge = self.clamped
-        self.clamped = (neg + int((rgb < 0).sum()), huge + int((rgb > F16_MAX).sum()))
-        self.values[li, v] = np.clip(rgb, 0.0, F16_MAX).astype(np.float16)
-
-    def import_views(self, read, nonfinite, progress: bool = True) -> None:
-        """Write every view not yet done from ``read(li, v) -> rgb [H, W, 3]`` float32 (with
-        :meth:`put_clamped`; a progress bar of views). A slice with a non-finite value discards
-        the partial file and raises a VrnError that starts with ``nonfinite(li, v, rgb)``; a
-        Ctrl-C says how to resume and is raised again."""
-        L, V = self.values.shape[:2]
+    def import_views(self, read, nonfinite, src, crop: str, progress: bool = True) -> Path:
+        """Write every view not yet done from ``read(li, v) -> rgb [H, W, 3]`` float32, clamped
+        into the float16 range [0, F16_MAX] (a progress bar of views), and :meth:`finalize` the
+        file. A slice with a non-finite value discards the partial file and raises a VrnError
+        that starts with ``nonfinite(li, v, rgb)``; a Ctrl-C says how to resume and is raised
+        again. Then one line on stderr per kind of value clamped (naming ``src``), and a warning
+        for an odd size, whose advice says to crop ``crop``."""
+        L, V, H, W = self.values.shape[:4]
         name = self.partial.name.removesuffix(".partial")
+        neg = huge = 0  # values clamped: negative, above F16_MAX
         bar = tqdm(total=V, initial=len(self.done), desc="import views", unit="view",
                    disable=not progress)  # fmt: skip
         try:
@@ -317,7 +313,9 @@ class BtfWriter:
                         raise VrnError(
                             f"{nonfinite(li, v, rgb)}; nothing was written (no {name}, no .partial)"
                         )
-                    self.put_clamped(li, v, rgb)
+                    rgb = np.asarray(rgb, np.float32)
+                    neg, huge = neg + int((rgb < 0).sum()), huge + int((rgb > F16_MAX).sum())
+                    self.values[li, v] = np.clip(rgb, 0.0, F16_MAX).astype(np.float16)
                 self.mark_done(v)
                 bar.update(1)
         except KeyboardInterrupt:
@@ -326,10 +324,6 @@ class BtfWriter:
                   "continue", file=sys.stderr)  # fmt: skip
             raise
         bar.close()
-
-    def report_clamped(self, src) -> None:
-        """One line on stderr per kind of value :meth:`put_clamped` clamped, naming ``src``."""
-        neg, huge = self.clamped
         if neg:
             print(f"{src}: clamped {neg} negative values to 0", file=sys.stderr)
         if huge:
@@ -338,6 +332,37 @@ class BtfWriter:
                 f"{F16_MAX:g}",
                 file=sys.stderr,
             )
+        if H % 2 or W % 2:
+            print(
+                f"warning: {self.path}: {H}x{W} texels, odd: packs shade 2x2 blocks, so teach, "
+                f"distill and eval refuse it; crop {crop} to an even size",
+                file=sys.stderr,
+            )
+        return self.finalize()
+
+    def put_view(self, v: int, view: np.ndarray) -> None:
+        """Store rendered view ``v`` (every light, ``[L, H, W, 3]``), clamped into the float16
+        range, and mark it done; a non-finite value is an internal error (a renderer's bug)."""
+        if not np.isfinite(view).all():
+            raise VrnError(f"internal error: non-finite BTF values rendered at view {v}")
+        self.values[:, v] = np.clip(view, 0.0, F16_MAX).astype(np.float16)
+        self.mark_done(v)
+
+    @contextlib.contextmanager
+    def keep_on_interrupt(self, out):
+        """A Ctrl-C in the block keeps the views written so far in the ``.partial`` and says
+        how to continue (``--resume``) before it is raised again."""
+        try:
+            yield
+        except KeyboardInterrupt:
+            self.values.flush()
+            print(
+                f"\n{out}: interrupted after {len(self.done)}/{self.values.shape[1]} views; "
+                f"partial data kept in {self.partial}; rerun the same command with --resume to "
+                "continue",
+                file=sys.stderr,
+            )
+            raise
 
     def mark_done(self, view: int) -> None:
         """Flush data and record view index ``view`` as complete."""

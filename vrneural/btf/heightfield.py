@@ -73,33 +73,6 @@ class Maps:
         return np.concatenate([np.asarray(p, np.float32) for p in parts], -1)
 
 
-def flat_maps(
-    n: int,
-    albedo=(0.5, 0.5, 0.5),
-    f0=(0.0, 0.0, 0.0),
-    alpha=(0.3, 0.3),
-    angle=0.0,
-    sheen=(0.0, 0.0, 0.0),
-    sheen_rough=0.5,
-) -> Maps:
-    """A flat, homogeneous patch (for tests: it must reproduce the analytic BRDF)."""
-
-    def full(v, k=None):
-        shape = (n, n) if k is None else (n, n, k)
-        return np.broadcast_to(np.asarray(v, np.float32), shape).copy()
-
-    return Maps(
-        height=full(0.0),
-        albedo=full(albedo, 3),
-        f0=full(f0, 3),
-        alpha_t=full(alpha[0]),
-        alpha_b=full(alpha[1]),
-        angle=full(angle),
-        sheen=full(sheen, 3),
-        sheen_rough=full(sheen_rough),
-    )
-
-
 # ---------------------------------------------------------------------------------------------
 # Periodic primitives. ``u, v`` are ``[N, N]`` grids of UV cell centres.
 

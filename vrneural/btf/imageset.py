@@ -240,13 +240,7 @@ def import_images(
     def nonfinite(li, v, rgb):
         return f"{plan.files[li][v]}: {int((~np.isfinite(rgb)).sum())} non-finite values (NaN/Inf)"
 
-    w.import_views(lambda li, v: read_rgb(plan.files[li][v], png_linear), nonfinite, progress)
-    w.report_clamped(plan.folder)
-    H, W = plan.size
-    if H % 2 or W % 2:
-        print(
-            f"warning: {out}: {H}x{W} texels, odd: packs shade 2x2 blocks, so teach, distill "
-            "and eval refuse it; crop the images to an even size",
-            file=sys.stderr,
-        )
-    return w.finalize()
+    def read(li, v):
+        return read_rgb(plan.files[li][v], png_linear)
+
+    return w.import_views(read, nonfinite, plan.folder, "the images", progress)

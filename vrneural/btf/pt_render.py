@@ -73,7 +73,7 @@ class RenderConfig:
         return self.height_grid or int(min(512, 2 * self.res))
 
 
-def build(cfg: RenderConfig, progress: bool = False):
+def build(cfg: RenderConfig):
     """The preset's scene (Mitsuba loaded, tile copies around it) and its height field
     ``[N, N]`` relative to the reference plane (whose height is set on the scene)."""
     pt.load_mitsuba()
@@ -122,15 +122,16 @@ def render_btf(
         todo = [v for v in range(V) if v not in w.done]
         if resume and w.done:
             print(f"{out}: resuming, {len(w.done)}/{V} views already done", file=sys.stderr)
-        done_views = len(w.done)
-        bar = tqdm(
-            total=L * V,
-            initial=done_views * L,
-            desc=f"{cfg.preset} slices",
-            unit="slice",
-            disable=not progress,
-        )
-        try:
+        with (
+            w.keep_on_interrupt(out),
+            tqdm(
+                total=L * V,
+                initial=len(w.done) * L,
+                desc=f"{cfg.preset} slices",
+                unit="slice",
+                disable=not progress,
+            ) as bar,
+        ):
             for v in todo:
                 cam = pt.sensor(ps, dirs[v], cfg.res, cfg.spp)
                 view = np.empty((L, cfg.res, cfg.res, 3), np.float32)
@@ -140,21 +141,7 @@ def render_btf(
                     seed = pt.slice_seed(cfg.sample_seed, li, v)
                     view[li] = pt.render_slice(ps, cam, dirs[li], cfg.spp, seed)
                     bar.update(1)
-                if not np.isfinite(view).all():
-                    raise VrnError(f"internal error: non-finite values rendered at view {v}")
-                w.values[:, v] = np.clip(view, 0.0, F16_MAX).astype(np.float16)
-                w.mark_done(v)
-                done_views += 1
-        except KeyboardInterrupt:
-            bar.close()
-            w.values.flush()
-            print(
-                f"\n{out}: interrupted after {done_views}/{V} views; partial data kept in "
-                f"{w.partial}; rerun the same command with --resume to continue",
-                file=sys.stderr,
-            )
-            raise
-    bar.close()
+                w.put_view(v, view)
     return w.finalize()
 
 

@@ -22,7 +22,6 @@ from vrneural.btf.heightfield import texel_height
 from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict, opt
 from vrneural.errors import VrnError, check_choice, check_range, check_seed
-from vrneural.formats.f16 import F16_MAX
 from vrneural.interrupt import Stop
 
 GENERATOR = "vrneural.btf.synth v1"
@@ -126,39 +125,21 @@ def synthesize(
         todo = [v for v in range(len(dirs)) if v not in w.done]
         if resume and w.done:
             print(f"{out}: resuming, {len(w.done)}/{len(dirs)} views already done", file=sys.stderr)
-        done_views = len(w.done)
-        bar = None
-        try:
+        with w.keep_on_interrupt(out):
             with tqdm(total=len(dirs), desc="shadow maps", unit="light", disable=not progress) as b:
                 scene = make_scene(maps, dirs, b)
             del maps
             samples = subsamples(cfg)
-            bar = tqdm(
+            with tqdm(
                 total=len(dirs),
-                initial=done_views,
+                initial=len(w.done),
                 desc=f"{cfg.preset} views",
                 unit="view",
                 disable=not progress,
-            )
-            for v in todo:
-                if stop.flag:
-                    raise KeyboardInterrupt
-                vals = render_view(scene, dirs[v], samples, (cfg.res, cfg.res))
-                if not np.isfinite(vals).all():
-                    raise VrnError(f"internal error: non-finite BTF values at view {v}")
-                w.values[:, v] = np.clip(vals, 0.0, F16_MAX).astype(np.float16)
-                w.mark_done(v)
-                done_views += 1
-                bar.update(1)
-        except KeyboardInterrupt:
-            if bar is not None:
-                bar.close()
-            w.values.flush()
-            print(
-                f"\n{out}: interrupted after {done_views}/{len(dirs)} views; partial data kept in "
-                f"{w.partial}; rerun the same command with --resume to continue",
-                file=sys.stderr,
-            )
-            raise
-    bar.close()
+            ) as bar:
+                for v in todo:
+                    if stop.flag:
+                        raise KeyboardInterrupt
+                    w.put_view(v, render_view(scene, dirs[v], samples, (cfg.res, cfg.res)))
+                    bar.update(1)
     return w.finalize()

@@ -1,4 +1,4 @@
-"""UBO2014 ``.btf`` import through the ``btf-extractor`` package, plus a minimal writer.
+"""UBO2014 ``.btf`` import through the ``btf-extractor`` package.
 
 The UBO2014 files are read by btf-extractor's ``Ubo2014`` (a Cython wrapper around Zdravko
 Velinov's ``btf.hh``), which returns BGR float32 images ``[H, W, 3]`` per (light, view) angle
@@ -9,22 +9,20 @@ angles -> unit vectors, and stream every slice into our format.
 (a segfault), so :func:`parse_header` validates the file in Python first: magic, header, the
 direction tables and the exact file length of the factorised data ("DFMF" and "FMF0/1").
 
-:func:`write_dfmf` writes a small file in the "!DFMF08FC" layout (the one btf.hh reads for
-UBO2014) from a dense ``[L, L, H, W, 3]`` array, for tests: an exact SVD factorisation per colour
-channel, stored bottom-up as btf.hh expects (it flips rows on load).
+Files in the "!DFMF08FC" layout for the tests are written by ``write_dfmf`` of
+``tests/btf_helpers.py``.
 """
 
 from __future__ import annotations
 
 import struct
-import sys
 from pathlib import Path
 
 import numpy as np
 
 from vrneural.btf.dirs import spherical
 from vrneural.btf.format import BtfWriter, check_partial_settings
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, input_file
 
 INSTALL_HINT = "pip install 'vrneural[ubo]' (or: pip install btf-extractor)"
 _COMMON = struct.Struct("<II80s80s80sf3f")  # BTFCommonHeader, 264 bytes
@@ -75,11 +73,7 @@ def parse_header(path) -> dict:
     Returns ``{"format", "width", "height", "light_angles" [L, 2], "view_angles" [V, 2]}``
     (angles in radians, as stored). Raises :class:`VrnError` on anything LoadBTF would reject.
     """
-    p = Path(path)
-    if not p.exists():
-        raise VrnError(f"{p}: no such file")
-    if p.is_dir():
-        raise VrnError(f"{p}: is a directory, expected a UBO2014 .btf file")
+    p = input_file(path, "a UBO2014 .btf file")
     size = p.stat().st_size
     with open(p, "rb") as f:
         head = f.read(min(size, 1 << 24))  # direction tables and headers are small
@@ -281,40 +275,4 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True, height=Non
     def nonfinite(li, v, rgb):
         return f"{src}: non-finite values at light {li}, view {v}"
 
-    w.import_views(read, nonfinite, progress)
-    w.report_clamped(src)
-    if h_img % 2 or w_img % 2:
-        print(
-            f"warning: {out}: {h_img}x{w_img} texels, odd: packs shade 2x2 blocks, so teach, "
-            "distill and eval refuse it; crop it to an even size",
-            file=sys.stderr,
-        )
-    return w.finalize()
-
-
-def write_dfmf(path, values: np.ndarray, light_angles: np.ndarray, view_angles: np.ndarray):
-    """Write a UBO2014-style "!DFMF08FC" file (for tests). ``values``: ``[L, V, H, W, 3]`` RGB
-    (``L == V``, as btf.hh's DFMF reader requires); angles ``[N, 2]`` (theta, phi) radians."""
-    L, V, H, W, _ = values.shape
-    if L != V:
-        raise ValueError("DFMF needs as many views as lights")
-    out = bytearray(b"!DFMF08FC")
-    out += _COMMON.pack(_COMMON.size, 1, b"vrneural test", b"none", b"none", 1.0, 1, 1, 1)
-    out += struct.pack("<I", V)
-    for v in range(V):
-        out += struct.pack("<2fI", *view_angles[v], L)
-        for li in range(L):
-            out += struct.pack("<2f", *light_angles[li])
-    out += struct.pack("<II", W, H)
-    k = min(L * V, H * W)
-    out += struct.pack("<II3f9f", k, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1)
-    flipped = values[:, :, ::-1]  # stored bottom-up; btf.hh flips rows on load
-    for c in range(3):
-        # rows: lv = view * L + light; columns: xy = y * W + x
-        a = np.transpose(flipped[..., c], (1, 0, 2, 3)).reshape(V * L, H * W).astype(np.float64)
-        u, s, vt = np.linalg.svd(a, full_matrices=False)
-        out += struct.pack("<BIII", 4, k, V * L, H * W)
-        out += s[:k].astype("<f4").tobytes()
-        out += np.ascontiguousarray(u[:, :k]).astype("<f4").tobytes()
-        out += np.ascontiguousarray((s[:k, None] * vt[:k]).T).astype("<f4").tobytes()
-    Path(path).write_bytes(bytes(out))
+    return w.import_views(read, nonfinite, src, "it", progress)

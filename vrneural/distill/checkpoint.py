@@ -30,7 +30,7 @@ import torch
 from vrneural.btf.format import BTF_MAGIC
 from vrneural.btf.identity import moved_btf
 from vrneural.distill.models import NeuralModel
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, input_file
 from vrneural.formats.vrnm import VRNM_MAGIC
 from vrneural.grazing import DEFAULT_THETA_MAX_DEG
 from vrneural.outputs import make_parent
@@ -76,11 +76,7 @@ def load_checkpoint(path, kind: str | None = None) -> dict:
     Refuses files that need arbitrary unpickling (``weights_only=True``), corrupt or foreign
     files, other formats/versions, and (with ``kind``) checkpoints of another kind.
     """
-    p = Path(path)
-    if not p.exists():
-        raise VrnError(f"{p}: no such checkpoint")
-    if p.is_dir():
-        raise VrnError(f"{p}: is a directory, expected a checkpoint (.pt)")
+    p = input_file(path, "a checkpoint (.pt)", missing="no such checkpoint")
     _refuse_our_other_formats(p)
     _check_crcs(p)
     try:
@@ -140,13 +136,12 @@ def _non_finite(obj, name: str = "") -> str | None:
     if isinstance(obj, torch.Tensor):
         ok = not obj.is_floating_point() or bool(torch.isfinite(obj).all())
         return None if ok else name
-    items = (
-        obj.items()
-        if isinstance(obj, dict)
-        else enumerate(obj)
-        if isinstance(obj, (list, tuple))
-        else ()
-    )
+    if isinstance(obj, dict):
+        items = obj.items()
+    elif isinstance(obj, (list, tuple)):
+        items = enumerate(obj)
+    else:
+        return None
     for k, v in items:
         bad = _non_finite(v, f"{name}.{k}" if name else str(k))
         if bad is not None:
@@ -216,15 +211,11 @@ def model_from_checkpoint(ck: dict, source=None) -> NeuralModel:
     model.eval()
     for p in model.parameters():
         p.requires_grad_(False)
-    model.dir_range = recorded_dir_range(ck)
-    return model
-
-
-def recorded_dir_range(ck: dict) -> tuple[float, float]:
-    """The direction range of a checkpoint's BTF (its record; checkpoints from before it was
-    recorded: the default, which is what ``btf synth`` and UBO2014 hold)."""
+    # its BTF's direction range; checkpoints from before it was recorded: the default, which
+    # is what ``btf synth`` and UBO2014 hold
     rng = ck.get("btf", {}).get("dir_range")
-    return tuple(rng) if rng else (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
+    model.dir_range = tuple(rng) if rng else (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
+    return model
 
 
 def _state_mismatch(want: dict, have: dict) -> str | None:

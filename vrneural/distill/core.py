@@ -23,7 +23,9 @@ from vrneural.distill.specs import latent_widths
 
 
 class DistillNet(nn.Module):
-    """Student + T maps; ``forward`` returns the Eq. 5 loss of one slice (this rank's share)."""
+    """Student + T maps; ``forward`` returns the Eq. 5 loss of one slice (this rank's share).
+    Without a ``teacher`` (``teach``) or with ``cfg.distill`` off (``--no-distill``) the loss
+    is the ground truth's L1 alone (in the output's space)."""
 
     def __init__(self, model, teacher, data: SliceData, cfg):
         super().__init__()
@@ -32,7 +34,8 @@ class DistillNet(nn.Module):
         self.cfg = cfg
         self.space = cfg.space
         self.teacher = [teacher]  # a list: not a submodule (frozen, not synchronised by DDP)
-        if cfg.distill:
+        self.distill = teacher is not None and cfg.distill
+        if self.distill:
             dt, ds = latent_widths(teacher.spec), latent_widths(model.spec)  # z_t, z_s widths
             self.T1 = nn.Linear(dt[0], ds[0], bias=False)
             self.T2 = nn.Linear(dt[1], ds[1], bias=False)
@@ -57,7 +60,7 @@ class DistillNet(nn.Module):
         gt = space_l1(raw, self.data.target(pair), self.space)
         lod = self.lod_loss(wi, wo, pair)
         gt_total = gt if lod is None else gt + lod
-        if not self.cfg.distill:
+        if not self.distill:
             return gt_total, {"gt": gt.detach()}
         teacher = self.teacher[0]
         with torch.no_grad():

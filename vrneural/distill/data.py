@@ -49,7 +49,6 @@ class SliceData:
         self.test = sorted(test_set)
         self.train = [p for p in range(L * V) if p not in test_set]
         ys, xs = torch.meshgrid(torch.arange(H), torch.arange(W), indexing="ij")
-        self.block_index = to_blocks(ys * W + xs)  # [N, 4] flat texel index
         centre = torch.stack([(xs + 0.5) / W, (ys + 0.5) / H], -1).float()  # [H, W, 2]
         self.centres = to_blocks(centre)  # [N, 4, 2]
         share = nb // world

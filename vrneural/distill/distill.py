@@ -154,8 +154,9 @@ def run_wide_start(cfg: DistillConfig, on_step=None, stored: dict | None = None)
         )
     if stored is not None:  # the run's own settings; a flag that contradicts one is an error
         kind = resolved(cfg)
-        for name, key in WIDE_START_RECORD:
-            now, was = getattr(cfg, name), type(getattr(kind, name))(stored[key])
+        ran = {k: type(getattr(kind, k))(stored[key]) for k, key in WIDE_START_RECORD}
+        for name, was in ran.items():
+            now = getattr(cfg, name)
             if now is not None and now != was:
                 why = (
                     "its epochs were split between the halves when it began"
@@ -167,9 +168,7 @@ def run_wide_start(cfg: DistillConfig, on_step=None, stored: dict | None = None)
                     f"run with --{name.replace('_', '-')} {was}; {why} (drop the flag, or start "
                     "over: --force instead of --resume)"
                 )
-        cfg = dataclasses.replace(
-            cfg, **{name: type(getattr(kind, name))(stored[key]) for name, key in WIDE_START_RECORD}
-        )
+        cfg = dataclasses.replace(cfg, **ran)
     asked, cfg = cfg, resolved(cfg)  # the halves resolve the fields left open themselves
     w = cfg.wide_start
     if cfg.method == "neumip":
@@ -444,18 +443,7 @@ def _train(asked: DistillConfig, on_step=None, epochs_flag: str = "--epochs") ->
     }
     if cfg.force and resume is None and rank == 0:
         clear_outputs(outs)
-    ck = fit(
-        net,
-        lambda: mean_l1(model, data, pairs),
-        data,
-        cfg,
-        cfg.output,
-        payload,
-        resume,
-        tex_params=model.texture_parameters(),
-        on_step=on_step,
-        epochs_flag=epochs_flag,
-    )
+    ck = fit(net, model, data, pairs, cfg, payload, resume, on_step, epochs_flag)
     if rank == 0:
         finish_outputs(ck, cfg, data, export, missing_only=ck is resume)
     return ck

@@ -77,15 +77,14 @@ def activation_ranges(mat: NeuralMaterial, wi: np.ndarray, wo: np.ndarray, uv: n
 def material_ranges(mat: NeuralMaterial, data: SliceData, pairs: list[int]) -> dict:
     """Weights, textures and activations (over ``pairs`` of the training data) vs f16."""
     r: dict = {}
-    for name, layers in mat.networks.items():
+    nets, texs = dict(mat.networks), dict(mat.textures)
+    if mat.offset_net is not None:
+        nets["offset"], texs["offset"] = mat.offset_net, mat.offset_tex
+    for name, layers in nets.items():
         for i, lay in enumerate(layers):
             r[f"weight.{name}.{i}"] = value_range(np.concatenate([lay.weight.ravel(), lay.bias]))
-    for name, t in mat.textures.items():
+    for name, t in texs.items():
         r[f"texture.{name}"] = value_range(np.asarray(t, np.float32))
-    if mat.offset_net is not None:
-        for i, lay in enumerate(mat.offset_net):
-            r[f"weight.offset.{i}"] = value_range(np.concatenate([lay.weight.ravel(), lay.bias]))
-        r["texture.offset"] = value_range(np.asarray(mat.offset_tex, np.float32))
     uv = data.uv(None, shard=False).numpy()
     n = uv.shape[0]
     wi = np.concatenate([np.repeat(data.dirs(p)[0].numpy()[None], n, 0) for p in pairs])
@@ -129,20 +128,12 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None, lod_leve
     diff = 0.0
     for p in pairs[:2]:
         wi, wo = data.dirs(p)
-        n = uv.shape[0]
-        ref = material_forward(
-            mat, np.repeat(wi.numpy()[None], n, 0), np.repeat(wo.numpy()[None], n, 0), uv.numpy()
-        )
-        got = model.predict(wi, wo, uv).numpy()
-        diff = max(diff, float(np.abs(ref - got).max()))
-        for k in range(1, mat.lod_levels):  # each pyramid level at its own texel centres
-            uvk = data.uv_level(k, None)
-            nk = uvk.shape[0]
-            lod = np.full(nk, k, np.float32)
-            ref = material_forward(
-                mat, np.repeat(wi.numpy()[None], nk, 0), np.repeat(wo.numpy()[None], nk, 0),
-                uvk.numpy(), lod=lod,
-            )  # fmt: skip
+        for k in range(mat.lod_levels):  # each pyramid level at its own texel centres
+            uvk = uv if k == 0 else data.uv_level(k, None)
+            n = uvk.shape[0]
+            lod = None if k == 0 else np.full(n, k, np.float32)
+            wik, wok = (np.repeat(d.numpy()[None], n, 0) for d in (wi, wo))
+            ref = material_forward(mat, wik, wok, uvk.numpy(), lod=lod)
             got = model.predict(wi, wo, uvk, k).numpy()
             diff = max(diff, float(np.abs(ref - got).max()))
     hist = ck["history"]
@@ -154,7 +145,7 @@ def pack_material(ck: dict, data: SliceData, source: str | None = None, lod_leve
             "btf": ck["btf"],
             "checkpoint": str(source) if source else None,
             # identifies this pack's checkpoint, so `run --pack` can tell a student's teacher
-            "checkpoint_sha256": _sha256_or_none(source),
+            "checkpoint_sha256": file_sha256(source) if source and Path(source).is_file() else None,
             "teacher": ck.get("teacher", {}).get("sha256"),
             "teacher_path": ck.get("teacher", {}).get("resolved"),
             "seed": cfg["seed"],
@@ -217,16 +208,11 @@ def ranges_table(ranges: dict) -> str:
     return "\n".join(rows)
 
 
-def _sha256_or_none(path) -> str | None:
-    return file_sha256(path) if path and Path(path).is_file() else None
-
-
 def init_record(init: dict | None) -> dict | None:
     """A checkpoint's ``init_from`` (``--init-from``/``--wide-start``) in short: the wide run's
     file, hash, width and epochs; None for a run from random weights."""
     if not init:
         return None
-
     return {
         "path": init["path"],
         "sha256": init["sha256"],

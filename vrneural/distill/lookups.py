@@ -202,8 +202,6 @@ def setup_view_lookup(model: nn.Module, par: dict, tex) -> None:
     model.parallax_march = par.get("march", "texel")
     model.parallax_kind = par["kind"]
     if par["kind"] == "neural":
-        from vrneural.neural_offset import VIEW_INPUTS
-
         oc = int(par["channels"])
         model.offset_mlp = MLP([oc + VIEW_INPUTS, *par["hidden"], 1])
         model.offset_tex = tex(tuple(par["res"]), oc)

@@ -126,47 +126,39 @@ def written_by(path, ck: dict, output=None) -> bool:
     (at ``output``): the test-L1 curve it records is a non-empty start of the checkpoint's
     history; or, for a `vrneural export` of the run interrupted in its first epoch (no curve
     yet), it names the checkpoint ``output`` as its source and records the run's config."""
-    curve = _recorded_curve(Path(path))
+    curve, src, config = _recorded(Path(path))
     have = json_safe([h.get("test_l1") for h in ck.get("history", [])])
     if curve:
         return json_safe(curve) == have[: len(curve)]
     if curve != [] or output is None:
         return False
-    src, config = _recorded_source(Path(path))
     same = src is not None and Path(src).resolve() == Path(output).resolve()
     return same and json_safe(config) == json_safe(ck.get("config"))
 
 
-def _recorded_source(p: Path) -> tuple:
-    """``(checkpoint path, training config)`` that a pack (its provenance) or the sidecar of
-    `vrneural export` records; ``(None, None)`` for anything else."""
+def _recorded(p: Path) -> tuple:
+    """``(per-epoch test L1, checkpoint path, training config)`` that a pack (its metrics and
+    provenance) or a config file (its history; the sidecar of `vrneural export`: its source)
+    records; the curve None for anything not ours."""
     try:
         if p.suffix == ".vrnm":
             from vrneural.formats.vrnm import read_vrnm
 
-            prov = read_vrnm(p).meta.get("provenance", {})
-            return prov.get("checkpoint"), prov.get("config")
-        doc = json.loads(p.read_text())
-        return doc.get("checkpoint"), doc.get("training_config")
-    except (VrnError, OSError, ValueError, AttributeError, TypeError):
-        return None, None
-
-
-def _recorded_curve(p: Path) -> list | None:
-    """The per-epoch test L1 a pack or config file records (None: not one of ours)."""
-    try:
-        if p.suffix == ".vrnm":
-            from vrneural.formats.vrnm import read_vrnm
-
-            doc = {"metrics": read_vrnm(p).meta.get("metrics", {})}
+            meta = read_vrnm(p).meta
+            prov = meta.get("provenance")
+            prov = prov if isinstance(prov, dict) else {}
+            doc = {"metrics": meta.get("metrics", {}), "checkpoint": prov.get("checkpoint")}
+            doc["training_config"] = prov.get("config")
         else:
             doc = json.loads(p.read_text())
         if isinstance(doc.get("history"), list):
-            return [h.get("test_l1") for h in doc["history"]]
-        curve = doc.get("metrics", {}).get("test_l1_curve")
-        return curve if isinstance(curve, list) else None
+            curve = [h.get("test_l1") for h in doc["history"]]
+        else:
+            curve = doc.get("metrics", {}).get("test_l1_curve")
+        curve = curve if isinstance(curve, list) else None
+        return curve, doc.get("checkpoint"), doc.get("training_config")
     except (VrnError, OSError, ValueError, AttributeError, TypeError):
-        return None
+        return None, None, None
 
 
 def finish_outputs(ck: dict, cfg, data, export: bool | None = None, missing_only=False) -> None:

@@ -59,8 +59,9 @@ def prune_to(wide: NeuralModel, spec: dict, data: SliceData) -> NeuralModel:
             w = f"{name}.layers.{i}"
             state[f"{w}.weight"] = state[f"{w}.weight"][kept]
             state[f"{w}.bias"] = state[f"{w}.bias"][kept]
-            keep_cols = torch.cat([cols[kept], _other_cols(w_next.shape[1], cols)])
-            state[_weight_of(b_next)] = w_next[:, keep_cols.sort().values]
+            read = torch.ones(w_next.shape[1], dtype=torch.bool)  # the reader keeps the rest
+            read[cols[dropped]] = False
+            state[b_next.removesuffix("bias") + "weight"] = w_next[:, read]
     net.load_state_dict(state)
     return net
 
@@ -75,16 +76,6 @@ def _reader(state: dict, name: str, i: int, n_layers: int):
     z = state[f"{name}.layers.{i}.weight"].shape[0]
     w = state["fine.layers.0.weight"]
     return w, "fine.layers.0.bias", torch.arange(z)
-
-
-def _other_cols(n: int, cols: torch.Tensor) -> torch.Tensor:
-    mask = torch.ones(n, dtype=torch.bool)
-    mask[cols] = False
-    return torch.arange(n)[mask]
-
-
-def _weight_of(bias_key: str) -> str:
-    return bias_key[: -len("bias")] + "weight"
 
 
 def _activations(wide: NeuralModel, state: dict, data: SliceData, name: str, i: int):

@@ -1,18 +1,19 @@
-"""``vrneural teach``: train the 128-wide teacher ("NeuMIP Max", arch ``single``) on a BTF."""
+"""``vrneural teach``: train the 128-wide teacher ("NeuMIP Max", arch ``single``) on a BTF,
+on the ground truth alone (loss ``L1(y, y_gt)`` in the output's space)."""
 
 from __future__ import annotations
 
 import dataclasses
 
 import torch
-from torch import nn
 
 from vrneural.btf.format import read_btf
 from vrneural.btf.identity import btf_fingerprint, check_btf_record, split_pairs
 from vrneural.config import given, resolved
 from vrneural.distill.config import RESUME_FREE, TeachConfig
+from vrneural.distill.core import DistillNet
 from vrneural.distill.data import SliceData
-from vrneural.distill.evaluate import mean_l1, space_l1, test_pairs
+from vrneural.distill.evaluate import test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
 from vrneural.distill.outputs import (
     clear_outputs,
@@ -24,21 +25,6 @@ from vrneural.distill.train import compile_networks, dist_setup, fit, train_devi
 from vrneural.errors import VrnError, check_range, check_seed, count
 from vrneural.outputs import output_lock
 from vrneural.parallax import setup_parallax
-
-
-class GroundTruthNet(nn.Module):
-    """A model trained on ground truth alone: loss ``L1(y, y_gt)`` in the output's space."""
-
-    def __init__(self, model: NeuralModel, data: SliceData, space: str):
-        super().__init__()
-        self.model = model
-        self.data = data
-        self.space = space
-
-    def forward(self, wi, wo, uv, pair):
-        raw, _ = self.model(wi, wo, uv)
-        loss = space_l1(raw, self.data.target(pair), self.space)
-        return loss, {"gt": loss.detach()}
 
 
 def check_train_config(cfg) -> None:
@@ -150,7 +136,7 @@ def _run_teach(asked: TeachConfig, on_step, epochs_flag: str) -> dict:
     model = NeuralModel(spec, cfg.seed)
     if height is not None:
         model.set_height(height)
-    net = GroundTruthNet(model, data, cfg.space).to(dev)
+    net = DistillNet(model, None, data, cfg).to(dev)
     compile_networks(cfg.compile, model)
     pairs = test_pairs(data, cfg.max_test_slices)
     payload = {
@@ -165,18 +151,7 @@ def _run_teach(asked: TeachConfig, on_step, epochs_flag: str) -> dict:
     }
     if cfg.force and resume is None and rank == 0:
         clear_outputs(outs)
-    ck = fit(
-        net,
-        lambda: mean_l1(model, data, pairs),
-        data,
-        cfg,
-        cfg.output,
-        payload,
-        resume,
-        tex_params=model.texture_parameters(),
-        on_step=on_step,
-        epochs_flag=epochs_flag,
-    )
+    ck = fit(net, model, data, pairs, cfg, payload, resume, on_step, epochs_flag)
     if rank == 0:
         finish_outputs(ck, cfg, data, missing_only=ck is resume)
     return ck

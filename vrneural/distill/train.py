@@ -29,6 +29,8 @@ from vrneural.distill.averages import Ema
 from vrneural.distill.checkpoint import save_checkpoint
 from vrneural.distill.core import NonFiniteLossError, epoch_order, epoch_steps
 from vrneural.distill.data import SliceData
+from vrneural.distill.evaluate import mean_l1
+from vrneural.distill.models import NeuralModel
 from vrneural.errors import VrnError, count
 from vrneural.interrupt import Stop
 
@@ -117,27 +119,28 @@ class Interrupted(KeyboardInterrupt):
 
 def fit(
     net: nn.Module,
-    test_l1,
+    model: NeuralModel,
     data: SliceData,
+    pairs: list[int],
     cfg,
-    out: str,
     payload: dict,
     resume: dict | None = None,
-    tex_params: list | None = None,
     on_step=None,
     epochs_flag: str = "--epochs",
 ) -> dict:
-    """Train ``net`` (``net(wi, wo, uv, pair) -> (loss, parts)``) and return the final payload.
+    """Train ``net`` (``net(wi, wo, uv, pair) -> (loss, parts)``, around ``model``) into the
+    checkpoint ``cfg.output`` and return the final payload.
 
-    ``on_step(epoch, step)`` is called after every step (tests use it to send Ctrl-C).
-    ``test_l1()`` evaluates the held-out L1 (linear space); ``payload`` holds the fixed
+    ``on_step(epoch, step)`` is called after every step (tests use it to send Ctrl-C). The
+    held-out L1 (linear space) is ``model``'s on the test ``pairs``; ``payload`` holds the fixed
     checkpoint fields (kind, spec, config, btf, split, ...); ``resume`` a loaded checkpoint;
     ``epochs_flag`` the option that sets ``cfg.epochs``, for messages (``bench quality``'s
     ``--teacher-epochs``; "": none does, a ``--wide-start`` half).
     """
     torch.set_num_threads(max(1, int(cfg.threads)))
     rank, world = (dist.get_rank(), dist.get_world_size()) if dist.is_initialized() else (0, 1)
-    tex_ids = {id(p) for p in tex_params or []}
+    out, tex_params = cfg.output, model.texture_parameters()
+    tex_ids = {id(p) for p in tex_params}
     rest = [p for p in net.parameters() if p.requires_grad and id(p) not in tex_ids]
     groups = [{"params": rest, "lr": cfg.lr}]
     if tex_params:
@@ -167,12 +170,11 @@ def fit(
         if step:
             gen.set_state(resume["gen_state"])
     dev = data.device
+    stepped = net  # what the steps call: under torchrun the DDP wrapper
     if world > 1:
-        model = nn.parallel.DistributedDataParallel(
+        stepped = nn.parallel.DistributedDataParallel(
             net, device_ids=[dev.index] if dev.type == "cuda" else None
         )
-    else:
-        model = net
 
     def save(finished: bool) -> dict:
         ck = {
@@ -220,7 +222,7 @@ def fit(
             t0 = time.perf_counter()
             net.train()
             steps = epoch_steps(
-                model, opt, data, order, step, gen if cfg.jitter else None, ema, world
+                stepped, opt, data, order, step, gen if cfg.jitter else None, ema, world
             )
             while step < n:
                 try:
@@ -245,7 +247,7 @@ def fit(
                     raise stopped
             net.eval()
             with torch.no_grad(), ema.applied() if ema else contextlib.nullcontext():
-                last_test = float(test_l1())
+                last_test = float(mean_l1(model, data, pairs))
             if not math.isfinite(last_test):  # weights gone non-finite: never checkpoint them
                 raise _diverged(f"test L1 is {last_test}", epoch, n, n, out)
             sched.step(last_test)

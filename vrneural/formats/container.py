@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, input_file
 
 #: the magic of every vrneural container format -> what to call it in an error
 _KNOWN_MAGIC = {
@@ -189,11 +189,7 @@ def read_container(
     Arrays are read-only memory maps. ``what`` names the format in error messages. A file
     still being written (or left by an interrupted write) is refused unless ``partial``.
     """
-    p = Path(path)
-    if not p.exists():
-        raise VrnError(f"{p}: no such file")
-    if p.is_dir():
-        raise VrnError(f"{p}: is a directory, expected a {what}")
+    p = input_file(path, f"a {what}")
     size = p.stat().st_size
     magic = magic.ljust(8, b"\0")
     with open(p, "rb") as f:

@@ -42,19 +42,20 @@ VRNM_VERSION = 5
 #: versions this reader takes (1: before the recorded direction range; 2: before pyramids;
 #: 3: before height fields; 4: before the neural offset)
 VRNM_READS = (1, 2, 3, 4, 5)
-_said_default_range: set[str] = set()
-_said_no_parallax: set[str] = set()
+_said: set[tuple[str, str]] = set()  # (file, message) said by _said_once
 
 
 def write_vrnm(path, mat: NeuralMaterial) -> Path:
     """Write ``mat`` atomically. Raises :class:`VrnError` on non-finite weights or textures."""
     arrays: dict[str, np.ndarray] = {}
-    nets = {}
-    for name, layers in mat.networks.items():
-        nets[name] = [{"n_in": lay.n_in, "n_out": lay.n_out, "act": lay.act} for lay in layers]
+
+    def put_layers(prefix: str, layers) -> list[dict]:
         for i, lay in enumerate(layers):
-            arrays[f"net.{name}.{i}.weight"] = np.asarray(lay.weight, np.float32)
-            arrays[f"net.{name}.{i}.bias"] = np.asarray(lay.bias, np.float32)
+            arrays[f"{prefix}.{i}.weight"] = np.asarray(lay.weight, np.float32)
+            arrays[f"{prefix}.{i}.bias"] = np.asarray(lay.bias, np.float32)
+        return [{"n_in": lay.n_in, "n_out": lay.n_out, "act": lay.act} for lay in layers]
+
+    nets = {name: put_layers(f"net.{name}", layers) for name, layers in mat.networks.items()}
     for name, t in mat.textures.items():
         if not np.isfinite(np.asarray(t, np.float32)).all():
             raise VrnError(f"{path}: neural texture '{name}' contains NaN/Inf (f16 overflow?)")
@@ -65,10 +66,7 @@ def write_vrnm(path, mat: NeuralMaterial) -> Path:
         arrays["height"] = np.asarray(mat.height, np.float16)
     offset = None
     if mat.offset_net is not None:
-        offset = [{"n_in": lay.n_in, "n_out": lay.n_out, "act": lay.act} for lay in mat.offset_net]
-        for i, lay in enumerate(mat.offset_net):
-            arrays[f"offset.{i}.weight"] = np.asarray(lay.weight, np.float32)
-            arrays[f"offset.{i}.bias"] = np.asarray(lay.bias, np.float32)
+        offset = put_layers("offset", mat.offset_net)
         arrays["tex.offset"] = np.asarray(mat.offset_tex, np.float16)
     for k, a in arrays.items():
         if not np.isfinite(a).all():
@@ -101,7 +99,15 @@ def read_vrnm(path) -> NeuralMaterial:
             offset_net = _layers(path, arrays, "offset", header["offset"])
             offset_tex = np.array(arrays["tex.offset"], np.float16)
         texs = {name: np.array(arrays[f"tex.{name}"], np.float16) for name in header["textures"]}
-        dir_range = header["dir_range"] if version >= 2 else _default_range(path)
+        if version >= 2:
+            dir_range = header["dir_range"]
+        else:  # none recorded: the default, said once
+            dir_range = (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
+            _said_once(
+                path,
+                "pack from before recorded direction ranges; assuming the BTF's directions reach "
+                f"{DEFAULT_THETA_MAX_DEG:g} degrees (re-export it to record its own)",
+            )
         counts = header["levels"] if version >= 3 else {}
         levels = {
             name: [np.array(arrays[f"tex.{name}.{k}"], np.float16) for k in range(1, int(n))]
@@ -114,7 +120,12 @@ def read_vrnm(path) -> NeuralMaterial:
                 raise ValueError(f"parallax march {parallax['march']!r} not in {MARCHES}")
             height = np.array(arrays["height"], np.float16) if "height" in arrays else None
         else:
-            parallax, height = _no_parallax(path), None
+            parallax, height = {"kind": "off"}, None
+            _said_once(
+                path,
+                "pack from before height fields (format < 4); parallax off (re-distill with "
+                "--parallax to give it one)",
+            )
         for k, a in arrays.items():  # before the material checks its height field
             if not np.isfinite(np.asarray(a, np.float32)).all():
                 raise VrnError(f"{path}: '{k}' contains NaN/Inf")
@@ -144,27 +155,9 @@ def _layers(path, arrays: dict, prefix: str, specs: list) -> list[Layer]:
     return layers
 
 
-def _no_parallax(path) -> dict:
-    """The parallax of a pack from before height fields (version < 4): off, said once."""
-    key = str(Path(path).resolve())
-    if key not in _said_no_parallax:
-        _said_no_parallax.add(key)
-        print(
-            f"{path}: pack from before height fields (format < 4); parallax off (re-distill "
-            "with --parallax to give it one)",
-            file=sys.stderr,
-        )
-    return {"kind": "off"}
-
-
-def _default_range(path) -> tuple[float, float]:
-    """The direction range of a version-1 pack (none recorded): the default, said once."""
-    key = str(Path(path).resolve())
-    if key not in _said_default_range:
-        _said_default_range.add(key)
-        print(
-            f"{path}: pack from before recorded direction ranges; assuming the BTF's directions "
-            f"reach {DEFAULT_THETA_MAX_DEG:g} degrees (re-export it to record its own)",
-            file=sys.stderr,
-        )
-    return (DEFAULT_THETA_MAX_DEG, DEFAULT_THETA_MAX_DEG)
+def _said_once(path, message: str) -> None:
+    """Print ``path: message`` on stderr, once per file and message (an old pack's default)."""
+    key = (str(Path(path).resolve()), message)
+    if key not in _said:
+        _said.add(key)
+        print(f"{path}: {message}", file=sys.stderr)
