@@ -9,18 +9,17 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from vrneural.bench.atlas_meshes import NAMES
-from vrneural.bench.parts import QUICK_LOOP, Loop
+from vrneural.bench.parts import QUICK_LOOP, Loop, bench_config
 from vrneural.config import Config, QuickConfig, choices, ints, opt, part, unset, words
 from vrneural.errors import VrnError
 from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 from vrneural.runtime.schedule import SCHEDULES
 
 
-@dataclass
+@bench_config("frames", "CI-sized: textures 128,256; N 0,2,4; eyes 258x276; >= 2 frames")
 class FramesConfig(QuickConfig):
     """`vrneural bench frames`."""
 
-    out: str = opt("bench-frames", "output directory", cli=False)
     texture_res: tuple[int, ...] | None = unset(
         (800, 1200, 1600, 2000), "radiance texture sides (comma-separated)", items=ints()
     )
@@ -34,9 +33,6 @@ class FramesConfig(QuickConfig):
     lights: int = opt(1, "point lights")
     min_frames: int | None = unset(3, "at least this many measured frames per configuration")
     screen: bool = opt(True, "also measure per-pixel screen-space shading")
-    quick: bool = opt(False, "CI-sized: textures 128,256; N 0,2,4; eyes 258x276; >= 2 frames")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
 
 
 FramesConfig.QUICK = FramesConfig(
@@ -44,11 +40,10 @@ FramesConfig.QUICK = FramesConfig(
 )
 
 
-@dataclass
+@bench_config("lights", "CI-sized: lights 1,2,4; texture 256; eyes 258x276")
 class LightsConfig(QuickConfig):
     """`vrneural bench lights`."""
 
-    out: str = opt("bench-lights", "output directory", cli=False)
     lights: tuple[int, ...] | None = unset(
         tuple(range(1, 9)), "light counts (comma-separated, 1..64)", items=ints(1, LIGHTS_MAX)
     )
@@ -56,19 +51,15 @@ class LightsConfig(QuickConfig):
     reuse: int = opt(4, "update interval N")
     schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
     loop: Loop = part(Loop)
-    quick: bool = opt(False, "CI-sized: lights 1,2,4; texture 256; eyes 258x276")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
 
 
 LightsConfig.QUICK = LightsConfig(lights=(1, 2, 4), texture_res=256, loop=QUICK_LOOP)
 
 
-@dataclass
+@bench_config("materials", "CI-sized: materials 1,2,3; texture 256; eyes 258x276")
 class MaterialsConfig(QuickConfig):
     """`vrneural bench materials`."""
 
-    out: str = opt("bench-materials", "output directory", cli=False)
     materials: tuple[int, ...] | None = unset(
         (1, 2, 3, 4), "material counts (comma-separated, 1..8)", items=ints(1, 8)
     )
@@ -77,19 +68,15 @@ class MaterialsConfig(QuickConfig):
     schedule: str = opt("staggered", "reuse schedule", choices=("burst", "staggered"))
     lights: int = opt(3, "point lights")
     loop: Loop = part(Loop)
-    quick: bool = opt(False, "CI-sized: materials 1,2,3; texture 256; eyes 258x276")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
 
 
 MaterialsConfig.QUICK = MaterialsConfig(materials=(1, 2, 3), texture_res=256, loop=QUICK_LOOP)
 
 
-@dataclass
+@bench_config("frame", "CI-sized: texture 128, eyes 96x96, 6 frames, 2 rounds")
 class FrameConfig(QuickConfig):
     """`vrneural bench frame`."""
 
-    out: str = opt("bench-frame", "output directory", cli=False)
     texture_res: int | None = unset(1200, "radiance texture side")
     reuse: int = opt(4, "update interval N (staggered)")
     eye_res: str | None = unset("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
@@ -107,9 +94,6 @@ class FrameConfig(QuickConfig):
         "also time the texture-space update of the same materials with NeuMIP's neural offset "
         "(the student's module: 4 channels, 6 -> 8 -> 8 -> 1), per texel and per 2x2 block",
     )
-    quick: bool = opt(False, "CI-sized: texture 128, eyes 96x96, 6 frames, 2 rounds")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
 
 
 FrameConfig.QUICK = FrameConfig(texture_res=128, eye_res="96x96", frames=6, repeats=2, rounds=2)
@@ -155,11 +139,10 @@ def network_names(flag: str, value) -> tuple[str, ...]:
     return vals
 
 
-@dataclass
+@bench_config("kernels", "CI-sized: student and NeuMIP, 16384 texels, 2 repeats, sgemm 256")
 class KernelsConfig(QuickConfig):
     """`vrneural bench kernels`."""
 
-    out: str = opt("bench-kernels", "output directory", cli=False)
     texels: int | None = unset(
         1 << 18, "texels per evaluation (the student's coarse net runs on 1/4)"
     )
@@ -179,9 +162,6 @@ class KernelsConfig(QuickConfig):
         "CPU threads of PyTorch and of numpy's sgemm (0: their default, every core; 1 avoids "
         "the oversubscription that makes both many times slower on a loaded machine)",
     )
-    quick: bool = opt(False, "CI-sized: student and NeuMIP, 16384 texels, 2 repeats, sgemm 256")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
 
 
 KernelsConfig.QUICK = KernelsConfig(
@@ -198,17 +178,13 @@ def mesh_names(flag: str, value) -> tuple[str, ...]:
     return names
 
 
-@dataclass
+@bench_config("atlas", "CI-sized: each mesh a few thousand triangles, 128-256^2, 128 px")
 class AtlasBenchConfig(QuickConfig):
     """`vrneural bench atlas`."""
 
-    out: str = opt("bench-atlas", "output directory", cli=False)
     meshes: tuple[str, ...] = opt(NAMES, "meshes to run (comma-separated)", items=mesh_names)
     seams: bool = opt(True, "render each atlas (Lambertian, texture vs screen) for the seam error")
     eye: int | None = unset(384, "seam renders: image side in pixels")
-    quick: bool = opt(False, "CI-sized: each mesh a few thousand triangles, 128-256^2, 128 px")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
 
 
 AtlasBenchConfig.QUICK = AtlasBenchConfig(eye=128)

@@ -19,11 +19,16 @@ import dataclasses
 import time
 
 import numpy as np
+from tqdm import tqdm
 
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
 from vrneural.bench import tradeoff as tr
+from vrneural.bench.packs import load_packs, train_packs
 from vrneural.bench.train_configs import DistanceConfig
+from vrneural.errors import VrnError, check_range
+from vrneural.runtime.config import REUSE_MAX
+from vrneural.runtime.profiles import get_profile
 from vrneural.scoring import metrics
 
 #: name -> (mips, screen_res, prefiltered neural textures)
@@ -50,9 +55,6 @@ def conditions(c: DistanceConfig) -> list[ts.Condition]:
 
 
 def check(c: DistanceConfig) -> None:
-    from vrneural.errors import VrnError, check_range
-    from vrneural.runtime.config import REUSE_MAX
-
     check_range("--size", c.size, 0.001, 10.0)
     rp.check_texture_res(c.texture_res, "--texture-res")
     check_range("--reuse", c.reuse, 0, REUSE_MAX)
@@ -74,11 +76,6 @@ def settings(c: DistanceConfig, cond, prof, mips: bool, screen: bool, mode="text
 
 
 def run_distance(cfg: DistanceConfig) -> dict:
-    from tqdm import tqdm
-
-    from vrneural.bench.packs import load_packs, train_packs
-    from vrneural.runtime.profiles import get_profile
-
     c = cfg.resolved()
     check(c)
     with rp.prepare_out(cfg.out, cfg.force, "distance") as root:
@@ -101,14 +98,10 @@ def run_distance(cfg: DistanceConfig) -> dict:
             rs = settings(c, cond, prof, False, False, "reference", teacher)
             rscene = ts.scene_for(cond, mats["student"], teacher)
             bar.set_postfix_str(f"{cond.name}: reference")
-            ref = tr.reference(rscene, rs, cond, c.score.crop, full, cond.scored, c.score.spp, 0)
-            nf = cond.scored[:2]
-            ref2 = tr.reference(rscene, rs, cond, c.score.crop, full, nf, c.score.spp, 1)
+            ref, _, _, floor = ts.reference_pair(rscene, rs, cond, c.score, full, ppd, 2)
             bar.update()
             rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
-                   "noise_floor": float(np.mean([metrics.flip_hdr_eyes(ref[f], ref2[f], ppd)
-                                                 for f in nf])),
-                   "variants": []}  # fmt: skip
+                   "noise_floor": floor, "variants": []}  # fmt: skip
             cache: dict = {}
             own = {}  # pack -> its level 0 per pixel, supersampled: the filtering error alone
             for key in ("student", "student_lod"):

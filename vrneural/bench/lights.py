@@ -10,64 +10,43 @@ shading work grows linearly with k.
 
 from __future__ import annotations
 
-import time
-
 from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.configs import LightsConfig
-from vrneural.errors import check_range, count
-from vrneural.runtime.config import REUSE_MAX
+from vrneural.errors import count
 
 
 def run_lights(cfg: LightsConfig) -> dict:
     c = cfg.resolved()
-    rp.check_texture_res(c.texture_res)
-    check_range("--reuse", c.reuse, 0, REUSE_MAX)
-    eye_res = c.loop.check()
-    with rp.prepare_out(cfg.out, cfg.force, "lights") as root:
-        t0 = time.perf_counter()
-        doc = rp.header("lights", c)
-        scene = timing.bench_scene(max(8, *c.lights))  # light k stays put for any list up to 8
-        doc["records"], n = timing.count_sweep(
-            c, eye_res, c.lights, "bench lights", lambda k: (scene, k)
-        )
-        recs = doc["records"]
-        # the fewest lights measured, whatever the order
-        first = min(recs, key=lambda r: r["lights"])
+    scene = timing.bench_scene(max(8, *c.lights))  # light k stays put for any list up to 8
+
+    def report(recs):
+        first = min(recs, key=lambda r: r["lights"])  # the fewest lights measured, in any order
         base = first["shading_ms_per_frame"] / first["lights"]
-        md = [
-            "# Lights: frame time over the number of point lights (paper Fig. 10)",
-            "",
-            rp.adapter_line(doc),
-            f"Benchmark scene, {count(c.loop.eyes, 'eye')} at {c.loop.eye_res}, "
-            f"texture {c.texture_res}^2, "
-            f"N = {c.reuse} ({c.schedule}), {n} frames per light count after frame 0 "
-            f"and {c.loop.warmup} s of unmeasured frames."
-            + (" **Quick run: reduced grid.**" if c.quick else ""),
-            "",
+        columns = [
+            ("lights", "lights"),
+            ("FPS (mean frame ms)", "fps"),
+            ("frame ms median", "frame_ms.median"),
+            ("frame ms p99", "frame_ms.p99"),
+            ("shading ms/frame", "shading_ms_per_frame"),
+            ("shading / linear", lambda r: r["shading_ms_per_frame"] / (base * r["lights"])),
+            ("forward ms", "forward_ms"),
+            ("MLP evals/frame", "mlp_evals_per_frame"),
         ]
-        md += rp.record_table(
-            recs,
-            [
-                ("lights", "lights"),
-                ("FPS (mean frame ms)", "fps"),
-                ("frame ms median", "frame_ms.median"),
-                ("frame ms p99", "frame_ms.p99"),
-                ("shading ms/frame", "shading_ms_per_frame"),
-                ("shading / linear", lambda r: r["shading_ms_per_frame"] / (base * r["lights"])),
-                ("forward ms", "forward_ms"),
-                ("MLP evals/frame", "mlp_evals_per_frame"),
-            ],
-        )
-        md += [
-            "",
-            rp.FPS_NOTE,
+        notes = [
             "",
             f"shading / linear: shading ms over (shading ms per light at {first['lights']} "
             "light(s) x lights); 1 = linear.",
         ]
+        setting = (
+            f"Benchmark scene, {count(c.loop.eyes, 'eye')} at {c.loop.eye_res}, "
+            f"texture {c.texture_res}^2"
+        )
         plots = [("lights.png", "lights", lambda d, path: plot(d, base, path))]
-        return rp.finish(root, doc, md, t0, plots)
+        title = "# Lights: frame time over the number of point lights (paper Fig. 10)"
+        return title, setting, columns, notes, plots
+
+    return timing.count_bench(c, "lights", c.lights, lambda k: (scene, k), "light count", report)
 
 
 def plot(doc: dict, base: float, path) -> None:

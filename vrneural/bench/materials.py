@@ -7,14 +7,12 @@ resolution. Radiance textures are RGBA float16 here (8 B/texel): ``res^2 * 8 * e
 
 from __future__ import annotations
 
-import time
-
 from vrneural.bench import report as rp
 from vrneural.bench import timing
 from vrneural.bench.configs import MaterialsConfig
 from vrneural.errors import check_range, count
 from vrneural.material import random_material
-from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
+from vrneural.runtime.config import LIGHTS_MAX
 from vrneural.runtime.lights import default_lights
 from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 
@@ -32,47 +30,34 @@ def squares_scene(k: int, n_lights: int):
 
 def run_materials(cfg: MaterialsConfig) -> dict:
     c = cfg.resolved()
-    counts = c.materials
-    rp.check_texture_res(c.texture_res)
-    check_range("--reuse", c.reuse, 0, REUSE_MAX)
     check_range("--lights", c.lights, 1, LIGHTS_MAX)
-    eye_res = c.loop.check()
-    with rp.prepare_out(cfg.out, cfg.force, "materials") as root:
-        t0 = time.perf_counter()
-        doc = rp.header("materials", c)
-        doc["records"], n = timing.count_sweep(
-            c, eye_res, counts, "bench materials", lambda k: (squares_scene(k, c.lights), c.lights)
-        )
+
+    def report(recs):
         per = c.texture_res**2 * 8 * c.loop.eyes / 2**20  # rgba16float, per eye
-        for k, rec in zip(counts, doc["records"], strict=True):
+        for k, rec in zip(c.materials, recs, strict=True):
             rec["radiance_texture_mb_per_material"] = per
             rec["radiance_texture_mb"] = per * k  # every material's textures, as the table shows
-        recs = doc["records"]
-        md = [
-            "# Materials: several materials at once (paper Table 3)",
-            "",
-            rp.adapter_line(doc),
+        columns = [
+            ("materials", "materials"),
+            ("FPS (mean frame ms)", "fps"),
+            ("frame ms median", "frame_ms.median"),
+            ("frame ms p99", "frame_ms.p99"),
+            ("shading ms/frame", "shading_ms_per_frame"),
+            ("forward ms", "forward_ms"),
+            ("radiance textures MiB", "radiance_texture_mb"),
+        ]
+        setting = (
             f"k squares with distinct materials, {count(c.lights, 'light')}, "
             f"{count(c.loop.eyes, 'eye')} at {c.loop.eye_res}, "
-            f"texture {c.texture_res}^2 per material, N = {c.reuse} ({c.schedule}), {n} frames per "
-            f"count after frame 0 and {c.loop.warmup} s of unmeasured frames."
-            + (" **Quick run: reduced grid.**" if c.quick else ""),
-            "",
-        ]
-        md += rp.record_table(
-            recs,
-            [
-                ("materials", "materials"),
-                ("FPS (mean frame ms)", "fps"),
-                ("frame ms median", "frame_ms.median"),
-                ("frame ms p99", "frame_ms.p99"),
-                ("shading ms/frame", "shading_ms_per_frame"),
-                ("forward ms", "forward_ms"),
-                ("radiance textures MiB", "radiance_texture_mb"),
-            ],
+            f"texture {c.texture_res}^2 per material"
         )
-        md += ["", rp.FPS_NOTE]
-        return rp.finish(root, doc, md, t0, [("materials.png", "materials", plot)])
+        title = "# Materials: several materials at once (paper Table 3)"
+        return title, setting, columns, [], [("materials.png", "materials", plot)]
+
+    def setup(k):
+        return squares_scene(k, c.lights), c.lights
+
+    return timing.count_bench(c, "materials", c.materials, setup, "count", report)
 
 
 def plot(doc: dict, path) -> None:

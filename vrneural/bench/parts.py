@@ -5,6 +5,8 @@ benches' options, declared and checked once here instead of copied into every be
 - :class:`Scored`: the scored window of the quality-versus-cost benches (``tradeoff``,
   ``distance``).
 - :class:`PackBudget`: the training budget of the packs those two train.
+- :func:`bench_config`: the fields every bench has (``out``, ``quick``, ``progress``,
+  ``force``).
 """
 
 from __future__ import annotations
@@ -16,6 +18,30 @@ from vrneural.btf.synth import BtfConfig
 from vrneural.config import opt, unset
 from vrneural.errors import check_range
 from vrneural.runtime.config import parse_res
+
+
+def bench_config(name: str, quick: str, force: str = "", resume: str = ""):
+    """``@dataclass`` for the config of `vrneural bench NAME`, adding the fields every bench
+    has: ``out`` first (``bench-NAME``, unless the class places it; ``--out`` itself is
+    :func:`~vrneural.bench.entries.add_bench`'s), then the class's own, then ``quick`` (the
+    bench's help for it), ``progress``, ``force`` and, with its help, ``resume``."""
+
+    def wrap(cls):
+        own = cls.__annotations__
+        head = {} if "out" in own else {"out": opt(f"bench-{name}", "output directory", cli=False)}
+        tail = {
+            "quick": opt(False, quick),
+            "progress": opt(True, "show progress bars"),
+            "force": opt(False, force or "overwrite an existing output directory"),
+        }
+        if resume:
+            tail["resume"] = opt(False, resume)
+        for k, field in (head | tail).items():
+            setattr(cls, k, field)
+        cls.__annotations__ = dict.fromkeys(head, "str") | own | dict.fromkeys(tail, "bool")
+        return dataclass(cls)
+
+    return wrap
 
 
 @dataclass

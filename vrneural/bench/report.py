@@ -15,6 +15,7 @@ from vrneural.atlas.config import MIN_RESOLUTION
 from vrneural.config import config_dict, int_items
 from vrneural.errors import VrnError, check_range
 from vrneural.outputs import OutputDir, atomic_path, write_json
+from vrneural.presentation import pyplot, save_png, table  # noqa: F401 (rp.save_png, rp.table)
 from vrneural.runtime.config import max_texture_res
 from vrneural.runtime.run import percentiles
 from vrneural.versions import package_versions
@@ -55,19 +56,6 @@ def adapter_line(doc: dict) -> str:
     return f"Adapter: **{a['name']}**, {a['backend']}{cpu}."
 
 
-def table(headers: list[str], rows: list[list]) -> list[str]:
-    """Markdown table lines; floats printed with 3 significant digits."""
-
-    def cell(v):
-        if isinstance(v, float):
-            return f"{v:.3g}" if abs(v) < 1e3 else f"{v:.0f}"
-        return str(v)
-
-    out = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
-    out += ["| " + " | ".join(cell(v) for v in r) + " |" for r in rows]
-    return out
-
-
 def record_table(records: list[dict], columns: list[tuple]) -> list[str]:
     """:func:`table` with a row per record: ``columns`` are ``(header, field)``, ``field`` a key
     (``"frame_ms.median"``: a nested one) or a function of the record."""
@@ -80,27 +68,6 @@ def record_table(records: list[dict], columns: list[tuple]) -> list[str]:
         return r
 
     return table([h for h, _ in columns], [[get(r, f) for _, f in columns] for r in records])
-
-
-def save_png(fig, path: Path, dpi: int = 100, bbox: str | None = "tight") -> Path:
-    """Save a matplotlib figure as PNG atomically (dpi 100 keeps plots well under 300 KB) and
-    close it; ``bbox``: matplotlib's ``bbox_inches``."""
-    import matplotlib.pyplot as plt
-
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=dpi, bbox_inches=bbox)
-    plt.close(fig)
-    return path
-
-
-def pyplot():
-    """``matplotlib.pyplot`` on the Agg backend (files only, no display needed)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def figure(w: float = 6.4, h: float = 4.0, ncols: int = 1, sharey: bool = False):

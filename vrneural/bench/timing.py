@@ -1,4 +1,5 @@
-"""The frame-timing loop shared by `bench frames`, `bench lights` and `bench materials`.
+"""The frame-timing loop shared by `bench frames`, `bench lights` and `bench materials`, and
+the run of the last two (:func:`count_bench`).
 
 One :class:`~vrneural.runtime.renderer.Renderer` per (scene, texture resolution, lights) is
 reused across update intervals and schedules (``reuse`` and ``schedule`` are read from its
@@ -20,12 +21,14 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from vrneural.bench.report import stats
+from vrneural.bench import report as rp
 from vrneural.btf.heightfield import spectral_noise
+from vrneural.errors import check_range
 from vrneural.material import random_material
 from vrneural.mlp import random_mlp
 from vrneural.neural_offset import OFFSET_SIZES, VIEW_INPUTS
 from vrneural.parallax import auto_blocks
+from vrneural.runtime.config import REUSE_MAX
 from vrneural.runtime.lights import default_lights
 from vrneural.runtime.profiles import get_profile
 from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
@@ -91,14 +94,14 @@ def measure(
     shade = [st.gpu_ms.get("texture", 0.0) + st.gpu_ms.get("screen", 0.0) for st in timed]
     fwd = [st.gpu_ms.get("forward", 0.0) for st in timed]
     r.next_frame = f0 + n + m
-    fs = stats(walls)
+    fs = rp.stats(walls)
     return {
         "frames": n,
         "first_frame": f0,
         "warmup_frames": warm,
         "frame_ms": fs,
         "fps": 1e3 / fs["mean"],
-        "gpu_ms": stats(gpu),  # the timed passes (gpu_untimed: those left out)
+        "gpu_ms": rp.stats(gpu),  # the timed passes (gpu_untimed: those left out)
         "gpu_untimed": sorted(untimed),
         "host_cpu_ms": float(np.median([st.cpu_ms for st in sts])),
         # "wall": this adapter's timestamps miss a pass (gpu/coverage.py), so the shading and
@@ -135,27 +138,50 @@ def measured_record(
     }
 
 
-def count_sweep(c, eye_res, counts: list[int], desc: str, setup) -> tuple[list[dict], int]:
-    """`bench lights` and `bench materials`: one renderer per count ``k`` of ``counts``, on
-    ``setup(k) -> (scene, point lights)``, with ``c``'s texture side, eyes, N and schedule at
-    the quest3 frame rate and field of view, each measured over ``c.loop.cycles`` update cycles
-    after ``c.loop.warmup`` s. Returns the records (in ``counts`` order) and the frames measured
-    per count."""
-    prof = get_profile("quest3")
-    n = frames_for(c.reuse, c.loop.cycles, 1)
-    bar = progress(n * len(counts), desc, c.progress)
-    recs = []
-    for k in counts:
-        scene, n_lights = setup(k)
-        r = make_renderer(scene, texture_res=c.texture_res, eye_res=eye_res, eyes=c.loop.eyes,
-                          n_lights=n_lights, reuse=c.reuse, schedule=c.schedule, fps=prof.fps,
-                          fov_y=prof.fov_y)  # fmt: skip
-        recs.append(
-            measured_record(r, c.reuse, c.schedule, c.loop.cycles, 1, bar.update, c.loop.warmup)
-        )
-        del r
-    bar.close()
-    return recs, n
+def count_bench(c, name: str, counts: list[int], setup, per: str, report) -> dict:
+    """`bench lights` and `bench materials` (``name``), ``c`` resolved: its checks, its output
+    folder, one renderer per count ``k`` of ``counts`` on ``setup(k) -> (scene, point lights)``
+    with ``c``'s texture side, eyes, N and schedule at the quest3 frame rate and field of view,
+    each measured over ``c.loop.cycles`` update cycles after ``c.loop.warmup`` s (the records in
+    ``counts`` order), and results.md from ``report(records) -> (title, setting, columns,
+    notes, plots)``: the title, the setting line (the scene; N, the frames measured per
+    ``per`` and the warm-up follow), the table of ``columns``, the FPS note and ``notes``;
+    ``plots`` as :func:`~vrneural.bench.report.finish` draws them."""
+    rp.check_texture_res(c.texture_res)
+    check_range("--reuse", c.reuse, 0, REUSE_MAX)
+    loop, eye_res = c.loop, c.loop.check()
+    with rp.prepare_out(c.out, c.force, name) as root:
+        t0 = time.perf_counter()
+        doc = rp.header(name, c)
+        prof = get_profile("quest3")
+        n = frames_for(c.reuse, loop.cycles, 1)
+        bar = progress(n * len(counts), f"bench {name}", c.progress)
+        recs = doc["records"] = []
+        for k in counts:
+            scene, n_lights = setup(k)
+            r = make_renderer(scene, texture_res=c.texture_res, eye_res=eye_res, eyes=loop.eyes,
+                              n_lights=n_lights, reuse=c.reuse, schedule=c.schedule, fps=prof.fps,
+                              fov_y=prof.fov_y)  # fmt: skip
+            recs.append(
+                measured_record(r, c.reuse, c.schedule, loop.cycles, 1, bar.update, loop.warmup)
+            )
+            del r
+        bar.close()
+        title, setting, columns, notes, plots = report(recs)
+        md = [
+            title,
+            "",
+            rp.adapter_line(doc),
+            f"{setting}, N = {c.reuse} ({c.schedule}), {n} frames per {per} after frame 0 "
+            f"and {loop.warmup} s of unmeasured frames."
+            + (" **Quick run: reduced grid.**" if c.quick else ""),
+            "",
+            *rp.record_table(recs, columns),
+            "",
+            rp.FPS_NOTE,
+            *notes,
+        ]
+        return rp.finish(root, doc, md, t0, plots)
 
 
 def progress(total: int, desc: str, enabled: bool):

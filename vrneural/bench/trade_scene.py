@@ -26,6 +26,7 @@ from vrneural.runtime.adaptive import AdaptiveState
 from vrneural.runtime.camera import HeadPath, OrbitPath, PoseLogPath, look_rotation
 from vrneural.runtime.lights import PointLight, light_arrays
 from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
+from vrneural.scoring import metrics
 
 SPHERE_M = 0.08  # sphere diameter, metres (about 105 pixels at 1 m on quest3)
 DIST_M = 1.0  # default distance head -> sphere centre
@@ -199,6 +200,17 @@ def reference(scene, s, cond, crop, full, frames, spp, seed) -> dict:
     ref = SupersampledReference(scene, s, spp, seed)
     track(ref.r, cond, crop, full)
     return {f: ref.frame(f) for f in frames}
+
+
+def reference_pair(scene, s, cond: Condition, score, full, ppd: float, n_floor: int):
+    """The supersampled reference (``score``'s spp, seed 0) on ``cond``'s scored frames and a
+    second one (seed 1: other sample positions) on the first ``n_floor`` of them; returns
+    ``(ref, ref2, those frames, their mean FLIP between the two)``: the noise floor of a score."""
+    ref = reference(scene, s, cond, score.crop, full, cond.scored, score.spp, 0)
+    nf = cond.scored[:n_floor]
+    ref2 = reference(scene, s, cond, score.crop, full, nf, score.spp, 1)
+    floor = float(np.mean([metrics.flip_hdr_eyes(ref[f], ref2[f], ppd) for f in nf]))
+    return ref, ref2, nf, floor
 
 
 def scheduled_candidates(r, cond, budget: float | None) -> float:

@@ -28,8 +28,8 @@ from tqdm import tqdm
 
 from vrneural.bench import report as rp
 from vrneural.bench import trade_scene as ts
-from vrneural.bench.packs import REQUIRED, load_packs, pack_paths, train_packs
-from vrneural.bench.trade_scene import reference, render, scheduled_candidates
+from vrneural.bench.packs import PACKS, REQUIRED, load_packs, pack_paths, train_packs
+from vrneural.bench.trade_scene import render, scheduled_candidates
 from vrneural.bench.tradeoff_report import finish_report, label
 from vrneural.bench.train_configs import TradeoffConfig
 from vrneural.errors import VrnError, check_range
@@ -260,8 +260,6 @@ def check(c) -> None:
     if c.packs is not None and not c.packs.strip():  # "" trains; typed, it was a slip
         raise VrnError("--packs is empty; name the folder of packs, or leave it out to train them")
     if c.packs:  # every pack what its name says, before any work or output
-        from vrneural.bench.packs import load_packs, pack_paths
-
         load_packs(pack_paths(c.packs))
     else:
         c.budget.check(list(c.presets), "--presets")
@@ -293,8 +291,6 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
         doc["packs"] = {"source": c.packs or "trained", "seconds": time.perf_counter() - tt,
                         "materials": {k: sorted(v) for k, v in mats.items()}}  # fmt: skip
         if c.packs:
-            from vrneural.bench.packs import PACKS
-
             doc["packs"]["absent"] = [k for k in PACKS if k not in next(iter(mats.values()))]
         prof = get_profile("quest3")  # the eye image the crops are cut from
         full = prof.eye_res
@@ -330,11 +326,9 @@ def run_tradeoff(cfg: TradeoffConfig) -> dict:
             rs = settings_for(c, variant(mode="reference"), cond, prof, teacher)
             rscene = ts.scene_for(cond, pm["student"], teacher, c.lights)
             bar.set_postfix_str(f"{cond.name} / {preset}: reference")
-            ref = reference(rscene, rs, cond, c.score.crop, full, cond.scored, c.score.spp, 0)
-            nf = cond.scored[: max(2, len(cond.scored) // 2)]
-            ref2 = reference(rscene, rs, cond, c.score.crop, full, nf, c.score.spp, 1)
-            floor = [metrics.flip_hdr_eyes(ref[f], ref2[f], ppd) for f in nf]
-            rec["noise_floor"] = {"flip": float(np.mean(floor)), "frames": nf}
+            n_floor = max(2, len(cond.scored) // 2)
+            ref, ref2, nf, floor = ts.reference_pair(rscene, rs, cond, c.score, full, ppd, n_floor)
+            rec["noise_floor"] = {"flip": floor, "frames": nf}
             cache: dict = {}
             n0 = None
             for v in vs:

@@ -5,10 +5,9 @@ without the benches (each bench module imports its config from here).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import ClassVar
 
-from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored
+from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored, bench_config
 from vrneural.btf.presets import PRESETS
 from vrneural.config import QuickConfig, choices, floats, ints, listed, opt, part, unset, words
 from vrneural.distill.config import COMPILE_MODES, StudentShape, TrainBudget
@@ -18,7 +17,14 @@ from vrneural.runtime.config import REUSE_MAX
 BENCH_PARALLAX = ("off", "height", "neural", "both")
 
 
-@dataclass
+@bench_config(
+    "quality",
+    "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps",
+    force="use an existing --out: retrain every network and rewrite the reports (other files "
+    "in it are kept)",
+    resume="reuse the checkpoints in OUT that match this run (same config, BTF and teacher): "
+    "finished ones as they are, interrupted or shorter ones continued; train the rest",
+)
 class QualityConfig(QuickConfig, TrainBudget, StudentShape):
     """`vrneural bench quality`: the training fields it shares with `distill` (seed, --ema,
     --lr-patience, --device, --compile, --neumip-dirs, --width, --wide-start) apply to every
@@ -58,18 +64,6 @@ class QualityConfig(QuickConfig, TrainBudget, StudentShape):
         "train this many networks at once, each in its own process (teachers first, then "
         "every network and seed of every preset; with --device cuda see docs/training.md on MPS)",
     )
-    quick: bool = opt(False, "CI-sized run: 16^2 texels, 8 directions, 2 epochs, 5 LM steps")
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(
-        False,
-        "use an existing --out: retrain every network and rewrite the reports (other files "
-        "in it are kept)",
-    )
-    resume: bool = opt(
-        False,
-        "reuse the checkpoints in OUT that match this run (same config, BTF and teacher): "
-        "finished ones as they are, interrupted or shorter ones continued; train the rest",
-    )
 
     def resolved(self) -> QualityConfig:
         """The fields not given: ``--quick``'s (``QUICK``) or the defaults; no
@@ -93,7 +87,14 @@ METHODS = {
 STARTS = {"plain": "from random weights", "wide": "wide start (2W, pruned to W)"}
 
 
-@dataclass
+@bench_config(
+    "widths",
+    "CI-sized run: 16^2 texels, 8 directions, 2 epochs, widths 4,8, 1 seed (options "
+    "given explicitly win)",
+    force="use an existing --out: retrain every network, rewrite the reports",
+    resume="reuse the checkpoints in OUT that match this run (same settings, BTF and teacher): "
+    "finished ones as they are, interrupted ones continued; train the rest",
+)
 class WidthsConfig(QuickConfig):
     """`vrneural bench widths`."""
 
@@ -133,18 +134,6 @@ class WidthsConfig(QuickConfig):
         "off", "torch.compile the networks (teach/distill --compile)", choices=COMPILE_MODES
     )
     jobs: int = opt(1, "train this many networks at once, each in its own process")
-    quick: bool = opt(
-        False,
-        "CI-sized run: 16^2 texels, 8 directions, 2 epochs, widths 4,8, 1 seed (options "
-        "given explicitly win)",
-    )
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "use an existing --out: retrain every network, rewrite the reports")
-    resume: bool = opt(
-        False,
-        "reuse the checkpoints in OUT that match this run (same settings, BTF and teacher): "
-        "finished ones as they are, interrupted ones continued; train the rest",
-    )
 
 
 WidthsConfig.QUICK = WidthsConfig(
@@ -152,11 +141,14 @@ WidthsConfig.QUICK = WidthsConfig(
 )
 
 
-@dataclass
+@bench_config(
+    "tradeoff",
+    "CI-sized: 48-pixel crops, 2 spp, 3 frames, rest and one 300 deg/s turn, no light, "
+    "distance or tiling sweep, textures 128,256 (base 256), N 0,4, one tiny-trained preset",
+)
 class TradeoffConfig(QuickConfig):
     """`vrneural bench tradeoff`."""
 
-    out: str = opt("bench-tradeoff", "output directory", cli=False)
     score: Scored = part(Scored)
     speeds: tuple[float, ...] | None = unset(
         (0, 100, 200, 300, 400),
@@ -205,13 +197,6 @@ class TradeoffConfig(QuickConfig):
         "directory with teacher/student/student_nodistill/single8/neumip.vrnm (skips training; "
         "each must be what its name says, all from one BTF and its teacher); replaces --presets",
     )
-    quick: bool = opt(
-        False,
-        "CI-sized: 48-pixel crops, 2 spp, 3 frames, rest and one 300 deg/s turn, no light, "
-        "distance or tiling sweep, textures 128,256 (base 256), N 0,4, one tiny-trained preset",
-    )
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
 
 
 TradeoffConfig.QUICK = TradeoffConfig(
@@ -228,11 +213,14 @@ TradeoffConfig.QUICK = TradeoffConfig(
 )
 
 
-@dataclass
+@bench_config(
+    "distance",
+    "CI-sized: distances 1,10, tiling 8, 48-pixel crops, 2 spp, 3 frames, texture 256, tiny "
+    "training",
+)
 class DistanceConfig(QuickConfig):
     """`vrneural bench distance`."""
 
-    out: str = opt("bench-distance", "output directory", cli=False)
     distances: tuple[float, ...] | None = unset(
         (0.3, 1, 3, 10, 20), "sphere distances (m)", items=floats(0.2, 100.0)
     )
@@ -247,13 +235,6 @@ class DistanceConfig(QuickConfig):
     score: Scored = part(Scored)
     preset: str = opt("leather", "synthetic BTF preset of the trained packs")
     budget: PackBudget = part(PackBudget)
-    quick: bool = opt(
-        False,
-        "CI-sized: distances 1,10, tiling 8, 48-pixel crops, 2 spp, 3 frames, texture 256, tiny "
-        "training",
-    )
-    progress: bool = opt(True, "show progress bars")
-    force: bool = opt(False, "overwrite an existing output directory")
 
     #: packs trained 24 epochs, not the shared 4: with 4, the LOD pack's level 0 is noisier
     #: than the plain student's and flickers more at 0.3 m (docs/lod.md); 24 cost a minute

@@ -132,8 +132,6 @@ def run_widths(cfg: WidthsConfig) -> dict:
     od = check_bench_out(root, cfg, "bench widths", "sweep")
     _check_same_preset(cfg, root)
     if cfg.resume:  # every checkpoint it would meet matches, before any work
-        from vrneural.bench.quality import _teach_config
-
         btf_path = root / "btf" / f"{cfg.preset}.btf"
         _teach_config(cfg.preset, plan.quality, root, btf_path, None)
         network_runs(plan, root, btf_path, check_teacher=False)

@@ -12,16 +12,13 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.btf.sheet import sheet_panels
+from vrneural.presentation import pyplot
 from vrneural.scoring.score import display_slice, predict_slice, slice_exposure, texel_blocks
 
 
 def slices_png(mats: list, names: list[str], btf, precision: str) -> bytes:
     """The figure as PNG bytes. ``precision``: ``f32``, ``f16`` or ``both`` (shown in f32)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     prec = "f16" if precision == "f16" else "f32"
     L, V, H, W = btf.shape
     uv = texel_blocks(H, W)

@@ -26,6 +26,7 @@ from vrneural.formats.vrnm import read_vrnm
 from vrneural.interrupt import Stop
 from vrneural.material import distilled, width_words
 from vrneural.outputs import OutputDir, atomic_path, write_json
+from vrneural.presentation import table
 from vrneural.scoring.config import PRECISION_CHOICES, EvalConfig
 from vrneural.scoring.score import pick_slices, precisions, score
 
@@ -340,9 +341,7 @@ def text_table(doc: dict) -> str:
 def markdown(doc: dict) -> str:
     rows = table_rows(doc)
     md = [f"# vrneural eval: {doc['btf']['name']}", "", headline(doc) + ".", ""]
-    md += ["| " + " | ".join(r) + " |" for r in rows[:1]]
-    md += ["|" + "---|" * len(rows[0])]
-    md += ["| " + " | ".join(r) + " |" for r in rows[1:]]
+    md += table(rows[0], rows[1:])
     md += ["", LEGEND, ""]
     trainer = [
         f"{p['name']} {_trainer_l1(p):.6f}" for p in doc["packs"] if _trainer_l1(p) is not None
