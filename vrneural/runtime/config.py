@@ -147,7 +147,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
             raise VrnError(
                 f"--{name} = {getattr(cfg, name)!r} is not allowed; choose {', '.join(allowed)}"
             )
-    reuse_given, budget = parse_reuse(cfg.reuse, cfg.reuse_budget, cfg.mode)
+    reuse_given, budget = parse_reuse(cfg.reuse, cfg.reuse_budget)
     for name in ("frames", "eyes", "texture_res", "lights"):
         v = getattr(cfg, name)
         if v is not None:  # None: the profile's
@@ -252,7 +252,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     )
 
 
-def parse_reuse(reuse, budget: float, mode: str) -> tuple[int | None, float | None]:
+def parse_reuse(reuse, budget: float) -> tuple[int | None, float | None]:
     """``--reuse`` (None, a whole number, or ``"auto"``) and ``--reuse-budget`` ->
     ``(N or None for the profile's, the adaptive budget or None)``."""
     if isinstance(reuse, str) and reuse.strip().lower() == "auto":
