@@ -73,14 +73,16 @@ def count(n: int, noun: str, plural: str | None = None) -> str:
     return f"{n} {noun if n == 1 else plural or noun + 's'}"
 
 
-def check_range(name: str, value: float, lo: float | None = None, hi: float | None = None) -> None:
-    """Raise :class:`VrnError` unless ``lo <= value <= hi`` (bounds optional) and finite."""
+def check_range(name: str, value: float, lo=None, hi=None, lo_open=False, open_inf=False) -> None:
+    """Raise :class:`VrnError` unless ``lo <= value <= hi`` (``lo < value`` with ``lo_open``;
+    the bounds optional numbers) and finite. ``open_inf``: no ``hi`` written ``inf)``, not
+    ``inf]``."""
     bad = isinstance(value, float) and not math.isfinite(value)
-    bad = bad or (lo is not None and value < lo) or (hi is not None and value > hi)
-    if bad:
-        lo_s = "-inf" if lo is None else number_text(lo)
-        hi_s = "inf" if hi is None else number_text(hi)
-        raise VrnError(f"{name} = {value!r} is out of range; allowed [{lo_s}, {hi_s}]")
+    bad = bad or (lo is not None and (value <= lo if lo_open else value < lo))
+    if bad or (hi is not None and value > hi):
+        lo_s = ("(" if lo_open else "[") + ("-inf" if lo is None else number_text(lo))
+        hi_s = ("inf" + (")" if open_inf else "]")) if hi is None else number_text(hi) + "]"
+        raise VrnError(f"{name} = {value!r} is out of range; allowed {lo_s}, {hi_s}")
 
 
 def check_int(name: str, value, lo: int | None = None, hi: int | None = None) -> None:
@@ -109,8 +111,9 @@ def number_text(x: float) -> str:
     return f"{x:g}"
 
 
-def check_choice(name: str, value: object, allowed: tuple | list | set) -> None:
-    """Raise :class:`VrnError` unless ``value`` is one of ``allowed``."""
+def check_choice(name: str, value: object, allowed: tuple | list | set, ordered=False) -> None:
+    """Raise :class:`VrnError` unless ``value`` is one of ``allowed`` (listed sorted, or in the
+    given order with ``ordered``)."""
     if value not in allowed:
-        opts = ", ".join(str(a) for a in sorted(allowed, key=str))
+        opts = ", ".join(str(a) for a in (allowed if ordered else sorted(allowed, key=str)))
         raise VrnError(f"{name} = {value!r} is not allowed; choose one of: {opts}")

@@ -43,7 +43,7 @@ import numpy as np
 import tomllib
 
 from vrneural.atlas.config import MAX_RESOLUTION, MIN_RESOLUTION, MODES
-from vrneural.errors import SEED_MAX, VrnError, check_int, number_text
+from vrneural.errors import SEED_MAX, VrnError, check_choice, check_int, check_range
 from vrneural.formats.vrnm import read_vrnm
 from vrneural.material import NeuralMaterial, lambertian_material, random_material
 from vrneural.runtime.lights import (
@@ -127,9 +127,12 @@ class _Fields:
         if not isinstance(table, dict):
             raise VrnError(f"{src}: {path} must be a table")
 
+    def name(self, key: str) -> str:
+        """``file: path.key``, as messages name a field."""
+        return f"{self.src}: {self.path}.{key}" if self.path else f"{self.src}: {key}"
+
     def err(self, key: str, msg: str) -> VrnError:
-        p = f"{self.path}.{key}" if self.path else key
-        return VrnError(f"{self.src}: {p} {msg}")
+        return VrnError(f"{self.name(key)} {msg}")
 
     def num(self, key, default=None, lo=None, hi=None, lo_open=False, integer=False):
         v = self.t.get(key, default)
@@ -137,16 +140,7 @@ class _Fields:
             raise self.err(key, "is missing")
         if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and v != int(v)):
             raise self.err(key, f"= {v!r} must be {'an integer' if integer else 'a number'}")
-        bad = not math.isfinite(v) or (lo is not None and (v <= lo if lo_open else v < lo))
-        bad = bad or (hi is not None and v > hi)
-        if bad:
-            lo_s = "-inf" if lo is None else number_text(lo)
-            hi_s = "inf" if hi is None else number_text(hi)
-            br = "(" if lo_open else "["
-            raise self.err(
-                key,
-                f"= {v!r} is out of range; allowed {br}{lo_s}, {hi_s}{')' if hi is None else ']'}",
-            )
+        check_range(self.name(key), v, lo, hi, lo_open, open_inf=True)
         return int(v) if integer else float(v)
 
     def vec(self, key, default=None, n=3, lo=None, bound=None):
@@ -186,8 +180,8 @@ class _Fields:
             raise self.err(key, "is missing")
         if not isinstance(v, str):
             raise self.err(key, f"= {v!r} must be a string")
-        if choices is not None and v not in choices:
-            raise self.err(key, f"= {v!r} is not allowed; choose one of: {', '.join(choices)}")
+        if choices is not None:
+            check_choice(self.name(key), v, choices, ordered=True)
         return v
 
     def unknown(self, allowed) -> None:
