@@ -33,10 +33,6 @@ from vrneural.viewer.view import View
 from vrneural.viewer.xvfb import on_a_display
 
 
-def _load() -> float:
-    return float(os.getloadavg()[0])
-
-
 def offscreen_fps(profile: str, frames: int) -> dict:
     """``Renderer.frame`` alone at the viewer's start-up camera, one eye, as the window does."""
     v = View(profile=profile)  # the same renderer, settings, pose and lights as the window
@@ -153,7 +149,7 @@ def measure(quick: bool = False) -> dict:
 
     n = 8 if quick else 30
     res: dict = {"adapter": adapter_summary().to_dict(), "cpus": os.cpu_count()}
-    res["load_before"] = _load()
+    res["load_before"] = os.getloadavg()[0]
     for profile, frames, reps in (("preview", n, 2), ("quest3", max(4, n // 3), 1)):
         runs = []
         for _ in range(reps):  # interleaved: the machine's load drifts
@@ -171,7 +167,7 @@ def measure(quick: bool = False) -> dict:
     res["preview"]["target_fps"] = 5.0
     res["preview"]["met"] = res["preview"]["window_fps"] >= 5.0
     res["input_to_photon"] = window_run("preview", 30 if quick else 160, 8 if quick else 30)
-    res["load_after"] = _load()
+    res["load_after"] = os.getloadavg()[0]
     return res
 
 
