@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from atlas_helpers import gpu_raster_coverage
 
 from vrneural.atlas import EMPTY, build_atlas, builtin_mesh
 from vrneural.atlas.raster import raster_coverage as cpu_raster_coverage
@@ -33,13 +34,12 @@ def _edge_distance(uv, faces, ids, R):
 @pytest.mark.gpu
 @pytest.mark.parametrize("name", ["torus", "sphere"])
 def test_gpu_and_cpu_rasterizers_agree(name):
-    from vrneural.atlas.gpu_raster import raster_coverage
 
     R = 256
     atlas = build_atlas(builtin_mesh(name), R, 2, cache=False)
     uv, faces = atlas.uv_atlas, atlas.mesh.faces
     cpu = cpu_raster_coverage(uv, faces, R)
-    gpu = raster_coverage(uv, faces, R)
+    gpu = gpu_raster_coverage(uv, faces, R)
     assert gpu.shape == (R, R) and gpu.dtype == np.uint32
     differ = cpu != gpu
     # every disagreement is a centre on (within snapping of) an edge of both candidates
@@ -56,7 +56,6 @@ def test_gpu_top_left_rule_on_a_grid_through_centres():
     interior centre exactly one owner, and the same one (vertices are exactly representable,
     so no snapping ambiguity)."""
     from vrneural.atlas.builtin import grid_faces
-    from vrneural.atlas.gpu_raster import raster_coverage
 
     R = 32
     s = np.linspace(4.5 / R, 28.5 / R, 5)
@@ -64,18 +63,17 @@ def test_gpu_top_left_rule_on_a_grid_through_centres():
     uv = np.stack([u.ravel(), v.ravel()], 1).astype(np.float32)
     faces = grid_faces(4, 4)
     cpu = cpu_raster_coverage(uv, faces, R)
-    gpu = raster_coverage(uv, faces, R)
+    gpu = gpu_raster_coverage(uv, faces, R)
     np.testing.assert_array_equal(gpu, cpu)
 
 
 @pytest.mark.gpu
 def test_gpu_raster_states_the_allowed_resolution_range():
-    from vrneural.atlas.gpu_raster import raster_coverage
     from vrneural.errors import VrnError
     from vrneural.gpu import get_device
 
     limit = get_device().limits["max-texture-dimension-2d"]
     uv = np.float32([[0.1, 0.1], [0.9, 0.1], [0.1, 0.9]])
     with pytest.raises(VrnError) as e:
-        raster_coverage(uv, np.uint32([[0, 1, 2]]), limit + 2)
+        gpu_raster_coverage(uv, np.uint32([[0, 1, 2]]), limit + 2)
     assert str(e.value) == f"resolution = {limit + 2} is out of range; allowed [1, {limit}]"

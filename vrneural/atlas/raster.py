@@ -179,8 +179,8 @@ def _coverage(px, es, tris, R: int) -> tuple[np.ndarray, int]:
 def raster_coverage(uv: np.ndarray, faces: np.ndarray, R: int) -> np.ndarray:
     """[R, R] uint32: step 1 alone (exact centre coverage, no sliver fixes, no gutter).
 
-    The numpy twin of :func:`vrneural.atlas.gpu_raster.raster_coverage` (same name and
-    signature), which draws the triangles with a wgpu render pipeline.
+    The numpy twin of the GPU cross-check ``gpu_raster_coverage`` in tests/atlas_helpers.py
+    (same signature), which draws the triangles with a wgpu render pipeline.
     """
     px, area, es = _setup(uv, faces, R)
     return _coverage(px, es, np.flatnonzero(area != 0), R)[0].reshape(R, R)
