@@ -263,15 +263,6 @@ def _resume_pruned_half(cfg, narrow, wide_path: str, on_step) -> dict:
     return _train(narrow, on_step, epochs_flag="")
 
 
-def run_distill(cfg: DistillConfig, on_step=None, epochs_flag: str = "--epochs") -> dict:
-    """Train (or resume) a student/baseline; returns the final checkpoint dict. Holds a lock on its
-    outputs while it trains (:func:`vrneural.outputs.output_lock`). Fields left None take
-    their defaults, or on ``--resume`` the checkpoint's; ``epochs_flag``: the option that
-    sets ``cfg.epochs``, for messages."""
-    with output_lock(cfg.output):
-        return _run_distill(cfg, on_step, epochs_flag)
-
-
 #: options that shape one method only: (field, the methods it applies to, what it is)
 METHOD_OPTIONS = (
     ("coarse_channels", ("student",), "the coarse-to-fine student's U_c channels"),
@@ -301,28 +292,33 @@ def check_method_options(cfg: DistillConfig, chosen) -> None:
         )
 
 
-def _run_distill(cfg: DistillConfig, on_step, epochs_flag: str) -> dict:
-    check_resume_force(cfg.resume, cfg.force)
-    if not cfg.resume:  # a resumed run's method is its checkpoint's: checked in _train
-        check_method_options(resolved(cfg), given(cfg))
-    stored = stored_wide_start(cfg.output) if cfg.resume else None
-    if cfg.wide_start or stored:
-        with output_lock(wide_output(cfg.output)):  # its wide half's outputs too
-            return run_wide_start(cfg, on_step, stored)
-    wide = cfg.output.endswith(".pt") and Path(wide_output(cfg.output))
-    if not cfg.resume and wide and wide.is_file():  # an unfinished wide half left behind?
-        try:
-            c = load_checkpoint(wide)
-        except VrnError:
-            c = {}
-        if is_wide_half(c.get("config", {})) and not c.get("finished", True):
-            warnings.warn(
-                f"{wide}: holds the unfinished wide half of a --wide-start run at "
-                f"{cfg.output}; this run (without --wide-start) leaves it as it is",
-                UnfinishedRunWarning,
-                stacklevel=2,
-            )
-    return _train(cfg, on_step, epochs_flag)
+def run_distill(cfg: DistillConfig, on_step=None, epochs_flag: str = "--epochs") -> dict:
+    """Train (or resume) a student/baseline; returns the final checkpoint dict. Holds a lock on its
+    outputs while it trains (:func:`vrneural.outputs.output_lock`). Fields left None take
+    their defaults, or on ``--resume`` the checkpoint's; ``epochs_flag``: the option that
+    sets ``cfg.epochs``, for messages."""
+    with output_lock(cfg.output):
+        check_resume_force(cfg.resume, cfg.force)
+        if not cfg.resume:  # a resumed run's method is its checkpoint's: checked in _train
+            check_method_options(resolved(cfg), given(cfg))
+        stored = stored_wide_start(cfg.output) if cfg.resume else None
+        if cfg.wide_start or stored:
+            with output_lock(wide_output(cfg.output)):  # its wide half's outputs too
+                return run_wide_start(cfg, on_step, stored)
+        wide = cfg.output.endswith(".pt") and Path(wide_output(cfg.output))
+        if not cfg.resume and wide and wide.is_file():  # an unfinished wide half left behind?
+            try:
+                c = load_checkpoint(wide)
+            except VrnError:
+                c = {}
+            if is_wide_half(c.get("config", {})) and not c.get("finished", True):
+                warnings.warn(
+                    f"{wide}: holds the unfinished wide half of a --wide-start run at "
+                    f"{cfg.output}; this run (without --wide-start) leaves it as it is",
+                    UnfinishedRunWarning,
+                    stacklevel=2,
+                )
+        return _train(cfg, on_step, epochs_flag)
 
 
 def _train(asked: DistillConfig, on_step=None, epochs_flag: str = "--epochs") -> dict:

@@ -95,63 +95,59 @@ def resumed_config(
     return merged
 
 
-def run_teach(cfg: TeachConfig, on_step=None, epochs_flag: str = "--epochs") -> dict:
+def run_teach(asked: TeachConfig, on_step=None, epochs_flag: str = "--epochs") -> dict:
     """Train (or resume) a teacher; returns the final checkpoint dict. Holds a lock on its
     outputs while it trains (:func:`vrneural.outputs.output_lock`). Fields left None take
     their defaults, or on ``--resume`` the checkpoint's; ``epochs_flag``: the option that
-    sets ``cfg.epochs``, for messages."""
-    with output_lock(cfg.output):
-        return _run_teach(cfg, on_step, epochs_flag)
-
-
-def _run_teach(asked: TeachConfig, on_step, epochs_flag: str) -> dict:
-    cfg = resolved(asked)
-    check_train_config(cfg)
-    check_range("--width", cfg.width, 1, 4096)
-    check_range("--layers", cfg.layers, 3, 16)
-    check_range("--channels", cfg.channels, 1, 64)
-    outs = outputs_of(cfg.output, cfg.export)
-    resume = prepare_outputs(cfg, outs, inputs=[cfg.btf])
-    if resume is not None:
-        if resume.get("kind") != "teacher":
-            raise VrnError(f"{cfg.output}: is not a teacher checkpoint; cannot --resume teach")
-        stored = {"parallax": "off"} | resume["config"]
-        old = resumed_config(asked, stored, resume, epochs_flag=epochs_flag)
-        cfg = resolved(TeachConfig(**(old | {"btf": cfg.btf})))
-    btf = read_btf(cfg.btf)
-    fp = btf_fingerprint(btf)
-    if resume is not None:
-        mismatch = f"differs from the one {cfg.output} was trained on"
-        check_btf_record(cfg.btf, fp, resume["btf"], mismatch, "the run began on")
-    dev = train_device(cfg.device)
-    rank, world = dist_setup(cfg.device)
-    L, V, H, W = btf.shape
-    train, test = split_pairs(L, V, cfg.test_fraction, cfg.split_seed)
-    data = SliceData(btf, test, rank, world, device=dev)
-    spec = make_spec(
-        "teacher", (H, W), cfg.space, width=cfg.width, layers=cfg.layers, channels=cfg.channels
-    )
-    recorded = resume.get("parallax") if resume is not None else None
-    height, parallax = setup_parallax(cfg, spec, btf, cfg.btf, recorded)
-    model = NeuralModel(spec, cfg.seed)
-    if height is not None:
-        model.set_height(height)
-    net = DistillNet(model, None, data, cfg).to(dev)
-    compile_networks(cfg.compile, model)
-    pairs = test_pairs(data, cfg.max_test_slices)
-    payload = {
-        "kind": "teacher",
-        "method": "teacher",
-        "spec": spec,
-        "config": dataclasses.asdict(cfg),
-        "btf": fp,
-        "split": {"train": train, "test": test},
-        "parallax": parallax,
-        "versions": {"torch": str(torch.__version__)},
-    }
-    if cfg.force and resume is None and rank == 0:
-        clear_outputs(outs)
-    ck = fit(net, model, data, pairs, cfg, payload, resume, on_step, epochs_flag)
-    if rank == 0:
-        finish_outputs(ck, cfg, data, missing_only=ck is resume)
-    return ck
+    sets ``asked.epochs``, for messages."""
+    with output_lock(asked.output):
+        cfg = resolved(asked)
+        check_train_config(cfg)
+        check_range("--width", cfg.width, 1, 4096)
+        check_range("--layers", cfg.layers, 3, 16)
+        check_range("--channels", cfg.channels, 1, 64)
+        outs = outputs_of(cfg.output, cfg.export)
+        resume = prepare_outputs(cfg, outs, inputs=[cfg.btf])
+        if resume is not None:
+            if resume.get("kind") != "teacher":
+                raise VrnError(f"{cfg.output}: is not a teacher checkpoint; cannot --resume teach")
+            stored = {"parallax": "off"} | resume["config"]
+            old = resumed_config(asked, stored, resume, epochs_flag=epochs_flag)
+            cfg = resolved(TeachConfig(**(old | {"btf": cfg.btf})))
+        btf = read_btf(cfg.btf)
+        fp = btf_fingerprint(btf)
+        if resume is not None:
+            mismatch = f"differs from the one {cfg.output} was trained on"
+            check_btf_record(cfg.btf, fp, resume["btf"], mismatch, "the run began on")
+        dev = train_device(cfg.device)
+        rank, world = dist_setup(cfg.device)
+        L, V, H, W = btf.shape
+        train, test = split_pairs(L, V, cfg.test_fraction, cfg.split_seed)
+        data = SliceData(btf, test, rank, world, device=dev)
+        spec = make_spec(
+            "teacher", (H, W), cfg.space, width=cfg.width, layers=cfg.layers, channels=cfg.channels
+        )
+        recorded = resume.get("parallax") if resume is not None else None
+        height, parallax = setup_parallax(cfg, spec, btf, cfg.btf, recorded)
+        model = NeuralModel(spec, cfg.seed)
+        if height is not None:
+            model.set_height(height)
+        net = DistillNet(model, None, data, cfg).to(dev)
+        compile_networks(cfg.compile, model)
+        pairs = test_pairs(data, cfg.max_test_slices)
+        payload = {
+            "kind": "teacher",
+            "method": "teacher",
+            "spec": spec,
+            "config": dataclasses.asdict(cfg),
+            "btf": fp,
+            "split": {"train": train, "test": test},
+            "parallax": parallax,
+            "versions": {"torch": str(torch.__version__)},
+        }
+        if cfg.force and resume is None and rank == 0:
+            clear_outputs(outs)
+        ck = fit(net, model, data, pairs, cfg, payload, resume, on_step, epochs_flag)
+        if rank == 0:
+            finish_outputs(ck, cfg, data, missing_only=ck is resume)
+        return ck
