@@ -5,9 +5,17 @@ import pytest
 
 import vrneural.btf.render as render
 from vrneural.btf import read_btf
+from vrneural.btf.config import PRESET_NAMES, PT_PRESET_NAMES
 from vrneural.btf.presets import PRESETS
+from vrneural.btf.pt_presets import PT_PRESETS
 from vrneural.btf.synth import BtfConfig, synthesize
 from vrneural.errors import VrnError
+
+
+def test_the_configs_name_the_presets_the_builders_have():
+    """The light config module (CLI start-up) lists the presets without importing them."""
+    assert PRESET_NAMES == tuple(sorted(PRESETS))
+    assert PT_PRESET_NAMES == tuple(PT_PRESETS)
 
 
 def _interrupt_after(monkeypatch, cfg, out, views: int) -> None:

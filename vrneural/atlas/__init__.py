@@ -6,32 +6,26 @@ Public API (used by the runtime): :func:`load_mesh`, :func:`builtin_mesh`,
 :class:`Mesh`, :class:`Atlas`, :data:`EMPTY`. Conventions are in :mod:`vrneural.atlas.types`.
 """
 
-from vrneural.atlas.builtin import BUILTIN_MESHES, builtin_mesh
+import importlib
+
 from vrneural.atlas.config import MAX_RESOLUTION, AtlasConfig
-from vrneural.atlas.geometry import MeshWarning, make_mesh
-from vrneural.atlas.io import load_mesh
-from vrneural.atlas.raster import texel_barycentrics
-from vrneural.atlas.types import EMPTY, Atlas, Mesh
 
-__all__ = [
-    "BUILTIN_MESHES",
-    "EMPTY",
-    "MAX_RESOLUTION",
-    "Atlas",
-    "AtlasConfig",
-    "Mesh",
-    "MeshWarning",
-    "build_atlas",
-    "builtin_mesh",
-    "load_mesh",
-    "make_mesh",
-    "texel_barycentrics",
-]
+_FROM = {
+    "BUILTIN_MESHES": "builtin",
+    "EMPTY": "types",
+    "Atlas": "types",
+    "Mesh": "types",
+    "MeshWarning": "geometry",
+    "build_atlas": "build",
+    "builtin_mesh": "builtin",
+    "load_mesh": "io",
+    "make_mesh": "geometry",
+    "texel_barycentrics": "raster",
+}
+__all__ = ["MAX_RESOLUTION", "AtlasConfig", *_FROM]
 
 
-def __getattr__(name: str):  # build_atlas loads scipy: on first use, not with the package
-    if name == "build_atlas":
-        from vrneural.atlas.build import build_atlas
-
-        return build_atlas
+def __getattr__(name: str):  # numpy (build_atlas: scipy) on first use, not with the package
+    if name in _FROM:
+        return getattr(importlib.import_module(f"vrneural.atlas.{_FROM[name]}"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from vrneural.bench.supersample import SPP_MAX
-from vrneural.btf.synth import BtfConfig
+from vrneural.btf.config import BtfConfig
 from vrneural.config import opt, unset
 from vrneural.errors import check_range
 from vrneural.runtime.config import parse_res

@@ -8,7 +8,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 from vrneural.bench.parts import QUICK_BUDGET, QUICK_SCORED, PackBudget, Scored, bench_config
-from vrneural.btf.presets import PRESETS
+from vrneural.btf.config import PRESET_NAMES
 from vrneural.config import QuickConfig, choices, floats, ints, listed, opt, part, unset, words
 from vrneural.distill.config import COMPILE_MODES, StudentShape, TrainBudget
 from vrneural.runtime.config import REUSE_MAX
@@ -99,7 +99,7 @@ class WidthsConfig(QuickConfig):
     """`vrneural bench widths`."""
 
     preset: str = opt(
-        "leather", "synthetic BTF preset: " + ", ".join(sorted(PRESETS)) + " (btf synth)"
+        "leather", "synthetic BTF preset: " + ", ".join(PRESET_NAMES) + " (btf synth)"
     )
     out: str = opt("bench-widths", "output directory", cli=False)
     res: int | None = unset(32, "BTF texels per side")

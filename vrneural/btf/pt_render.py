@@ -17,60 +17,22 @@ from __future__ import annotations
 import dataclasses
 import sys
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 from vrneural.btf import pathtrace as pt
+from vrneural.btf.config import RenderConfig
 from vrneural.btf.dirs import MAX_THETA_DEG, direction_set
 from vrneural.btf.format import BtfWriter, check_partial_settings, read_btf
 from vrneural.btf.pt_presets import PT_PRESETS
-from vrneural.config import config_dict, opt
-from vrneural.errors import VrnError, check_choice, check_range, check_seed
+from vrneural.config import config_dict
+from vrneural.errors import VrnError
 from vrneural.formats.f16 import F16_MAX
 from vrneural.interrupt import Stop
 
 GENERATOR = "vrneural.btf.pt_render v1 (Mitsuba 3)"
-
-
-@dataclass
-class RenderConfig:
-    """Path-traced BTF (`vrneural btf render`)."""
-
-    preset: str = opt("weave", "material preset: " + ", ".join(PT_PRESETS))
-    res: int = opt(64, "texels per side (the tile is res x res)")
-    dirs: int = opt(24, "light and view directions (151 = UBO2014 layout, else quasi-uniform)")
-    seed: int = opt(0, "seed of the material: its geometry and colours")
-    spp: int = opt(64, "Monte Carlo samples per texel and slice")
-    sample_seed: int = opt(
-        0,
-        "seed of the Monte Carlo samples (another value: an independent render of the same "
-        "material, for the noise floor)",
-    )
-    bounces: int = opt(5, "surface interactions per light path (1 = direct light only)")
-    height_grid: int = opt(0, "height field size N stored in the file (0 = 2 x res, <= 512)")
-
-    def validate(self) -> None:
-        """One-line :class:`VrnError` on a bad field, named by its flag."""
-        check_choice("preset", self.preset, list(PT_PRESETS))
-        check_range("--res", self.res, 2, 4096)
-        if self.res % 2:
-            raise VrnError(f"--res = {self.res} must be even (training uses 2x2 texel blocks)")
-        check_range("--dirs", self.dirs, 2, 100_000)
-        check_range("--spp", self.spp, 1, 1 << 20)
-        check_seed("--seed", self.seed)
-        check_seed("--sample-seed", self.sample_seed)
-        check_range("--bounces", self.bounces, 1, 64)
-        if self.height_grid != 0 and not 2 <= self.height_grid <= 4096:
-            raise VrnError(
-                f"--height-grid = {self.height_grid} is out of range; allowed 0 (auto) or [2, 4096]"
-            )
-
-    @property
-    def grid_size(self) -> int:
-        return self.height_grid or int(min(512, 2 * self.res))
 
 
 def build(cfg: RenderConfig):

@@ -8,62 +8,21 @@ sidecar, so an interrupted run continues with ``resume=True`` (the CLI's ``--res
 
 from __future__ import annotations
 
-import dataclasses
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
+from vrneural.btf.config import BtfConfig
 from vrneural.btf.dirs import direction_set
 from vrneural.btf.format import BtfWriter, check_partial_settings
 from vrneural.btf.heightfield import texel_height
 from vrneural.btf.presets import PRESETS
-from vrneural.config import config_dict, opt
-from vrneural.errors import VrnError, check_choice, check_range, check_seed
+from vrneural.config import config_dict
 from vrneural.interrupt import Stop
 
 GENERATOR = "vrneural.btf.synth v1"
-
-
-@dataclass
-class BtfConfig:
-    """Synthetic BTF generation (`vrneural btf synth`)."""
-
-    preset: str = opt("leather", "material preset: " + ", ".join(sorted(PRESETS)))
-    res: int = opt(64, "texels per side (the tile is res x res)")
-    dirs: int = opt(151, "light and view directions (151 = UBO2014 layout, else quasi-uniform)")
-    seed: int = opt(0, "random seed (same seed, same bytes on one machine)")
-    spp: int = opt(4, "jittered sub-samples per texel (a square number is stratified)")
-    grid: int = opt(
-        0, "heightfield grid size N per side, 8 to 4096 (0 = 2 x res clamped to [64, 512])"
-    )
-
-    def validate(self, flags: dict[str, str] | None = None) -> None:
-        """One-line :class:`VrnError` on a bad field, named ``--FIELD`` or as ``flags`` maps it
-        (a command that synthesises under other flag names: ``{"res": "--btf-res"}``)."""
-        f = {k: f"--{k}" for k in ("preset", "res", "dirs", "spp", "seed", "grid")} | (flags or {})
-        check_choice(f["preset"], self.preset, sorted(PRESETS))
-        check_range(f["res"], self.res, 2, 4096)
-        if self.res % 2:  # the networks work on 2x2 texel blocks (teach/distill need it)
-            raise VrnError(f"{f['res']} = {self.res} must be even (training uses 2x2 texel blocks)")
-        # at least 2 x 2 (light, view) pairs: one can be held out for the test L1
-        check_range(f["dirs"], self.dirs, 2, 100_000)
-        check_range(f["spp"], self.spp, 1, 256)
-        check_seed(f["seed"], self.seed)
-        if self.grid != 0 and not 8 <= self.grid <= 4096:
-            raise VrnError(
-                f"{f['grid']} = {self.grid} is out of range; allowed 0 (auto) or [8, 4096]"
-            )
-
-    @property
-    def grid_size(self) -> int:
-        return self.grid or int(min(512, max(64, 2 * self.res)))
-
-    def resolved(self) -> BtfConfig:
-        """The config as rendered (``grid`` 0 replaced by the size used), as the sidecar has it."""
-        return dataclasses.replace(self, grid=self.grid_size)
 
 
 def build_maps(cfg: BtfConfig):

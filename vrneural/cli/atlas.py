@@ -8,7 +8,6 @@ import sys
 import warnings
 from pathlib import Path
 
-from vrneural.atlas import BUILTIN_MESHES, builtin_mesh, load_mesh
 from vrneural.atlas.config import MAX_PADDING, AtlasConfig, check_texture_resolution
 from vrneural.config import add_config_args, config_dict, config_from_args
 from vrneural.errors import VrnError, check_range
@@ -72,6 +71,8 @@ def register(sub) -> None:
 
 
 def _meshes(spec: str, crease: float | None = None):
+    from vrneural.atlas import BUILTIN_MESHES, builtin_mesh, load_mesh
+
     if spec in BUILTIN_MESHES and not Path(spec).exists():
         return [builtin_mesh(spec, crease)]
     head = spec.rsplit(":", 1)[0]

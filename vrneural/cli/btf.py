@@ -16,10 +16,7 @@ import json
 import sys
 from pathlib import Path
 
-from vrneural.btf.format import read_btf
-from vrneural.btf.pathtrace import load_mitsuba
-from vrneural.btf.pt_render import RenderConfig, render_btf
-from vrneural.btf.synth import BtfConfig, synthesize
+from vrneural.btf.config import BtfConfig, RenderConfig
 from vrneural.config import add_config_args, config_from_args, config_path, write_config
 from vrneural.errors import VrnError, check_range
 from vrneural.outputs import (
@@ -149,6 +146,8 @@ def _check_partial(out: Path, resume: bool, force: bool) -> None:
 
 
 def run_synth(args) -> int:
+    from vrneural.btf.synth import synthesize
+
     cfg = config_from_args(BtfConfig, args)
     cfg.validate()
     _check_btf_output(args, "leather.btf")
@@ -157,6 +156,9 @@ def run_synth(args) -> int:
 
 
 def run_render(args) -> int:
+    from vrneural.btf.pathtrace import load_mitsuba
+    from vrneural.btf.pt_render import render_btf
+
     cfg = config_from_args(RenderConfig, args)
     cfg.validate()
     _check_btf_output(args, "weave.btf")
@@ -199,6 +201,7 @@ def _warn_nonfinite(file: str, s: dict) -> None:
 
 
 def run_info(args) -> int:
+    from vrneural.btf.format import read_btf
     from vrneural.btf.sheet import summary
 
     s = summary(read_btf(args.file))
@@ -244,6 +247,7 @@ def run_info(args) -> int:
 
 
 def run_show(args) -> int:
+    from vrneural.btf.format import read_btf
     from vrneural.btf.sheet import contact_sheet, sheet_panels, summary
 
     check_suffix(args.output, ".png", "image", "sheet.png", ignore_case=True)

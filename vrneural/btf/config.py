@@ -1,0 +1,92 @@
+"""``BtfConfig`` and ``RenderConfig``: what `vrneural btf synth` and `btf render` take (each
+field's help is its --help line); a light module (the CLI's parser imports it, not the stage)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from vrneural.config import opt
+from vrneural.errors import VrnError, check_choice, check_range, check_seed
+
+#: the keys of :data:`vrneural.btf.presets.PRESETS` (sorted) and of
+#: :data:`vrneural.btf.pt_presets.PT_PRESETS` (in its order; a test checks both)
+PRESET_NAMES = ("carpet", "fabric", "leather", "metal", "stone", "wood")
+PT_PRESET_NAMES = ("weave", "pebbles", "fur", "bark", "mosaic")
+
+
+@dataclass
+class BtfConfig:
+    """Synthetic BTF generation (`vrneural btf synth`)."""
+
+    preset: str = opt("leather", "material preset: " + ", ".join(PRESET_NAMES))
+    res: int = opt(64, "texels per side (the tile is res x res)")
+    dirs: int = opt(151, "light and view directions (151 = UBO2014 layout, else quasi-uniform)")
+    seed: int = opt(0, "random seed (same seed, same bytes on one machine)")
+    spp: int = opt(4, "jittered sub-samples per texel (a square number is stratified)")
+    grid: int = opt(
+        0, "heightfield grid size N per side, 8 to 4096 (0 = 2 x res clamped to [64, 512])"
+    )
+
+    def validate(self, flags: dict[str, str] | None = None) -> None:
+        """One-line :class:`VrnError` on a bad field, named ``--FIELD`` or as ``flags`` maps it
+        (a command that synthesises under other flag names: ``{"res": "--btf-res"}``)."""
+        f = {k: f"--{k}" for k in ("preset", "res", "dirs", "spp", "seed", "grid")} | (flags or {})
+        check_choice(f["preset"], self.preset, list(PRESET_NAMES))
+        check_range(f["res"], self.res, 2, 4096)
+        if self.res % 2:  # the networks work on 2x2 texel blocks (teach/distill need it)
+            raise VrnError(f"{f['res']} = {self.res} must be even (training uses 2x2 texel blocks)")
+        # at least 2 x 2 (light, view) pairs: one can be held out for the test L1
+        check_range(f["dirs"], self.dirs, 2, 100_000)
+        check_range(f["spp"], self.spp, 1, 256)
+        check_seed(f["seed"], self.seed)
+        if self.grid != 0 and not 8 <= self.grid <= 4096:
+            raise VrnError(
+                f"{f['grid']} = {self.grid} is out of range; allowed 0 (auto) or [8, 4096]"
+            )
+
+    @property
+    def grid_size(self) -> int:
+        return self.grid or int(min(512, max(64, 2 * self.res)))
+
+    def resolved(self) -> BtfConfig:
+        """The config as rendered (``grid`` 0 replaced by the size used), as the sidecar has it."""
+        return dataclasses.replace(self, grid=self.grid_size)
+
+
+@dataclass
+class RenderConfig:
+    """Path-traced BTF (`vrneural btf render`)."""
+
+    preset: str = opt("weave", "material preset: " + ", ".join(PT_PRESET_NAMES))
+    res: int = opt(64, "texels per side (the tile is res x res)")
+    dirs: int = opt(24, "light and view directions (151 = UBO2014 layout, else quasi-uniform)")
+    seed: int = opt(0, "seed of the material: its geometry and colours")
+    spp: int = opt(64, "Monte Carlo samples per texel and slice")
+    sample_seed: int = opt(
+        0,
+        "seed of the Monte Carlo samples (another value: an independent render of the same "
+        "material, for the noise floor)",
+    )
+    bounces: int = opt(5, "surface interactions per light path (1 = direct light only)")
+    height_grid: int = opt(0, "height field size N stored in the file (0 = 2 x res, <= 512)")
+
+    def validate(self) -> None:
+        """One-line :class:`VrnError` on a bad field, named by its flag."""
+        check_choice("preset", self.preset, list(PT_PRESET_NAMES))
+        check_range("--res", self.res, 2, 4096)
+        if self.res % 2:
+            raise VrnError(f"--res = {self.res} must be even (training uses 2x2 texel blocks)")
+        check_range("--dirs", self.dirs, 2, 100_000)
+        check_range("--spp", self.spp, 1, 1 << 20)
+        check_seed("--seed", self.seed)
+        check_seed("--sample-seed", self.sample_seed)
+        check_range("--bounces", self.bounces, 1, 64)
+        if self.height_grid != 0 and not 2 <= self.height_grid <= 4096:
+            raise VrnError(
+                f"--height-grid = {self.height_grid} is out of range; allowed 0 (auto) or [2, 4096]"
+            )
+
+    @property
+    def grid_size(self) -> int:
+        return self.height_grid or int(min(512, 2 * self.res))
