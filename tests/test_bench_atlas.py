@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from vrneural.bench.atlas_meshes import NAMES
+from vrneural.bench.configs import NAMES
 from vrneural.cli import main
 
 

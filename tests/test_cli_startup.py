@@ -1,13 +1,15 @@
 """What `vrneural`'s start-up loads: the parser needs each command's config dataclass and light
-modules (numpy at most), never a stage's run-time code; each handler imports its stage when the
+modules (no numpy), never a stage's run-time code; each handler imports its stage when the
 command runs (vrneural/cli/__init__.py)."""
 
+import dataclasses
 import json
 import subprocess
 import sys
 
 #: loaded by no parser: heavy libraries, process pools, and the stages' run-time modules
 RUN_TIME = (
+    "numpy",
     "multiprocessing",
     "concurrent.futures.process",
     "tomllib",
@@ -46,8 +48,8 @@ RUN_TIME = (
     "vrneural.viewer.view",
     "vrneural.viewer.frame",
 )
-#: vrneural modules build_parser() loads (44 when this was written): a new one is a choice
-MAX_VRNEURAL = 44
+#: vrneural modules build_parser() loads (38 when this was written): a new one is a choice
+MAX_VRNEURAL = 38
 
 
 def test_build_parser_loads_configs_not_stages():
@@ -60,3 +62,15 @@ def test_build_parser_loads_configs_not_stages():
     assert [m for m in RUN_TIME if m in loaded] == []
     ours = [m for m in loaded if m.split(".")[0] == "vrneural"]
     assert len(ours) <= MAX_VRNEURAL, ours
+
+
+def test_light_copies_of_choices():
+    """The light config modules copy two tuples of choices rather than import numpy-heavy
+    modules at start-up; the copies stay equal to the originals."""
+    from vrneural.distill.config import PARALLAX
+    from vrneural.parallax import PARALLAX_CHOICES, RENDER_MARCHES
+    from vrneural.runtime.config import RunConfig
+
+    assert PARALLAX == PARALLAX_CHOICES
+    marches = next(f for f in dataclasses.fields(RunConfig) if f.name == "parallax_march")
+    assert tuple(marches.metadata["choices"]) == RENDER_MARCHES

@@ -28,7 +28,6 @@ import numpy as np
 
 from vrneural.outputs import atomic_path
 
-NAMES = ("ico6", "ico7", "torus", "knot", "cloth", "fan", "field", "lightmap")
 #: atlas resolution per mesh (full set; the quick set uses 128 or 256)
 RESOLUTION = {"ico7": 2048, "field": 2048}
 
@@ -160,8 +159,9 @@ def write_glb(path, pos, faces, normals=None, uv0=None, uv1=None) -> Path:
 
 
 def write_mesh(name: str, folder: Path, quick: bool) -> Path:
-    """Generate bench mesh ``name`` (:data:`NAMES`) into ``folder`` (PLY, or GLB for the one
-    with lightmap UVs, whose normals and UV sets a PLY cannot hold); returns the file."""
+    """Generate bench mesh ``name`` (:data:`~vrneural.bench.configs.NAMES`) into ``folder``
+    (PLY, or GLB for the one with lightmap UVs, whose normals and UV sets a PLY cannot hold);
+    returns the file."""
     import trimesh
 
     from vrneural.atlas import builtin

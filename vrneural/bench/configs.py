@@ -8,12 +8,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from vrneural.bench.atlas_meshes import NAMES
 from vrneural.bench.parts import QUICK_LOOP, Loop, bench_config
 from vrneural.config import Config, QuickConfig, choices, ints, opt, part, unset, words
 from vrneural.errors import VrnError
 from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX
 from vrneural.runtime.schedule import SCHEDULES
+
+#: the meshes of `bench atlas` (built by :mod:`vrneural.bench.atlas_meshes`)
+NAMES = ("ico6", "ico7", "torus", "knot", "cloth", "fan", "field", "lightmap")
 
 
 @bench_config("frames", "CI-sized: textures 128,256; N 0,2,4; eyes 258x276; >= 2 frames")
@@ -170,7 +172,7 @@ KernelsConfig.QUICK = KernelsConfig(
 
 
 def mesh_names(flag: str, value) -> tuple[str, ...]:
-    """``--meshes``: at least one, each one of :data:`~vrneural.bench.atlas_meshes.NAMES`."""
+    """``--meshes``: at least one, each one of :data:`NAMES`."""
     names = words(flag, value)
     bad = [n for n in names if n not in NAMES]
     if bad or not names:

@@ -13,11 +13,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from vrneural.bench.supersample import SPP_MAX
 from vrneural.btf.config import BtfConfig
 from vrneural.config import opt, unset
 from vrneural.errors import check_range
 from vrneural.runtime.config import parse_res
+
+#: the largest sample count per pixel (each sample is a full per-pixel teacher render)
+SPP_MAX = 256
 
 
 def bench_config(name: str, quick: str, force: str = "", resume: str = ""):

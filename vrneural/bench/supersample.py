@@ -15,10 +15,8 @@ import math
 
 import numpy as np
 
+from vrneural.bench.parts import SPP_MAX
 from vrneural.errors import check_int
-
-#: the largest sample count per pixel (each sample is a full per-pixel teacher render)
-SPP_MAX = 256
 
 
 def stratified_offsets(spp: int, seed: int) -> np.ndarray:

@@ -10,11 +10,15 @@ from dataclasses import dataclass
 from vrneural.atlas.config import MAX_RESOLUTION, MIN_RESOLUTION
 from vrneural.config import opt, resolved, unset
 from vrneural.errors import VrnError, check_int, check_range, count
-from vrneural.parallax import RENDER_MARCHES
-from vrneural.runtime.lights import LIGHTS_MAX
 from vrneural.runtime.profiles import PROFILES, get_profile
 from vrneural.runtime.schedule import SCHEDULES
-from vrneural.runtime.settings import FRAMES_IN_FLIGHT_MAX, MODES, RADIANCE, Settings
+from vrneural.runtime.settings import (
+    FRAMES_IN_FLIGHT_MAX,
+    LIGHTS_MAX,
+    MODES,
+    RADIANCE,
+    Settings,
+)
 
 
 @dataclass
@@ -52,7 +56,7 @@ class RunConfig:
         "offset): auto (once per 2x2 block where a block spans at most one texel of the "
         "material, as at the headset's density; else per texel), pack (the march it trained "
         "with), texel or block",
-        choices=RENDER_MARCHES,
+        choices=("auto", "pack", "texel", "block"),  # vrneural.parallax.RENDER_MARCHES
     )
     radiance: str | None = unset(
         "per-eye",

@@ -13,8 +13,6 @@ MOTIONS = ("none", "circle")
 #: Largest accepted ``colour * intensity`` (W/sr); shading sums in f32 and clamps to the f16
 #: range before the rgba16float store (docs/extremes.md).
 MAX_INTENSITY = 1e6
-#: the most point lights a frame shades (`run --lights`, every bench; the shaders loop over them)
-LIGHTS_MAX = 64
 
 
 @dataclass

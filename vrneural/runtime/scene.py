@@ -47,13 +47,13 @@ from vrneural.errors import SEED_MAX, VrnError, check_choice, check_int, check_r
 from vrneural.formats.vrnm import read_vrnm
 from vrneural.material import NeuralMaterial, lambertian_material, random_material
 from vrneural.runtime.lights import (
-    LIGHTS_MAX,
     MAX_INTENSITY,
     MOTIONS,
     PointLight,
     default_lights,
 )
 from vrneural.runtime.profiles import PROFILES
+from vrneural.runtime.settings import LIGHTS_MAX
 
 
 @dataclass

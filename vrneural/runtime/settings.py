@@ -10,6 +10,8 @@ MODES = ("texture", "screen", "reference")
 RADIANCE = ("per-eye", "shared")
 #: the most frames a renderer lets the GPU queue (Settings.frames_in_flight)
 FRAMES_IN_FLIGHT_MAX = 3
+#: the most point lights a frame shades (`run --lights`, every bench; the shaders loop over them)
+LIGHTS_MAX = 64
 #: the longest refresh sweep of adaptive reuse, in frames
 ADAPTIVE_PERIOD_MAX = 16
 
