@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vrneural.config import opt
-from vrneural.errors import VrnError, check_int, check_range
+from vrneural.errors import VrnError, check_int
 from vrneural.outputs import check_output
 
 SPLITS = ("off", "reference", "flip")
@@ -40,10 +40,8 @@ def check_view_config(vc: ViewConfig) -> None:
     """Range and file checks before anything opens (one-line errors, as `run`'s)."""
     if not isinstance(vc, ViewConfig):
         raise VrnError(f"view: config is a {type(vc).__name__}, expected a ViewConfig")
-    check_int("--frames", vc.frames)
-    check_range("--frames", vc.frames, 0, 10_000_000)
-    check_int("--split-every", vc.split_every)
-    check_range("--split-every", vc.split_every, 0, 100_000)
+    check_int("--frames", vc.frames, 0, 10_000_000)
+    check_int("--split-every", vc.split_every, 0, 100_000)
     if vc.split not in SPLITS:
         raise VrnError(f"--split = {vc.split!r} is not allowed; choose {', '.join(SPLITS)}")
     if vc.window:
