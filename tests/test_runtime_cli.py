@@ -772,3 +772,16 @@ def test_a_pack_or_mesh_given_as_the_scene_says_where_it_goes(tmp_path):
     )
     with pytest.raises(VrnError, match=r"pose log not found .*; the built-in path is orbit"):
         load_scene(_scene(tmp_path, text))
+
+
+@pytest.mark.gpu
+def test_video_line_names_the_eyes_it_holds(capsys, tmp_path):
+    """The printed video line follows the eyes the run rendered, given or by default (two)."""
+    for extra, name, what in (
+        ([], "stereo.mp4", "(left eye | right eye)"),
+        (["--eyes", "1"], "mono.mp4", "(one eye)"),
+    ):
+        out = tmp_path / f"o{len(extra)}"
+        argv = ["run", "--profile", "tiny", "--frames", "2", "--quiet", "--out", str(out)]
+        assert main([*argv, *extra]) == 0
+        assert f"{name} {what}" in capsys.readouterr().out

@@ -35,7 +35,7 @@ def main(args) -> int:
     pngs = sorted(Path(f).name for f in sm["files"] if f.endswith(".png"))
     print(f"wrote     {out}/")
     for mp4 in (Path(f) for f in sm["files"] if f.endswith(".mp4")):
-        what = "left eye | right eye" if cfg.eyes == 2 else "one eye"
+        what = "left eye | right eye" if sm["resolved"]["eyes"] == 2 else "one eye"
         print(f"  video   {out}/{mp4.name} ({what})")
     if pngs:
         print(f"  frames  {', '.join(pngs)} (+ .exr)")
