@@ -10,7 +10,13 @@ import numpy as np
 from vrneural.atlas import meshuv
 from vrneural.atlas.cache import cache_key, load_cached, split_mesh, store
 from vrneural.atlas.charts import face_normals
-from vrneural.atlas.config import MAX_PADDING, MAX_RESOLUTION, MIN_RESOLUTION, MODES
+from vrneural.atlas.config import (
+    MAX_PADDING,
+    MAX_RESOLUTION,
+    MIN_RESOLUTION,
+    MODES,
+    AtlasConfig,  # noqa: F401 (its old home)
+)
 from vrneural.atlas.generate import Layout, generated_layout
 from vrneural.atlas.geometry import check_geometry, check_uv
 from vrneural.atlas.layout import uv_area

@@ -33,7 +33,7 @@ from tqdm import tqdm
 from vrneural.btf.sheet import dir_angles, fmt_angle
 from vrneural.errors import VrnError
 from vrneural.material import NeuralMaterial, material_forward
-from vrneural.scoring.config import AUTO_TEXELS
+from vrneural.scoring.config import AUTO_TEXELS, EvalConfig  # noqa: F401 (EvalConfig: its old home)
 from vrneural.scoring.metrics import display, psnr, ssim
 
 #: seed of the slices drawn when not all are scored
