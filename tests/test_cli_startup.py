@@ -74,3 +74,21 @@ def test_light_copies_of_choices():
     assert PARALLAX == PARALLAX_CHOICES
     marches = next(f for f in dataclasses.fields(RunConfig) if f.name == "parallax_march")
     assert tuple(marches.metadata["choices"]) == RENDER_MARCHES
+
+
+def test_a_command_without_torch_says_what_to_install(tmp_path):
+    """PyTorch is an optional extra: a command that needs it, where it is missing, prints one
+    line naming the extra and exits 2, leaving no output behind."""
+    code = (
+        "import sys; sys.modules['torch'] = None; from vrneural.cli import main; "
+        "sys.exit(main(sys.argv[1:]))"
+    )
+    btf = tmp_path / "m.btf"
+    btf.write_bytes(b"")  # never read: the stage's import comes first
+    for argv in (["teach", str(btf), "-o", "t.pt"], ["bench", "quality", "--quick"]):
+        r = subprocess.run(
+            [sys.executable, "-c", code, *argv], capture_output=True, text=True, cwd=tmp_path
+        )
+        assert r.returncode == 2, r.stderr
+        assert r.stderr.count("\n") == 1 and "pip install 'vrneural[train]'" in r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.btf"]

@@ -89,6 +89,15 @@ def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
     except VrnError as e:
         print(f"{command_name(args)}: error: {e}", file=sys.stderr)
         return e.exit_code
+    except ModuleNotFoundError as e:  # the one optional dependency commands import at the top
+        if e.name != "torch":
+            raise
+        print(
+            f"{command_name(args)}: error: needs PyTorch, which is not installed: "
+            "pip install 'vrneural[train]' (bash scripts/setup.sh installs it)",
+            file=sys.stderr,
+        )
+        return 2
     except KeyboardInterrupt:
         print(f"{command_name(args)}: interrupted", file=sys.stderr)
         return 130
