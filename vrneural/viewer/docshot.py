@@ -28,7 +28,11 @@ def shoot(frames: int = 8, split: str = "reference", **options):
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m vrneural.viewer.docshot", description=__doc__)
+    p = argparse.ArgumentParser(
+        prog="python -m vrneural.viewer.docshot",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("out", help="PNG to write")
     p.add_argument("--force", action="store_true", help="overwrite it")
     a = p.parse_args(argv)

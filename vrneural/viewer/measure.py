@@ -242,7 +242,11 @@ def plot(res: dict, path) -> None:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m vrneural.viewer.measure", description=__doc__)
+    p = argparse.ArgumentParser(
+        prog="python -m vrneural.viewer.measure",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("out", help="results JSON (Markdown and PNG beside it)")
     p.add_argument("--quick", action="store_true", help="fewer frames (a smoke run)")
     p.add_argument("--force", action="store_true", help="overwrite existing results")
