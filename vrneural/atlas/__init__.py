@@ -6,8 +6,7 @@ Public API (used by the runtime): :func:`load_mesh`, :func:`builtin_mesh`,
 :class:`Mesh`, :class:`Atlas`, :data:`EMPTY`. Conventions are in :mod:`vrneural.atlas.types`.
 """
 
-import importlib
-
+from vrneural import lazy_exports
 from vrneural.atlas.config import MAX_RESOLUTION, AtlasConfig
 
 _FROM = {
@@ -23,9 +22,4 @@ _FROM = {
     "texel_barycentrics": "raster",
 }
 __all__ = ["MAX_RESOLUTION", "AtlasConfig", *_FROM]
-
-
-def __getattr__(name: str):  # numpy (build_atlas: scipy) on first use, not with the package
-    if name in _FROM:
-        return getattr(importlib.import_module(f"vrneural.atlas.{_FROM[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_exports(__name__, _FROM)  # numpy (build_atlas: scipy) on first use

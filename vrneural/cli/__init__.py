@@ -1,7 +1,7 @@
 """The `vrneural` command. Each subcommand is a module here with ``register(subparsers)``: at
-its top it imports the config dataclasses its parser is built from (light modules: numpy at
-most), and its handler imports the stage when the command runs, so start-up and `--help` load
-no stage (tests/test_cli_startup.py).
+its top it imports the config dataclasses its parser is built from (light modules: no numpy),
+and its handler imports the stage when the command runs, so start-up and `--help` load no stage
+(tests/test_cli_startup.py).
 
 User errors (:class:`~vrneural.errors.VrnError`) print one line and exit with code 2.
 """
@@ -89,7 +89,7 @@ def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
     except VrnError as e:
         print(f"{command_name(args)}: error: {e}", file=sys.stderr)
         return e.exit_code
-    except ModuleNotFoundError as e:  # the one optional dependency commands import at the top
+    except ModuleNotFoundError as e:  # torch (the train extra): the training stages import it
         if e.name != "torch":
             raise
         print(

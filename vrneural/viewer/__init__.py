@@ -10,14 +10,9 @@ its knobs, the mouse moves the camera and the lights, and the eyes are tonemappe
 into the window's own swap chain (:mod:`vrneural.viewer.present`).
 """
 
+from vrneural import lazy_exports
 from vrneural.viewer.config import ViewConfig
 
 __all__ = ["View", "ViewConfig"]
-
-
-def __getattr__(name: str):  # View loads the renderer: on first use (`vrneural view`'s parser
-    if name == "View":  # needs ViewConfig alone)
-        from vrneural.viewer.view import View
-
-        return View
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+# View loads the renderer: on first use (`vrneural view`'s parser needs ViewConfig alone)
+__getattr__ = lazy_exports(__name__, {"View": "view"})
