@@ -83,16 +83,20 @@ def test_frames_records_and_amortisation(results):
 def test_frame_breakdown_has_every_pass_floor_and_depth(results):
     d = results[1]["frame"]
     sm = d["summary"]
-    want = {"texture_full", "texture_bare", "texture_slice", "texture_slice_bare", "forward",
-            "forward_floor_sample", "forward_floor_constant", "forward_display"}  # fmt: skip
+    want = {"texture_full", "texture_bare", "texture_loads", "texture_slice",
+            "texture_slice_bare", "forward", "forward_floor_sample", "forward_floor_constant",
+            "forward_display"}  # fmt: skip
     assert set(sm["passes"]) == want
     assert all(_finite(v["wall_ms"]) and v["wall_ms"] > 0 for v in sm["passes"].values())
     assert set(sm["loops"]) == {"1", "2", "3"}
     for depth, v in sm["loops"].items():
         assert _finite(v["wall_ms"], v["host_cpu_ms"], v["gpu_ms"], v["wall_vs_bound"])
         assert 0 <= v["in_flight"] <= int(depth) - 1  # never more queued than allowed
+    cpu = d["adapter"]["is_cpu"]  # a CPU adapter's passes compared by their CPU time
+    assert all(_finite(v["cpu_ms"]) and v["cpu_ms"] > 0 for v in sm["passes"].values()) or not cpu
     for v in sm["ratios"].values():
-        assert _finite(v["median"]) and v["median"] > 0 and v["clock"] in ("wall", "timestamp")
+        assert _finite(v["median"]) and v["median"] > 0
+        assert v["clock"] == "cpu" if cpu else v["clock"] in ("wall", "timestamp")
     assert all(r["loop"][k]["blocks_per_frame"] > 0 for r in d["records"] for k in r["loop"])
 
 

@@ -493,27 +493,63 @@ fn main_compacted(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups
     count4(c, lid);
 }
 
-// The floor of this pass (`vrneural bench frame`): the same candidates, the same facing test,
+// The floors of this pass (`vrneural bench frame`): the same candidates, the same facing test,
 // the same geometry records read and the same texels stored as `main`, and nothing else (no
-// frame, sampling, network or counters).
+// frame, sampling, network or counters): `bare`; `bare_loads` adds the neural-texture lookups at
+// the block's texels (level 0 at the unmoved uvs: those of a material without parallax or
+// pyramid), the traffic every shading of them needs.
+
 @compute @workgroup_size(64)
 fn bare(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     let i = todo_index(wid, nwg, lid);
-    if (i < P.sched.y) {
-        let k = cand[P.sched.x + i];
-        if (block_front(k)) {
-            let g0 = geo_pos[k];
-            let packed = bitcast<u32>(g0.w);
-            let x0 = (packed & 0xFFFFu) * 2u;
-            let y0 = (packed >> 16u) * 2u;
-            let v = g0.xyz + geo_nrm[k].xyz + geo_tan[k].xyz;
-            let q01 = geo_uv01[k];
-            let q23 = geo_uv23[k];
-            textureStore(out_tex, vec2<u32>(x0, y0), vec4<f32>(v + q01.x, 1.0));
-            textureStore(out_tex, vec2<u32>(x0 + 1u, y0), vec4<f32>(v + q01.z, 1.0));
-            textureStore(out_tex, vec2<u32>(x0, y0 + 1u), vec4<f32>(v + q23.x, 1.0));
-            textureStore(out_tex, vec2<u32>(x0 + 1u, y0 + 1u), vec4<f32>(v + q23.z, 1.0));
-        }
-    }
+    if (i >= P.sched.y) { return; }
+    let k = cand[P.sched.x + i];
+    if (!block_front(k)) { return; }
+    let g0 = geo_pos[k];
+    let packed = bitcast<u32>(g0.w);
+    let x0 = (packed & 0xFFFFu) * 2u;
+    let y0 = (packed >> 16u) * 2u;
+    var v = g0.xyz + geo_nrm[k].xyz + geo_tan[k].xyz;
+    let q01 = geo_uv01[k];
+    let q23 = geo_uv23[k];
+    var w = vec4<f32>(q01.x, q01.z, q23.x, q23.z);
+    textureStore(out_tex, vec2<u32>(x0, y0), vec4<f32>(v + w.x, 1.0));
+    textureStore(out_tex, vec2<u32>(x0 + 1u, y0), vec4<f32>(v + w.y, 1.0));
+    textureStore(out_tex, vec2<u32>(x0, y0 + 1u), vec4<f32>(v + w.z, 1.0));
+    textureStore(out_tex, vec2<u32>(x0 + 1u, y0 + 1u), vec4<f32>(v + w.w, 1.0));
+}
+
+@compute @workgroup_size(64)
+fn bare_loads(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+              @builtin(local_invocation_index) lid: u32) {
+    let i = todo_index(wid, nwg, lid);
+    if (i >= P.sched.y) { return; }
+    let k = cand[P.sched.x + i];
+    if (!block_front(k)) { return; }
+    let g0 = geo_pos[k];
+    let packed = bitcast<u32>(g0.w);
+    let x0 = (packed & 0xFFFFu) * 2u;
+    let y0 = (packed >> 16u) * 2u;
+    var v = g0.xyz + geo_nrm[k].xyz + geo_tan[k].xyz;
+    let q01 = geo_uv01[k];
+    let q23 = geo_uv23[k];
+    var w = vec4<f32>(q01.x, q01.z, q23.x, q23.z);
+    let t0 = tiled(q01.xy);
+    let t1 = tiled(q01.zw);
+    let t2 = tiled(q23.xy);
+    let t3 = tiled(q23.zw);
+    v.x += sample_a((t0 + t1 + t2 + t3) * 0.25)[0];
+    let f0 = sample_b(t0);
+    let f1 = sample_b(t1);
+    let f2 = sample_b(t2);
+    let f3 = sample_b(t3);
+    w[0] += f0[0] + f0[1];
+    w[1] += f1[0] + f1[1];
+    w[2] += f2[0] + f2[1];
+    w[3] += f3[0] + f3[1];
+    textureStore(out_tex, vec2<u32>(x0, y0), vec4<f32>(v + w.x, 1.0));
+    textureStore(out_tex, vec2<u32>(x0 + 1u, y0), vec4<f32>(v + w.y, 1.0));
+    textureStore(out_tex, vec2<u32>(x0, y0 + 1u), vec4<f32>(v + w.z, 1.0));
+    textureStore(out_tex, vec2<u32>(x0 + 1u, y0 + 1u), vec4<f32>(v + w.w, 1.0));
 }

@@ -12,7 +12,8 @@ spell of a shared machine hits every condition:
 - the floors over the same geometry, targets and candidates: a constant-colour forward pass, a
   forward pass doing one bilinear sample per fragment and nothing else, and the bare
   texture-space kernel (the same facing test, geometry records read and texels stored; no
-  shading).
+  shading), alone and with the neural-texture lookups at the blocks' texels (``texture_loads``:
+  the traffic any shading of them needs).
 
 With ``--parallax-steps S`` the same rounds also time the texture-space update of the same two
 materials with height-field parallax of up to S steps, marched per texel, once per 2x2 block and
@@ -55,27 +56,32 @@ TARGETS = {
 
 def time_passes(r, encode, repeats: int) -> dict:
     """``encode(enc, timer)`` records one pass (or a set of passes timed together) into a
-    fresh encoder; submitted alone ``repeats`` times: ``{"wall_ms", "timestamp_ms"}``
-    (medians; the timestamps summed over the passes it timed, None without them)."""
+    fresh encoder; submitted alone ``repeats`` times: ``{"wall_ms", "cpu_ms",
+    "timestamp_ms"}`` (medians; ``cpu_ms``: the CPU time of every thread of this process from
+    submit to completion, on a CPU adapter the pass's work; the timestamps summed over the
+    passes it timed, None without them)."""
     from vrneural.gpu.timing import GpuTimer
 
-    walls, stamps = [], []
+    walls, cpus, stamps = [], [], []
     timer = GpuTimer(8)
     for i in range(repeats + 1):  # the first: warm-up (pipelines compiled at first use)
         enc = r.dev.create_command_encoder()
         encode(enc, timer)
         timer.resolve(enc)
         r.arena.flush()
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         r.dev.queue.submit([enc.finish()])
         r.dev.queue.read_buffer(r.counters.buf, 0, 16)  # a copy after everything: waits for it
+        c1 = time.process_time()
         ts = timer.read()
         if i:
             walls.append((time.perf_counter() - t0) * 1e3)
+            cpus.append((c1 - c0) * 1e3)
             stamps.append(sum(ts.values()) if ts else None)
     ok = [t for t in stamps if t is not None]
     return {
         "wall_ms": float(np.median(walls)),
+        "cpu_ms": float(np.median(cpus)),
         "timestamp_ms": float(np.median(ok)) if ok else None,
     }
 
@@ -200,6 +206,7 @@ def run_frame(cfg: FrameConfig) -> dict:
             p, rep = rec["passes"], c.repeats
             rec["empty_submit_ms"] = time_passes(hdr, lambda enc, timer: None, rep)["wall_ms"]
             updates = {"texture_full": (hdr, "main", 1), "texture_bare": (hdr, "bare", 1),
+                       "texture_loads": (hdr, "bare_loads", 1),
                        "texture_slice": (hdr, "main", n1),
                        "texture_slice_bare": (hdr, "bare", n1)}  # fmt: skip
             for (kind, march), rr in par.items():  # the same update, with parallax

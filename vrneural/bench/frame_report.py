@@ -13,6 +13,8 @@ PASS_RATIOS = (
     ("sample_floor_vs_constant_floor", "forward_floor_sample", "forward_floor_constant"),
     ("display_vs_hdr_forward", "forward_display", "forward"),
     ("texture_vs_bare", "texture_full", "texture_bare"),
+    ("texture_vs_loads_floor", "texture_full", "texture_loads"),
+    ("loads_floor_vs_bare", "texture_loads", "texture_bare"),
     ("texture_slice_vs_bare", "texture_slice", "texture_slice_bare"),
     # --parallax-steps: the same update with height-field parallax
     ("parallax_vs_texture", "texture_full_parallax", "texture_full"),
@@ -47,11 +49,15 @@ def _covered(p: dict, empty_ms: float) -> bool:
 
 
 def summarise(doc: dict, reuse: int) -> dict:
-    """Medians over rounds: per pass its wall (and timestamp) ms, the ratios of
-    :data:`PASS_RATIOS` (each taken within a round, by timestamps where this adapter's cover
-    both passes, else by the wall clock), and per frames-in-flight depth the loop's wall, host
-    CPU and GPU per frame and wall / max(host CPU, GPU)."""
+    """Medians over rounds: per pass its wall (timestamp, CPU) ms, the ratios of
+    :data:`PASS_RATIOS` (each taken within a round: on a CPU adapter by CPU time, else by
+    timestamps where this adapter's cover both passes, else by the wall clock), and per
+    frames-in-flight depth the loop's wall, host CPU and GPU per frame and wall / max(host
+    CPU, GPU)."""
     recs = doc["records"]
+    # a CPU adapter's passes are this process's threads: their CPU time is the passes' work,
+    # unlike the wall clock and timestamps not stretched by other processes on the cores
+    cpu = doc["adapter"].get("is_cpu") and "cpu_ms" in recs[0]["passes"]["forward"]
 
     def clock(name: str) -> str:  # timestamps where they agree with the wall in every round
         ok = all(_covered(r["passes"][name], r["empty_submit_ms"]) for r in recs)
@@ -65,11 +71,13 @@ def summarise(doc: dict, reuse: int) -> dict:
             "timestamp_ms": _med(ts) if None not in ts else None,
             "timestamps_agree": clock(name) == "timestamp_ms",
         }
+        if cpu:
+            passes[name]["cpu_ms"] = _med([r["passes"][name]["cpu_ms"] for r in recs])
     ratios = {}
     for key, a, b in PASS_RATIOS:
         if a not in recs[0]["passes"]:
             continue
-        ck = clock(a) if clock(a) == clock(b) else "wall_ms"
+        ck = "cpu_ms" if cpu else clock(a) if clock(a) == clock(b) else "wall_ms"
         per = [r["passes"][a][ck] / r["passes"][b][ck] for r in recs]
         ratios[key] = {"median": _med(per), "range": [float(min(per)), float(max(per))],
                        "clock": ck[:-3]}  # fmt: skip
@@ -111,7 +119,9 @@ def markdown(doc: dict) -> list[str]:
         f"runtime/timecheck.py): {covered or 'no timestamps'}. "
         "Each pass is submitted alone; two passes are compared by their timestamps where these "
         "agree with each one's wall time (less an empty submit) in every round, else by the wall "
-        "clock (submit to completion).",
+        "clock (submit to completion); on a CPU adapter by the CPU time of all of this "
+        "process's threads from submit to completion (the passes' work, which other processes "
+        "on the same cores do not stretch as they stretch the wall clock).",
         "",
         "## Passes (each alone)",
         "",
@@ -122,8 +132,10 @@ def markdown(doc: dict) -> list[str]:
             return "-"
         return v["timestamp_ms"] if v["timestamps_agree"] else f"{v['timestamp_ms']:.3g} (wrong)"
 
-    rows = [[k, v["wall_ms"], stamp(k, v)] for k, v in sm["passes"].items()]
-    md += rp.table(["pass", "wall ms", "timestamp ms"], rows)
+    cpu = ["CPU ms (all threads)"] if "cpu_ms" in sm["passes"]["forward"] else []
+    rows = [[k, v["wall_ms"], stamp(k, v), *([v["cpu_ms"]] if cpu else [])]
+            for k, v in sm["passes"].items()]  # fmt: skip
+    md += rp.table(["pass", "wall ms", "timestamp ms", *cpu], rows)
     md += ["", "## Ratios (per round, median [range])", ""]
     rows = []
     for k, v in sm["ratios"].items():
@@ -167,13 +179,13 @@ def plot(doc: dict, path) -> None:
     fig, (a1, a2) = rp.figure(11.0, 3.8, 2)
     groups = [
         ["forward_floor_constant", "forward_floor_sample", "forward", "forward_display"],
-        ["texture_bare", "texture_full"],
+        ["texture_bare", "texture_loads", "texture_full"],
         ["texture_slice_bare", "texture_slice"],
     ]
     x, pos, labels = 0, [], []
     for names in groups:  # a gap of half a bar between the groups
         for n in names:
-            floor = "floor" in n or "bare" in n
+            floor = "floor" in n or "bare" in n or "loads" in n
             a1.bar(x, sm["passes"][n]["wall_ms"], color="0.7" if floor else "C0")
             pos.append(x)
             labels.append(n.replace("forward_", "").replace("texture_", "tex "))

@@ -1,6 +1,7 @@
 """numpy twins of the runtime's shading kernels: the readable specification of
 ``shaders/texture_space.wgsl`` (:func:`shade_texture_space`) and of the per-pixel evaluation
-shared with ``shaders/screen_space.wgsl`` (:func:`shade_points`).
+shared with ``shaders/screen_space.wgsl`` (:func:`shade_points`), and of the forward pass's
+plain (non-neural) objects (:func:`shade_plain`).
 
 Units: positions metres (world), light radiance ``colour * intensity`` in W/sr; a point light
 contributes ``L = BTF(u, wi, wo) * I / d^2`` (docs/conventions.md section 2). Output radiance is
@@ -249,3 +250,30 @@ def shade_texture_space(
     nc = 0 if mat.arch == "single" else nc
     counters = np.array([int(w.sum()), int((~front).sum()), nc, nf], np.int64)
     return out, counters
+
+
+def shade_plain(world, normal, eye, albedo, specular, shininess, light_pos, light_rgb):
+    """Twin of forward.wgsl's ``plain_colour``: Lambert + normalised Blinn-Phong
+    ``ks (s + 8) / (8 pi) (n.h)^s``, two-sided, under point lights with inverse-square falloff,
+    in float32 with the shader's operations in its order. ``world, normal: [..., 3]`` (the
+    normal need not be unit), ``eye [3]``, ``light_pos, light_rgb: [L, 3]`` (rgb: colour *
+    intensity); returns radiance ``[..., 3]`` float32, clamped to the f16 maximum."""
+    f32 = np.float32
+    world, normal = np.asarray(world, f32), np.asarray(normal, f32)
+    n0 = normal / np.sqrt(np.sum(normal * normal, -1, keepdims=True))
+    v = np.asarray(eye, f32) - world
+    wo = v / np.sqrt(np.sum(v * v, -1, keepdims=True))
+    n = np.where(np.sum(n0 * wo, -1, keepdims=True) < 0, -n0, n0)
+    kd = np.asarray(albedo, f32) * f32(1 / np.pi)
+    ks = f32(specular) * (f32(shininess) + f32(8)) * f32(1 / (8 * np.pi))
+    c = np.zeros_like(world)
+    for lp, lc in zip(np.asarray(light_pos, f32), np.asarray(light_rgb, f32), strict=True):
+        lv = lp - world
+        r = f32(1) / np.sqrt(np.maximum(np.sum(lv * lv, -1, keepdims=True), f32(1e-12)))
+        wi = lv * r
+        cos_i = np.sum(n * wi, -1, keepdims=True)
+        hv = wi + wo
+        nh = np.sum(n * hv, -1, keepdims=True) / np.sqrt(np.sum(hv * hv, -1, keepdims=True))
+        s = ks * np.maximum(nh, f32(0)) ** f32(shininess)
+        c += np.where(cos_i > 0, (kd + s) * (cos_i * r * r) * lc, f32(0))
+    return np.minimum(c, f32(F16_MAX))

@@ -237,6 +237,8 @@ class TextureTarget:
             used = {
                 "bare": ("P", "geo_pos", "geo_nrm", "geo_tan", "geo_uv01", "geo_uv23", "out_tex",
                          "cand"),
+                "bare_loads": ("P", "geo_pos", "geo_nrm", "geo_tan", "geo_uv01", "geo_uv23",
+                               "out_tex", "cand", *("tex_a", "tex_b")[: len(tp.gmat.views)]),
                 "cull": ("P", "geo_pos", "geo_nrm", "counters", "cand", "todo", "todo_n"),
                 "args": ARGS_BINDINGS,
                 "main_compacted": tuple(k for k in res if k not in ("cand", "todo_n", "ind")),
@@ -276,7 +278,8 @@ class TextureTarget:
         with the same ``phase, period``): one dispatch, or from :data:`COMPACT_MIN` candidates
         three (cull, args, main_compacted). ``bound``: the pipeline the pass has set (returned:
         the other eye's target shares it). ``entry="bare"``: the pass's floor kernel (the same
-        facing test, geometry records read and texels stored; no shading)."""
+        facing test, geometry records read and texels stored; no shading); ``"bare_loads"``:
+        with the neural-texture lookups at the block's texels too."""
         n = self.gatlas.block_list(period)[1][phase][1]
         if not n:
             return bound
@@ -293,7 +296,7 @@ class TextureTarget:
             cp.set_bind_group(0, bind)
             cp.dispatch_workgroups(*grid(n), 1)
             bound = pipe
-        if self.mips is not None and entry != "bare":  # after the texels it averages
+        if self.mips is not None and not entry.startswith("bare"):  # after the texels it averages
             self.mips.dispatch(cp)
             bound = None
         return bound

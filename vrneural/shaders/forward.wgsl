@@ -9,7 +9,7 @@
 //   fs_neural: bilinear sample of this eye's radiance texture at the atlas uv (clamp-to-edge;
 //              the atlas gutter guarantees valid taps); with mips, trilinear over the chain.
 //   fs_plain:  ordinary material: Lambert + Blinn-Phong under the same point lights
-//              (twin: runtime/reference_plain.py:shade_plain).
+//              (twin: runtime/reference.py:shade_plain).
 //   *_vis:     screen-space modes: plain objects write colour, neural objects write (id + 1, tri)
 //              into an rg32uint visibility target and leave colour 0 for the compute pass.
 
@@ -45,20 +45,30 @@ fn vs_main(v: VIn) -> VOut {
     return o;
 }
 
+// 1 / pi and 1 / (8 pi): the BRDF's constant factors as multiplies (a division per fragment
+// and light cost 10% of the pass on lavapipe, `vrneural bench frame`)
+const INV_PI: f32 = 0.3183098861837907;
+const INV_8PI: f32 = 0.039788735772973836;
+
+// Lambert + normalised Blinn-Phong, two-sided, under the point lights (inverse-square falloff).
+// Twin: runtime/reference.py:shade_plain (the same operations in the same order).
 fn plain_colour(world: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
-    var n = normalize(normal);
-    let wo = normalize(F.eye.xyz - world);
-    if (dot(n, wo) < 0.0) { n = -n; }  // two-sided
+    let n0 = normal * inverseSqrt(dot(normal, normal));
+    let v = F.eye.xyz - world;
+    let wo = v * inverseSqrt(dot(v, v));
+    let n = select(n0, -n0, dot(n0, wo) < 0.0);  // two-sided
+    let kd = O.albedo.rgb * INV_PI;
+    let ks = O.spec.x * (O.spec.y + 8.0) * INV_8PI;
     var c = vec3<f32>(0.0);
     for (var i = 0u; i < {{ n_active }}u; i++) {
         let lv = lights[i].pos.xyz - world;
-        let d2 = max(dot(lv, lv), 1e-12);
-        let wi = lv * inverseSqrt(d2);
+        let r = inverseSqrt(max(dot(lv, lv), 1e-12));  // 1 / distance
+        let wi = lv * r;
         let cos_i = dot(n, wi);
         if (cos_i <= 0.0) { continue; }
-        let h = normalize(wi + wo);
-        let s = O.spec.x * (O.spec.y + 8.0) / (8.0 * 3.14159265) * pow(max(dot(n, h), 0.0), O.spec.y);
-        c += (O.albedo.rgb / 3.14159265 + vec3<f32>(s)) * cos_i * lights[i].radiance.rgb / d2;
+        let hv = wi + wo;
+        let s = ks * pow(max(dot(n, hv) * inverseSqrt(dot(hv, hv)), 0.0), O.spec.y);
+        c += (kd + vec3<f32>(s)) * (cos_i * r * r) * lights[i].radiance.rgb;
     }
     return min(c, vec3<f32>(65504.0));
 }

@@ -6,3 +6,5 @@ rm -rf "$dst" && mkdir -p "$dst"
 git -C /work/wt41 archive e90c611 vrneural | tar -x -C "$dst"
 mv "$dst/vrneural" "$dst/vrneural_e90c611"
 grep -rl "vrneural" "$dst/vrneural_e90c611" --include=*.py | xargs sed -i -E 's/\bvrneural\.([a-z_])/vrneural_e90c611.\1/g; s/^(\s*)(from|import) vrneural( |$)/\1\2 vrneural_e90c611\3/'
+# the bundled packs of that commit (main's own are a newer format the old reader refuses)
+sed -i 's/files("vrneural")/files("vrneural_e90c611")/' "$dst/vrneural_e90c611/runtime/scene.py"
