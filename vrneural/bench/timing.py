@@ -104,7 +104,7 @@ def measure(
         "gpu_ms": rp.stats(gpu),  # the timed passes (gpu_untimed: those left out)
         "gpu_untimed": sorted(untimed),
         "host_cpu_ms": float(np.median([st.cpu_ms for st in sts])),
-        # "wall": this adapter's timestamps miss a pass (gpu/coverage.py), so the shading and
+        # "wall": this adapter's timestamps miss a pass (runtime/timecheck.py), so the shading and
         # forward ms come from one more cycle with each pass submitted alone (submit to done)
         "pass_clock": clock,
         "wall_clock_frames": m,
