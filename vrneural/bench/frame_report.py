@@ -182,17 +182,20 @@ def plot(doc: dict, path) -> None:
         ["texture_bare", "texture_loads", "texture_full"],
         ["texture_slice_bare", "texture_slice"],
     ]
+    key = "cpu_ms" if "cpu_ms" in sm["passes"]["forward"] else "wall_ms"  # the ratios' clock
     x, pos, labels = 0, [], []
     for names in groups:  # a gap of half a bar between the groups
         for n in names:
             floor = "floor" in n or "bare" in n or "loads" in n
-            a1.bar(x, sm["passes"][n]["wall_ms"], color="0.7" if floor else "C0")
+            a1.bar(x, sm["passes"][n][key], color="0.7" if floor else "C0")
             pos.append(x)
             labels.append(n.replace("forward_", "").replace("texture_", "tex "))
             x += 1
         x += 0.5
     a1.set_xticks(pos, labels, rotation=40, ha="right", fontsize=7)
-    a1.set_ylabel("ms, each pass alone (wall)")
+    a1.set_ylabel(
+        "ms, each pass alone (" + ("CPU, all threads" if key == "cpu_ms" else "wall") + ")"
+    )
     a1.set_title("passes (grey: floors)", fontsize=9)
     d = list(sm["loops"])
     for key, lab in (("wall_ms", "wall / frame"), ("host_cpu_ms", "host CPU / frame"),
