@@ -105,7 +105,8 @@ def run(args) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         meshes = _meshes(args.mesh, args.crease_angle)
-        outs = output_paths(out, len(meshes))
+        n = len(meshes)  # one mesh: OUT; several: OUT-<k>.png each (OUT itself not written)
+        outs = [out] if n == 1 else [out.with_name(f"{out.stem}-{k}{out.suffix}") for k in range(n)]
         for o in [*outs, sidecar_path(out)]:  # every file written, before any is
             check_output(o, args.force)
         results = []
@@ -158,14 +159,6 @@ def run(args) -> int:
                 f"dilate {r['dilate_s']:.2f} s{when}"
             )
     return 0
-
-
-def output_paths(out: Path, n_meshes: int) -> list[Path]:
-    """The PNGs written for a file of ``n_meshes`` meshes: ``out`` itself for one mesh, else
-    ``OUT-<k>.png`` per mesh (``out`` itself is then not written)."""
-    if n_meshes == 1:
-        return [out]
-    return [out.with_name(f"{out.stem}-{k}{out.suffix}") for k in range(n_meshes)]
 
 
 def sidecar_path(out: Path) -> Path:
