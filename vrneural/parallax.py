@@ -47,7 +47,6 @@ RENDER_MARCHES = ("auto", "pack", *MARCHES)
 #: height field (or offset texture): the block's 4 texels then lie within one texel, where the
 #: per-texel march moves them alike to within a fraction of a texel (docs/parallax.md)
 AUTO_BLOCK_FOOT_TEXELS = 0.5
-DEFAULT_STEPS = 16
 MAX_STEPS = 64
 #: ``auto`` gives a material parallax when its relief (:func:`relief_texels`) reaches this many
 #: texels: below one texel the shift at the steepest measured view (``tan 75 deg`` ~ 3.7 texels

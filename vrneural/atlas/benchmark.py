@@ -27,7 +27,8 @@ from vrneural.atlas.config import (
     check_texture_resolution,
 )
 from vrneural.errors import ArgumentParser, VrnError, check_range
-from vrneural.outputs import atomic_path, check_output, write_json
+from vrneural.outputs import check_output, write_json
+from vrneural.presentation import pyplot, save_png
 
 STAGES = ("unwrap_s", "raster_s", "sliver_s", "dilate_s", "total_s")
 
@@ -72,12 +73,7 @@ def run_benchmark(mesh_name: str, resolution: int, padding: int, repeats: int) -
 
 def plot(result: dict, path: Path) -> None:
     """A horizontal stacked bar of the median stage times (PNG)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 2.4))
+    fig, ax = pyplot().subplots(figsize=(7, 2.4))
     left = 0.0
     for k in STAGES[:-1]:
         v = result["median"][k]
@@ -88,9 +84,7 @@ def plot(result: dict, path: Path) -> None:
     ax.set_title(f"atlas {result['mesh']} ({result['triangles']} tris) at {result['resolution']}^2")
     ax.legend(ncol=4, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.6))
     fig.subplots_adjust(left=0.04, right=0.97, top=0.82, bottom=0.5)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=120)
-    plt.close(fig)
+    save_png(fig, path, dpi=120, bbox=None)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -109,14 +109,12 @@ def components(n_faces: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return connected_components(g, directed=False)[1]
 
 
-def chart_faces(
-    pos: np.ndarray, faces: np.ndarray, cone_deg: float = CONE_DEG
-) -> tuple[np.ndarray, np.ndarray]:
+def chart_faces(pos: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(chart [F] int64 0..C-1, axes [C, 3])``: the chart of every face and its projection
     axis (module doc, steps 1-2)."""
     normals, areas = face_normals(pos, faces)
     fa, fb = face_adjacency(pos, faces)
-    axes = cover_directions(normals[areas > 0], areas[areas > 0], cone_deg)
+    axes = cover_directions(normals[areas > 0], areas[areas > 0], CONE_DEG)
     label = np.argmax(normals @ axes.T, axis=1)
     same = (label[fa] == label[fb]) & (areas[fa] > 0) & (areas[fb] > 0)
     comp = components(len(faces), fa[same], fb[same])

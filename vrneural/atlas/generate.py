@@ -30,7 +30,6 @@ from vrneural.atlas.unwrap import unwrap
 from vrneural.atlas.visualize import uv_charts
 from vrneural.errors import VrnError, count
 
-METHODS = ("charts", "xatlas")
 #: rounds of cutting self-overlapping charts in two
 OVERLAP_ROUNDS = 4
 #: chart options of the xatlas retry (other than xatlas's defaults)

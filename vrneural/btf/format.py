@@ -169,9 +169,11 @@ def write_btf(
     return write_container(path, BTF_MAGIC, version, header, arrays)
 
 
-def check_partial_settings(partial: Path, generator: dict) -> None:
-    """Refuse to continue an interrupted ``.partial`` that was made with other settings, naming
-    them (``--force`` starts over): the hours already rendered are never thrown away silently."""
+def check_partial_settings(path, generator: dict) -> None:
+    """Refuse to continue the interrupted ``<path>.partial`` where it was made with other
+    settings, naming them (``--force`` starts over): the hours already rendered are never
+    thrown away silently."""
+    partial = Path(path).with_name(Path(path).name + ".partial")
     if not partial.exists():
         return
     try:
@@ -211,6 +213,8 @@ class BtfWriter:
         L, V = len(light_dirs), len(view_dirs)
         H, W = resolution
         _check_not_empty(path, L, V, H, W)
+        if resume and meta.get("generator"):  # what differs, before the container refuses it
+            check_partial_settings(path, meta["generator"])
         header = _header(path, meta)
         specs = {
             "values": ((L, V, H, W, 3), "float16"),

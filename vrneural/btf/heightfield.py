@@ -90,21 +90,18 @@ def spectral_noise(
     f_hi: float,
     beta: float = 2.0,
     stretch=(1.0, 1.0),
-    rotate: float = 0.0,
 ) -> np.ndarray:
     """Periodic Gaussian noise ``[N, N]`` (zero mean, unit std) with a band-limited power law.
 
     Frequencies in cycles per tile: power ``~ f^-beta`` between ``f_lo`` and ``f_hi``.
-    ``stretch = (sx, sy)`` scales the frequency axes (after rotating by ``rotate`` radians):
+    ``stretch = (sx, sy)`` scales the frequency axes:
     ``(8, 1)`` suppresses variation along u, so features become streaks along u (wood grain,
     brushing); ``(1, 8)`` gives streaks along v.
     """
     white = rng.standard_normal((n, n))
     fx = np.fft.fftfreq(n, 1.0 / n)
     FX, FY = np.meshgrid(fx, fx, indexing="xy")
-    c, s = np.cos(rotate), np.sin(rotate)
-    gx, gy = (c * FX + s * FY) * stretch[0], (-s * FX + c * FY) * stretch[1]
-    f = np.hypot(gx, gy)
+    f = np.hypot(FX * stretch[0], FY * stretch[1])
     amp = np.where((f >= f_lo) & (f <= f_hi), np.maximum(f, 1e-9) ** (-beta / 2), 0.0)
     out = np.fft.ifft2(np.fft.fft2(white) * amp).real
     sd = out.std()

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vrneural.btf.format import BtfWriter, check_partial_settings
+from vrneural.btf.format import BtfWriter
 from vrneural.btf.imagetable import TABLE_NAMES, Entry, find_table, read_table
 from vrneural.errors import VrnError
 
@@ -225,8 +225,6 @@ def import_images(
     }
     if height is not None:
         meta["generator"]["height"] = height[1]
-    if resume:
-        check_partial_settings(Path(out).with_name(Path(out).name + ".partial"), meta["generator"])
     if plan.n_srgb:
         print(
             f"{plan.folder}: {plan.n_srgb} of the {L * V} images are 8/16-bit integer images "

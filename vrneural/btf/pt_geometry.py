@@ -97,20 +97,18 @@ def _mesh(v, f, uv, n=None) -> Mesh:
     )
 
 
-def tube(path, radius, sides: int = 8, ref=None, caps: bool = False) -> Mesh:
-    """A tube of ``sides`` segments around the polyline ``path [K, 3]`` with ``radius``
+def tube(path, radius, ref, sides: int = 8) -> Mesh:
+    """An open tube of ``sides`` segments around the polyline ``path [K, 3]`` with ``radius``
     (scalar or ``[K]``; tapering to 0 closes the end to a point). The cross-section's frame
-    comes from the fixed direction ``ref`` (default: the axis least aligned with the path),
-    so a periodic path gives the same ring at its two ends (copies join without a crack).
-    UV: u runs along the tube (0..1), v around it. Normals: the exact ring directions (for a
-    tapering tube tilted by the taper). ``caps`` closes both ends with a flat fan."""
+    comes from the fixed direction ``ref`` (``[3]``, not along the path), so a periodic path
+    gives the same ring at its two ends (copies join without a crack). UV: u runs along the
+    tube (0..1), v around it. Normals: the exact ring directions (for a tapering tube tilted
+    by the taper)."""
     path = np.asarray(path, np.float64)
     k = len(path)
     r = np.broadcast_to(np.asarray(radius, np.float64), (k,))
     t = np.gradient(path, axis=0)
     t /= np.linalg.norm(t, axis=1, keepdims=True)
-    if ref is None:
-        ref = np.eye(3)[int(np.argmin(np.abs(t.mean(0))))]
     nn = np.asarray(ref, np.float64)[None] - t * (t @ np.asarray(ref, np.float64))[:, None]
     nn /= np.linalg.norm(nn, axis=1, keepdims=True)
     bb = np.cross(t, nn)
@@ -130,19 +128,6 @@ def tube(path, radius, sides: int = 8, ref=None, caps: bool = False) -> Mesh:
     arc = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
     u = arc / max(arc[-1], 1e-12)
     uv = np.stack(np.broadcast_arrays(u[:, None], (s / sides)[None, :]), -1).reshape(-1, 2)
-    if caps:
-        n_v = len(v)
-        v = np.concatenate([v, path[[0, -1]]])
-        uv = np.concatenate([uv, [[0.0, 0.0], [1.0, 0.0]]])
-        nrm = np.concatenate([nrm, -t[:1], t[-1:]])
-        last = (k - 1) * sides
-        faces = np.concatenate(
-            [
-                faces,
-                np.stack([np.full(sides, n_v), (s + 1) % sides, s], -1),
-                np.stack([np.full(sides, n_v + 1), last + s, last + (s + 1) % sides], -1),
-            ]
-        )
     return _mesh(v, faces, uv, nrm)
 
 

@@ -25,7 +25,7 @@ from tqdm import tqdm
 from vrneural.btf import pathtrace as pt
 from vrneural.btf.config import RenderConfig
 from vrneural.btf.dirs import MAX_THETA_DEG, direction_set
-from vrneural.btf.format import BtfWriter, check_partial_settings, read_btf
+from vrneural.btf.format import BtfWriter, read_btf
 from vrneural.btf.pt_presets import PT_PRESETS
 from vrneural.config import config_dict
 from vrneural.errors import VrnError
@@ -67,9 +67,6 @@ def render_btf(
         "seed": cfg.seed,
         "reference_plane": "mean height of the top surface seen from above (z = 0 of height)",
     }
-    out = Path(out)
-    if resume and not force:
-        check_partial_settings(out.with_name(out.name + ".partial"), meta["generator"])
     with Stop() as stop:
         stop.second_raises = True
         ps, height, tile = build(cfg)

@@ -20,7 +20,7 @@ import numpy as np
 from vrneural.btf.dirs import spherical
 from vrneural.btf.format import Btf
 from vrneural.errors import VrnError
-from vrneural.outputs import atomic_path
+from vrneural.presentation import pyplot, save_png
 from vrneural.warn import VrnWarning
 
 
@@ -145,11 +145,7 @@ def summary(btf: Btf, max_slices: int = 256) -> dict:
 
 def sheet_figure(btf: Btf, texel: tuple[int, int] | None = None):
     """The contact sheet as a matplotlib figure (panels from :func:`sheet_panels`)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     L, V, H, W = btf.shape
     panels = sheet_panels(btf)
     slices = [np.tile(btf.slice(p.light, p.view), (2, 2, 1)) for p in panels]
@@ -196,14 +192,7 @@ def sheet_figure(btf: Btf, texel: tuple[int, int] | None = None):
 
 def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:
     """Write the contact sheet PNG to ``out``. ``texel = (x, y)`` picks the unfolded texel."""
-    fig = sheet_figure(btf, texel)  # selects the Agg backend before pyplot is imported here
-    import matplotlib.pyplot as plt
-
-    out = Path(out)
-    with atomic_path(out) as tmp:
-        fig.savefig(tmp, format="png")
-    plt.close(fig)
-    return out
+    return save_png(sheet_figure(btf, texel), Path(out), bbox=None)
 
 
 def _height_summary(btf) -> dict:

@@ -16,7 +16,7 @@ from tqdm import tqdm
 
 from vrneural.btf.config import BtfConfig
 from vrneural.btf.dirs import direction_set
-from vrneural.btf.format import BtfWriter, check_partial_settings
+from vrneural.btf.format import BtfWriter
 from vrneural.btf.heightfield import texel_height
 from vrneural.btf.presets import PRESETS
 from vrneural.config import config_dict
@@ -67,9 +67,6 @@ def synthesize(
         "generator": {**config_dict(cfg), "tool": GENERATOR},
         "seed": cfg.seed,
     }
-    out = Path(out)
-    if resume and not force:
-        check_partial_settings(out.with_name(out.name + ".partial"), meta["generator"])
     # Ctrl-C or SIGTERM (also where a non-interactive shell started this in the background
     # with SIGINT ignored) stops after the current view; a second one at once. The handler is
     # in place before the .partial file appears, so a signal sent once it exists is never

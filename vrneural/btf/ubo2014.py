@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.btf.dirs import spherical
-from vrneural.btf.format import BtfWriter, check_partial_settings
+from vrneural.btf.format import BtfWriter
 from vrneural.errors import VrnError, input_file
 
 INSTALL_HINT = "pip install 'vrneural[ubo]' (or: pip install btf-extractor)"
@@ -256,8 +256,6 @@ def import_ubo(src, out, resume: bool = False, progress: bool = True, height=Non
     }
     if height is not None:
         meta["generator"]["height"] = height[1]
-    if resume:  # name what differs (another source, say) before the writer refuses it
-        check_partial_settings(Path(out).with_name(Path(out).name + ".partial"), meta["generator"])
     w = BtfWriter(
         out,
         _degrees_to_dirs(light_ang),

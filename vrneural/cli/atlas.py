@@ -88,7 +88,10 @@ def _meshes(spec: str, crease: float | None = None):
 
 
 def run(args) -> int:
+    import imageio.v3 as iio
+
     from vrneural.atlas.build import build_atlas  # the stage (scipy), when it runs
+    from vrneural.atlas.visualize import atlas_image, gutter_mask
     from vrneural.runtime.assets import collapsed_triangles, lost_triangles
 
     cfg = config_from_args(AtlasConfig, args)
@@ -102,7 +105,8 @@ def run(args) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         meshes = _meshes(args.mesh, args.crease_angle)
-        outs = output_paths(out, len(meshes))
+        n = len(meshes)  # one mesh: OUT; several: OUT-<k>.png each (OUT itself not written)
+        outs = [out] if n == 1 else [out.with_name(f"{out.stem}-{k}{out.suffix}") for k in range(n)]
         for o in [*outs, sidecar_path(out)]:  # every file written, before any is
             check_output(o, args.force)
         results = []
@@ -115,7 +119,9 @@ def run(args) -> int:
                 progress=True,
                 atlas_uv=cfg.atlas_uv,
             )
-            _write_png(o, atlas, args.color)
+            img = atlas_image(atlas, by=args.color, gutter=gutter_mask(atlas))
+            with atomic_path(o) as tmp:
+                iio.imwrite(tmp, img, extension=".png")
             results.append({"output": str(o), **atlas.stats})
     notes = [" ".join(str(w.message).splitlines()) for w in caught]
     if cfg.padding == 0:
@@ -127,7 +133,15 @@ def run(args) -> int:
         flat = collapsed_triangles(r)
         if flat:
             notes.append(f"{r['mesh']}: {flat}")
-    _write_sidecar(out, cfg, results, notes, args.crease_angle)
+    # what write_config writes, at the path checked before anything was written (even where
+    # OUT of a multi-mesh file is a directory: it is not written then)
+    doc = {
+        **config_dict(cfg),
+        "crease_angle": args.crease_angle,
+        "stats": results,
+        "warnings": notes,
+    }
+    write_json(sidecar_path(out), doc)
     for n in notes:  # stderr: stdout is the stats alone (valid JSON with --json)
         print(f"warning: {n}", file=sys.stderr)
     if args.json:
@@ -147,34 +161,7 @@ def run(args) -> int:
     return 0
 
 
-def output_paths(out: Path, n_meshes: int) -> list[Path]:
-    """The PNGs written for a file of ``n_meshes`` meshes: ``out`` itself for one mesh, else
-    ``OUT-<k>.png`` per mesh (``out`` itself is then not written)."""
-    if n_meshes == 1:
-        return [out]
-    return [out.with_name(f"{out.stem}-{k}{out.suffix}") for k in range(n_meshes)]
-
-
 def sidecar_path(out: Path) -> Path:
     """``<out>.config.json``: config, stats and warnings of every mesh (the name
     :func:`vrneural.config.write_config` gives it beside a file)."""
     return out.with_name(out.name + ".config.json")
-
-
-def _write_png(path: Path, atlas, color: str) -> None:
-    import imageio.v3 as iio
-
-    from vrneural.atlas.visualize import atlas_image, gutter_mask
-
-    img = atlas_image(atlas, by=color, gutter=gutter_mask(atlas))
-    with atomic_path(path) as tmp:
-        iio.imwrite(tmp, img, extension=".png")
-
-
-def _write_sidecar(
-    out: Path, cfg, results: list[dict], notes: list[str], crease: float | None
-) -> None:
-    # what write_config writes, at the path checked before anything was written (even where
-    # OUT of a multi-mesh file is a directory: it is not written then)
-    doc = {**config_dict(cfg), "crease_angle": crease, "stats": results, "warnings": notes}
-    write_json(sidecar_path(out), doc)

@@ -13,36 +13,24 @@ from vrneural.bench.entries import ENTRIES, add_bench
 from vrneural.bench.train_configs import QualityConfig, WidthsConfig
 from vrneural.config import config_from_args
 
-
-def _register_quality(sub) -> None:
-    every = "of every network but the teacher"
-    helps = {  # the bench's own words for the fields it shares with distill (TrainBudget, ...)
-        "seed": "seed of synthesis, initialisation, data order and texture-lookup jitter",
-        "ema": f"weight-average decay {every} (distill --ema; 0 = off)",
-        "lr_patience": f"ReduceLROnPlateau patience {every} (distill --lr-patience; see "
-        "docs/quality-research.md on a gentler schedule)",
-        "device": "train on cpu, cuda or cuda:N (teach/distill --device)",
-        "compile": "torch.compile the networks: off, default or reduce-overhead "
-        "(teach/distill --compile)",
-        "neumip_dirs": "NeuMIP's direction inputs: xy (NeuMIP's own) or full (wi, wo, h, as "
-        "the student)",
-        "width": "hidden width of the single-level net and both students (distill --width; "
-        "the paper's 8; see the width sweep in docs/quality-research.md)",
-        "wide_start": "train the single-level net and both students this wide for the first "
-        "half of --epochs, then prune them to --width for the rest (distill --wide-start; "
-        "0 = off, from random weights)",
-    }
-    add_bench(
-        sub,
-        "quality",
-        QualityConfig,
-        _run_quality,
-        "Table 1 analog: whole-BTF L1 of the student and baselines per material",
-        "Synthesise each preset's BTF, train the teacher and the five methods "
-        "(Lafortune, NeuMIP, single-level 8-wide, student without and with distillation) at "
-        "one fixed budget, and write results.json, results.md, curves.png and slices.png.",
-        helps=helps,
-    )
+_EVERY = "of every network but the teacher"
+#: `bench quality`'s own words for the fields it shares with distill (TrainBudget, ...)
+QUALITY_HELPS = {
+    "seed": "seed of synthesis, initialisation, data order and texture-lookup jitter",
+    "ema": f"weight-average decay {_EVERY} (distill --ema; 0 = off)",
+    "lr_patience": f"ReduceLROnPlateau patience {_EVERY} (distill --lr-patience; see "
+    "docs/quality-research.md on a gentler schedule)",
+    "device": "train on cpu, cuda or cuda:N (teach/distill --device)",
+    "compile": "torch.compile the networks: off, default or reduce-overhead "
+    "(teach/distill --compile)",
+    "neumip_dirs": "NeuMIP's direction inputs: xy (NeuMIP's own) or full (wi, wo, h, as "
+    "the student)",
+    "width": "hidden width of the single-level net and both students (distill --width; "
+    "the paper's 8; see the width sweep in docs/quality-research.md)",
+    "wide_start": "train the single-level net and both students this wide for the first "
+    "half of --epochs, then prune them to --width for the rest (distill --wide-start; "
+    "0 = off, from random weights)",
+}
 
 
 def _run_quality(args) -> int:
@@ -56,38 +44,12 @@ def _run_quality(args) -> int:
     return 0
 
 
-def _register_widths(sub) -> None:
-    add_bench(
-        sub,
-        "widths",
-        WidthsConfig,
-        _run_widths,
-        "what the student's width costs and buys: whole-BTF L1 against MACs per texel",
-        "Synthesise one preset's BTF, train its teacher, then the --methods "
-        "networks (default: the student) at every --widths, from random weights and/or with "
-        "a wide start, and NeuMIP as the reference; write results.json, results.md and "
-        "widths.png.",
-    )
-
-
 def _run_widths(args) -> int:
     from vrneural.bench.widths import run_widths
 
     doc = run_widths(config_from_args(WidthsConfig, args))
     print(f"{args.out}: results.json, results.md, widths.png ({doc['total_seconds'] / 60:.1f} min)")
     return 0
-
-
-def _register_extremes(sub) -> None:
-    add_bench(
-        sub,
-        "extremes",
-        ExtremesConfig,
-        _run_extremes,
-        "numerical stability at the extremes: every case works or is rejected clearly",
-        "Run every extreme case (directions, precision, geometry, settings, "
-        "training) and write results.json, results.md and f16_error.png; exit 1 on any FAIL.",
-    )
 
 
 def _run_extremes(args) -> int:
@@ -102,20 +64,6 @@ def _run_extremes(args) -> int:
     return 1 if doc["n_fail"] else 0
 
 
-def _register_runtime(sub) -> None:
-    add_bench(
-        sub,
-        "runtime",
-        RuntimeConfig,
-        _run_runtime,
-        "the runtime's performance targets: texture vs screen space, constants vs "
-        "buffer, kernel vs PyTorch, the networks alone, burst vs staggered",
-        "Measure the runtime's performance targets in one run on this adapter "
-        "(texture_vs_screen, constants_vs_buffer, vs_torch, mlp_only, schedules) and write "
-        "results.json and results.md.",
-    )
-
-
 def _run_runtime(args) -> int:
     from vrneural.bench.runtime import HEADLINES, headline, run_runtime
 
@@ -127,11 +75,50 @@ def _run_runtime(args) -> int:
     return 0
 
 
+#: name -> register(sub), in `--help` order
 BENCHMARKS = {
-    "quality": _register_quality,
-    "runtime": _register_runtime,
-    "widths": _register_widths,
-    "extremes": _register_extremes,
+    "quality": lambda sub: add_bench(
+        sub,
+        "quality",
+        QualityConfig,
+        _run_quality,
+        "Table 1 analog: whole-BTF L1 of the student and baselines per material",
+        "Synthesise each preset's BTF, train the teacher and the five methods "
+        "(Lafortune, NeuMIP, single-level 8-wide, student without and with distillation) at "
+        "one fixed budget, and write results.json, results.md, curves.png and slices.png.",
+        helps=QUALITY_HELPS,
+    ),
+    "runtime": lambda sub: add_bench(
+        sub,
+        "runtime",
+        RuntimeConfig,
+        _run_runtime,
+        "the runtime's performance targets: texture vs screen space, constants vs "
+        "buffer, kernel vs PyTorch, the networks alone, burst vs staggered",
+        "Measure the runtime's performance targets in one run on this adapter "
+        "(texture_vs_screen, constants_vs_buffer, vs_torch, mlp_only, schedules) and write "
+        "results.json and results.md.",
+    ),
+    "widths": lambda sub: add_bench(
+        sub,
+        "widths",
+        WidthsConfig,
+        _run_widths,
+        "what the student's width costs and buys: whole-BTF L1 against MACs per texel",
+        "Synthesise one preset's BTF, train its teacher, then the --methods "
+        "networks (default: the student) at every --widths, from random weights and/or with "
+        "a wide start, and NeuMIP as the reference; write results.json, results.md and "
+        "widths.png.",
+    ),
+    "extremes": lambda sub: add_bench(
+        sub,
+        "extremes",
+        ExtremesConfig,
+        _run_extremes,
+        "numerical stability at the extremes: every case works or is rejected clearly",
+        "Run every extreme case (directions, precision, geometry, settings, "
+        "training) and write results.json, results.md and f16_error.png; exit 1 on any FAIL.",
+    ),
 }
 
 BENCHMARKS.update(ENTRIES)  # frames, lights, materials, kernels, tradeoff, ..., all

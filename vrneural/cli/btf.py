@@ -274,46 +274,35 @@ def run_show(args) -> int:
 
 
 def run_import(args) -> int:
+    from vrneural.btf.height_import import read_height
+    from vrneural.btf.imageset import import_images, plan_import
     from vrneural.btf.ubo2014 import import_ubo, load_extractor, parse_header
 
     _check_btf_output(args, "leather.btf")  # as btf synth
-    if Path(args.file).is_dir():
-        return _import_images(args)
-    if args.table or args.png_linear:
+    src, images = args.file, Path(args.file).is_dir()
+    if images:  # an image set (vrneural/btf/imageset.py): all checks first
+        size = plan_import(src, args.table, args.png_linear, args.height).size
+    elif args.table or args.png_linear:
         flag = "--table" if args.table else "--png-linear"
-        raise VrnError(f"{flag} is for a folder of images; {args.file} is not a folder")
-    load_extractor()
-    hdr = parse_header(args.file)
-    height = _height(args, (hdr["height"], hdr["width"]))
-    (out,) = check_outputs([args.output], args.force, inputs=[args.file])
+        raise VrnError(f"{flag} is for a folder of images; {src} is not a folder")
+    else:
+        load_extractor()
+        hdr = parse_header(src)
+        size = (hdr["height"], hdr["width"])
+    height = None if args.height is None else read_height(args.height, args.height_scale, size)
+    (out,) = check_outputs([args.output], args.force, inputs=[] if images else [src])
     _check_partial(out, args.resume, args.force)
-    print(import_ubo(args.file, out, args.resume, not args.no_progress, height))
-    return 0
-
-
-def _height(args, size: tuple[int, int]):
-    """``--height`` read and checked against the BTF's texels ``size``, or None."""
-    from vrneural.btf.height_import import read_height
-
-    return None if args.height is None else read_height(args.height, args.height_scale, size)
-
-
-def _import_images(args) -> int:
-    """`btf import DIR`: an image set (vrneural/btf/imageset.py)."""
-    from vrneural.btf.imageset import import_images, plan_import
-
-    plan = plan_import(args.file, args.table, args.png_linear, args.height)  # all checks first
-    height = _height(args, plan.size)
-    (out,) = check_outputs([args.output], args.force)
-    _check_partial(out, args.resume, args.force)
-    path = import_images(
-        args.file,
-        out,
-        table=args.table,
-        png_linear=args.png_linear,
-        resume=args.resume,
-        progress=not args.no_progress,
-        height=height,
-    )
+    if images:
+        path = import_images(
+            src,
+            out,
+            table=args.table,
+            png_linear=args.png_linear,
+            resume=args.resume,
+            progress=not args.no_progress,
+            height=height,
+        )
+    else:
+        path = import_ubo(src, out, args.resume, not args.no_progress, height)
     print(path)
     return 0

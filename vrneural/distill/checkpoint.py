@@ -18,7 +18,6 @@ Layout (``format`` = ``"vrneural-checkpoint"``, ``version`` = 1)::
 
 from __future__ import annotations
 
-import os
 import pickle
 import re
 import warnings
@@ -33,7 +32,7 @@ from vrneural.distill.models import NeuralModel
 from vrneural.errors import VrnError, input_file
 from vrneural.formats.vrnm import VRNM_MAGIC
 from vrneural.grazing import DEFAULT_THETA_MAX_DEG
-from vrneural.outputs import make_parent
+from vrneural.outputs import atomic_path
 from vrneural.warn import VrnWarning
 
 FORMAT = "vrneural-checkpoint"
@@ -56,18 +55,13 @@ def unfinished_run(ck: dict) -> str:
 
 
 def save_checkpoint(path, payload: dict) -> None:
-    """``torch.save`` to a temporary sibling, then ``os.replace`` (atomic): a failed write
-    (one-line :class:`VrnError`) leaves the previous checkpoint as it was."""
-    p = make_parent(path)
-    tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
-    try:
-        torch.save({"format": FORMAT, "version": VERSION, **payload}, tmp)
-        os.replace(tmp, p)
-    except (OSError, RuntimeError) as e:  # torch reports a failed open as a RuntimeError
-        raise VrnError(f"{p}: cannot write the checkpoint ({_first_sentence(e)})") from None
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    """``torch.save`` through :func:`vrneural.outputs.atomic_path`: a failed write (one-line
+    :class:`VrnError`) leaves the previous checkpoint as it was."""
+    with atomic_path(path) as tmp:
+        try:
+            torch.save({"format": FORMAT, "version": VERSION, **payload}, tmp)
+        except (OSError, RuntimeError) as e:  # torch reports a failed open as a RuntimeError
+            raise VrnError(f"{path}: cannot write the checkpoint ({_first_sentence(e)})") from None
 
 
 def load_checkpoint(path, kind: str | None = None) -> dict:

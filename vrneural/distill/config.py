@@ -205,13 +205,10 @@ class DistillConfig(TrainConfig, StudentShape):
 def check_lod_levels(cfg, res: tuple[int, int], btf_path) -> None:
     """``--lod-levels`` fits the BTF: the last level still has whole 2x2 blocks (and the
     student's half-resolution coarse texture a texel per block)."""
-    top = cfg.lod_levels - 1
-    ok = all(r % (1 << (top + 1)) == 0 for r in res)
-    if not ok:
-        most = 1
-        while all(r % (1 << (most + 1)) == 0 for r in res) and most < 12:
-            most += 1
+    fit = min((r & -r).bit_length() - 1 for r in res)  # 2^fit divides both sides
+    if cfg.lod_levels > fit:
         raise VrnError(
             f"--lod-levels = {cfg.lod_levels} does not fit {btf_path} ({res[0]}x{res[1]} "
-            f"texels): level {top} needs whole 2x2 blocks; allowed [1, {most}]"
+            f"texels): level {cfg.lod_levels - 1} needs whole 2x2 blocks; allowed [1, "
+            f"{min(max(fit, 1), 12)}]"
         )

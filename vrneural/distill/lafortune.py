@@ -100,10 +100,9 @@ def fit_lafortune(
     wo: torch.Tensor,
     iters: int = 40,
     chunk: int = 64,
-    progress=None,
 ) -> torch.Tensor:
     """Fit ``[T, 55]`` parameters to ``y: [T, M, 3]`` observed at ``wi, wo: [M, 3]`` (float64
-    normal equations for stability). ``progress(n)`` is called after each chunk of texels."""
+    normal equations for stability), ``chunk`` texels at a time."""
 
     def res(p, yt):
         return (lafortune_eval(p, wi, wo) - yt).reshape(p.shape[0], -1)
@@ -129,8 +128,6 @@ def fit_lafortune(
             cost = torch.where(ok, c_new, cost)
             lam = torch.where(ok, lam * 0.3, lam * 4).clamp(1e-9, 1e9)
         out.append(p)
-        if progress is not None:
-            progress(yt.shape[0])
     return torch.cat(out)
 
 

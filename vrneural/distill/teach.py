@@ -51,11 +51,10 @@ def resumed_config(
     cfg,
     stored: dict,
     ck: dict,
-    free: tuple[str, ...] = RESUME_FREE,
     epochs_flag: str = "--epochs",
 ) -> dict:
-    """The checkpoint's config with the ``free`` fields taken from ``cfg`` (an unresolved
-    config: a field left None was not given).
+    """The checkpoint's config with the :data:`~vrneural.distill.config.RESUME_FREE` fields
+    taken from ``cfg`` (an unresolved config: a field left None was not given).
 
     A field given with another value than the checkpoint used (even the default) is an
     error, not silently ignored; so is an ``--epochs`` below the epochs already trained.
@@ -67,7 +66,7 @@ def resumed_config(
 
     chosen = given(cfg)
     for k in (f.name for f in dataclasses.fields(cfg) if f.name in chosen):
-        if k in free or k in ("force", "btf", "teacher") or k not in stored:
+        if k in RESUME_FREE or k in ("force", "btf", "teacher") or k not in stored:
             continue
         now = getattr(cfg, k)
         if now != stored[k]:
@@ -77,7 +76,7 @@ def resumed_config(
                 "or start over: --force instead of --resume)"
             )
     now = resolved(cfg)  # no --epochs: the run's own target (when it has one)
-    merged = dict(stored) | {k: getattr(now, k) for k in free if k != "epochs"}
+    merged = dict(stored) | {k: getattr(now, k) for k in RESUME_FREE if k != "epochs"}
     merged["epochs"] = cfg.epochs if cfg.epochs is not None else stored.get("epochs", now.epochs)
     done = int(ck["epoch"])
     if merged["epochs"] < done:
