@@ -70,12 +70,13 @@ def assert_auto_march_parity(mat, unmoved) -> None:
     (:func:`assert_moved_lookup_parity`) at a grazing and a near-normal eye."""
     import dataclasses
 
+    from vrneural.atlas import build_atlas
     from vrneural.parallax import auto_blocks
-    from vrneural.runtime.assets import get_atlas, get_mesh
+    from vrneural.runtime.assets import get_mesh
     from vrneural.runtime.reference import block_geometry
 
     auto = dataclasses.replace(mat, parallax={**mat.parallax, "march": "auto"})
-    at = get_atlas(get_mesh("sphere"), 64)
+    at = build_atlas(get_mesh("sphere"), 64)
     tl = (0.3, 0.3, 0.0, 0.0)
     per_block = auto_blocks(block_geometry(at)["foot"] * np.float32(0.3), auto.march_grid)
     assert 0.2 < per_block.mean() < 0.8, per_block.mean()  # both routes are taken

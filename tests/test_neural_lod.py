@@ -158,12 +158,13 @@ def test_gpu_lod_that_varies_between_blocks_follows_the_twin():
     toward its poles), so the lanes of one SIMD group read different pyramid levels: llvmpipe
     read textureDimensions at such a level as the first lane's (garbage where they differed);
     the level's size is now derived from level 0's."""
+    from vrneural.atlas import build_atlas
     from vrneural.runtime import reference as ref
-    from vrneural.runtime.assets import get_atlas, get_mesh
+    from vrneural.runtime.assets import get_mesh
     from vrneural.runtime.texture_pass import shade_texture_space
 
     m = pyramid_material(4)
-    at = get_atlas(get_mesh("sphere"), 128)
+    at = build_atlas(get_mesh("sphere"), 128)
     eye, lp, lc = np.float32([0.0, 1.5, 0.8]), np.float32([[0.3, 1.0, 0.9]]), np.ones((1, 3))
     tl = (2.5, 2.5, 0, 0)
     lod = ref.block_lod(m, ref.texture_blocks(at, np.eye(4), tl)["foot"])

@@ -235,14 +235,15 @@ def test_gpu_texture_space_parallax_follows_the_twin(mesh, march):
     numpy twin does (per eye: two eye positions), at a grazing and a near-normal view."""
     from runtime_helpers import assert_moved_lookup_parity, quad_atlas
 
-    from vrneural.runtime.assets import get_atlas, get_mesh
+    from vrneural.atlas import build_atlas
+    from vrneural.runtime.assets import get_mesh
 
     m = parallax_material(16, amp=0.06, march=march)
     if mesh == "quad":
         at = quad_atlas(32)
         eyes = [np.float32([0.2, 0.1, 1.5]), np.float32([2.5, -1.0, 0.4])]
     else:
-        at = get_atlas(get_mesh("sphere"), 64)
+        at = build_atlas(get_mesh("sphere"), 64)
         eyes = [np.float32([0.0, 1.5, 0.8]), np.float32([1.2, 0.3, 0.5])]
     lp, lc = np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
     tl = (2.0, 2.0, 0, 0)

@@ -64,9 +64,10 @@ def texture_vs_screen(texture_res=1200, eye_res=(2064, 2208), reuse=4, frames=3)
 
 
 def _plane_case(res: int, n_lights: int = 1):
-    from vrneural.runtime.assets import get_atlas, get_mesh
+    from vrneural.atlas import build_atlas
+    from vrneural.runtime.assets import get_mesh
 
-    atlas = get_atlas(get_mesh("plane"), res)
+    atlas = build_atlas(get_mesh("plane"), res)
     mat = random_material(5)
     model = np.eye(4)
     eye = np.float32([0.1, 1.0, 0.3])

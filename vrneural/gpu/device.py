@@ -47,11 +47,6 @@ def pick_adapter(infos: list[dict]) -> int:
     return min(usable, key=rank) if usable else -1
 
 
-def _describe(info: dict) -> str:
-    name = info.get("device", "") or info.get("description", "") or "?"
-    return f"{name} ({info.get('backend_type', '?')})"
-
-
 @functools.cache
 def _adapter():
     # lavapipe (and other Mesa drivers) warn about XDG_RUNTIME_DIR when it is unset; harmless
@@ -66,10 +61,14 @@ def _adapter():
     infos = [dict(a.info) for a in adapters]
     i = pick_adapter(infos)
     if i < 0:
-        found = ", ".join(_describe(info) for info in infos) or "none"
+        found = ", ".join(
+            f"{info.get('device', '') or info.get('description', '') or '?'} "
+            f"({info.get('backend_type', '?')})"
+            for info in infos
+        )
         raise VrnError(
-            f"no Vulkan, Metal or D3D12 GPU adapter found (wgpu found: {found}; OpenGL is "
-            f"not supported); {INSTALL_HINT}"
+            f"no Vulkan, Metal or D3D12 GPU adapter found (wgpu found: {found or 'none'}; "
+            f"OpenGL is not supported); {INSTALL_HINT}"
         )
     return adapters[i]
 

@@ -50,9 +50,7 @@ def wgsl_float(x: float, suffix: str = "") -> str:
 
 
 def render_wgsl(name: str, **ctx) -> str:
-    """Render template ``shaders/<name>`` with ``ctx``."""
-    if not name.endswith(".wgsl"):
-        name += ".wgsl"
+    """Render template ``shaders/<name>`` (``.wgsl`` appended when missing) with ``ctx``."""
     return _env().get_template(name).render(**ctx)
 
 

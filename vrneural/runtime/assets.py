@@ -1,11 +1,11 @@
-"""Meshes and atlases for the runtime (from :mod:`vrneural.atlas`), with the warnings `run`
-and `atlas` give about an atlas's triangles."""
+"""Meshes for the runtime (from :mod:`vrneural.atlas`), and the warnings `run` and `atlas` give
+about an atlas's triangles."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from vrneural.atlas.types import Atlas, Mesh
+from vrneural.atlas.types import Mesh
 from vrneural.errors import VrnError
 
 #: Fraction of a mesh's triangles that may own no atlas texel before `run` and `atlas` warn
@@ -92,11 +92,3 @@ def get_mesh(
         f"{field} = {spec!r}: {p.name} has no mesh {part!r}; it has {', '.join(names[:6])}"
         f"{', ...' if len(names) > 6 else ''} (or an index 0-{len(meshes) - 1})"
     )
-
-
-def get_atlas(
-    mesh: Mesh, resolution: int, padding: int = 2, atlas_uv: str = "auto", progress: bool = False
-) -> Atlas:
-    from vrneural.atlas import build_atlas
-
-    return build_atlas(mesh, resolution, padding=padding, atlas_uv=atlas_uv, progress=progress)

@@ -44,26 +44,6 @@ def expanded_vertices(mesh, uv_atlas: np.ndarray | None) -> np.ndarray:
     return rows
 
 
-def pack_object(model, albedo=(0, 0, 0), specular=0.0, shininess=1.0, obj_id=0) -> bytes:
-    """The ``Object`` uniform (:data:`~vrneural.runtime.interface.OBJECT`) as bytes."""
-    o = OBJECT.zeros()
-    m32 = np.asarray(model, np.float32)
-    o["model"] = m32.T
-    o["normal_mat"] = normal_matrix(m32).T
-    o["albedo"][:3] = albedo
-    o["spec"][:3] = (specular, shininess, obj_id)
-    return o.tobytes()
-
-
-def pack_frame_into(f: np.ndarray, view_proj, eye, n_lights: int) -> None:
-    """The ``Frame`` uniform into the record ``f``
-    (:data:`~vrneural.runtime.interface.FRAME`)."""
-    f["view_proj"] = np.asarray(view_proj, np.float64).T
-    f["eye"][:3] = eye
-    f["eye"][3] = 0.0
-    f["info"] = (n_lights, 0, 0, 0)
-
-
 @functools.cache
 def _module(n_lights: int, n_active: int, display: bool, mips: bool = False):
     frame, obj = forward_bindings(n_lights)
@@ -183,8 +163,10 @@ class EyeTargets:
         """Frame uniforms: ``view_proj [4, 4]``, ``eye_pos [3]``, lights (positions as given,
         in the same frame as ``view_proj``)."""
         ar = self.arena
-        f = FRAME.view(ar.view(self.f_off, FRAME_BYTES, np.uint8))[0]
-        pack_frame_into(f, view_proj, eye_pos, len(light_pos))
+        f = FRAME.view(ar.view(self.f_off, FRAME_BYTES, np.uint8))[0]  # the Frame uniform
+        f["view_proj"] = np.asarray(view_proj, np.float64).T
+        f["eye"] = (*eye_pos, 0.0)
+        f["info"] = (len(light_pos), 0, 0, 0)
         lights = LIGHT.view(ar.view(self.l_off, LIGHT.size * self.n_lights, np.uint8))
         pack_lights_into(lights, light_pos, light_rgb)
         ar.written()
@@ -203,10 +185,13 @@ class DrawObject:
         self.n_vertices = 3 * len(mesh.faces)
         self.vbuf = upload_buffer(expanded_vertices(mesh, uv_atlas), wgpu.BufferUsage.VERTEX)
         albedo, spec, shin = plain if plain is not None else ((0, 0, 0), 0.0, 1.0)
-        self.ubuf = upload_buffer(
-            np.frombuffer(pack_object(model, albedo, spec, shin, obj_id), np.uint8),
-            wgpu.BufferUsage.UNIFORM,
-        )
+        o = OBJECT.zeros()  # the Object uniform
+        m32 = np.asarray(model, np.float32)
+        o["model"] = m32.T
+        o["normal_mat"] = normal_matrix(m32).T
+        o["albedo"][:3] = albedo
+        o["spec"][:3] = (spec, shin, obj_id)
+        self.ubuf = upload_buffer(np.frombuffer(o.tobytes(), np.uint8), wgpu.BufferUsage.UNIFORM)
         self.binds: dict = {}
 
     def bind_group(self, radiance_view=None, key=None, mips: bool = False):
@@ -241,30 +226,21 @@ def _sampler(mips: bool = False):
     )
 
 
-def frame_bind_group(eye: EyeTargets):
-    """Group 0 (frame uniforms + lights) of ``eye``, shared by every forward pipeline."""
-    if eye._bind is not None:
-        return eye._bind
-    ar = eye.arena
-    eye._bind = get_device().create_bind_group(
-        layout=_layouts()[0],
-        entries=forward_bindings(eye.n_lights)[0].entries(
-            {
-                "F": ar.binding(eye.f_off, FRAME_BYTES),
-                "lights": ar.binding(eye.l_off, LIGHT.size * eye.n_lights),
-            }
-        ),
-    )
-    return eye._bind
-
-
 def record_bundle(eye: EyeTargets, draws: list):
     """A render bundle of ``eye``'s draws, ``[(pipeline, object bind group, DrawObject)]``
     in order: replayed by every frame's forward pass (one call instead of four per draw)."""
     enc = get_device().create_render_bundle_encoder(
         color_formats=eye.formats(), depth_stencil_format=DEPTH_FORMAT
     )
-    enc.set_bind_group(0, frame_bind_group(eye))
+    if eye._bind is None:  # group 0 (frame uniforms + lights), shared by every pipeline
+        ar = eye.arena
+        res = {
+            "F": ar.binding(eye.f_off, FRAME_BYTES),
+            "lights": ar.binding(eye.l_off, LIGHT.size * eye.n_lights),
+        }
+        entries = forward_bindings(eye.n_lights)[0].entries(res)
+        eye._bind = get_device().create_bind_group(layout=_layouts()[0], entries=entries)
+    enc.set_bind_group(0, eye._bind)
     for pipe, bg, d in draws:
         enc.set_pipeline(pipe)
         enc.set_bind_group(1, bg)

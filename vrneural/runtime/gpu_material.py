@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vrneural.atlas.types import Atlas, Mesh
+from vrneural.atlas.types import Atlas
 from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import upload_buffer, upload_texture
 from vrneural.material import ARCHS, NeuralMaterial
@@ -77,8 +77,13 @@ class GpuMaterial:
             for n in names
         ]
         self.views = [t.create_view(dimension="2d-array") for t in self.textures]
-        #: the height field of a parallax material (r32float ``[H, W]``), else None
-        self.height = upload_height_texture(mat.height) if mat.parallax_steps else None
+        #: the height field of a parallax material (r32float ``[H, W]``: the float16 values
+        #: exactly; read with ``textureLoad``, see neural_material.wgsl), else None
+        self.height = None
+        if mat.parallax_steps:
+            h32 = np.asarray(mat.height, np.float32)
+            tb = wgpu.TextureUsage.TEXTURE_BINDING
+            self.height = upload_texture(h32, "r32float", tb, "neural.height")
         #: the offset texture of a neural-offset material (as the neural textures), else None
         self.offset = None
         if mat.parallax_kind == "neural":
@@ -107,28 +112,6 @@ class GpuMaterial:
         return out
 
 
-def upload_height_texture(height: np.ndarray):
-    """A parallax material's height field ``[H, W]`` float16 -> an ``r32float`` texture (the
-    float16 values exactly; read with ``textureLoad``, see neural_material.wgsl)."""
-    import wgpu
-
-    usage = wgpu.TextureUsage.TEXTURE_BINDING
-    return upload_texture(np.asarray(height, np.float32), "r32float", usage, "neural.height")
-
-
-def vertex_table(mesh: Mesh, uv_atlas: np.ndarray) -> np.ndarray:
-    """The ``verts`` storage layout: ``[V, 4, 4]`` float32 (see module docstring)."""
-    v = mesh.positions.shape[0]
-    t = np.zeros((v, 4, 4), np.float32)
-    t[:, 0, :3] = mesh.positions
-    t[:, 0, 3] = uv_atlas[:, 0]
-    t[:, 1, :3] = mesh.normals
-    t[:, 1, 3] = uv_atlas[:, 1]
-    t[:, 2, :] = mesh.tangents
-    t[:, 3, :2] = mesh.uv
-    return t
-
-
 class GpuAtlas:
     """Storage buffers of one atlas (shared by both eyes)."""
 
@@ -140,7 +123,15 @@ class GpuAtlas:
         self.atlas = atlas
         self.resolution = atlas.resolution
         s = wgpu.BufferUsage.STORAGE
-        self.verts = upload_buffer(vertex_table(atlas.mesh, atlas.uv_atlas), s, "verts")
+        mesh, uv = atlas.mesh, atlas.uv_atlas
+        t = np.zeros((len(mesh.positions), 4, 4), np.float32)  # verts: see the module docstring
+        t[:, 0, :3] = mesh.positions
+        t[:, 0, 3] = uv[:, 0]
+        t[:, 1, :3] = mesh.normals
+        t[:, 1, 3] = uv[:, 1]
+        t[:, 2, :] = mesh.tangents
+        t[:, 3, :2] = mesh.uv
+        self.verts = upload_buffer(t, s, "verts")
         self.faces = upload_buffer(np.asarray(atlas.mesh.faces, np.uint32).ravel(), s, "faces")
         self._lists: dict[int, tuple] = {}
         self._geometry: dict | None = None

@@ -61,17 +61,10 @@ def _interpolate(atlas: Atlas, tri: np.ndarray, p: np.ndarray, *arrays: np.ndarr
     return [(lam * a[f].astype(np.float32)).sum(1) for a in arrays]
 
 
-def interp_attributes(atlas: Atlas, tri: np.ndarray, p: np.ndarray):
-    """Object-space position ``[N, 3]``, normal ``[N, 3]`` (not normalised) and tangent
-    ``[N, 4]`` (w: handedness) of triangles ``tri: [N]`` at atlas points ``p: [N, 2]``
-    (barycentric interpolation, f32)."""
-    m = atlas.mesh
-    return tuple(_interpolate(atlas, tri, p, m.positions, m.normals, m.tangents))
-
-
 def world_frames(pos: np.ndarray, nrm: np.ndarray, tan: np.ndarray, model: np.ndarray):
     """World position, unit normal, tangent and bitangent ``[N, 3]`` each from object-space
-    attributes (:func:`interp_attributes`): normal matrix, Gram-Schmidt tangent, handedness.
+    position, normal ``[N, 3]`` (not normalised) and tangent ``[N, 4]`` (w: handedness):
+    normal matrix, Gram-Schmidt tangent, handedness.
     Twin of ``frame_of`` in neural_material.wgsl."""
     model = model.astype(np.float32)
     pos = pos @ model[:3, :3].T + model[:3, 3]
@@ -169,7 +162,8 @@ def block_geometry(atlas: Atlas) -> dict:
     first = np.argmax(blk != EMPTY, axis=1)
     tc = blk[np.arange(len(blk)), first].astype(np.int64)
     centre = np.stack([2 * bx + 1, 2 * by + 1], -1).astype(np.float32) / np.float32(R)
-    pos, nrm, tan = interp_attributes(atlas, tc, centre)
+    m = atlas.mesh
+    pos, nrm, tan = _interpolate(atlas, tc, centre, m.positions, m.normals, m.tangents)
     tri = np.where(blk != EMPTY, blk, tc[:, None]).astype(np.int64)  # [N, 4]
     tx = 2 * bx[:, None] + np.array([0, 1, 0, 1])  # [N, 4]
     ty = 2 * by[:, None] + np.array([0, 0, 1, 1])

@@ -22,7 +22,7 @@ from vrneural.gpu.uniforms import UniformArena
 from vrneural.runtime import forward as fw
 from vrneural.runtime import settings
 from vrneural.runtime.adaptive import coverage_slack, near_scale, object_directions
-from vrneural.runtime.assets import collapsed_triangles, get_atlas, get_mesh, lost_triangles
+from vrneural.runtime.assets import collapsed_triangles, get_mesh, lost_triangles
 from vrneural.runtime.camera import (
     Eye,
     OrbitPath,
@@ -131,6 +131,8 @@ class Renderer(FrameEncoding):
 
     def _add_object(self, i: int, o, passes: dict, progress) -> None:
         """Load object ``i``'s mesh; a neural one also gets its atlas, pass and targets."""
+        from vrneural.atlas import build_atlas
+
         scene, s = self.scene, self.s
         say = progress or (lambda text: None)
         where = f"{scene.src}: objects[{i}] ({o.name})"  # what its errors and warnings name
@@ -153,7 +155,7 @@ class Renderer(FrameEncoding):
             )
         say(f"{o.name}: atlas {res}^2, {len(mesh.faces)} triangles")
         try:
-            atlas = get_atlas(mesh, res, atlas_uv=o.atlas_uv, progress=progress is not None)
+            atlas = build_atlas(mesh, res, atlas_uv=o.atlas_uv, progress=progress is not None)
         except VrnError as e:  # name the object and the knobs that set its resolution
             raise VrnError(f"{where} at {res}^2 texels ({knob}): {e}") from None
         lost = lost_triangles(atlas.stats, res, "they show their neighbours' shading")
@@ -171,7 +173,7 @@ class Renderer(FrameEncoding):
             for side in level_sides(res):  # every level's atlas now (cached on disk after)
                 try:
                     say(f"object {o.name}: atlas {side}^2")
-                    n.levels[side] = (get_atlas(mesh, side), None, None, None)
+                    n.levels[side] = (build_atlas(mesh, side), None, None, None)
                     sides.append(side)
                 except VrnError:  # too small for the mesh's charts: the larger ones only
                     break

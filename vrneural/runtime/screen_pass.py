@@ -30,22 +30,6 @@ from vrneural.runtime.texture_pass import (
 PARAMS_BYTES = SCREEN_PARAMS.size  # 256
 
 
-def pack_screen_params(
-    p: np.ndarray, model, eye, tiling, inv_view_proj, width, height, slot, obj_id, rect=None
-) -> None:
-    """Write the ``Params`` uniform of screen_space.wgsl into the record ``p``
-    (:data:`~vrneural.runtime.interface.SCREEN_PARAMS`); ``rect``: the pixels to cover
-    (default: the whole eye)."""
-    m32 = np.asarray(model, np.float32)
-    p["model"] = m32.T
-    p["normal_mat"] = normal_matrix(m32).T
-    p["eye"][:3] = np.asarray(eye, np.float32)[:3]
-    p["tiling"] = np.asarray(tiling, np.float32)
-    p["inv_view_proj"] = np.asarray(inv_view_proj, np.float32).T
-    p["screen"] = (width, height, slot, obj_id)
-    p["rect"] = rect or (0, 0, width, height)
-
-
 def screen_rect(centre, radius, view_proj, width, height) -> tuple[int, int, int, int]:
     """Pixel rectangle ``(x0, y0, w, h)`` covering a world bounding sphere (the whole screen
     when the sphere reaches behind the eye)."""
@@ -143,7 +127,14 @@ class ScreenTarget:
         self.rect = rect
         ar = self.arena
         p = SCREEN_PARAMS.view(ar.view(self.p_off, PARAMS_BYTES, np.uint8))[0]
-        pack_screen_params(p, model, eye, tiling, inv_view_proj, w, h, slot, obj_id, rect)
+        m32 = np.asarray(model, np.float32)
+        p["model"] = m32.T
+        p["normal_mat"] = normal_matrix(m32).T
+        p["eye"][:3] = np.asarray(eye, np.float32)[:3]
+        p["tiling"] = np.asarray(tiling, np.float32)
+        p["inv_view_proj"] = np.asarray(inv_view_proj, np.float32).T
+        p["screen"] = (w, h, slot, obj_id)
+        p["rect"] = rect
         lights = LIGHT.view(ar.view(self.l_off, LIGHT.size * self.spass.n_lights, np.uint8))
         pack_lights_into(lights, light_pos, light_rgb)
         ar.written()

@@ -102,23 +102,19 @@ class FrameStats:
 
     def _decode(self) -> None:
         raw, names, ts_bytes, screen, wall = self._raw
-        c = np.frombuffer(raw, np.uint32, offset=ts_bytes).reshape(-1, 4).sum(0, dtype=np.int64)
+        slots = np.frombuffer(raw, np.uint32, offset=ts_bytes).reshape(-1, 4)
+        c = [int(x) for x in slots.sum(0, dtype=np.int64)]
         gpu = dict(wall) if wall is not None else GpuTimer.decode(raw[:ts_bytes], names)
         for k in self.untimed:
             gpu.pop(k, None)
         d = self.__dict__
         d["gpu_ms"] = gpu
         d["wall_ms"] = (self._end - self._start) * 1e3
-        if screen:  # the screen kernels count (pixels, backfacing, coarse, fine)
-            d["pixels_shaded"], d["blocks_backfacing"] = int(c[0]), int(c[1])
-            d["blocks_shaded"] = 0
-        else:
-            d["blocks_shaded"], d["blocks_backfacing"] = int(c[0]), int(c[1])
-            d["pixels_shaded"] = 0
-        d["mlp_coarse"], d["mlp_fine"] = int(c[2]), int(c[3])
+        # the screen kernels count (pixels, backfacing, coarse, fine)
+        d["pixels_shaded"], d["blocks_shaded"] = (c[0], 0) if screen else (0, c[0])
+        d["blocks_backfacing"], d["mlp_coarse"], d["mlp_fine"] = c[1:]
         # per neural object (texture mode): the blocks shaded for it, its eyes' slots summed
         n, eyes = d.get("_objects", (0, 1))
-        slots = np.frombuffer(raw, np.uint32, offset=ts_bytes).reshape(-1, 4)
         d["object_blocks"] = [int(b) for b in slots[: n * eyes, 0].reshape(n, eyes).sum(1)]
         self._raw = None
 

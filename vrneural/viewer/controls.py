@@ -147,16 +147,14 @@ class Controls:
             return
         s = v.image_scale()  # window pixels per image pixel
         lt = v.lights[k]
-        p = drag_point(lt.at(v.t), v.pose(), v.fov_y, dx / s, dy / s, v.eye_res[1])
+        p = drag_point(lt.at(v.t), v.pose(), v.r.s.fov_y, dx / s, dy / s, v.r.s.eye_res[1])
         v.lights[k] = dataclasses.replace(lt, position=tuple(float(x) for x in p), motion="none")
 
     def move(self, dt: float) -> None:
         """Fly for ``dt`` seconds along the held keys."""
         if not self.held or dt <= 0:
             return
-        r = sum(MOVES[a][0] for a in self.held)
-        u = sum(MOVES[a][1] for a in self.held)
-        f = sum(MOVES[a][2] for a in self.held)
+        r, u, f = (sum(axis) for axis in zip(*(MOVES[a] for a in self.held), strict=True))
         self.view.camera.move(r, u, f, dt)
 
 

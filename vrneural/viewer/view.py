@@ -212,14 +212,6 @@ class View(FrameWork):
         ratio = self.canvas.get_pixel_ratio() if self.canvas else 1.0
         return fit(size, self.image_size())[2] / max(ratio, 1e-6)
 
-    @property
-    def eye_res(self) -> tuple[int, int]:
-        return self.r.s.eye_res
-
-    @property
-    def fov_y(self) -> float:
-        return self.r.s.fov_y
-
     def _building(self, what: str) -> None:
         if getattr(self, "canvas", None) is not None:
             self.say(what)
