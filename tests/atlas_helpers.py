@@ -88,7 +88,7 @@ def gpu_raster_coverage(uv: np.ndarray, faces: np.ndarray, R: int) -> np.ndarray
     import wgpu
 
     from vrneural.gpu import get_device, read_texture, upload_buffer
-    from vrneural.gpu.pipelines import pipeline_cache
+    from vrneural.gpu.pipelines import PIPELINES
 
     dev = get_device()
     limit = dev.limits["max-texture-dimension-2d"]
@@ -102,7 +102,7 @@ def gpu_raster_coverage(uv: np.ndarray, faces: np.ndarray, R: int) -> np.ndarray
         label="atlas ids",
     )
     wgsl = Path(__file__).with_name("atlas_ids.wgsl").read_text()
-    mod = pipeline_cache().module(wgsl, "atlas_ids")
+    mod = PIPELINES.module(wgsl, "atlas_ids")
     pipe = dev.create_render_pipeline(
         layout="auto",
         vertex={

@@ -51,12 +51,12 @@ def test_buffer_round_trip(rng):
 def test_load_wgsl_and_cache():
     from vrneural.gpu import load_wgsl
     from vrneural.gpu.mlp_kernel import mlp_wgsl
-    from vrneural.gpu.pipelines import pipeline_cache
+    from vrneural.gpu.pipelines import PIPELINES
     from vrneural.mlp import random_mlp
 
     assert "macro material_fns" in load_wgsl("neural_material")
     assert load_wgsl("neural_material") == load_wgsl("neural_material.wgsl")
-    cache = pipeline_cache()
+    cache = PIPELINES
     code = mlp_wgsl(random_mlp([3, 4, 2], seed=0))
     c = {"N": 16, "WIDTH": 16, "STRIDE": 64}
     p1 = cache.compute(code, constants=c)

@@ -50,15 +50,12 @@ class PipelineCache:
         return p
 
 
-_CACHE = PipelineCache()
+#: the process-wide cache
+PIPELINES = PipelineCache()
 
 
 def compute_pipeline(
     code: str, entry: str = "main", constants: dict | None = None, label: str = ""
 ):
     """Cached compute pipeline from the process-wide :class:`PipelineCache`."""
-    return _CACHE.compute(code, entry, constants, label)
-
-
-def pipeline_cache() -> PipelineCache:
-    return _CACHE
+    return PIPELINES.compute(code, entry, constants, label)

@@ -56,22 +56,14 @@ class MipChain:
         from vrneural.gpu.device import get_device
         from vrneural.runtime.interface import MIP_BINDINGS
 
-        self.levels = levels
-        pipe = _pipeline()
-        dev = get_device()
-        self.groups = []
+        layout = _pipeline().get_bind_group_layout(0)
+        self.groups = []  # per level from 1: (bind group, side)
         for k in range(1, levels):
             src = texture.create_view(base_mip_level=k - 1, mip_level_count=1)
             dst = texture.create_view(base_mip_level=k, mip_level_count=1)
-            self.groups.append(
-                (
-                    dev.create_bind_group(
-                        layout=pipe.get_bind_group_layout(0),
-                        entries=MIP_BINDINGS.entries({"src": src, "dst": dst}),
-                    ),
-                    max(1, texture.size[0] >> k),
-                )
-            )
+            entries = MIP_BINDINGS.entries({"src": src, "dst": dst})
+            group = get_device().create_bind_group(layout=layout, entries=entries)
+            self.groups.append((group, max(1, texture.size[0] >> k)))
 
     def dispatch(self, cp) -> None:
         """Record the chain into an open compute pass (each level after the one it reads)."""

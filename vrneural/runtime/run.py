@@ -146,12 +146,10 @@ def default_out() -> Path:
             make_dirs(p.parent)
             p.mkdir()
             return p
-        except FileExistsError as e:
-            if p.parent.is_dir():  # the name is taken: the next one
+        except OSError as e:
+            if isinstance(e, FileExistsError) and p.parent.is_dir():  # taken: the next name
                 k += 1
                 continue
-            raise VrnError(f"{p}: cannot create output directory ({why(p, e)})") from None
-        except OSError as e:
             raise VrnError(f"{p}: cannot create output directory ({why(p, e)})") from None
 
 
@@ -357,6 +355,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
         per_frame["object_res"] = [st.object_res for st in stats]
         per_frame["object_texels_allocated"] = [st.object_texels for st in stats]
         per_frame["object_texels_shaded"] = [[4 * b for b in st.object_blocks] for st in stats]
+    ref = str(Path(cfg.reference).resolve()) if cfg.reference else None
     evals = [a + b for a, b in zip(per_frame["mlp_coarse"], per_frame["mlp_fine"], strict=True)]
     return {
         "adapter": adapter.to_dict(),
@@ -370,8 +369,9 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
                     "mesh": o.mesh,
                     "material": o.material.kind,
                     "source": o.material.source,
+                    # the teacher shaded in reference mode: --reference's, else the material's own
                     **(
-                        {"reference": reference_of(cfg, o.material)}
+                        {"reference": ref or o.material.reference_source or None}
                         if s.mode == "reference" and o.material.kind == "neural"
                         else {}
                     ),
@@ -415,14 +415,6 @@ UNTIMED_NOTE = (
     "first frame: runtime/timecheck.py); its time is in frame_wall_ms, and `vrneural bench "
     "frame` times it by the wall clock"
 )
-
-
-def reference_of(cfg, material) -> str | None:
-    """The teacher pack an object was shaded with in reference mode: ``--reference`` for every
-    object when given, else the material's own."""
-    if cfg.reference:
-        return str(Path(cfg.reference).resolve())
-    return material.reference_source or None
 
 
 def _texture_text(profile_res: int, sm: dict, given: bool = False) -> str:

@@ -103,18 +103,15 @@ MAX_SCALE = 1e6
 MIN_SCALE = 1e-9
 
 
-def euler_matrix(deg) -> np.ndarray:
-    """Rotation ``[3, 3]`` from XYZ Euler angles in degrees (applied x, then y, then z)."""
-    x, y, z = np.radians(np.asarray(deg, np.float64))
+def model_matrix(position=(0, 0, 0), rotation=(0, 0, 0), scale=1.0) -> np.ndarray:
+    """Object -> world ``[4, 4]``: uniform ``scale``, XYZ Euler angles ``rotation`` in degrees
+    (applied x, then y, then z), then ``position``."""
+    x, y, z = np.radians(np.asarray(rotation, np.float64))
     rx = np.array([[1, 0, 0], [0, np.cos(x), -np.sin(x)], [0, np.sin(x), np.cos(x)]])
     ry = np.array([[np.cos(y), 0, np.sin(y)], [0, 1, 0], [-np.sin(y), 0, np.cos(y)]])
     rz = np.array([[np.cos(z), -np.sin(z), 0], [np.sin(z), np.cos(z), 0], [0, 0, 1]])
-    return rz @ ry @ rx
-
-
-def model_matrix(position=(0, 0, 0), rotation=(0, 0, 0), scale=1.0) -> np.ndarray:
     m = np.eye(4)
-    m[:3, :3] = euler_matrix(rotation) * scale
+    m[:3, :3] = rz @ ry @ rx * scale
     m[:3, 3] = position
     return m
 

@@ -114,7 +114,7 @@ class Controls:
             live.follow_head = False
             v.reset_camera()
         elif action == "screenshot":
-            v.request_screenshot()
+            v.want_shot = True  # taken after the next frame is drawn
         elif action == "quit":
             v.close()
 

@@ -142,9 +142,6 @@ class View(FrameWork):
         if alert:
             print(f"warning: {msg}", file=sys.stderr)
 
-    def request_screenshot(self) -> None:
-        self.want_shot = True
-
     def fps(self) -> float:
         """Frames per second over the last second (wall clock between frames' ends)."""
         last = self.fps_window[-1] if self.fps_window else 0.0

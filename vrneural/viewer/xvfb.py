@@ -52,7 +52,12 @@ def virtual_display(width: int = 2200, height: int = 1400) -> Iterator[str]:
         try:
             yield f":{number}"
         finally:
-            _let_go_of_glfw()
+            # glfw's X connection goes before its server (else Xlib's fatal-error handler ends
+            # the process at exit); rendercanvas initialises glfw again for its next window
+            glfw = sys.modules.get("glfw")
+            if glfw is not None:
+                glfw.terminate()
+                glfw._rc_alive = False  # rendercanvas's flag: no polling of a terminated glfw
             if old is None:
                 os.environ.pop("DISPLAY", None)
             else:
@@ -66,15 +71,6 @@ def virtual_display(width: int = 2200, height: int = 1400) -> Iterator[str]:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
-
-
-def _let_go_of_glfw() -> None:
-    """Close glfw's X connection before its server goes (else Xlib's fatal-error handler ends
-    the process at exit); rendercanvas initialises glfw again for its next window."""
-    glfw = sys.modules.get("glfw")
-    if glfw is not None:
-        glfw.terminate()
-        glfw._rc_alive = False  # rendercanvas's flag: no polling of a terminated glfw
 
 
 def _read_display(fd: int, proc, log, timeout: float = 30.0) -> int:
