@@ -12,10 +12,8 @@ per light, shared by the block's 4 texels)::
                  rgb_k = eval_fine(zz, pre_b(U_f(u_k)))
     single:      rgb_k = eval_single(dirs, pre_a(U(u_k)))
 
-``"constants"``: weights as WGSL constants in unrolled code (:mod:`vrneural.gpu.unroll`);
-``"storage"``: layer loops over one storage buffer (narrow networks); ``"uniform"`` /
-``"streamed"``: single-level networks of any width, layers streamed in pairs
-(:func:`streamed_single`).
+The variants are described in :mod:`vrneural.runtime.codegen`: :func:`constant_nets` (unrolled
+by :mod:`vrneural.gpu.unroll`), :func:`storage_nets` and :func:`streamed_single`.
 """
 
 from __future__ import annotations

@@ -20,11 +20,9 @@ MIN_SIDE = 8
 
 
 def mip_count(resolution: int) -> int:
-    """Levels in a radiance texture of side ``resolution``, level 0 included."""
-    n = 1
-    while n <= MIPS_MAX and (resolution >> n) >= MIN_SIDE:
-        n += 1
-    return n
+    """Levels in a radiance texture of side ``resolution``, level 0 included: level ``k`` is
+    ``resolution >> k`` wide, at least :data:`MIN_SIDE`, and ``k`` at most :data:`MIPS_MAX`."""
+    return 1 + min(MIPS_MAX, max(0, (resolution // MIN_SIDE).bit_length() - 1))
 
 
 def mip_chain(level0: np.ndarray, levels: int) -> list[np.ndarray]:
