@@ -23,14 +23,12 @@ def _map_read(buf):
 
 
 class ReadbackRing:
-    """``depth`` buffers of ``nbytes`` each; slot ``i`` carries the payload it was submitted
-    with until :meth:`take` hands both back."""
+    """``depth`` buffers (``frames_in_flight``, checked by the renderer) of ``nbytes`` each;
+    slot ``i`` carries the payload it was submitted with until :meth:`take` hands both back."""
 
     def __init__(self, nbytes: int, depth: int, label: str = "readback"):
         import wgpu
 
-        if not 1 <= depth <= 3:
-            raise ValueError(f"frames in flight = {depth}; allowed 1..3")
         dev = get_device()
         u = wgpu.BufferUsage.MAP_READ | wgpu.BufferUsage.COPY_DST
         self.nbytes = max(16, -(-nbytes // 16) * 16)
