@@ -32,7 +32,7 @@ from pathlib import Path
 
 from vrneural.bench.quality_btf import btf_path as btf_file
 from vrneural.bench.quality_checks import validate
-from vrneural.bench.quality_lafortune import img, lafortune, slice_pairs
+from vrneural.bench.quality_lafortune import lafortune, slice_pairs
 from vrneural.bench.quality_parallax import (
     PARALLAX_LABELS,
     VIEW_BINS,
@@ -228,7 +228,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bo
     """Train and evaluate every method on one preset; returns its records. ``trained``: the
     ``--jobs`` workers trained them all, so only load them."""
     from vrneural.distill.checkpoint import model_from_checkpoint
-    from vrneural.distill.data import SliceData
+    from vrneural.distill.data import SliceData, from_blocks
     from vrneural.distill.evaluate import mean_l1, predict_slice
 
     d = root / preset
@@ -253,7 +253,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bo
     slices = slice_pairs(data)
     out: dict = {"btf": tck["btf"], "synth_seconds": synth_s, "methods": {}, "slices": {}}
     gt = [data.target(p, shard=False) for p in slices]
-    out["slices"]["ground truth"] = [img(g, data.res) for g in gt]
+    out["slices"]["ground truth"] = [from_blocks(g, data.res).numpy() for g in gt]
 
     for name, cks in records.items():
         models = [model_from_checkpoint(ck) for ck in cks]

@@ -168,14 +168,15 @@ def vs_torch(res=512, repeats=7, n_lights=3) -> dict:
     # factored: per block / texel once (n_lights blocks share one texel set here, as in the pass)
     nb = max(1, n // n_lights)
     wc0, wf0 = mat.networks["coarse"][0], mat.networks["fine"][0]
+    zd = mat.networks["coarse"][-1].n_out  # the coarse net's output: the fine net's first inputs
     tw = {
         k: torch.from_numpy(np.ascontiguousarray(v))
         for k, v in {
             "cd": wc0.weight[:, :9],
             "cf": wc0.weight[:, 9:],
             "cb": wc0.bias,
-            "fz": wf0.weight[:, : z_dim(mat)],
-            "ff": wf0.weight[:, z_dim(mat) :],
+            "fz": wf0.weight[:, :zd],
+            "ff": wf0.weight[:, zd:],
             "fb": wf0.bias,
         }.items()
     }
@@ -222,10 +223,6 @@ def vs_torch(res=512, repeats=7, n_lights=3) -> dict:
         "repeats": repeats,
         "target": 3.0,
     }
-
-
-def z_dim(mat) -> int:
-    return mat.networks["coarse"][-1].n_out
 
 
 def _torch_act(act: str):
