@@ -133,20 +133,13 @@ def _distill_configs(
     for name, kw in runs_table(cfg, RUNS).items():
         tstem = kw.get("teacher", "teacher")
         tsha = file_sha256(d / f"{tstem}.pt") if check_teacher else None
+        neumip = kw.get("method") == "neumip"  # 4 x 25 (and its parallax variant), never pruned
+        width, wide = (None, 0) if neumip else (cfg.width, cfg.wide_start)
         for seed in range(cfg.seed, cfg.seed + cfg.repeats):
             # the first seed keeps the plain name, so a one-seed run's checkpoints are reused
             stem = name if seed == cfg.seed else f"{name}.seed{seed}"
-            neumip = kw.get("method") == "neumip"  # 4 x 25 (and its parallax variant), never pruned
             out += network_runs(
-                cfg,
-                d,
-                btf_path,
-                tsha,
-                name,
-                stem,
-                dict(kw, seed=seed),
-                width=None if neumip else cfg.width,
-                wide_start=0 if neumip else cfg.wide_start,
+                cfg, d, btf_path, tsha, name, stem, dict(kw, seed=seed), width, wide
             )
     return out
 
