@@ -53,13 +53,8 @@ def train_packs(
     stamp.unlink(missing_ok=True)
     btf = d / "btf.btf"
     btf.unlink(missing_ok=True)
-    synthesize(
-        BtfConfig(
-            preset=budget["preset"], res=budget["res"], dirs=budget["dirs"], seed=budget["seed"]
-        ),
-        btf,
-        progress=progress,
-    )
+    bcfg = BtfConfig(**{k: budget[k] for k in ("preset", "res", "dirs", "seed")})
+    synthesize(bcfg, btf, progress=progress)
     common = dict(seed=budget["seed"], progress=progress, force=True, max_test_slices=0)
     run_teach(
         TeachConfig(
