@@ -19,7 +19,7 @@ TINY = dict(preset="leather", res=16, dirs=6, teacher_width=32, teacher_epochs=1
 def packs(tmp_path_factory) -> Path:
     """The five packs `bench tradeoff` trains, at a tiny budget (a few seconds on a CPU)."""
     d = tmp_path_factory.mktemp("packs")
-    train_packs(d, TINY, progress=False, log=lambda m: None)
+    train_packs(d, TINY, progress=False)
     return d
 
 

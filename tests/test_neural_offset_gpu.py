@@ -129,11 +129,11 @@ def test_bench_frame_times_the_update_with_parallax_and_the_neural_offset(tmp_pa
     of docs/parallax.md), and reports the share of blocks "auto" marches once."""
     import json
 
-    from vrneural.bench.timing import offset_materials
+    from vrneural.bench.timing import parallax_materials
     from vrneural.cli import main
 
     for march in ("texel", "block"):
-        mats = offset_materials(march=march)
+        mats = parallax_materials("neural", march=march)
         assert all(m.parallax_kind == "neural" and m.parallax_march == march for m in mats)
     argv = ["bench", "frame", "--quick", "--neural-offset", "--parallax-steps", "4", "--rounds",
             "1", "--no-progress", "--out", str(tmp_path / "b")]  # fmt: skip

@@ -75,12 +75,13 @@ def test_gpu_mip_chain_equals_its_twin():
 def _render(scene, s, frames=1, target=None):
     """Render ``frames`` frames; ``target``: a point the still head looks at (default: the
     scene's head path)."""
-    from vrneural.bench import poses, trade_scene
+    from vrneural.bench import poses
+    from vrneural.runtime.camera import OrbitPath
     from vrneural.runtime.renderer import Renderer
 
     r = Renderer(scene, s)
     if target is not None:
-        r.head = trade_scene.Still(poses.HEAD, target)
+        r.head = OrbitPath(tuple(poses.HEAD), tuple(target), sway=0.0)  # still
     st = [r.frame(f) for f in range(frames)]
     return r, st, r.read_eyes()[0][..., :3]
 

@@ -28,7 +28,7 @@ from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 ALBEDO = (0.8, 0.5, 0.2)
 
 
-def _scene(mesh_file: str, size: float, atlas_uv: str):
+def _scene(mesh_file: str, size: float):
     from vrneural.runtime.assets import get_mesh
 
     p = get_mesh(mesh_file).positions
@@ -36,7 +36,7 @@ def _scene(mesh_file: str, size: float, atlas_uv: str):
     scale = size / float((p.max(0) - p.min(0)).max())
     model = model_matrix(np.asarray(OrbitPath.target) - centre * scale, (20, 30, 0), scale)
     mat = MaterialDesc("neural", lambertian_material(ALBEDO), "lambertian", 1.0)
-    obj = ObjectDesc("mesh", mesh_file, model, mat, atlas_uv=atlas_uv)
+    obj = ObjectDesc("mesh", mesh_file, model, mat)
     light = PointLight(position=(0.6, 1.8, 1.2), colour=(1.0, 1.0, 1.0), intensity=1.5)
     return Scene("seams", [obj], [light], None, None, "orbit", Path.cwd(), src="seam scene")
 
@@ -81,24 +81,16 @@ def border_mask(atlas, model: np.ndarray, view_proj: np.ndarray, W: int, H: int)
     return mask
 
 
-def seam_error(mesh_file: str, texture_res: int, eye: int, atlas_uv: str = "auto") -> dict:
+def seam_error(mesh_file: str, texture_res: int, eye: int) -> dict:
     """``{seam_error, interior_error, border_pixels, object_pixels}`` of ``mesh_file`` (module
     doc) at ``texture_res``^2 texels, an ``eye`` x ``eye`` image."""
     from vrneural.runtime.renderer import Renderer, Settings
 
-    scene = _scene(mesh_file, 0.7, atlas_uv)
+    scene = _scene(mesh_file, 0.7)
     imgs, r = {}, None
+    kw = dict(eyes=1, reuse=0, texture_res=texture_res, eye_res=(eye, eye), fov_y=50.0, n_lights=1)
     for mode in ("screen", "texture"):
-        s = Settings(
-            eyes=1,
-            reuse=0,
-            texture_res=texture_res,
-            eye_res=(eye, eye),
-            fov_y=50.0,
-            n_lights=1,
-            mode=mode,
-        )
-        r = Renderer(scene, s)
+        r = Renderer(scene, Settings(mode=mode, **kw))
         r.frame(0)
         imgs[mode] = r.read_eyes()[0][..., :3].astype(np.float64)
     atlas = r.neural[0].atlas

@@ -83,8 +83,7 @@ def run_distance(cfg: DistanceConfig) -> dict:
         doc = rp.header("distance", c)
         budget = c.budget.of(c.preset)
         tt = time.perf_counter()
-        paths = train_packs(root / "packs", budget, c.progress, lambda m: None,
-                            only=("student", "student_lod"))  # fmt: skip
+        paths = train_packs(root / "packs", budget, c.progress, only=("student", "student_lod"))
         mats = load_packs(paths)
         doc["packs"] = {"budget": budget, "seconds": time.perf_counter() - tt}
         prof = get_profile("quest3")

@@ -181,8 +181,9 @@ def run_frame(cfg: FrameConfig) -> dict:
         par = {}  # (kind, march) -> renderer of the materials with parallax of that kind
         kinds = {"parallax": c.parallax_steps, "offset": c.neural_offset}
         for kind in (k for k, on in kinds.items() if on):
-            mats = (timing.parallax_materials(c.parallax_steps) if kind == "parallax"
-                    else timing.offset_materials())  # fmt: skip
+            mats = timing.parallax_materials(
+                "height" if kind == "parallax" else "neural", c.parallax_steps
+            )
             for march in MARCHES:  # the render's march (--parallax-march)
                 rr = _renderer(timing.bench_scene(c.lights, mats), c, eye_res, "hdr", march=march)
                 par[kind, march] = rr

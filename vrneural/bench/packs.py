@@ -33,7 +33,7 @@ PACKS = ("teacher", *RUNS)
 
 
 def train_packs(
-    d: Path, budget: dict, progress: bool, log=print, only: tuple | None = None
+    d: Path, budget: dict, progress: bool, only: tuple | None = None
 ) -> dict[str, Path]:
     """Train (or reuse) every pack under ``d``; ``budget``: preset, res, dirs, teacher_width,
     teacher_epochs, epochs, seed; ``only``: the networks of :data:`RUNS` to train (default all;
@@ -48,19 +48,13 @@ def train_packs(
     stamp = d / "budget.json"
     want = json.dumps(budget, sort_keys=True)
     if stamp.exists() and stamp.read_text() == want and all(p.exists() for p in paths.values()):
-        log(f"packs: reusing {d}")
         return paths
     d.mkdir(parents=True, exist_ok=True)
     stamp.unlink(missing_ok=True)
     btf = d / "btf.btf"
     btf.unlink(missing_ok=True)
-    synthesize(
-        BtfConfig(
-            preset=budget["preset"], res=budget["res"], dirs=budget["dirs"], seed=budget["seed"]
-        ),
-        btf,
-        progress=progress,
-    )
+    bcfg = BtfConfig(**{k: budget[k] for k in ("preset", "res", "dirs", "seed")})
+    synthesize(bcfg, btf, progress=progress)
     common = dict(seed=budget["seed"], progress=progress, force=True, max_test_slices=0)
     run_teach(
         TeachConfig(

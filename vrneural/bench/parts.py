@@ -1,12 +1,5 @@
 """Sub-configs several benches share (:func:`vrneural.config.part`): their fields are the
 benches' options, declared and checked once here instead of copied into every bench.
-
-- :class:`Loop`: the frame loop of the frame benches (``frames``, ``lights``, ``materials``).
-- :class:`Scored`: the scored window of the quality-versus-cost benches (``tradeoff``,
-  ``distance``).
-- :class:`PackBudget`: the training budget of the packs those two train.
-- :func:`bench_config`: the fields every bench has (``out``, ``quick``, ``progress``,
-  ``force``).
 """
 
 from __future__ import annotations
@@ -48,7 +41,8 @@ def bench_config(name: str, quick: str, force: str = "", resume: str = ""):
 
 @dataclass
 class Loop:
-    """How a frame bench renders: eyes, their size, and the frames measured."""
+    """How a frame bench (``frames``, ``lights``, ``materials``) renders: eyes, their size, and
+    the frames measured."""
 
     eye_res: str | None = unset("2064x2208", "pixels per eye, WIDTHxHEIGHT (quest3)")
     eyes: int = opt(2, "eyes (1 or 2)")
@@ -71,7 +65,7 @@ QUICK_LOOP = Loop(eye_res="258x276")
 
 @dataclass
 class Scored:
-    """The window scored against the supersampled reference."""
+    """The window scored against the supersampled reference (``tradeoff``, ``distance``)."""
 
     crop: int | None = unset(128, "side (pixels) of the scored window of each quest3 eye image")
     spp: int | None = unset(
@@ -87,7 +81,8 @@ class Scored:
 
 @dataclass
 class PackBudget:
-    """What the packs a bench trains cost: the synthetic BTF's size, the teacher, the epochs."""
+    """What the packs ``tradeoff`` and ``distance`` train cost: the synthetic BTF's size, the
+    teacher, the epochs."""
 
     btf_res: int | None = unset(32, "BTF texels per side (training budget)")
     btf_dirs: int | None = unset(10, "BTF light and view directions (dirs^2 slices)")

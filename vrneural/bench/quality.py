@@ -32,7 +32,7 @@ from pathlib import Path
 
 from vrneural.bench.quality_btf import btf_path as btf_file
 from vrneural.bench.quality_checks import validate
-from vrneural.bench.quality_lafortune import img, lafortune, slice_pairs
+from vrneural.bench.quality_lafortune import lafortune, slice_pairs
 from vrneural.bench.quality_parallax import (
     PARALLAX_LABELS,
     VIEW_BINS,
@@ -133,20 +133,13 @@ def _distill_configs(
     for name, kw in runs_table(cfg, RUNS).items():
         tstem = kw.get("teacher", "teacher")
         tsha = file_sha256(d / f"{tstem}.pt") if check_teacher else None
+        neumip = kw.get("method") == "neumip"  # 4 x 25 (and its parallax variant), never pruned
+        width, wide = (None, 0) if neumip else (cfg.width, cfg.wide_start)
         for seed in range(cfg.seed, cfg.seed + cfg.repeats):
             # the first seed keeps the plain name, so a one-seed run's checkpoints are reused
             stem = name if seed == cfg.seed else f"{name}.seed{seed}"
-            neumip = kw.get("method") == "neumip"  # 4 x 25 (and its parallax variant), never pruned
             out += network_runs(
-                cfg,
-                d,
-                btf_path,
-                tsha,
-                name,
-                stem,
-                dict(kw, seed=seed),
-                width=None if neumip else cfg.width,
-                wide_start=0 if neumip else cfg.wide_start,
+                cfg, d, btf_path, tsha, name, stem, dict(kw, seed=seed), width, wide
             )
     return out
 
@@ -228,7 +221,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bo
     """Train and evaluate every method on one preset; returns its records. ``trained``: the
     ``--jobs`` workers trained them all, so only load them."""
     from vrneural.distill.checkpoint import model_from_checkpoint
-    from vrneural.distill.data import SliceData
+    from vrneural.distill.data import SliceData, from_blocks
     from vrneural.distill.evaluate import mean_l1, predict_slice
 
     d = root / preset
@@ -253,7 +246,7 @@ def bench_material(preset: str, cfg: QualityConfig, root: Path, log, trained: bo
     slices = slice_pairs(data)
     out: dict = {"btf": tck["btf"], "synth_seconds": synth_s, "methods": {}, "slices": {}}
     gt = [data.target(p, shard=False) for p in slices]
-    out["slices"]["ground truth"] = [img(g, data.res) for g in gt]
+    out["slices"]["ground truth"] = [from_blocks(g, data.res).numpy() for g in gt]
 
     for name, cks in records.items():
         models = [model_from_checkpoint(ck) for ck in cks]

@@ -54,7 +54,3 @@ def btf_path(name: str, cfg, root: Path) -> Path:
     in ``root/btf``."""
     given = given_btfs(cfg)
     return given[name] if name in given else root / "btf" / f"{name}.btf"
-
-
-def is_given(name: str, cfg) -> bool:
-    return name in given_btfs(cfg)

@@ -30,9 +30,8 @@ def validate(cfg) -> list[str]:
     twice = sorted({p for p in presets if presets.count(p) > 1})
     if twice:
         raise VrnError(f"--presets names {', '.join(twice)} more than once")
-    for k in ("teacher_epochs", "epochs", "repeats"):
+    for k in ("teacher_epochs", "epochs", "repeats", "lafortune_iters"):
         check_range(f"--{k.replace('_', '-')}", getattr(cfg, k), 1, 10_000)
-    check_range("--lafortune-iters", cfg.lafortune_iters, 1, 10_000)
     check_range("--jobs", cfg.jobs, 1, 256)
     check_range("--width", cfg.width, 1, 64)
     if cfg.wide_start:

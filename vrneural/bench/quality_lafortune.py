@@ -13,12 +13,6 @@ from vrneural.bench.quality_parallax import bin_pairs
 from vrneural.outputs import atomic_path
 
 
-def img(blocks, res):
-    from vrneural.distill.data import from_blocks
-
-    return from_blocks(blocks, res).numpy()
-
-
 def slice_pairs(data) -> list[int]:
     """Two held-out pairs to show: the brightest (highlight) and the median one."""
     means = sorted((float(data.target(p, shard=False).mean()), p) for p in data.test)

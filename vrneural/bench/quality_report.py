@@ -309,15 +309,7 @@ def curves_png(doc: dict, path: Path) -> None:
 def slices_png(doc: dict, slices: dict, path: Path) -> None:
     plt = pyplot()
 
-    cols = [
-        "ground truth",
-        "teacher",
-        "student",
-        "student_nodistill",
-        "single8",
-        "neumip",
-        "lafortune",
-    ]
+    cols = ["ground truth", *reversed(ORDER)]  # teacher, student, ..., lafortune
     rows = [(p, i) for p in slices for i in range(len(slices[p][1]))]
     fig, axes = plt.subplots(
         len(rows), len(cols), figsize=(1.7 * len(cols), 1.8 * len(rows)), squeeze=False

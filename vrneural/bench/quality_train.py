@@ -15,7 +15,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
-from vrneural.bench.quality_btf import is_given
+from vrneural.bench.quality_btf import given_btfs
 from vrneural.bench.quality_parallax import resolved_parallax
 from vrneural.config import config_dict, resolved
 from vrneural.distill.config import BEFORE_FIELD, RESUME_FREE
@@ -29,7 +29,7 @@ def make_btf(preset: str, cfg, path: Path) -> Path:
 
     With ``--resume`` a BTF synthesised with other settings is an error, not replaced: the
     teachers there were trained on it, and a file from an older release cannot be remade."""
-    if is_given(preset, cfg):  # --btf: benched as it is
+    if preset in given_btfs(cfg):  # --btf: benched as it is
         return path
     try:
         from vrneural.btf.synth import BtfConfig, synthesize

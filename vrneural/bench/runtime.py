@@ -169,29 +169,26 @@ def vs_torch(res=512, repeats=7, n_lights=3) -> dict:
     # factored: per block / texel once (n_lights blocks share one texel set here, as in the pass)
     nb = max(1, n // n_lights)
     wc0, wf0 = mat.networks["coarse"][0], mat.networks["fine"][0]
-    tw = {
-        k: torch.from_numpy(np.ascontiguousarray(v))
-        for k, v in {
-            "cd": wc0.weight[:, :9],
-            "cf": wc0.weight[:, 9:],
-            "cb": wc0.bias,
-            "fz": wf0.weight[:, : z_dim(mat)],
-            "ff": wf0.weight[:, z_dim(mat) :],
-            "fb": wf0.bias,
-        }.items()
-    }
+    zd = mat.networks["coarse"][-1].n_out  # the coarse net's output: the fine net's first inputs
+
+    def t(a):  # numpy -> torch
+        return torch.from_numpy(np.ascontiguousarray(a))
+
+    # the first layers split: coarse by directions / features, fine by z_c / features
+    w_cd, w_cf, b_c = t(wc0.weight[:, :9]), t(wc0.weight[:, 9:]), t(wc0.bias)
+    w_fz, w_ff, b_f = t(wf0.weight[:, :zd]), t(wf0.weight[:, zd:]), t(wf0.bias)
     c_rest, f_rest = torch_net(mat.networks["coarse"][1:]), torch_net(mat.networks["fine"][1:])
     c_act, f_act = _torch_act(wc0.act), _torch_act(wf0.act)
-    tdir = torch.from_numpy(np.ascontiguousarray(dirs))
-    tfc = torch.from_numpy(np.ascontiguousarray(xc[:nb, 9:]))
+    tdir = t(dirs)
+    tfc = t(xc[:nb, 9:])
     tff_b = tff[: 4 * nb]
 
     def run_factored():
         with torch.no_grad():
-            pa = torch.addmm(tw["cb"], tfc, tw["cf"].T).repeat(n_lights, 1)[:n]  # per block
-            pb = torch.addmm(tw["fb"], tff_b, tw["ff"].T)  # per texel, [4 nb, H]
-            z = c_rest(c_act(pa + tdir @ tw["cd"].T))  # per (block, light)
-            zz = (z @ tw["fz"].T).repeat_interleave(4, 0)  # per (block, light), to texels
+            pa = torch.addmm(b_c, tfc, w_cf.T).repeat(n_lights, 1)[:n]  # per block
+            pb = torch.addmm(b_f, tff_b, w_ff.T)  # per texel, [4 nb, H]
+            z = c_rest(c_act(pa + tdir @ w_cd.T))  # per (block, light)
+            zz = (z @ w_fz.T).repeat_interleave(4, 0)  # per (block, light), to texels
             h = f_act(zz + pb.repeat(n_lights, 1)[: 4 * n])
             y = f_rest(h).clamp_min(0)
         return y
@@ -223,10 +220,6 @@ def vs_torch(res=512, repeats=7, n_lights=3) -> dict:
         "repeats": repeats,
         "target": 3.0,
     }
-
-
-def z_dim(mat) -> int:
-    return mat.networks["coarse"][-1].n_out
 
 
 def _torch_act(act: str):

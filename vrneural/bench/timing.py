@@ -188,33 +188,26 @@ def progress(total: int, desc: str, enabled: bool):
     return tqdm(total=total, desc=desc, unit="frame", disable=not enabled)
 
 
-def parallax_materials(steps: int, seeds=(3, 4), tex_res: int = 16, march: str = "texel"):
-    """The benchmark scene's two random students with height-field parallax of ``steps``
-    march steps on a rough random relief (spectral noise over 0.15 tile widths, pebbles'
-    range; the march ends where it meets it, so the cost depends on the relief)."""
-    out = []
-    for s in seeds:
-        m = random_material(s, tex_res=tex_res)
-        h = spectral_noise(np.random.default_rng(s), tex_res, 1, 8)
-        h = 0.15 * (h - h.mean()) / max(float(np.ptp(h)), 1e-12)
-        par = {"kind": "height", "steps": steps, "march": march}
-        out.append(dataclasses.replace(m, levels={}, parallax=par, height=h))
-    return out
-
-
-def offset_materials(seeds=(3, 4), tex_res: int = 16, march: str = "texel"):
-    """The benchmark scene's two random students with NeuMIP's neural offset module of the
-    student's size (:data:`vrneural.neural_offset.OFFSET_SIZES`: a random offset texture and
-    a random dense offset MLP; the cost does not depend on the values)."""
+def parallax_materials(kind: str, steps: int = 0, march: str = "texel"):
+    """The benchmark scene's two random students (seeds 3 and 4, 16^2 textures) with parallax
+    of ``kind``: ``height``, a height field of ``steps`` march steps on a rough random relief
+    (spectral noise over 0.15 tile widths, pebbles' range; the march ends where it meets it, so
+    the cost depends on the relief); ``neural``, NeuMIP's neural offset module of the student's
+    size (:data:`vrneural.neural_offset.OFFSET_SIZES`: a random offset texture and a random
+    dense offset MLP; the cost does not depend on the values)."""
     ch, hidden = OFFSET_SIZES["student"]
     out = []
-    for s in seeds:
-        m = random_material(s, tex_res=tex_res)
+    for s in (3, 4):
         rng = np.random.default_rng(s)
-        tex = rng.normal(0.0, 0.5, (tex_res, tex_res, ch)).astype(np.float16)
-        net = random_mlp([ch + VIEW_INPUTS, *hidden, 1], s)
-        par = {"kind": "neural", "march": march}
-        out.append(dataclasses.replace(m, levels={}, parallax=par, offset_net=net, offset_tex=tex))
+        if kind == "height":
+            h = spectral_noise(rng, 16, 1, 8)
+            h = 0.15 * (h - h.mean()) / max(float(np.ptp(h)), 1e-12)
+            par = dict(height=h, parallax={"kind": "height", "steps": steps, "march": march})
+        else:
+            tex = rng.normal(0.0, 0.5, (16, 16, ch)).astype(np.float16)
+            net = random_mlp([ch + VIEW_INPUTS, *hidden, 1], s)
+            par = dict(offset_tex=tex, offset_net=net, parallax={"kind": "neural", "march": march})
+        out.append(dataclasses.replace(random_material(s, tex_res=16), levels={}, **par))
     return out
 
 

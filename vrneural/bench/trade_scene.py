@@ -23,7 +23,7 @@ import numpy as np
 from vrneural.bench import poses
 from vrneural.bench.supersample import SupersampledReference
 from vrneural.runtime.adaptive import AdaptiveState
-from vrneural.runtime.camera import HeadPath, OrbitPath, PoseLogPath, look_rotation
+from vrneural.runtime.camera import HeadPath, OrbitPath, PoseLogPath
 from vrneural.runtime.lights import PointLight, light_arrays
 from vrneural.runtime.scene import MaterialDesc, ObjectDesc, Scene, model_matrix
 from vrneural.scoring import metrics
@@ -52,27 +52,14 @@ class Condition:
     def head(self) -> HeadPath:
         if self.log is not None:
             return PoseLogPath(self.log)
-        if self.family in ("smooth", "distance", "tiling"):  # a slow sway
-            return OrbitPath(
-                centre=tuple(poses.HEAD), target=tuple(self.centre()), sway=0.05, period=4.0
-            )
-        return Still(poses.HEAD, self.centre())
+        # a slow sway, else (light) a head at rest: sway 0, the same pose every frame
+        sway = 0.05 if self.family in ("smooth", "distance", "tiling") else 0.0
+        return OrbitPath(tuple(poses.HEAD), tuple(self.centre()), sway=sway, period=4.0)
 
     def centre(self) -> np.ndarray:
         """The sphere's centre (world)."""
         d = poses.TARGET - poses.HEAD
         return poses.HEAD + d / np.linalg.norm(d) * self.distance
-
-
-class Still(HeadPath):
-    """A head at rest at ``position`` looking at ``target``."""
-
-    def __init__(self, position, target):
-        self.p = np.asarray(position, np.float64)
-        self.r = look_rotation(np.asarray(target, np.float64) - self.p)
-
-    def pose(self, t: float):
-        return self.p, self.r
 
 
 def scene_for(c: Condition, mat, reference=None, n_lights: int = 2):

@@ -274,7 +274,7 @@ def load_materials(c, root: Path) -> dict:
         budget = c.budget.of(preset)
         d = root / "packs" / (preset if i else "")  # the first where earlier releases kept it
         only = None if i == 0 else ("student",)  # other presets: teacher and student
-        out[preset] = load_packs(train_packs(d, budget, c.progress, log=lambda m: None, only=only))
+        out[preset] = load_packs(train_packs(d, budget, c.progress, only=only))
     return out
 
 

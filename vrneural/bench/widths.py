@@ -53,8 +53,6 @@ from vrneural.errors import VrnError, check_range, check_seed
 from vrneural.outputs import file_sha256, write_json
 from vrneural.versions import package_versions
 
-#: the networks ``--methods`` may name: their `distill` settings and their names in the report
-NEUMIP = dict(method="neumip", distill=False)
 #: --wide-start trains 2W wide, and distill's widths end at 64
 MAX_WIDE = 32
 
@@ -112,7 +110,7 @@ def network_runs(plan: Plan, root: Path, btf_path: Path, check_teacher: bool = T
     tsha = file_sha256(d / "teacher.pt") if check_teacher else None
     out = []
     for seed in range(q.seed, q.seed + q.repeats):
-        kw = dict(NEUMIP, seed=seed)
+        kw = dict(method="neumip", distill=False, seed=seed)
         out += one(q, d, btf_path, tsha, ("neumip", None, "plain"), f"neumip-s{seed}", kw, None, 0)
         for m in plan.methods:
             for start in plan.starts:

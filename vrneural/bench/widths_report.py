@@ -119,37 +119,23 @@ def widths_png(doc: dict, path: Path) -> None:
     fig, ax = plt.subplots(figsize=(7.2, 4.8))
     marks = {"plain": "o-", "wide": "s--"}  # a method keeps its colour; the start its line
     colours = {"student": "C0", "student_nodistill": "C1", "single8": "C2"}
-    for method, start in families(doc):
-        fam = _family(rows, method, start)
+    series = [(_family(rows, m, s), dict(fmt=marks[s], color=colours[m])) for m, s in families(doc)]
+    for fam, style in [*series, ([nm], dict(fmt="r*", ms=11))]:  # NeuMIP last, no width label
         x = [r["macs_per_texel"] for r in fam]
         y = [r["whole_l1"] for r in fam]
         ax.errorbar(
-            x,
-            y,
-            yerr=[r["whole_l1_sd"] for r in fam],
-            fmt=marks[start],
-            color=colours[method],
-            capsize=3,
-            label=_label(fam[0]),
+            x, y, yerr=[r["whole_l1_sd"] for r in fam], capsize=3, label=_label(fam[0]), **style
         )
         for r, xi, yi in zip(fam, x, y, strict=True):
-            ax.annotate(
-                str(r["width"]),
-                (xi, yi),
-                textcoords="offset points",
-                xytext=(4, 4),
-                fontsize=7,
-                color=colours[method],
-            )
-    ax.errorbar(
-        [nm["macs_per_texel"]],
-        [nm["whole_l1"]],
-        yerr=[nm["whole_l1_sd"]],
-        fmt="r*",
-        ms=11,
-        capsize=3,
-        label=_label(nm),
-    )
+            if r is not nm:
+                ax.annotate(
+                    str(r["width"]),
+                    (xi, yi),
+                    textcoords="offset points",
+                    xytext=(4, 4),
+                    fontsize=7,
+                    color=style["color"],
+                )
     ax.axhline(1.1 * nm["whole_l1"], color="r", lw=0.8, ls=":", label="NeuMIP + 10%")
     top = max(r["whole_l1"] + r["whole_l1_sd"] for r in rows.values())
     if doc["zero_output_l1"] <= 1.5 * top:  # in view: a network near it learned nothing

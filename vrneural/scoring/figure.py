@@ -13,7 +13,8 @@ import numpy as np
 
 from vrneural.btf.sheet import sheet_panels
 from vrneural.presentation import pyplot
-from vrneural.scoring.score import display_slice, predict_slice, slice_exposure, texel_blocks
+from vrneural.scoring.metrics import display
+from vrneural.scoring.score import predict_slice, slice_exposure, texel_blocks
 
 
 def slices_png(mats: list, names: list[str], btf, precision: str) -> bytes:
@@ -36,10 +37,10 @@ def slices_png(mats: list, names: list[str], btf, precision: str) -> bytes:
         ]
         errs = [np.abs(y - gt).mean(-1) for y in ys]
         top = max(max(float(np.percentile(e, 99.5)) for e in errs), 1e-8)
-        axes[r][0].imshow(display_slice(gt, ex), interpolation="nearest")
+        axes[r][0].imshow(display(gt * ex), interpolation="nearest")
         axes[r][0].set_title(f"BTF {pan.names[0]}\n{pan.shown}", fontsize=7)
         for k, (name, y, e) in enumerate(zip(names, ys, errs, strict=True)):
-            axes[r][1 + 2 * k].imshow(display_slice(y, ex), interpolation="nearest")
+            axes[r][1 + 2 * k].imshow(display(y * ex), interpolation="nearest")
             axes[r][1 + 2 * k].set_title(f"{name}", fontsize=7)
             axes[r][2 + 2 * k].imshow(e, cmap="magma", vmin=0, vmax=top, interpolation="nearest")
             axes[r][2 + 2 * k].set_title(

@@ -68,14 +68,7 @@ def ssim(a: np.ndarray, b: np.ndarray, data_range: float = 1.0) -> float:
 
 def flip_hdr(ref: np.ndarray, test: np.ndarray, ppd: float) -> float:
     """Mean HDR-FLIP of ``test`` against ``ref`` (linear radiance ``[H, W, >=3]``, >= 0)."""
-    import flip_evaluator
-
-    a = np.ascontiguousarray(np.maximum(np.nan_to_num(ref[..., :3]), 0), np.float32)
-    b = np.ascontiguousarray(np.maximum(np.nan_to_num(test[..., :3]), 0), np.float32)
-    _, mean, _ = flip_evaluator.evaluate(
-        a, b, "HDR", inputsRGB=True, applyMagma=False, parameters={"ppd": float(ppd)}
-    )
-    return float(mean)
+    return flip_hdr_eyes(np.asarray(ref)[None], np.asarray(test)[None], ppd)
 
 
 #: blank columns between the eyes of :func:`flip_hdr_eyes` (wider than FLIP's filters at the

@@ -28,7 +28,7 @@ from vrneural.material import distilled, width_words
 from vrneural.outputs import OutputDir, atomic_path, write_json
 from vrneural.presentation import table
 from vrneural.scoring.config import PRECISION_CHOICES, EvalConfig
-from vrneural.scoring.score import pick_slices, precisions, score
+from vrneural.scoring.score import pick_slices, score
 
 #: the fields of a BTF record compared (not the name, which a renamed copy changes)
 COMPARED = ("shape", "sha256", "values_sha256")  # the shape first: the plainest to name
@@ -192,7 +192,7 @@ def evaluate(cfg: EvalConfig, progress: bool = True) -> dict:
     tests = [held_out(p, m, fp, btf, warnings) for p, m in zip(cfg.packs, mats, strict=True)]
     for w in warnings:
         print(f"warning: {w}", file=sys.stderr)
-    precs = precisions(cfg.precision)
+    precs = ["f32", "f16"] if cfg.precision == "both" else [cfg.precision]
     subs = [trainer_test(m, t) for m, t in zip(mats, tests, strict=True)]
     res = score(mats, btf, pairs, precs, tests, progress, subs)
     names = labels(list(cfg.packs))

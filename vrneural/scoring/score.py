@@ -42,10 +42,6 @@ SAMPLE_SEED = 0
 N_WORST = 5
 
 
-def precisions(choice: str) -> list[str]:
-    return ["f32", "f16"] if choice == "both" else [choice]
-
-
 def pick_slices(spec: str, n_pairs: int, texels_per_slice: int) -> list[int]:
     """The pair indices ``l * V + v`` scored: ``'all'``, ``'auto'`` or a count N (N distinct
     pairs drawn at random with the fixed :data:`SAMPLE_SEED`, so reruns score the same ones)."""
@@ -110,11 +106,6 @@ def predict_slice(
     return from_blocks(material_forward(mat, d_i, d_o, uv, prec), H, W)
 
 
-def display_slice(x: np.ndarray, exposure: float) -> np.ndarray:
-    """A slice as displayed at ``exposure`` (see the module docstring), ``[H, W, 3]`` in [0, 1]."""
-    return display(x * exposure)
-
-
 def slice_exposure(gt: np.ndarray) -> float:
     """The exposure that maps the slice's 99th percentile (of each texel's max channel) to 1."""
     return 1.0 / max(float(np.percentile(gt.max(-1), 99.0)), 1e-6)
@@ -162,7 +153,7 @@ def score(
             )
         gt_sum += float(gt.sum(dtype=np.float64))
         ex = slice_exposure(gt)
-        gt_disp = display_slice(gt, ex)
+        gt_disp = display(gt * ex)
         for m, mat in enumerate(mats):
             for k, prec in enumerate(precs):
                 y = predict_slice(mat, btf.light_dirs[li], btf.view_dirs[vi], uv, H, W, prec)
@@ -170,7 +161,7 @@ def score(
                 a = accs[m][k]
                 a["abs"].append(float(np.abs(e).sum()))
                 a["sq"].append(float((e * e).sum()))
-                y_disp = display_slice(y, ex)
+                y_disp = display(y * ex)
                 a["psnr"].append(psnr(gt_disp, y_disp))
                 a["ssim"].append(ssim(gt_disp, y_disp))
     bar.close()
