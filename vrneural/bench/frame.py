@@ -6,8 +6,10 @@ spell of a shared machine hits every condition:
 
 - the frame loop with 1, 2 and 3 frames in flight: wall time per frame (frames back to back),
   host CPU per frame (main thread: ``frame()`` and reading its statistics) and frames queued;
-- each pass on its own (submitted alone, wall clock from submit to completion; GPU timestamps
-  beside it where this adapter's cover the pass, runtime/timecheck.py): a full texture-space update,
+- each pass on its own (submitted alone, from submit to completion: wall clock, the CPU time of
+  all of this process's threads, and GPU timestamps where this adapter's cover the pass,
+  runtime/timecheck.py; a CPU adapter's passes are compared by their CPU time, others by
+  timestamps or the wall clock): a full texture-space update,
   a staggered frame's update, the forward pass of both eyes (HDR and the 8-bit display target);
 - the floors over the same geometry, targets and candidates: a constant-colour forward pass, a
   forward pass doing one bilinear sample per fragment and nothing else, and the bare
@@ -192,7 +194,7 @@ def run_frame(cfg: FrameConfig) -> dict:
             doc["auto_block_share_by_side"] = by_side  # the same scene with larger materials
         floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_sample", "fs_floor_constant")}
         n1 = c.reuse + 1
-        bar = timing.progress(c.rounds, "bench frame (rounds)", c.progress)
+        bar = timing.progress(c.rounds, "bench frame", c.progress, unit="round")
         f = n1 * 2  # after a cycle of warm-up
         for rnd in range(c.rounds):
             rec = {"round": rnd, "loop": {}, "passes": {}}

@@ -184,8 +184,8 @@ def count_bench(c, name: str, counts: list[int], setup, per: str, report) -> dic
         return rp.finish(root, doc, md, t0, plots)
 
 
-def progress(total: int, desc: str, enabled: bool):
-    return tqdm(total=total, desc=desc, unit="frame", disable=not enabled)
+def progress(total: int, desc: str, enabled: bool, unit: str = "frame"):
+    return tqdm(total=total, desc=desc, unit=unit, disable=not enabled)
 
 
 def parallax_materials(kind: str, steps: int = 0, march: str = "texel"):

@@ -247,11 +247,14 @@ def shade_texture_space(
 
 
 def shade_plain(world, normal, eye, albedo, specular, shininess, light_pos, light_rgb):
-    """Twin of forward.wgsl's ``plain_colour``: Lambert + normalised Blinn-Phong
-    ``ks (s + 8) / (8 pi) (n.h)^s``, two-sided, under point lights with inverse-square falloff,
-    in float32 with the shader's operations in its order. ``world, normal: [..., 3]`` (the
-    normal need not be unit), ``eye [3]``, ``light_pos, light_rgb: [L, 3]`` (rgb: colour *
-    intensity); returns radiance ``[..., 3]`` float32, clamped to the f16 maximum."""
+    """Twin of forward.wgsl's ``plain_colour``: Lambert ``albedo / pi`` + normalised Blinn-Phong
+    ``specular (s + 8) / (8 pi) (n.h)^s`` (``s``: shininess), two-sided, under point lights with
+    inverse-square falloff, in float32 in the shader's order (its ``x * inverseSqrt(d)`` as
+    ``x / sqrt(d)``). ``world, normal: [..., 3]`` (metres, world; the normal need not be unit),
+    ``eye [3]`` (metres), ``albedo [3]`` or ``[..., 3]``, ``specular, shininess`` scalars,
+    ``light_pos, light_rgb: [L, 3]`` (metres; colour * intensity, W/sr); returns radiance
+    ``[..., 3]`` float32, clamped to the f16 maximum. A point at the eye gives NaN, as on the
+    GPU."""
     f32 = np.float32
     world, normal = np.asarray(world, f32), np.asarray(normal, f32)
     n0 = normal / np.sqrt(np.sum(normal * normal, -1, keepdims=True))

@@ -1,5 +1,10 @@
+"""Host CPU per frame, the frame loop at e90c611 against this one (issue #41), in one process:
+``bash docs/results/frame-ab/mkold.sh && python docs/results/frame-ab/ab_host_cpu.py [EYES]
+[TEXTURE SIDE]`` (default 96x96, 128; the frozen copy from mkold.sh's folder, or $AB_OLD).
+Three interleaved rounds of 30 frames each; the main thread's CPU time per frame (wall per
+frame too: on a CPU adapter the GPU's work shares the cores, so it does not fall with it)."""
 import sys, time, os
-sys.path.insert(0, "/tmp/ab41/old")
+sys.path.insert(0, os.environ.get("AB_OLD", "/tmp/ab41/old"))  # mkold.sh's folder
 import numpy as np
 import vrneural_e90c611.runtime.renderer as old
 import vrneural.runtime.renderer as new

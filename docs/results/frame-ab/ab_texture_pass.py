@@ -1,5 +1,5 @@
 import sys, time, os
-sys.path.insert(0, "/tmp/ab41/old")
+sys.path.insert(0, os.environ.get("AB_OLD", "/tmp/ab41/old"))  # mkold.sh's folder
 import numpy as np
 import vrneural_e90c611.runtime.renderer as old
 import vrneural_e90c611.gpu.device as olddev

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # frozen copy of vrneural at e90c611 as package vrneural_e90c611 (imports rewritten), in
-# /tmp/ab41/old by default, where ab_host_cpu.py and ab_texture_pass.py import it from
+# /tmp/ab41/old by default, where ab_host_cpu.py and ab_texture_pass.py import it from (or
+# set AB_OLD to the folder given here)
 set -e
 dst=${1:-/tmp/ab41/old}
 rm -rf "$dst" && mkdir -p "$dst"

@@ -9,7 +9,9 @@ Variants (joined with +): full (as shipped); nocount (the counters' sums and ato
 nonet (the MLPs replaced by a few adds of their inputs); noload (the neural-texture loads
 replaced by values computed from the taps); nosample (the whole lookups replaced);
 buf (the neural textures as storage buffers, array<vec4<u32>>, instead of rgba32uint
-textures); share (one set of 4 loads for a block whose 4 texels share their bilinear taps).
+textures); share (one set of 4 loads for a block whose 4 texels share their bilinear taps);
+nounpack (the float16 unpacking replaced by a bitcast); direct (every update as one dispatch,
+no compaction: it sets texture_pass.COMPACT_MIN for the rest of the run, so give it last).
 The images of the rewritten kernels are wrong by design: timing only.
 """
 import os, sys, re, numpy as np
@@ -29,7 +31,7 @@ def time_passes(r, encode, repeats):
         r.dev.queue.submit([enc.finish()])
         r.dev.queue.read_buffer(r.counters.buf, 0, 16)
         if i: cpus.append((time.process_time() - t0) * 1e3); walls.append((time.perf_counter() - w0) * 1e3)
-    return {"timestamp_ms": float(np.median(cpus)), "wall_ms": float(np.median(walls))}
+    return {"cpu_ms": float(np.median(cpus)), "wall_ms": float(np.median(walls))}
 from vrneural.gpu.pipelines import compute_pipeline
 
 res = int(sys.argv[1]) if len(sys.argv) > 1 else 512
@@ -79,7 +81,7 @@ def variant(code, name):
             old = "".join("    let pb%d = pre_b(sample_b(uv%d));\n" % (k, k) for k in range(4))
             assert old in code
             code = code.replace(old, "    let fb = sample_b4(uv0, uv1, uv2, uv3);\n" + "".join("    let pb%d = pre_b(fb[%d]);\n" % (k, k) for k in range(4)))
-        else: raise SystemExit(p)
+        else: raise SystemExit(f"unknown variant {p!r}; see the docstring")
     return code
 
 names = sys.argv[3].split(",") if len(sys.argv) > 3 else ["full", "nocount", "nonet", "nosample", "nonet+nosample+nocount"]
@@ -117,8 +119,8 @@ for rnd in range(rounds):
         out[name].append(time_passes(r, texture_update(r, "main", 0, 1, f), 3))
     for floor in ("bare_loads", "bare"):
         out[floor].append(time_passes(r, texture_update(r, floor, 0, 1, f), 3))
-bare = np.median([x["timestamp_ms"] for x in out["bare"]])
+bare = np.median([x["cpu_ms"] for x in out["bare"]])
 for k, v in out.items():
-    ts = [x["timestamp_ms"] for x in v]; w = [x["wall_ms"] for x in v]
+    ts = [x["cpu_ms"] for x in v]; w = [x["wall_ms"] for x in v]
     print(f"{k:26s} cpu {np.median(ts):7.2f} ms  wall {np.median(w):7.2f} ms  cpu / bare {np.median(ts)/bare:.2f}")
 print("load", os.getloadavg())
