@@ -11,7 +11,7 @@ replaced by values computed from the taps); nosample (the whole lookups replaced
 buf (the neural textures as storage buffers, array<vec4<u32>>, instead of rgba32uint
 textures); share (one set of 4 loads for a block whose 4 texels share their bilinear taps);
 nounpack (the float16 unpacking replaced by a bitcast); direct (every update as one dispatch,
-no compaction: it sets texture_pass.COMPACT_MIN for the rest of the run, so give it last).
+no compaction).
 The images of the rewritten kernels are wrong by design: timing only.
 """
 import os, sys, re, numpy as np
@@ -68,7 +68,7 @@ def variant(code, name):
         elif p == "noload":
             code = re.sub(r"textureLoad\((tex_[ab]), vec2<i32>\((xi.), (yi.)\), 0, 0\)", r"(vec4<u32>(u32(\2), u32(\3), 7u, 9u) + vec4<u32>(textureDimensions(\1).x))", code)
         elif p == "direct":
-            import vrneural.runtime.texture_pass as tp; tp.COMPACT_MIN = 10**9
+            pass  # install() sets texture_pass.COMPACT_MIN
         elif p == "buf":
             code = code.replace("var tex_a: texture_2d_array<u32>;", "var<storage, read> tex_a: array<vec4<u32>>;")
             code = code.replace("var tex_b: texture_2d_array<u32>;", "var<storage, read> tex_b: array<vec4<u32>>;")
@@ -90,7 +90,10 @@ import wgpu
 from vrneural.gpu.readback import upload_buffer
 from vrneural.runtime.gpu_material import _words
 orig_res = {}
+import vrneural.runtime.texture_pass as tpass
+COMPACT_MIN = tpass.COMPACT_MIN
 def install(name):
+    tpass.COMPACT_MIN = 10**9 if "direct" in name.split("+") else COMPACT_MIN
     for n in r.neural:
         gm = n.tpass.gmat
         if gm not in orig_res:
