@@ -234,11 +234,10 @@ class TextureTarget:
                     self.compact = CompactionBuffers(g.non_empty_blocks)
                 res.update(self.compact.resources())
             # an entry point's auto layout holds the bindings it uses, and only those
+            bare = ("P", "geo_pos", "geo_nrm", "geo_tan", "geo_uv01", "geo_uv23", "out_tex", "cand")
             used = {
-                "bare": ("P", "geo_pos", "geo_nrm", "geo_tan", "geo_uv01", "geo_uv23", "out_tex",
-                         "cand"),
-                "bare_loads": ("P", "geo_pos", "geo_nrm", "geo_tan", "geo_uv01", "geo_uv23",
-                               "out_tex", "cand", *("tex_a", "tex_b")[: len(tp.gmat.views)]),
+                "bare": bare,
+                "bare_loads": (*bare, *(k for k in ("tex_a", "tex_b") if k in res)),
                 "cull": ("P", "geo_pos", "geo_nrm", "counters", "cand", "todo", "todo_n"),
                 "args": ARGS_BINDINGS,
                 "main_compacted": tuple(k for k in res if k not in ("cand", "todo_n", "ind")),
