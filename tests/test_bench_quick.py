@@ -92,12 +92,15 @@ def test_frame_breakdown_has_every_pass_floor_and_depth(results):
     for depth, v in sm["loops"].items():
         assert _finite(v["wall_ms"], v["host_cpu_ms"], v["gpu_ms"], v["wall_vs_bound"])
         assert 0 <= v["in_flight"] <= int(depth) - 1  # never more queued than allowed
+        # wgpu's poll thread maps every frame's read-back: some CPU, less than the frame's wall
+        assert _finite(v["poll_cpu_ms"]) and 0 < v["poll_cpu_ms"] < v["wall_ms"]
     cpu = d["adapter"]["is_cpu"]  # a CPU adapter's passes compared by their CPU time
     assert all(_finite(v["cpu_ms"]) and v["cpu_ms"] > 0 for v in sm["passes"].values()) or not cpu
     for v in sm["ratios"].values():
         assert _finite(v["median"]) and v["median"] > 0
         assert v["clock"] == "cpu" if cpu else v["clock"] in ("wall", "timestamp")
     assert all(r["loop"][k]["blocks_per_frame"] > 0 for r in d["records"] for k in r["loop"])
+    assert "wgpu poll thread CPU ms/frame" in (results[0] / "frame" / "results.md").read_text()
 
 
 @pytest.mark.gpu

@@ -153,3 +153,23 @@ def test_uniform_arena_sends_the_written_span_once():
     np.testing.assert_array_equal(got[offs[2] // 4 : offs[2] // 4 + 8], 7.0)
     with pytest.raises(RuntimeError, match="alloc after the buffer was created"):
         ar.alloc(16)
+
+
+@pytest.mark.gpu
+def test_poll_thread_cpu_counts_the_read_backs_host_work():
+    """bench frame's second host clock: wgpu-py's device-poll thread maps every frame's
+    read-back, so its CPU time grows over frames; the main thread's own time is not in it."""
+    from vrneural.gpu.device import poll_thread_cpu
+
+    r = _renderer(frames_in_flight=2)
+    r.frame(0)
+    r.wait()
+    p0 = poll_thread_cpu()
+    for f in range(1, 9):
+        r.frame(f)
+    r.wait()
+    p1 = poll_thread_cpu()
+    assert p0 is not None and p1 > p0  # Linux: per-thread clocks
+    t0 = poll_thread_cpu()
+    sum(i * i for i in range(300_000))  # main-thread work only
+    assert poll_thread_cpu() - t0 < 0.01

@@ -40,6 +40,7 @@ from vrneural.bench import timing
 from vrneural.bench.configs import FrameConfig
 from vrneural.bench.frame_report import markdown, plot, summarise
 from vrneural.errors import check_range
+from vrneural.gpu.device import poll_thread_cpu
 from vrneural.runtime.config import LIGHTS_MAX, REUSE_MAX, parse_res
 from vrneural.runtime.lights import light_arrays
 from vrneural.runtime.profiles import get_profile
@@ -131,9 +132,10 @@ def floor_bundles(r, fragment: str) -> list:
 
 def loop(r, frames: int, f0: int) -> dict:
     """``frames`` frames back to back from ``f0`` (reading each one's statistics as they come
-    back, as `run` does); per frame: wall, host CPU (main thread), frames queued."""
+    back, as `run` does); per frame: wall, host CPU (main thread; and wgpu-py's device-poll
+    thread, :func:`~vrneural.gpu.device.poll_thread_cpu`), frames queued."""
     sts = []
-    c0, t0 = time.thread_time(), time.perf_counter()
+    c0, t0, p0 = time.thread_time(), time.perf_counter(), poll_thread_cpu()
     for f in range(f0, f0 + frames):
         sts.append(r.frame(f))
         latest = r.latest_stats()
@@ -144,9 +146,11 @@ def loop(r, frames: int, f0: int) -> dict:
         st.mlp_fine  # noqa: B018
     wall = (time.perf_counter() - t0) * 1e3 / frames
     cpu = (time.thread_time() - c0) * 1e3 / frames
+    p1 = poll_thread_cpu()
     return {
         "wall_ms": wall,
         "host_cpu_ms": cpu,
+        **({"poll_cpu_ms": (p1 - p0) * 1e3 / frames} if p1 is not None else {}),
         "host_ms": float(np.mean([st.host_ms for st in sts])),
         "in_flight": float(np.mean([st.in_flight for st in sts])),
         "blocks_per_frame": float(np.mean([st.blocks_shaded for st in sts])),

@@ -90,11 +90,13 @@ def summarise(doc: dict, reuse: int) -> dict:
             lp = r["loop"][d]
             gpu.append(g)
             rows.append((lp["wall_ms"], lp["host_cpu_ms"], lp["in_flight"],
-                         lp["wall_ms"] / max(lp["host_cpu_ms"], g)))  # fmt: skip
+                         lp["wall_ms"] / max(lp["host_cpu_ms"], g),
+                         lp.get("poll_cpu_ms", np.nan)))  # fmt: skip
         a = np.asarray(rows)
         loops[str(d)] = {
             "wall_ms": _med(a[:, 0]),
             "host_cpu_ms": _med(a[:, 1]),
+            **({"poll_cpu_ms": _med(a[:, 4])} if not np.isnan(a[:, 4]).any() else {}),
             "in_flight": _med(a[:, 2]),
             "gpu_ms": _med(gpu),
             "wall_vs_bound": _med(a[:, 3]),
@@ -156,23 +158,31 @@ def markdown(doc: dict) -> list[str]:
         md += ["", f"The same blocks with materials of other sizes (march auto, once per block): "
                f"{sides}."]  # fmt: skip
     md += ["", "## Frame loop (frames back to back)", ""]
+    poll = all("poll_cpu_ms" in v for v in sm["loops"].values())  # results from before it: none
     rows = [
-        [d, v["in_flight"], v["wall_ms"], v["host_cpu_ms"], v["gpu_ms"], v["wall_vs_bound"],
-         v["wall_vs_sum"]]
+        [d, v["in_flight"], v["wall_ms"], v["host_cpu_ms"], *([v["poll_cpu_ms"]] if poll else []),
+         v["gpu_ms"], v["wall_vs_bound"], v["wall_vs_sum"]]
         for d, v in sm["loops"].items()
     ]  # fmt: skip
     md += rp.table(
         ["frames in flight", "queued (mean)", "wall ms/frame", "host CPU ms/frame",
+         *(["wgpu poll thread CPU ms/frame"] if poll else []),
          "GPU ms/frame (passes alone, wall)", "wall / max(host, GPU)", "wall / (host + GPU)"],
         rows,
     )  # fmt: skip
+    poll_note = (
+        "; the wgpu poll thread's is host work too, off the main thread (it polls the device "
+        "and runs the read-backs' map callbacks)"
+    )
     md += [
         "",
         "GPU ms/frame: a staggered update of every radiance texture plus both eyes' forward "
         "passes, each submitted alone and timed by the wall clock (each carries a submit's "
         "fixed cost, so their sum can exceed a frame's wall time in the loop). Host CPU: the "
         "main thread's CPU time in `frame()` and in "
-        f"reading the statistics. Target for wall / max(host, GPU): <= {tg['wall_vs_bound']}. "
+        "reading the statistics"
+        + (poll_note if poll else "")
+        + f". Target for wall / max(host, GPU): <= {tg['wall_vs_bound']}. "
         "On a CPU adapter the GPU's work runs on the same cores as the host, so the two cannot "
         "fully overlap there.",
     ]

@@ -82,6 +82,25 @@ def get_device():
     return adapter.request_device_sync(required_features=feats, required_limits=limits)
 
 
+def poll_thread_cpu() -> float | None:
+    """CPU seconds used so far by wgpu-py's device-poll thread(s): they poll the device and run
+    the map callbacks of read-backs, host work a frame causes off the calling thread (0 before
+    any exists; None where the platform has no per-thread CPU clocks)."""
+    import threading
+    import time
+
+    if not hasattr(time, "pthread_getcpuclockid"):
+        return None
+    total = 0.0
+    for t in threading.enumerate():
+        if type(t).__name__ == "PollThread" and t.ident is not None:
+            try:
+                total += time.clock_gettime(time.pthread_getcpuclockid(t.ident))
+            except OSError:  # it ended meanwhile
+                pass
+    return total
+
+
 def has_feature(name: str) -> bool:
     """Whether the default device was created with feature ``name``."""
     return name in get_device().features

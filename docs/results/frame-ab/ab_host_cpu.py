@@ -1,9 +1,11 @@
 """Host CPU per frame, the frame loop at e90c611 against this one (issue #41), in one process:
 ``bash docs/results/frame-ab/mkold.sh && python docs/results/frame-ab/ab_host_cpu.py [EYES]
 [TEXTURE SIDE]`` (default 96x96, 128; the frozen copy from mkold.sh's folder, or $AB_OLD).
-Three interleaved rounds of 30 frames each; the main thread's CPU time per frame (wall per
-frame too: on a CPU adapter the GPU's work shares the cores, so it does not fall with it)."""
-import sys, time, os
+Three interleaved rounds of 30 frames each; per frame: the main thread's CPU time, and the host
+CPU time with wgpu-py's device-poll thread added (it polls the device and runs the map
+callbacks for the frames' read-backs: host work the frame causes, on another thread), and the
+wall time (on a CPU adapter the GPU's work shares the cores, so it does not fall with it)."""
+import sys, time, os, threading
 sys.path.insert(0, os.environ.get("AB_OLD", "/tmp/ab41/old"))  # mkold.sh's folder
 import numpy as np
 import vrneural_e90c611.runtime.renderer as old
@@ -18,17 +20,27 @@ rn = {d: new.Renderer(builtin_scene(2), new.Settings(**kw, frames_in_flight=d)) 
 for r in rn.values(): r.frame(0); r.wait()
 n = 30
 res = {}
+
+
+def poll_cpu() -> float:
+    """CPU seconds of wgpu-py's device-poll thread(s) (wgpu_native/_poller.py)."""
+    ts = [t for t in threading.enumerate() if type(t).__name__ == "PollThread"]
+    return sum(time.clock_gettime(time.pthread_getcpuclockid(t.ident)) for t in ts)
+
+
 for rep in range(3):
     for name, r in [("old", ro), *[(f"new{d}", r) for d, r in rn.items()]]:
-        c0, t0 = time.thread_time(), time.perf_counter()
+        c0, t0, p0 = time.thread_time(), time.perf_counter(), poll_cpu()
         f0 = 1 + rep * n
         sts = [r.frame(f) for f in range(f0, f0 + n)]
         if name != "old": r.wait()
         for st in sts: st.blocks_shaded, st.gpu_ms  # decoded inside the timed loop, as old does
         w = (time.perf_counter() - t0) / n * 1e3; c = (time.thread_time() - c0) / n * 1e3
-        res.setdefault(name, []).append((w, c))
-        print(f"{name}: wall {w:.2f} ms/frame, main-thread cpu {c:.2f} ms/frame")
+        pc = (poll_cpu() - p0) / n * 1e3
+        res.setdefault(name, []).append((w, c, c + pc))
+        print(f"{name}: wall {w:.2f} ms/frame, cpu: main thread {c:.2f}, with the poll thread {c + pc:.2f} ms/frame")
 for k, v in res.items():
-    v = np.array(v); print(k, "median wall %.2f cpu %.2f" % tuple(np.median(v, 0)))
-print("cpu ratio old/new2:", np.median(np.array(res["old"])[:, 1]) / np.median(np.array(res["new2"])[:, 1]))
+    v = np.array(v); print(k, "median wall %.2f cpu: main %.2f, with poll %.2f" % tuple(np.median(v, 0)))
+med = {k: np.median(np.array(v), 0) for k, v in res.items()}
+print("cpu ratio old/new2: main thread %.2f, with the poll thread %.2f" % (med["old"][1] / med["new2"][1], med["old"][2] / med["new2"][2]))
 print("load", os.getloadavg())
