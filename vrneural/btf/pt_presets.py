@@ -8,11 +8,11 @@ tile widths); all randomness comes from ``rng``, so a seed fixes the material.
   strong interreflection between bright stones);
 - ``fur``:     cut pile of thin curved strands on a backing (fibre-scale masking and
   shadowing, light scattered deep into the pile);
-- ``bark``:    a fissured bark of plates and deep narrow crevices, lichen on the plates
-  (a textured blend of two BSDFs), glossy sap in the cracks' walls;
+- ``bark``:    a fissured bark of fibrous plates and deep narrow crevices, lichen on the
+  plates (a textured blend of two BSDFs), glossy sap in the cracks' walls;
 - ``mosaic``:  tall tesserae of polished and brushed metals and glossy plastics, each tilted
-  and bevelled, in deep grout (mirror-like highlights that jump from tile to tile, walls that
-  hide and shadow the grout).
+  and bevelled, in deep sanded grout (mirror-like highlights that jump from tile to tile,
+  walls that hide and shadow the grout, grains that slide under a texel with the view).
 
 Values stay physically plausible: diffuse albedo <= 0.85, dielectrics with IOR 1.5, metals
 from Mitsuba's measured conductor data.
@@ -170,17 +170,27 @@ def fur(rng, tufts: int = 100, per_tuft: int = 14) -> Tile:
 
 
 def bark(rng, n: int = 160) -> Tile:
-    """Fissured bark: raised plates elongated along y between deep, narrow crevices (about
-    a fifth of the tile deep); lichen patches on the plates (a texture blending two BSDFs);
-    darker, glossier crevice walls."""
+    """Fissured bark: plates of varied tone, elongated along y, between deep crevices (about
+    a fifth of the tile deep, a third of its area); the plates' surface split into fibres along
+    y (streaks of 4-13 texels at 64^2, pale and dark, each a shallow ridge); lichen patches on
+    the plates (a texture blending two BSDFs); darker, glossier crevice walls.
+
+    The second version. On the first (crevices on a fifth of the area, each plate's colour
+    uniform but for the lichen) the lobes came within 22% of NeuMIP with parallax at 64^2: a
+    uniform plate looks the same wherever the view lands on it. Streaked plates, further
+    above the reference plane (wider crevices lower it), show another streak under a texel at
+    each view: what a lobe cannot follow and a height field can (docs/quality-research.md)."""
     f1, f2, ids = toroidal_cells(rng, n, 40, jitter=0.9)
     # stretch the cells along y: distance field of a squashed copy of the grid
     ridge = spectral_noise(rng, n, 1, 10, beta=2.5, stretch=(1.0, 5.0))
     gap = f2 - f1
-    crevice = 1.0 - smoothstep(0.0, 0.025, gap + 0.01 * ridge)
+    crevice = 1.0 - smoothstep(0.0, 0.045, gap + 0.01 * ridge)
     plates = 0.012 * spectral_noise(rng, n, 2, 30, beta=2.0)
-    height = 0.08 * (1.0 - crevice) ** 0.5 + plates - 0.12 * crevice
-    tone = rng.uniform(0.7, 1.1, ids.max() + 1)[ids]
+    fibres = spectral_noise(rng, n, 5, 16, beta=1.0, stretch=(1.0, 6.0))  # streaks along y
+    height = (
+        0.08 * (1.0 - crevice) ** 0.5 + plates + 0.006 * fibres * (1 - crevice) - 0.12 * crevice
+    )
+    tone = rng.uniform(0.45, 1.25, ids.max() + 1)[ids] * (1.0 + 0.7 * np.tanh(fibres))
     lichen = smoothstep(0.6, 1.2, spectral_noise(rng, n, 3, 20, beta=2.0)) * (1 - crevice)
     albedo = np.stack([0.30 * tone, 0.22 * tone, 0.15 * tone], -1) * (
         1.0 - 0.7 * crevice[..., None]
@@ -195,20 +205,30 @@ def bark(rng, n: int = 160) -> Tile:
         },
         "bsdf_1": plastic((0.06, 0.04, 0.03), 0.15),
     }
-    return Tile([Part(heightfield(height), bark_bsdf, name="bark")], "fissured bark with lichen")
+    return Tile(
+        [Part(heightfield(height), bark_bsdf, name="bark")], "fissured fibrous bark with lichen"
+    )
+
+
+#: the grout's colour (scaled per grain)
+GROUT = np.array([1.0, 0.96, 0.9])
 
 
 def mosaic(rng, cells: int = 8) -> Tile:
     """A ``cells x cells`` mosaic of tall tesserae: polished and brushed metals (copper, gold,
     aluminium, chromium) and glossy coloured plastics, each with jittered corners, a random
-    tilt of up to 10 degrees and a bevel, standing 0.045-0.07 tile widths above deep grout.
+    tilt of up to 10 degrees and a bevel, standing 0.045-0.07 tile widths above deep, sanded
+    grout (pale and dark grains).
 
-    Harder than the first version (5 x 5 tesserae, 0.024-0.032 above shallow grout), on
-    which the lobes came within 16% of NeuMIP with parallax at 64^2: a texel on a flat
-    tessera has one lobe, which is what Lafortune fits. Smaller tesserae give more edge
-    texels, and taller ones side walls seen at grazing views and grout shadowed by the walls
-    (relief 4.7 texels at 64^2, was 2.4): angular functions with occlusion steps
-    (docs/quality-research.md)."""
+    The third version. On the first (5 x 5 tesserae, 0.024-0.032 above shallow grout) the
+    lobes came within 16% of NeuMIP with parallax at 64^2: a texel on a flat tessera has one
+    lobe, which is what Lafortune fits. The second has smaller tesserae (more edge texels)
+    and taller ones (side walls seen at grazing views, grout shadowed by the walls; relief
+    4.7 texels at 64^2, was 2.4): angular functions with occlusion steps, but the lobes still
+    came within 32%, and height parallax helped NeuMIP by 2% only, because uniform grey grout
+    looks the same wherever the view lands on it. The grains of this one, 0.045-0.07 tile widths
+    below the tesserae's tops, slide under a texel as the view tilts: what a lobe cannot
+    follow and a height field can (docs/quality-research.md)."""
     pitch = 1.0 / cells
     mats = [
         lambda: metal("Cu", rng.uniform(0.05, 0.2)),
@@ -232,8 +252,11 @@ def mosaic(rng, cells: int = 8) -> Tile:
             bsdf = mats[int(rng.integers(len(mats)))]()
             parts.append(Part(m, bsdf, smooth=False, name=f"tessera{i}_{j}"))
     grout = heightfield(-0.03 + 0.002 * spectral_noise(rng, 64, 4, 32, beta=1.0))
-    parts.append(Part(grout, diffuse((0.50, 0.48, 0.45)), name="grout"))
-    return Tile(parts, f"{cells}x{cells} mosaic of tall metal and plastic tesserae")
+    # sanded grout: pale and dark grains of 1.5-5 texels at 64^2 (albedo 0.15-0.85)
+    grains = 0.5 + 0.35 * np.tanh(1.5 * spectral_noise(rng, 160, 12, 40, beta=0.5))
+    sand = {"type": "bitmap", "data": (grains[..., None] * GROUT).astype(np.float32)}
+    parts.append(Part(grout, diffuse(sand), name="grout"))
+    return Tile(parts, f"{cells}x{cells} mosaic of tall metal and plastic tesserae, sanded grout")
 
 
 PT_PRESETS = {
