@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import functools
 import os
+import threading
+import time
 from dataclasses import asdict, dataclass, field
 
 from vrneural.errors import VrnError
@@ -86,9 +88,6 @@ def poll_thread_cpu() -> float | None:
     """CPU seconds used so far by wgpu-py's device-poll thread(s): they poll the device and run
     the map callbacks of read-backs, host work a frame causes off the calling thread (0 before
     any exists; None where the platform has no per-thread CPU clocks)."""
-    import threading
-    import time
-
     if not hasattr(time, "pthread_getcpuclockid"):
         return None
     total = 0.0

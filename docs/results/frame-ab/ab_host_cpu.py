@@ -5,11 +5,12 @@ Three interleaved rounds of 30 frames each; per frame: the main thread's CPU tim
 CPU time with wgpu-py's device-poll thread added (it polls the device and runs the map
 callbacks for the frames' read-backs: host work the frame causes, on another thread), and the
 wall time (on a CPU adapter the GPU's work shares the cores, so it does not fall with it)."""
-import sys, time, os, threading
+import sys, time, os
 sys.path.insert(0, os.environ.get("AB_OLD", "/tmp/ab41/old"))  # mkold.sh's folder
 import numpy as np
 import vrneural_e90c611.runtime.renderer as old
 import vrneural.runtime.renderer as new
+from vrneural.gpu.device import poll_thread_cpu as poll_cpu  # wgpu-py's device-poll thread
 from vrneural.runtime.scene import builtin_scene
 from vrneural_e90c611.runtime.scene import builtin_scene as old_scene
 eye = tuple(int(x) for x in (sys.argv[1] if len(sys.argv) > 1 else "96x96").split("x"))
@@ -20,14 +21,6 @@ rn = {d: new.Renderer(builtin_scene(2), new.Settings(**kw, frames_in_flight=d)) 
 for r in rn.values(): r.frame(0); r.wait()
 n = 30
 res = {}
-
-
-def poll_cpu() -> float:
-    """CPU seconds of wgpu-py's device-poll thread(s) (wgpu_native/_poller.py)."""
-    ts = [t for t in threading.enumerate() if type(t).__name__ == "PollThread"]
-    return sum(time.clock_gettime(time.pthread_getcpuclockid(t.ident)) for t in ts)
-
-
 for rep in range(3):
     for name, r in [("old", ro), *[(f"new{d}", r) for d, r in rn.items()]]:
         c0, t0, p0 = time.thread_time(), time.perf_counter(), poll_cpu()
