@@ -140,33 +140,46 @@ def pebbles(rng, count: int = 34) -> Tile:
     return Tile(parts, f"{len(placed)} packed pebbles of six stones on sand")
 
 
-def fur(rng, tufts: int = 100, per_tuft: int = 14) -> Tile:
+def fur(rng, tufts: int = 144, per_tuft: int = 14) -> Tile:
     """Cut pile: ``tufts`` tufts (on a jittered grid) of ``per_tuft`` thin tapered strands
-    each, standing on a backing, leaning and curling; three yarn colours."""
+    each, standing on a backing, leaning and curling. The tufts' yarn colour follows patches
+    of several tufts (cream, russet, near-black: a calico coat) and their height varies by tuft
+    (0.07-0.19 tile widths), so taller tufts hide and shadow their neighbours.
+
+    The second version. On the first (100 tufts of three reds and greys chosen per tuft, all
+    0.11-0.16 tall) the lobes beat NeuMIP with parallax (0.93): a noisy carpet whose texels
+    change strand from view to view, which a per-texel lobe averages as well as a network.
+    Patches larger than a tuft slide under a texel as the view tilts; they made the two tie
+    (1.005). A short pile (0.035-0.075) and finer patches made the lobes win again (0.92):
+    docs/quality-research.md."""
     k = round(np.sqrt(tufts))
     base = (np.stack(np.meshgrid(np.arange(k), np.arange(k)), -1).reshape(-1, 2) + 0.5) / k
     centres = (base + (rng.random(base.shape) - 0.5) * 0.6 / k) % 1.0
-    cols = [(0.55, 0.08, 0.06), (0.62, 0.30, 0.06), (0.50, 0.45, 0.40)]
+    cols = [(0.80, 0.72, 0.58), (0.60, 0.24, 0.06), (0.07, 0.05, 0.04)]
+    # patches: a coarse periodic field looked up at each tuft's centre, cut into three bands
+    field = spectral_noise(rng, 64, 1, 3, beta=2.0)
+    at = field[(centres[:, 1] * 64).astype(int) % 64, (centres[:, 0] * 64).astype(int) % 64]
+    colour = np.digitize(at, np.quantile(at, [0.4, 0.7]))
+    tall = rng.uniform(0.07, 0.19, len(centres))
     groups: list[list] = [[] for _ in cols]
     t = np.linspace(0.0, 1.0, 7)
-    for cx, cy in centres:
-        c = int(rng.choice(3, p=[0.6, 0.25, 0.15]))
+    for (cx, cy), c, top in zip(centres, colour, tall, strict=True):
         lean = rng.normal(0, 0.15, 2)
         for _ in range(per_tuft):
             p0 = np.array([cx, cy]) + rng.normal(0, 0.022, 2)
-            h = rng.uniform(0.11, 0.16)
+            h = top * rng.uniform(0.85, 1.0)
             tilt = lean + rng.normal(0, 0.12, 2)
             curl = rng.normal(0, 0.02, 2)
             xy = p0 + np.outer(t, tilt * h) + np.outer(t**2, curl)
             path = np.column_stack([xy, h * t])
             radius = 0.009 * (1.0 - 0.8 * t)
-            groups[c].append(tube(path, radius, sides=6, ref=[1.0, 0.0, 0.0]))
+            groups[int(c)].append(tube(path, radius, sides=6, ref=[1.0, 0.0, 0.0]))
     parts = [
         Part(merge(g), plastic(cols[i], 0.35), name=f"yarn{i}") for i, g in enumerate(groups) if g
     ]
     back = heightfield(0.002 * spectral_noise(rng, 32, 2, 12))
     parts.append(Part(back, diffuse((0.20, 0.16, 0.11)), name="backing"))
-    return Tile(parts, f"cut pile, {k * k} tufts of {per_tuft} strands")
+    return Tile(parts, f"calico cut pile, {k * k} tufts of {per_tuft} strands")
 
 
 def bark(rng, n: int = 160) -> Tile:
