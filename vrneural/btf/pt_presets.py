@@ -158,7 +158,8 @@ def fur(rng, tufts: int = 144, per_tuft: int = 14) -> Tile:
     cols = [(0.80, 0.72, 0.58), (0.60, 0.24, 0.06), (0.07, 0.05, 0.04)]
     # patches: a coarse periodic field looked up at each tuft's centre, cut into three bands
     field = spectral_noise(rng, 64, 1, 3, beta=2.0)
-    at = field[(centres[:, 1] * 64).astype(int) % 64, (centres[:, 0] * 64).astype(int) % 64]
+    ij = (centres * len(field)).astype(int) % len(field)  # nearest cell, (x, y)
+    at = field[ij[:, 1], ij[:, 0]]
     colour = np.digitize(at, np.quantile(at, [0.4, 0.7]))
     tall = rng.uniform(0.07, 0.19, len(centres))
     groups: list[list] = [[] for _ in cols]
