@@ -49,7 +49,6 @@ def render(name: str, wait=None) -> tuple[np.ndarray, np.ndarray]:
     """Frames of configuration ``name``: eyes ``[F, E, H, W, 4]`` float16 (raw colour targets)
     and counters ``[F, 7]`` int64 (:data:`COUNTERS`). ``wait(renderer)``: called before the
     stats are read (the new frame loop's stats arrive later)."""
-    from vrneural.gpu.readback import read_texture
     from vrneural.runtime.renderer import Renderer, Settings
 
     kind, kw, frames, jitter = configs()[name]
@@ -62,7 +61,7 @@ def render(name: str, wait=None) -> tuple[np.ndarray, np.ndarray]:
     imgs, stats = [], []
     for f in range(frames):
         stats.append(r.frame(f))
-        imgs.append(np.stack([read_texture(et.colour) for et in r.eye_t]))
+        imgs.append(np.stack(r._read_colour()))  # each eye's raw colour target
     if wait is not None:
         wait(r)
     cnt = np.array([[getattr(st, k) for k in COUNTERS] for st in stats], np.int64)

@@ -21,15 +21,32 @@ def test_frames_are_bit_for_bit_those_of_the_loop_before_41(refs, name):
     screen, reference, a plain floor under one light, no lights): the same counters, and the
     same bits in every frame's eyes but where the plain objects' shading changed its arithmetic
     (reciprocals for divisions, forward.wgsl: plain_colour): there at most one float16 unit in
-    the last place, in a few values (1-3 pixels per configuration when it changed)."""
+    the last place, in a few values (1-3 pixels per configuration when it changed).
+
+    In mode texture the eyes are drawn side by side into one target since (one pass): the
+    second eye's columns lie further right, and the rasteriser's interpolation of its varyings
+    rounds differently there (lavapipe: 40-100 values of 30-60 thousand, at most 0.22% of the
+    value). That eye is held to 0.3% in at most 0.5% of its values; the first, and every eye
+    of the screen modes (a target each), to the bits above."""
     eyes, cnt = render(name, wait=lambda r: r.wait())
     np.testing.assert_array_equal(cnt, refs[f"{name}/counters"], err_msg=str(COUNTERS))
-    _assert_old_frames(eyes, refs[f"{name}/eyes"])
+    ref = refs[f"{name}/eyes"]
+    if configs()[name][1].get("mode", "texture") == "texture" and eyes.shape[1] > 1:
+        _assert_old_frames(eyes[:, :1], ref[:, :1])
+        _assert_interpolation_roundoff(eyes[:, 1:], ref[:, 1:])
+    else:
+        _assert_old_frames(eyes, ref)
 
 
 def _assert_old_frames(eyes, ref):
     ulps = np.abs(eyes.view(np.uint16).astype(np.int32) - ref.view(np.uint16))
     assert ulps.max() <= 1 and np.count_nonzero(ulps) <= 1e-3 * ulps.size
+
+
+def _assert_interpolation_roundoff(eyes, ref):
+    e, r = eyes.astype(np.float32), ref.astype(np.float32)
+    rel = np.abs(e - r) / (np.abs(r) + 1e-3)
+    assert rel.max() <= 3e-3 and np.count_nonzero(rel) <= 5e-3 * rel.size
 
 
 @pytest.mark.gpu

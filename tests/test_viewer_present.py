@@ -58,15 +58,20 @@ def test_present_pass_matches_its_numpy_twin_bit_for_bit(stereo):
     # a window twice the size: each image pixel becomes 2 x 2 window pixels
     big = _present(p, Layout(eyes, (128, 48)), (256, 96))
     np.testing.assert_array_equal(big, want.repeat(2, 0).repeat(2, 1))
-    # split: eye 0 left of column 20, the other eye's HDR from there on
-    got = _present(p, Layout(eyes[:1], (64, 48), 20, eyes[1]), (64, 48))
-    np.testing.assert_array_equal(got, compose(hdr[:1], hdr[1], 20))
-    # split with display colours on the right (the FLIP map)
-    from vrneural.gpu.readback import upload_texture
-
-    heat = np.random.default_rng(0).integers(0, 256, (48, 64, 4)).astype(np.uint8)
     import wgpu
 
+    from vrneural.gpu.readback import upload_texture
+
+    # the renderer's eyes side by side in one texture (mode texture): eye 0 its left columns
+    assert len(eyes) == 1 and tuple(eyes[0].size[:2]) == (128, 48)
+    # split: eye 0 left of column 20, the other eye's HDR (a texture of its own) from there on
+    other = upload_texture(
+        hdr[1].astype(np.float16), "rgba16float", wgpu.TextureUsage.TEXTURE_BINDING
+    )
+    got = _present(p, Layout(eyes[:1], (64, 48), 20, other), (64, 48))
+    np.testing.assert_array_equal(got, compose(hdr[:1], hdr[1], 20))
+    # split with display colours on the right (the FLIP map)
+    heat = np.random.default_rng(0).integers(0, 256, (48, 64, 4)).astype(np.uint8)
     tex = upload_texture(heat, "rgba8unorm", wgpu.TextureUsage.TEXTURE_BINDING)
     got = _present(p, Layout(eyes[:1], (64, 48), 33, tex, True), (64, 48))
     np.testing.assert_array_equal(got, compose(hdr[:1], heat / 255.0, 33, True))

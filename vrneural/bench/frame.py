@@ -113,11 +113,11 @@ def texture_update(r, entry: str, phase: int, period: int, f: int):
 
 
 def forward(r, bundles=None):
-    """An encoder callback: both eyes' forward passes (``bundles``: a floor's draws)."""
+    """An encoder callback: the eyes' forward passes (in mode texture one pass, the eyes side
+    by side; ``bundles``: a floor's draws)."""
 
     def encode(enc, timer) -> None:
-        for e in range(r.s.eyes):
-            r.encode_forward(enc, e, bundles, "forward", timer)
+        r.encode_forward(enc, None, bundles, "forward", timer)
 
     return encode
 

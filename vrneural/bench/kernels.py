@@ -127,9 +127,11 @@ def run_kernels(cfg: KernelsConfig) -> dict:
     nets, precs = c.networks, c.precisions
     if "f16" in precs and not adapter_summary().features.get("shader-f16"):
         raise VrnError("--precisions: f16 needs the shader-f16 feature, which the adapter lacks")
-    with rp.prepare_out(cfg.out, cfg.force, "kernels") as root:
-        import torch
+    # torch loaded before the output folder exists: a signal in the middle of its C++
+    # extension's import ends the process by std::terminate, not as an interrupt
+    import torch
 
+    with rp.prepare_out(cfg.out, cfg.force, "kernels") as root:
         t0 = time.perf_counter()
         doc = rp.header("kernels", c)
         threads_before = torch.get_num_threads()

@@ -58,6 +58,18 @@ class UniformArena:
         self._mark(offset, nbytes)
         return self.host[offset : offset + nbytes].view(dtype)
 
+    def words(self, offset: int, nbytes: int) -> np.ndarray:
+        """The host copy of a region as float32 words, for a writer that keeps the view and
+        fills it each frame (a view of :attr:`host`, which is never replaced); the writer
+        calls :meth:`mark` after writing."""
+        if self.buf is None:
+            self._create()
+        return self.host[offset : offset + nbytes].view(np.float32)
+
+    def mark(self, offset: int, nbytes: int) -> None:
+        """A region of :meth:`words` was written: it goes with the next :meth:`flush`."""
+        self._mark(offset, nbytes)
+
     def _mark(self, offset: int, nbytes: int) -> None:
         self.lo = offset if self.lo is None else min(self.lo, offset)
         self.hi = max(self.hi, offset + nbytes)

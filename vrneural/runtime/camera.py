@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import functools
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,22 +31,21 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     )
 
 
-def cross3(a, b) -> np.ndarray:
-    """``np.cross`` of two 3-vectors (float64), the same products and differences without its
-    per-call overhead (called every frame)."""
-    a0, a1, a2 = (float(x) for x in a)
-    b0, b1, b2 = (float(x) for x in b)
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
-
-
-def look_rotation(forward: np.ndarray, up=(0.0, 1.0, 0.0)) -> np.ndarray:
-    """Camera-to-world rotation ``[3, 3]`` whose -z axis is ``forward``."""
-    f = np.asarray(forward, np.float64)
-    f = f / np.linalg.norm(f)
-    r = cross3(f, up)
-    r = r / np.linalg.norm(r)
-    u = cross3(r, f)
-    return np.stack([r, u, -f], 1)
+def look_rotation(forward, up=(0.0, 1.0, 0.0)) -> np.ndarray:
+    """Camera-to-world rotation ``[3, 3]`` whose -z axis is ``forward``. Called every frame:
+    scalar float64 arithmetic (the products of ``np.cross`` and ``np.linalg.norm``) and one
+    array, instead of a dozen small numpy calls."""
+    fx, fy, fz = (float(x) for x in forward)
+    ux, uy, uz = (float(x) for x in up)
+    n = math.sqrt(fx * fx + fy * fy + fz * fz)
+    fx, fy, fz = fx / n, fy / n, fz / n
+    rx, ry, rz = fy * uz - fz * uy, fz * ux - fx * uz, fx * uy - fy * ux  # f x up
+    n = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if n < 1e-12:  # looking along ``up``: any right axis will do; the world's x
+        rx, ry, rz, n = 1.0, 0.0, 0.0, 1.0
+    rx, ry, rz = rx / n, ry / n, rz / n
+    vx, vy, vz = ry * fz - rz * fy, rz * fx - rx * fz, rx * fy - ry * fx  # r x f
+    return np.array([[rx, vx, -fx], [ry, vy, -fy], [rz, vz, -fz]])
 
 
 @functools.lru_cache(maxsize=64)
@@ -131,9 +131,11 @@ class OrbitPath(HeadPath):
     period: float = 8.0
 
     def pose(self, t: float):
-        a = 2 * np.pi * t / self.period
-        p = np.asarray(self.centre) + self.sway * np.array([np.sin(a), 0.3 * np.sin(2 * a), 0])
-        return p, look_rotation(np.asarray(self.target) - p)
+        a = 2 * math.pi * t / self.period
+        cx, cy, cz = self.centre
+        p = (cx + self.sway * math.sin(a), cy + self.sway * 0.3 * math.sin(2 * a), float(cz))
+        tx, ty, tz = self.target
+        return np.array(p), look_rotation((tx - p[0], ty - p[1], tz - p[2]))
 
 
 #: How far a pose log's quaternion length may be from 1 (logs written with few decimals)
@@ -197,8 +199,14 @@ class PoseLogPath(HeadPath):
         return (1 - s) * self.p[i] + s * self.p[j], quat_to_matrix(q)
 
 
+#: rows of ``view_proj`` that make the clip planes: m3 + m0, m3 - m0, m3 + m1, m3 - m1, m2 (near:
+#: WebGPU depth >= 0), m3 - m2
+_PLANE_ROWS = np.array(
+    [[1, 0, 0, 1], [-1, 0, 0, 1], [0, 1, 0, 1], [0, -1, 0, 1], [0, 0, 1, 0], [0, 0, -1, 1]], float
+)
+
+
 def frustum_planes(view_proj: np.ndarray) -> np.ndarray:
     """The 6 planes ``[6, 4]`` (normals inward, normalised) of a WebGPU clip volume."""
-    m = view_proj
-    planes = np.stack([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[2], m[3] - m[2]])
-    return planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+    planes = _PLANE_ROWS @ view_proj
+    return planes / np.sqrt((planes[:, :3] ** 2).sum(1))[:, None]

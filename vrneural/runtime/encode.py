@@ -74,31 +74,53 @@ class FrameEncoding:
         shift[:3, 3] = self.origin
         lp_r = lp - self.origin
         culled = 0
-        for e, (eye, et) in enumerate(zip(eyes, self.eye_t, strict=True)):
-            vp_r = eye.view_proj @ shift  # origin-relative position -> clip
-            et.update(vp_r, eye.position - self.origin, lp_r, lc)
+        vps = []
+        for eye, et in zip(eyes, self.eye_t, strict=True):
+            vps.append(eye.view_proj @ shift)  # origin-relative position -> clip
+            et.update(vps[-1], eye.position - self.origin, lp_r, lc)
+        if s.mode == "texture":  # the eyes side by side: one pass
+            if self.pass_clock == "wall":
+                enc = self._cut(enc, "_before")
+            self.encode_forward(enc)
+            return culled, self._cut(enc, "forward")
+        for e, eye in enumerate(eyes):
             if self.pass_clock == "wall":
                 enc = self._cut(enc, "_before")
             self.encode_forward(enc, e)
             enc = self._cut(enc, "forward")
-            if s.mode != "texture":
-                culled += self._encode_screen(enc, e, eye, vp_r, lp_r, lc)
-                enc = self._cut(enc, "screen")
+            culled += self._encode_screen(enc, e, eye, vps[e], lp_r, lc)
+            enc = self._cut(enc, "screen")
         return culled, enc
 
     def encode_forward(
-        self, enc, e: int, bundles: list | None = None, name="forward", timer=None
+        self, enc, e: int | None = None, bundles: list | None = None, name="forward", timer=None
     ) -> None:
-        """Eye ``e``'s forward pass into ``enc``: its bundle (or ``bundles[e]``: the bench's
-        floors over the same draws), timed as ``name`` (by ``timer``, default the frame's)."""
+        """The forward pass of eye ``e`` (None: of every eye) into ``enc``: the eyes' bundles
+        (or ``bundles``: the bench's floors over the same draws), timed as ``name`` (by
+        ``timer``, default the frame's). Eyes side by side in one set of targets
+        (:meth:`EyeTargets.side_by_side <vrneural.runtime.forward.EyeTargets.side_by_side>`,
+        mode texture) are drawn in one pass, a viewport each; otherwise a pass per eye."""
         if self._bundles is None:
             self._bundles = [
                 fw.record_bundle(et, self.draw_list(e, et)) for e, et in enumerate(self.eye_t)
             ]
-        ts = timer.writes(name) if timer is not None else self._writes(name)
-        rp = fw.begin_pass(enc, self.eye_t[e], ts)
-        rp.execute_bundles([(bundles or self._bundles)[e]])
-        rp.end()
+        bundles = bundles or self._bundles
+        ts = timer.writes if timer is not None else self._writes
+        ets = self.eye_t
+        shared = len(ets) > 1 and ets[1].colour is ets[0].colour
+        if shared:
+            if e is not None:  # a pass clears the whole target: the other eyes' too
+                raise ValueError("encode_forward: eyes side by side are drawn together (e=None)")
+            rp = fw.begin_pass(enc, ets[0], ts(name))
+            for et, b in zip(ets, bundles, strict=True):
+                fw.viewport(rp, et)
+                rp.execute_bundles([b])
+            rp.end()
+            return
+        for k in range(len(ets)) if e is None else (e,):
+            rp = fw.begin_pass(enc, ets[k], ts(name))
+            rp.execute_bundles([bundles[k]])
+            rp.end()
 
     def draw_list(self, e: int, et, fragment: str | None = None) -> list:
         """Eye ``e``'s draws ``[(pipeline, object bind group, DrawObject)]``; ``fragment``

@@ -21,7 +21,7 @@ from vrneural.gpu.shaders import render_wgsl
 from vrneural.gpu.uniforms import UniformArena
 from vrneural.runtime.interface import FRAME, LIGHT, OBJECT, forward_bindings, structs_wgsl
 from vrneural.runtime.reference import normal_matrix
-from vrneural.runtime.texture_pass import pack_lights_into
+from vrneural.runtime.texture_pass import light_words
 
 #: eye colour targets: ``hdr`` (linear radiance, for EXR and FLIP) or ``display`` (Reinhard
 #: tonemapped, sRGB-encoded 8 bits: half the bytes where HDR output is not needed)
@@ -129,46 +129,77 @@ def render_pipeline(
 class EyeTargets:
     """Per-eye colour (``target``: :data:`TARGETS`), depth and (screen modes) visibility
     textures, their views, and the frame uniforms (regions of ``arena``, the renderer's
-    :class:`~vrneural.gpu.uniforms.UniformArena`; by default one of its own)."""
+    :class:`~vrneural.gpu.uniforms.UniformArena`; by default one of its own).
+
+    ``share``: draw into the textures of another ``EyeTargets`` instead, in the ``width``
+    columns from ``x0`` (:meth:`side_by_side`); ``columns``: textures that many eyes wide."""
 
     def __init__(
         self, width: int, height: int, n_lights: int, vis: bool = False, arena=None,
-        target: str = "hdr",
+        target: str = "hdr", share: EyeTargets | None = None, x0: int = 0, columns: int = 1,
     ):  # fmt: skip
         import wgpu
 
         dev = get_device()
         tu = wgpu.TextureUsage
-        self.size = (width, height)
+        self.size = (width, height)  # this eye's image
+        self.x0 = x0  # its first column in the textures
         self.target = target
         storage = tu.STORAGE_BINDING if target == "hdr" else 0  # the screen pass writes HDR
 
         def texture(fmt: str, usage):
-            return dev.create_texture(size=(width, height, 1), format=fmt, usage=usage)
+            return dev.create_texture(size=(width * columns, height, 1), format=fmt, usage=usage)
 
         rt = tu.RENDER_ATTACHMENT
-        self.colour = texture(TARGETS[target], rt | tu.COPY_SRC | storage | tu.TEXTURE_BINDING)
-        self.depth = texture(DEPTH_FORMAT, rt)
-        self.vis = texture(VIS_FORMAT, rt | tu.TEXTURE_BINDING) if vis else None
-        self.colour_view = self.colour.create_view()
-        self.depth_view = self.depth.create_view()
-        self.vis_view = self.vis.create_view() if vis else None
+        if share is not None:
+            self.colour, self.depth, self.vis = share.colour, share.depth, share.vis
+            self.colour_view, self.depth_view = share.colour_view, share.depth_view
+            self.vis_view = share.vis_view
+        else:
+            usage = rt | tu.COPY_SRC | storage | tu.TEXTURE_BINDING
+            self.colour = texture(TARGETS[target], usage)
+            self.depth = texture(DEPTH_FORMAT, rt)
+            self.vis = texture(VIS_FORMAT, rt | tu.TEXTURE_BINDING) if vis else None
+            self.colour_view = self.colour.create_view()
+            self.depth_view = self.depth.create_view()
+            self.vis_view = self.vis.create_view() if vis else None
         self.n_lights = max(1, n_lights)
         self.arena = arena or UniformArena("eye", auto_flush=True)
         self.f_off = self.arena.alloc(FRAME_BYTES)
         self.l_off = self.arena.alloc(LIGHT.size * self.n_lights)
         self._bind = None
+        self._words: tuple | None = None  # its arena regions as words (update)
+
+    @classmethod
+    def side_by_side(
+        cls, n: int, width: int, height: int, n_lights: int, arena=None, target: str = "hdr"
+    ) -> list[EyeTargets]:
+        """``n`` eyes' targets in one set of textures ``n * width`` wide, eye ``e`` in the
+        columns from ``e * width``: one render pass draws every eye (a viewport each,
+        :func:`viewport`), each with its own frame uniforms. Single-pass stereo: one pass
+        begun, cleared and ended per frame instead of one per eye."""
+        first = cls(width, height, n_lights, False, arena, target, columns=n)
+        rest = [
+            cls(width, height, n_lights, False, arena, target, share=first, x0=e * width)
+            for e in range(1, n)
+        ]
+        return [first, *rest]
 
     def update(self, view_proj, eye_pos, light_pos, light_rgb) -> None:
         """Frame uniforms: ``view_proj [4, 4]``, ``eye_pos [3]``, lights (positions as given,
         in the same frame as ``view_proj``)."""
         ar = self.arena
-        f = FRAME.view(ar.view(self.f_off, FRAME_BYTES, np.uint8))[0]  # the Frame uniform
-        f["view_proj"] = np.asarray(view_proj, np.float64).T
-        f["eye"] = (*eye_pos, 0.0)
-        f["info"] = (len(light_pos), 0, 0, 0)
-        lights = LIGHT.view(ar.view(self.l_off, LIGHT.size * self.n_lights, np.uint8))
-        pack_lights_into(lights, light_pos, light_rgb)
+        if self._words is None:  # word views of the Frame uniform and the lights, kept
+            w = ar.words(self.f_off, FRAME_BYTES)
+            self._words = (w, w.view(np.uint32), ar.words(self.l_off, LIGHT.size * self.n_lights))
+        w, wu, lw = self._words  # the FRAME record's words: view_proj (column-major), eye, info
+        w[:16] = np.asarray(view_proj, np.float64).T.ravel()
+        w[16:19] = eye_pos
+        w[19] = 0.0
+        wu[20:24] = (len(light_pos), 0, 0, 0)
+        light_words(lw, light_pos, light_rgb)
+        ar.mark(self.f_off, FRAME_BYTES)
+        ar.mark(self.l_off, lw.nbytes)
         ar.written()
 
     def formats(self) -> list[str]:
@@ -247,6 +278,11 @@ def record_bundle(eye: EyeTargets, draws: list):
         enc.set_vertex_buffer(0, d.vbuf)
         enc.draw(d.n_vertices)
     return enc.finish()
+
+
+def viewport(rp, eye: EyeTargets) -> None:
+    """Draw into ``eye``'s columns of its (shared) targets."""
+    rp.set_viewport(eye.x0, 0, eye.size[0], eye.size[1], 0.0, 1.0)
 
 
 def begin_pass(encoder, eye: EyeTargets, timestamp_writes=None):

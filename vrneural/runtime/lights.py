@@ -5,6 +5,7 @@ A point light contributes ``L = BTF(u, wi, wo) * colour * I / d^2`` (docs/conven
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,11 +28,14 @@ class PointLight:
 
     def at(self, t: float) -> np.ndarray:
         """World position ``[3]`` at time ``t`` (s)."""
-        p = np.asarray(self.position, np.float64)
-        if self.motion == "circle":
-            a = self.phase + 2 * np.pi * t / self.period
-            p = p + self.radius * np.array([np.cos(a), 0.0, np.sin(a)])
-        return p
+        return np.array(self._at(t))
+
+    def _at(self, t: float) -> tuple[float, float, float]:
+        x, y, z = (float(v) for v in self.position)
+        if self.motion == "circle":  # scalar math: called per light and frame
+            a = self.phase + 2 * math.pi * t / self.period
+            return x + self.radius * math.cos(a), y, z + self.radius * math.sin(a)
+        return x, y, z
 
     @property
     def radiance(self) -> np.ndarray:
@@ -45,8 +49,8 @@ def light_arrays(lights: list[PointLight], t: float) -> tuple[np.ndarray, np.nda
     are rounded to f32 (a light 1e5 m from the origin would otherwise move in 7.8 mm steps)."""
     if not lights:
         return np.zeros((0, 3), np.float64), np.zeros((0, 3), np.float32)
-    pos = np.stack([lt.at(t) for lt in lights]).astype(np.float64)
-    rgb = np.stack([lt.radiance for lt in lights]).astype(np.float32)
+    pos = np.array([lt._at(t) for lt in lights], np.float64)
+    rgb = np.array([[float(c) * lt.intensity for c in lt.colour] for lt in lights], np.float32)
     return pos, rgb
 
 

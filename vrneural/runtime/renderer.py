@@ -94,10 +94,13 @@ class Renderer(FrameEncoding):
         nl = max(1, len(self.lights))
         #: every per-frame uniform, written with one write_buffer per frame
         self.arena = UniformArena("frame uniforms")
-        self.eye_t = [
-            fw.EyeTargets(w, h, nl, vis=screen, arena=self.arena, target=s.target)
-            for _ in range(s.eyes)
-        ]
+        if screen:  # the per-pixel pass reads and writes each eye's own targets
+            self.eye_t = [
+                fw.EyeTargets(w, h, nl, vis=True, arena=self.arena, target=s.target)
+                for _ in range(s.eyes)
+            ]
+        else:  # the eyes side by side: one forward pass draws them all
+            self.eye_t = fw.EyeTargets.side_by_side(s.eyes, w, h, nl, self.arena, s.target)
         self.head = OrbitPath() if scene.head == "orbit" else PoseLogPath(scene.head)
         # Floating origin: everything uploaded to the GPU is relative to the first eye position
         # (subtracted in float64), so scenes far from the world origin keep f32 precision.
@@ -279,6 +282,19 @@ class Renderer(FrameEncoding):
         _, _, r, ch = n.sphere
         return any(bool((e.planes @ ch >= -r).all()) for e in eyes)
 
+    def _visible_all(self, eyes) -> list[bool]:
+        """:meth:`_visible` of every neural object (one product per eye for all of them)."""
+        if not self.neural:
+            return []
+        for n in self.neural:
+            self.world_sphere(n)
+        ch = np.array([n.sphere[3] for n in self.neural]).T  # [4, objects]
+        r = np.array([n.sphere[2] for n in self.neural])
+        vis = np.zeros(len(self.neural), bool)
+        for e in eyes:
+            vis |= (e.planes @ ch >= -r).all(0)
+        return vis.tolist()
+
     def eyes_at(self, frame: int, t: float | None = None, head=None):
         """The eyes at display frame ``frame`` (the whole view: visibility and shading): the
         scene's head path at time ``t`` (s; default ``frame / fps``), or the head pose
@@ -324,8 +340,8 @@ class Renderer(FrameEncoding):
         adaptive = s.reuse_budget is not None
         centre = np.mean([e.position for e in eyes], axis=0) if adaptive else None
         todo, culled = [], 0
-        for k, n in enumerate(self.neural):
-            if not self._visible(n, eyes):
+        for k, (n, vis) in enumerate(zip(self.neural, self._visible_all(eyes), strict=True)):
+            if not vis:
                 culled += 1
                 n.fresh = False
                 continue
@@ -439,10 +455,26 @@ class Renderer(FrameEncoding):
         return [(e.position, 0.0) for e in eyes]
 
     def colour_textures(self) -> list:
-        """The eyes' HDR colour textures (``rgba16float``, ``eye_res``, sampled-texture usage)
-        as the last :meth:`frame` left them, for drawing them on the GPU without a read-back
-        (`vrneural view`): commands submitted after that frame see its result."""
-        return [et.colour for et in self.eye_t]
+        """The eyes' HDR colour textures (``rgba16float``, sampled-texture usage) as the last
+        :meth:`frame` left them, for drawing them on the GPU without a read-back (`vrneural
+        view`): commands submitted after that frame see its result. In mode texture one
+        texture, the eyes side by side (``eyes x eye_res`` wide); in the screen modes one per
+        eye."""
+        out = []
+        for et in self.eye_t:
+            if all(et.colour is not t for t in out):
+                out.append(et.colour)
+        return out
+
+    def _read_colour(self) -> list[np.ndarray]:
+        """Each eye's colour target as stored (its columns of a shared texture)."""
+        got: dict = {}
+        out = []
+        for et in self.eye_t:
+            if id(et.colour) not in got:
+                got[id(et.colour)] = read_texture(et.colour)
+            out.append(got[id(et.colour)][:, et.x0 : et.x0 + et.size[0]])
+        return out
 
     def invalidate(self) -> None:
         """Forget what the radiance textures hold: the next frame gives every visible neural
@@ -459,15 +491,15 @@ class Renderer(FrameEncoding):
                 "bits); HDR needs target 'hdr' (read_display gives the display colours)"
             )
         self.wait()
-        return [read_texture(et.colour).astype(np.float32) for et in self.eye_t]
+        return [c.astype(np.float32) for c in self._read_colour()]
 
     def read_display(self) -> list[np.ndarray]:
         """The eyes' display colours ``[H, W, 3]`` uint8 (sRGB) of the last frame (waits for
         it): the display target as it is, or the HDR target through ``output.tonemap``."""
         self.wait()
         if self.s.target == "display":
-            return [read_texture(et.colour)[..., :3] for et in self.eye_t]
-        return [tonemap(read_texture(et.colour).astype(np.float32)) for et in self.eye_t]
+            return [np.ascontiguousarray(c[..., :3]) for c in self._read_colour()]
+        return [tonemap(c.astype(np.float32)) for c in self._read_colour()]
 
     def radiance(self, obj: int = 0, eye: int = 0) -> np.ndarray:
         """Radiance texture ``[R, R, 4]`` float32 of neural object ``obj`` (counting neural

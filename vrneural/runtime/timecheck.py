@@ -47,8 +47,7 @@ def _passes(r) -> dict:
         out["texture"] = texture
 
     def forward(enc, timer):
-        for e in range(r.s.eyes):
-            r.encode_forward(enc, e, None, "forward", timer or _NoTimer())
+        r.encode_forward(enc, None, None, "forward", timer or _NoTimer())
 
     out["forward"] = forward
     if r.s.mode != "texture":
