@@ -785,3 +785,21 @@ def test_video_line_names_the_eyes_it_holds(capsys, tmp_path):
         argv = ["run", "--profile", "tiny", "--frames", "2", "--quiet", "--out", str(out)]
         assert main([*argv, *extra]) == 0
         assert f"{name} {what}" in capsys.readouterr().out
+
+
+@pytest.mark.gpu
+def test_eyes_side_by_side_must_fit_the_adapter(capsys, tmp_path):
+    """Mode texture draws both eyes into one target: two eyes each within the adapter's
+    texture limit can still be too wide together (a one-line error, not wgpu's)."""
+    from vrneural.errors import VrnError
+    from vrneural.gpu.device import adapter_summary
+    from vrneural.runtime.renderer import Renderer, Settings
+    from vrneural.runtime.scene import builtin_scene
+
+    m = adapter_summary().limits["max_texture_dimension_2d"]
+    w = m // 2 + 2
+    msg = _err(capsys, ["--profile", "tiny", "--eye-res", f"{w}x16", "--out", str(tmp_path / "o")])
+    assert f"one target {2 * w} pixels wide, above the adapter maximum {m}" in msg
+    assert f"use a width of at most {m // 2}" in msg and not (tmp_path / "o").exists()
+    with pytest.raises(VrnError, match=f"one target {2 * w} pixels wide"):
+        Renderer(builtin_scene(1), Settings(eyes=2, texture_res=64, eye_res=(w, 16)))

@@ -197,6 +197,12 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     eye_res = parse_res(cfg.eye_res) if cfg.eye_res else prof.eye_res
     if max(eye_res) > max_tex:
         raise VrnError(f"--eye-res = {eye_res} is above the adapter maximum {max_tex}")
+    if cfg.mode == "texture" and cfg.eyes * eye_res[0] > max_tex:  # one target, side by side
+        raise VrnError(
+            f"--eye-res = {eye_res} with --eyes {cfg.eyes}: mode texture draws the eyes side by "
+            f"side in one target {cfg.eyes * eye_res[0]} pixels wide, above the adapter maximum "
+            f"{max_tex}; use a width of at most {max_tex // cfg.eyes}"
+        )
     if cfg.lights is None:  # the profile's count, capped at what the scene defines
         n_lights = min(prof.lights, len(scene.lights))
     else:

@@ -100,6 +100,13 @@ class Renderer(FrameEncoding):
                 for _ in range(s.eyes)
             ]
         else:  # the eyes side by side: one forward pass draws them all
+            max_tex = int(self.dev.limits["max-texture-dimension-2d"])
+            if s.eyes * w > max_tex:
+                raise VrnError(
+                    f"eye_res = {s.eye_res} with {s.eyes} eyes: mode texture draws the eyes "
+                    f"side by side in one target {s.eyes * w} pixels wide, above the adapter "
+                    f"maximum {max_tex}; use a width of at most {max_tex // s.eyes}"
+                )
             self.eye_t = fw.EyeTargets.side_by_side(s.eyes, w, h, nl, self.arena, s.target)
         self.head = OrbitPath() if scene.head == "orbit" else PoseLogPath(scene.head)
         # Floating origin: everything uploaded to the GPU is relative to the first eye position
