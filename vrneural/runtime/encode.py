@@ -1,6 +1,7 @@
 """The commands of one frame (mixed into :class:`~vrneural.runtime.renderer.Renderer`): the
-texture-space updates in one compute pass, then per eye the forward pass (its render bundle)
-and, in the screen modes, the per-pixel pass. Everything goes into the frame's one encoder;
+texture-space updates in one compute pass, then the forward pass (mode texture: one pass, the
+eyes side by side, each eye's render bundle in its viewport; the screen modes: per eye, the
+forward pass and the per-pixel pass). Everything goes into the frame's one encoder;
 uniforms into the renderer's arena (sent once, before the submit).
 
 With ``Renderer.pass_clock = "wall"`` each pass is instead submitted alone and waited for, and

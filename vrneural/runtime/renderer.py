@@ -1,9 +1,9 @@
 """The frame loop: per frame, the scheduled texture-space updates of visible neural objects
-(per eye), then the forward pass per eye (or, in the screen-space modes, the visibility pass and
-the per-pixel compute pass), all in one command buffer and one submit. ``frame()`` returns
-without waiting for the GPU (up to ``Settings.frames_in_flight`` frames queued); the frame's
-counters and per-pass GPU ms (timestamps) come back in its own submit and arrive in its
-:class:`~vrneural.runtime.stats.FrameStats` later (runtime/stats.py).
+(per eye), then one forward pass drawing both eyes side by side (or, in the screen-space modes,
+per eye the visibility pass and the per-pixel compute pass), all in one command buffer and one
+submit. ``frame()`` returns without waiting for the GPU (up to ``Settings.frames_in_flight``
+frames queued); the frame's counters and per-pass GPU ms (timestamps) come back in its own
+submit and arrive in its :class:`~vrneural.runtime.stats.FrameStats` later (runtime/stats.py).
 """
 
 from __future__ import annotations
