@@ -160,8 +160,10 @@ def test_sigterm_outside_training_is_a_ctrl_c(tmp_path, capsys):
     from vrneural.bench.quality_train import resume_hint
 
     before = signal.getsignal(signal.SIGTERM)
-    with pytest.raises(KeyboardInterrupt), resume_hint(tmp_path):
+    with pytest.raises(KeyboardInterrupt) as ei, resume_hint(tmp_path):
         os.kill(os.getpid(), signal.SIGTERM)
         time.sleep(5)  # the handler raises at once
-    assert "rerun the same command with --resume" in capsys.readouterr().err
+    # the hint rides on the interrupt to the command line's one "interrupted" line
+    assert "rerun the same command with --resume" in str(ei.value), ei.value
+    assert str(tmp_path) in str(ei.value) and capsys.readouterr().err == ""
     assert signal.getsignal(signal.SIGTERM) is before

@@ -231,6 +231,20 @@ def test_resume_with_nothing_to_resume_is_an_error_not_a_silent_fresh_start(tmp_
     assert not out.exists() and not (tmp_path / "n.btf.partial").exists()
 
 
+def test_resume_on_a_finished_btf_says_it_is_complete_and_keeps_it(tmp_path, vrn_inproc):
+    out = tmp_path / "done.btf"
+    synth = ["btf", "synth", "--preset", "wood", "--res", "4", "--dirs", "3", "--no-progress"]
+    assert vrn_inproc(*synth, "-o", str(out)).returncode == 0
+    before = out.read_bytes()
+    r = vrn_inproc(*synth, "-o", str(out), "--resume")
+    _one_line_error(r, "already complete", "nothing to resume", "--force instead of --resume")
+    assert out.read_bytes() == before and not (tmp_path / "done.btf.partial").exists()
+    # an image import onto a finished output: the same answer, before reading anything
+    r = vrn_inproc("btf", "import", str(tmp_path), "-o", str(out), "--resume", "--no-progress")
+    _one_line_error(r, "already complete", "nothing to resume")
+    assert out.read_bytes() == before
+
+
 def test_synth_refuses_a_file_larger_than_the_free_disk_space(tmp_path, vrn_inproc, monkeypatch):
     import shutil
     from collections import namedtuple

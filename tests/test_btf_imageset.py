@@ -3,6 +3,7 @@ sets written here with OpenImageIO (EXR, PNG), imported, compared; every bad inp
 error (exit 2) that writes nothing; --resume after an interruption."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -171,6 +172,24 @@ def test_bad_image_sets_are_one_line_errors_and_write_nothing(tmp_path, capsys, 
     assert code == 2 and len(err.splitlines()) == 1, err
     assert all(n in err for n in needles), err
     assert not out.exists() and not (tmp_path / "out.btf.partial").exists()
+
+
+def test_table_is_looked_up_from_the_working_folder_then_the_image_folder(
+    tmp_path, capsys, monkeypatch
+):
+    d = tmp_path / "set"
+    make_set(d)
+    (d / "directions.csv").rename(d / "dirs.csv")
+    monkeypatch.chdir(tmp_path)
+    args = ["btf", "import", "set", "--no-progress", "--table"]
+    code, err = _err(capsys, [*args, "dirs.csv", "-o", "a.btf"])  # found in the folder
+    assert code == 0 and (tmp_path / "a.btf").exists(), err
+    code, err = _err(capsys, [*args, "set/dirs.csv", "-o", "b.btf"])  # from the working folder
+    assert code == 0 and (tmp_path / "b.btf").exists(), err
+    code, err = _err(capsys, [*args, "nosuch.csv", "-o", "c.btf"])  # both places are named
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert "neither nosuch.csv" in err and f"nor {Path('set') / 'nosuch.csv'}" in err, err
+    assert not (tmp_path / "c.btf").exists()
 
 
 def test_vectors_below_the_horizon_and_not_unit(tmp_path, capsys):

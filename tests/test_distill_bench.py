@@ -56,6 +56,13 @@ def test_bench_quality_smoke(tmp_path, capsys):
         if k != "lafortune":
             assert 0 < m["ssim"] <= 1 and np.isfinite(m["psnr_db"]), k
     assert "PSNR and SSIM of the BTF slices" in md
+    # a run stopped after its first material says so above the tables, not only in the JSON
+    from vrneural.bench.quality_report import markdown
+
+    assert doc["complete"] and doc["materials"] == ["leather"] and "Partial run" not in md
+    part = markdown({**doc, "complete": False, "materials": ["leather", "wood"]})
+    assert "**Partial run**: 1 of 2 materials finished (not yet: wood)" in part
+    assert "`--resume` finishes it" in part and "| leather |" in part
     from vrneural.scoring.config import EvalConfig
     from vrneural.scoring.run import evaluate
 

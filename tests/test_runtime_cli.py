@@ -165,6 +165,7 @@ def test_ctrl_c_keeps_the_frames_rendered_so_far(capsys, tmp_path, monkeypatch):
     assert main([*argv, "--out", str(out)]) == 130
     err = capsys.readouterr().err
     assert "interrupted after 3 of 8 frames" in err and "--force" in err
+    assert err.strip().startswith("vrneural run: interrupted after") and err.count("\n") == 1, err
     sm = json.loads((out / "summary.json").read_text())
     assert sm["interrupted"] is True and sm["frames"] == 3
     assert (out / "stereo.mp4").stat().st_size > 0

@@ -41,6 +41,16 @@ class Stop:
         self._old = {}
 
 
+def interrupt_saying(what: str, inner: BaseException | None = None) -> KeyboardInterrupt:
+    """The KeyboardInterrupt to raise after a Ctrl-C was handled: ``what`` (what was kept, how
+    to continue) rides on it to the command line, which prints it on its one ``interrupted``
+    line (``vrneural btf render: interrupted after 3/7 views; ...``). ``what`` starts with a
+    word that follows "interrupted" ("after ...", "before ...", "(...)"). An ``inner``
+    interrupt's own words are kept in front."""
+    said = str(inner) if inner is not None and inner.args else ""
+    return KeyboardInterrupt(f"{said}; {what}" if said else what)
+
+
 def threading_main() -> bool:
     return threading.current_thread() is threading.main_thread()
 

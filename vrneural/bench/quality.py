@@ -334,6 +334,7 @@ def _run(presets: list[str], cfg: QualityConfig, root: Path) -> dict:
             "machine": {"cpu_count": os.cpu_count(), "torch_threads": 1},
             "total_seconds": time.perf_counter() - t_all,
             "complete": len(results) == len(presets),
+            "materials": presets,
             "labels": labels(cfg.width),
             "results": results,
         }

@@ -159,6 +159,7 @@ def markdown(doc: dict) -> str:
     lines = [
         "# Quality: whole-BTF L1 per material and method (paper Table 1 analog)",
         "",
+        *_partial(doc),
         f"Budget: {_data(doc)}, teacher {cfg['teacher_epochs']} epochs, every other network "
         f"{cfg['epochs']} epochs"
         + (f" with weight averaging (--ema {cfg['ema']:g})" if cfg.get("ema") else "")
@@ -331,6 +332,20 @@ def slices_png(doc: dict, slices: dict, path: Path) -> None:
                 ax.set_title(name.replace("_", "\n"), fontsize=8)
         axes[r][0].set_ylabel(f"{p}\npair {pairs[i]}", fontsize=8)
     save_png(fig, path, dpi=110)
+
+
+def _partial(doc: dict) -> list[str]:
+    """A line that says so above the tables of a run that stopped before its last material
+    (results.json's ``complete`` false; the tables show the materials it finished)."""
+    if doc.get("complete", True):
+        return []
+    todo = [m for m in doc.get("materials", []) if m not in doc["results"]]
+    return [
+        f"**Partial run**: {len(doc['results'])} of {len(doc['results']) + len(todo)} materials "
+        f"finished{' (not yet: ' + ', '.join(todo) + ')' if todo else ''}. The run was "
+        "interrupted; the same command with `--resume` finishes it.",
+        "",
+    ]
 
 
 def write_report(doc: dict, slices: dict, root: Path) -> None:

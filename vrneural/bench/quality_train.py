@@ -10,7 +10,6 @@ import json
 import multiprocessing
 import os
 import signal
-import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
@@ -20,7 +19,7 @@ from vrneural.bench.quality_parallax import resolved_parallax
 from vrneural.config import config_dict, resolved
 from vrneural.distill.config import BEFORE_FIELD, RESUME_FREE
 from vrneural.errors import VrnError, count
-from vrneural.interrupt import raise_terminated, threading_main
+from vrneural.interrupt import interrupt_saying, raise_terminated, threading_main
 from vrneural.outputs import OutputDir, file_sha256
 
 
@@ -351,13 +350,12 @@ def resume_hint(root: Path):
     old = signal.signal(signal.SIGTERM, raise_terminated) if main else None
     try:
         yield
-    except KeyboardInterrupt:
-        print(
-            f"{root}: interrupted; finished checkpoints are kept, and interrupted ones continue "
-            "where they stopped: rerun the same command with --resume",
-            file=sys.stderr,
-        )
-        raise
+    except KeyboardInterrupt as e:
+        raise interrupt_saying(
+            f"(in {root} finished checkpoints are kept, and interrupted ones continue where "
+            "they stopped: rerun the same command with --resume)",
+            e,
+        ) from None
     finally:
         if main and old is not None:  # None: a handler not set from Python, not restorable
             signal.signal(signal.SIGTERM, old)

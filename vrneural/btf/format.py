@@ -31,6 +31,7 @@ from tqdm import tqdm
 from vrneural.errors import VrnError
 from vrneural.formats.container import ContainerWriter, read_container, write_container
 from vrneural.formats.f16 import F16_MAX
+from vrneural.interrupt import interrupt_saying
 
 BTF_MAGIC = b"VRNBTF"
 BTF_VERSION = 1
@@ -322,11 +323,13 @@ class BtfWriter:
                     self.values[li, v] = np.clip(rgb, 0.0, F16_MAX).astype(np.float16)
                 self.mark_done(v)
                 bar.update(1)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as e:
             bar.close()
-            print(f"\n{self.partial.with_name(name)}: interrupted; rerun with --resume to "
-                  "continue", file=sys.stderr)  # fmt: skip
-            raise
+            raise interrupt_saying(
+                f"before {self.partial.with_name(name)} was complete; rerun with --resume to "
+                "continue",
+                e,
+            ) from None
         bar.close()
         if neg:
             print(f"{src}: clamped {neg} negative values to 0", file=sys.stderr)
@@ -358,15 +361,13 @@ class BtfWriter:
         how to continue (``--resume``) before it is raised again."""
         try:
             yield
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as e:
             self.values.flush()
-            print(
-                f"\n{out}: interrupted after {len(self.done)}/{self.values.shape[1]} views; "
-                f"partial data kept in {self.partial}; rerun the same command with --resume to "
-                "continue",
-                file=sys.stderr,
-            )
-            raise
+            raise interrupt_saying(
+                f"after {len(self.done)}/{self.values.shape[1]} views of {out}; partial data "
+                f"kept in {self.partial}; rerun the same command with --resume to continue",
+                e,
+            ) from None
 
     def mark_done(self, view: int) -> None:
         """Flush data and record view index ``view`` as complete."""

@@ -30,14 +30,20 @@ class Entry:
 
 
 def find_table(folder: Path, table=None) -> Path:
-    """``table`` (relative to the folder or absolute), else the one of :data:`TABLE_NAMES`
-    in the folder (both there is an error: which one is meant?)."""
+    """``table`` (absolute, or relative to the working folder, then to ``folder``), else the
+    one of :data:`TABLE_NAMES` in the folder (both there is an error: which one is meant?)."""
     if table:
         t = Path(table)
-        t = t if t.is_absolute() or t.exists() else folder / t
-        if not t.is_file():
+        tried = [t] if t.is_absolute() else [t, Path(folder) / t]  # as given, then in the folder
+        for c in tried:
+            if c.is_file():
+                return c
+        if t.is_absolute():
             raise VrnError(f"{t}: no such direction table (--table)")
-        return t
+        raise VrnError(
+            f"--table {table}: no such direction table, neither {t} (from the working folder) "
+            f"nor {tried[1]} is a file"
+        )
     have = [folder / n for n in TABLE_NAMES if (folder / n).is_file()]
     if not have:
         raise VrnError(

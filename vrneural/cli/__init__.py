@@ -98,8 +98,9 @@ def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
             file=sys.stderr,
         )
         return 2
-    except KeyboardInterrupt:
-        print(f"{command_name(args)}: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as e:  # one line, with what the command kept (interrupt.interrupted)
+        said = f" {e}" if e.args and str(e) else ""
+        print(f"{command_name(args)}: interrupted{said}", file=sys.stderr)
         return 130
 
 

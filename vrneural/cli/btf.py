@@ -145,6 +145,17 @@ def _check_partial(out: Path, resume: bool, force: bool) -> None:
         raise VrnError(f"--resume: nothing to resume, {partial} does not exist; drop --resume")
 
 
+def _check_finished(output: str, resume: bool) -> None:
+    """--resume on an output that a finished run wrote (no ``.partial`` beside it) is answered
+    as what it is, not as an output that --force would overwrite."""
+    out = Path(output)
+    if resume and out.exists() and not out.with_name(out.name + ".partial").exists():
+        raise VrnError(
+            f"--resume: {out} is already complete (no {out.name}.partial beside it), nothing to "
+            "resume; pass --force instead of --resume to make it again"
+        )
+
+
 def run_synth(args) -> int:
     from vrneural.btf.synth import synthesize
 
@@ -176,6 +187,7 @@ def _write_btf(args, make, cfg, sidecar, extra: dict | None = None) -> int:
     """`btf synth` and `btf render`: ``make(cfg, out, ...)`` under the output's lock (a second
     run on it meanwhile is refused), then ``sidecar`` (+ ``extra``) as its config JSON."""
     with output_lock(args.output):
+        _check_finished(args.output, args.resume)
         out, _ = check_outputs([args.output, config_path(args.output)], args.force)
         _check_partial(out, args.resume, args.force)
         path = make(cfg, out, resume=args.resume, progress=not args.no_progress, force=args.force)
@@ -279,6 +291,7 @@ def run_import(args) -> int:
     from vrneural.btf.ubo2014 import import_ubo, load_extractor, parse_header
 
     _check_btf_output(args, "leather.btf")  # as btf synth
+    _check_finished(args.output, args.resume)
     src, images = args.file, Path(args.file).is_dir()
     if images:  # an image set (vrneural/btf/imageset.py): all checks first
         size = plan_import(src, args.table, args.png_linear, args.height).size

@@ -7,6 +7,7 @@ import dataclasses
 import sys
 
 from vrneural.config import add_config_args, config_from_args
+from vrneural.interrupt import interrupt_saying
 from vrneural.runtime.config import RunConfig
 from vrneural.viewer.backends import check_display, import_glfw
 from vrneural.viewer.config import RUN_ONLY, ViewConfig
@@ -43,11 +44,11 @@ def main(args) -> int:
     view = View(args.scene, cfg, vc)
     try:
         sm = view.run()
-    except KeyboardInterrupt:  # closed by Ctrl-C / SIGTERM: say what was kept, then exit 130
+    except KeyboardInterrupt as e:  # closed by Ctrl-C / SIGTERM: say what was kept, exit 130
         kept = [str(view.recorded)] if view.recorded else []
         kept += [p for p in map(str, view.shots) if p.endswith(".png")]
         if kept:
-            print(f"vrneural view: kept {', '.join(kept)}", file=sys.stderr)
+            raise interrupt_saying(f"(kept {', '.join(kept)})", e) from None
         raise
     print(
         f"view      {sm['frames']} frames, median {sm['fps_median']:.1f} FPS "

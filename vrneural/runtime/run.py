@@ -14,7 +14,7 @@ from tqdm import tqdm
 from vrneural.config import config_dict, given, resolved
 from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.formats.vrnm import read_vrnm
-from vrneural.interrupt import Stop
+from vrneural.interrupt import Stop, interrupt_saying
 from vrneural.outputs import OUTPUT_MARK, OutputDir, write_json
 from vrneural.outputs.files import make_dirs, why
 from vrneural.runtime.config import LIGHTS_MAX, RunConfig, resolve
@@ -321,12 +321,10 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
             kept.append(f"{n_png} frame PNG(s) + EXR")
         if any(f.endswith(".mp4") for f in files):
             kept.append(f"{Path(video.path).name} ({len(stats)} frames)")
-        print(
-            f"{out}: interrupted after {len(stats)} of {s.frames} frames; kept "
-            f"{', '.join(kept)} (--force replaces them)",
-            file=sys.stderr,
+        raise interrupt_saying(
+            f"after {len(stats)} of {s.frames} frames; {out} keeps {', '.join(kept)} "
+            "(--force replaces them)"
         )
-        raise KeyboardInterrupt
     return summary
 
 
