@@ -207,6 +207,8 @@ def test_a_real_ctrl_c_stops_between_frames_and_keeps_them_whole(
     assert json.loads((out / "summary.json").read_text())["frames"] == 4
     with iio2.get_reader(str(out / "stereo.mp4")) as rd:
         assert rd.count_frames() == 4
+        # the default --video-scale keeps small eyes whole (96 px: scale 1, not 4's 24 px)
+        assert rd.get_meta_data()["size"] == (192, 96)
     assert sorted(p.name for p in out.glob("*.png")) == [
         f"frame{f:04d}_eye{e}.png" for f in (0, 3) for e in (0, 1)
     ]

@@ -95,7 +95,11 @@ class RunConfig:
     )
     out: str | None = opt(None, "output directory (default: a new out/run-YYYYmmdd-HHMMSS per run)")
     video: bool = opt(True, "write OUT/stereo.mp4, both eyes side by side (imageio-ffmpeg)")
-    video_scale: int | None = unset(4, "video downscale factor (integer)")
+    video_scale: int | None = unset(
+        4,
+        "video downscale factor (integer; by default less for eyes under 1024 pixels, so "
+        "that each eye keeps 256)",
+    )
     save_frames: str = opt(
         "first,last", "frames saved as PNG + EXR: 'first,last', 'all', 'none', '0,45'"
     )

@@ -201,8 +201,10 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
     video = None
     if cfg.video:  # every eye keeps at least 2 x 2 pixels (libx264's minimum, 2x2 blocks)
         top = max(1, min(s.eye_res) // 2)
-        if "video_scale" not in chosen:  # the default adapts to small eyes
-            cfg = dataclasses.replace(cfg, video_scale=min(cfg.video_scale, top))
+        if "video_scale" not in chosen:  # the default adapts to small eyes: a video whose
+            # eyes keep at least VIDEO_MIN_PX pixels on their short side (quest3: 4, tiny: 1)
+            fit = max(1, min(s.eye_res) // VIDEO_MIN_PX)
+            cfg = dataclasses.replace(cfg, video_scale=min(cfg.video_scale, fit, top))
         check_range("--video-scale", cfg.video_scale, 1, top)
         check_video()
     od.check()
@@ -326,6 +328,11 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
             "(--force replaces them)"
         )
     return summary
+
+
+#: the default --video-scale (4) is lowered so that each eye in the video keeps at least this
+#: many pixels on its short side: a tiny profile's 96-pixel eyes were a 48 x 24 video
+VIDEO_MIN_PX = 256
 
 
 def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
