@@ -32,6 +32,7 @@ from vrneural.errors import VrnError
 from vrneural.formats.container import ContainerWriter, read_container, write_container
 from vrneural.formats.f16 import F16_MAX
 from vrneural.interrupt import interrupt_saying
+from vrneural.outputs import partial_path
 
 BTF_MAGIC = b"VRNBTF"
 BTF_VERSION = 1
@@ -174,7 +175,7 @@ def check_partial_settings(path, generator: dict) -> None:
     """Refuse to continue the interrupted ``<path>.partial`` where it was made with other
     settings, naming them (``--force`` starts over): the hours already rendered are never
     thrown away silently."""
-    partial = Path(path).with_name(Path(path).name + ".partial")
+    partial = partial_path(path)
     if not partial.exists():
         return
     try:
@@ -357,8 +358,8 @@ class BtfWriter:
 
     @contextlib.contextmanager
     def keep_on_interrupt(self, out):
-        """A Ctrl-C in the block keeps the views written so far in the ``.partial`` and says
-        how to continue (``--resume``) before it is raised again."""
+        """A Ctrl-C in the block keeps the views written so far in the ``.partial`` and is
+        raised again carrying how to continue (``--resume``; the command line prints it)."""
         try:
             yield
         except KeyboardInterrupt as e:

@@ -34,15 +34,17 @@ def find_table(folder: Path, table=None) -> Path:
     one of :data:`TABLE_NAMES` in the folder (both there is an error: which one is meant?)."""
     if table:
         t = Path(table)
-        tried = [t] if t.is_absolute() else [t, Path(folder) / t]  # as given, then in the folder
-        for c in tried:
+        if t.is_absolute():
+            if not t.is_file():
+                raise VrnError(f"{t}: no such direction table (--table)")
+            return t
+        inside = Path(folder) / t  # relative: as given (the working folder), then in the folder
+        for c in (t, inside):
             if c.is_file():
                 return c
-        if t.is_absolute():
-            raise VrnError(f"{t}: no such direction table (--table)")
         raise VrnError(
             f"--table {table}: no such direction table, neither {t} (from the working folder) "
-            f"nor {tried[1]} is a file"
+            f"nor {inside} is a file"
         )
     have = [folder / n for n in TABLE_NAMES if (folder / n).is_file()]
     if not have:

@@ -98,7 +98,7 @@ def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
             file=sys.stderr,
         )
         return 2
-    except KeyboardInterrupt as e:  # one line, with what the command kept (interrupt.interrupted)
+    except KeyboardInterrupt as e:  # one line, with what was kept (interrupt.interrupt_saying)
         said = f" {e}" if e.args and str(e) else ""
         print(f"{command_name(args)}: interrupted{said}", file=sys.stderr)
         return 130

@@ -25,6 +25,7 @@ from vrneural.outputs import (
     check_resume_force,
     check_suffix,
     output_lock,
+    partial_path,
 )
 
 
@@ -135,7 +136,7 @@ def _run_flags(p, func, resume_help="continue an interrupted run (<output>.parti
 def _check_partial(out: Path, resume: bool, force: bool) -> None:
     """An interrupted run's ``<out>.partial`` is only continued (--resume) or discarded (--force)
     on request: a long render is never thrown away by accident."""
-    partial = out.with_name(out.name + ".partial")
+    partial = partial_path(out)
     if partial.exists() and not (resume or force):
         raise VrnError(
             f"{partial} exists from an interrupted run; pass --resume to continue it "
@@ -149,7 +150,7 @@ def _check_finished(output: str, resume: bool) -> None:
     """--resume on an output that a finished run wrote (no ``.partial`` beside it) is answered
     as what it is, not as an output that --force would overwrite."""
     out = Path(output)
-    if resume and out.exists() and not out.with_name(out.name + ".partial").exists():
+    if resume and out.exists() and not partial_path(out).exists():
         raise VrnError(
             f"--resume: {out} is already complete (no {out.name}.partial beside it), nothing to "
             "resume; pass --force instead of --resume to make it again"

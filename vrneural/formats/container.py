@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from vrneural.errors import VrnError, input_file
+from vrneural.outputs.files import partial_path
 
 #: the magic of every vrneural container format -> what to call it in an error
 _KNOWN_MAGIC = {
@@ -97,7 +98,7 @@ class ContainerWriter:
         resume: bool = False,
     ):
         self.path = Path(path)
-        self.partial = self.path.with_name(self.path.name + ".partial")
+        self.partial = partial_path(self.path)
         self.magic = magic.ljust(8, b"\0")
         self.version = version
         marked = dict(header, partial=True)  # until finalize (see the module docstring)

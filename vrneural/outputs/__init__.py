@@ -26,6 +26,7 @@ from vrneural.outputs.files import (  # noqa: F401 (the rest of the layer, re-ex
     check_writable,
     make_dirs,
     make_parent,
+    partial_path,
 )
 
 OUTPUT_MARK = ".vrneural-output"

@@ -14,6 +14,12 @@ from pathlib import Path
 from vrneural.errors import VrnError
 
 
+def partial_path(path) -> Path:
+    """Where an interrupted write of ``path`` keeps its data: ``<path>.partial`` beside it."""
+    path = Path(path)
+    return path.with_name(path.name + ".partial")
+
+
 def check_free_space(path: str | os.PathLike, nbytes: int, reclaimed: int = 0) -> None:
     """Refuse to write ``nbytes`` to ``path`` with less free space (``reclaimed``: bytes of a
     file the write replaces)."""
