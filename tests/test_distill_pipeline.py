@@ -99,7 +99,8 @@ def test_baselines_train_and_export(trained, tmp_path, capsys):  # noqa: F811
         )
         assert code == 0, err
         label = "neumip (no distillation)" if method == "neumip" else method
-        assert f"{out}: {label} epochs 1  test L1" in capsys.readouterr().out
+        printed = capsys.readouterr().out
+        assert f"{out}: {label} epochs 1  test L1" in printed
         worst, mat, ck = _compare(out, out.with_suffix(".vrnm"))
         assert worst <= 1e-5
         assert mat.output == ("log1p" if method == "neumip" else "linear")
@@ -109,6 +110,10 @@ def test_baselines_train_and_export(trained, tmp_path, capsys):  # noqa: F811
         tl1, sl1 = ck["teacher_test_l1"], ck["history"][-1]["test_l1"]
         assert 0 < tl1 < sl1
         assert (f"test L1 {sl1 / tl1:.1f}x the teacher's" in err) == (sl1 / tl1 > 8), err
+        # and the test slices' mean value (the L1 of predicting black) is the scale it reads on
+        black = ck["test_mean"]
+        assert 0 < black and f"test L1 {sl1:.5f} ({sl1 / black:.0%} of the mean value)" in printed
+        assert ("predicting black would score better" in err) == (sl1 > black), err
         w = mat.networks["mlp"][0].weight
         if method == "neumip":  # NeuMIP's inputs: wi.xy, wo.xy; trained, the rest stay exactly 0
             assert np.all(w[:, [0, 1, 3, 4]] != 0) and not np.any(w[:, [2, 5, 6, 7, 8]])
@@ -138,3 +143,17 @@ def test_neumip_checkpoint_from_before_the_option_resumes_with_nine_inputs(train
 def test_blocks_are_2x2():
     a = torch.arange(16).reshape(4, 4)
     assert to_blocks(a)[1].tolist() == [2, 3, 6, 7]
+
+
+@pytest.mark.parametrize("l1", [0.004, 0.012])
+def test_report_warns_when_predicting_black_would_score_better(l1, capsys):
+    """The result line gives the test L1 as a share of the test slices' mean value, and an L1
+    above it (worse than a network that outputs 0) is a warning on stderr."""
+    from vrneural.cli.teach import _report
+
+    ck = {"history": [{"test_l1": l1}], "method": "teacher", "epoch": 3, "test_mean": 0.01}
+    assert _report(lambda: ck, "t.pt") == 0
+    out, err = capsys.readouterr()
+    assert f"t.pt: teacher epochs 3  test L1 {l1:.5f} ({l1 / 0.01:.0%} of the mean value)" in out
+    warned = f"warning: t.pt: test L1 {l1:.5f} is above the test slices' mean value 0.01000"
+    assert (warned in err) == (l1 > 0.01), err

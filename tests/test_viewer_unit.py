@@ -203,3 +203,18 @@ def test_flip_worker_stream_round_trip():
         assert b.dtype == np.asarray(a).dtype and b.shape == np.shape(a)
         np.testing.assert_array_equal(b, a)
     assert read_array(f) is None
+
+
+def test_hud_panel_keeps_to_its_height_and_counts_the_lines_left_out():
+    from vrneural.viewer.hud import LINE_PX, PAD, panel
+
+    lines = [f"line {i}" for i in range(10)]
+    full = panel(lines, {1, 8})
+    assert full.shape[0] == LINE_PX * 10 + 2 * PAD
+    cut = panel(lines, {1, 8}, max_height=4 * LINE_PX + 2 * PAD)
+    assert cut.shape[0] == 4 * LINE_PX + 2 * PAD  # three lines and "+7 lines (F2 hides)"
+    w, top = full.shape[1], 3 * LINE_PX + PAD  # (the last line is wider than the others)
+    np.testing.assert_array_equal(cut[:top, :w], full[:top])
+    assert not np.array_equal(cut[top:, :w], full[top : cut.shape[0]])
+    amber = (cut[..., :3] == (255, 190, 60)).all(-1)  # line 1's alert kept, line 8's gone
+    assert amber[PAD + LINE_PX : PAD + 2 * LINE_PX].any() and not amber[top:].any()

@@ -329,3 +329,18 @@ def test_ctrl_c_and_sigterm_close_between_frames_and_keep_the_video(display, tmp
 
     with iio2.get_reader(str(out)) as rd:
         assert sum(1 for _ in rd) >= 2
+
+
+def test_hud_leaves_a_small_window_most_of_its_image(display):
+    """A 192 x 80 window: the HUD keeps to its top half (two lines at least: its first line and
+    a count of the rest), and every pixel below is the offscreen renderer's frame."""
+    from vrneural.viewer import View
+    from vrneural.viewer.present import compose
+
+    v = View(profile="tiny", eyes=2, eye_res="96x80", frames=3)
+    run_script(v, {})
+    changed = (v.shown != compose(v.replay_offscreen())).any(-1)
+    rows = np.nonzero(changed.any(1))[0]
+    from vrneural.viewer.hud import LINE_PX, PAD
+
+    assert rows.size and rows.max() < 8 + max(80 // 2, 2 * LINE_PX + 2 * PAD), rows

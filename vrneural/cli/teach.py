@@ -78,10 +78,19 @@ def _report(fn, output: str) -> int:
     epochs = f"epochs {ck['epoch']}"
     if init:  # the result line counts both halves: "epochs 2 (4 in all)"
         epochs += f" ({int(init['epochs']) + int(ck['epoch'])} in all)"
+    black = ck.get("test_mean")  # the test slices' mean value: the L1 of predicting black
+    rel = f" ({test / black:.0%} of the mean value)" if black and test == test else ""
     print(
-        f"{output}: {method} {epochs}  test L1 {test:.5f}"
+        f"{output}: {method} {epochs}  test L1 {test:.5f}{rel}"
         f"  train {ck.get('train_seconds', 0):.1f} s{wrote}"
     )
+    if black and test > black:
+        print(
+            f"warning: {output}: test L1 {test:.5f} is above the test slices' mean value "
+            f"{black:.5f} ({test / black:.0%}): predicting black would score better; "
+            "undertrained, or a learning rate too high for this BTF?",
+            file=sys.stderr,
+        )
     ref = ck.get("teacher_test_l1")
     if ref and test == test:  # a student: compare it with its teacher on the same slices
         ratio = test / ref

@@ -34,7 +34,7 @@ from vrneural.distill.checkpoint import (
 from vrneural.distill.config import BEFORE_FIELD, DistillConfig, check_lod_levels
 from vrneural.distill.core import DistillNet
 from vrneural.distill.data import SliceData
-from vrneural.distill.evaluate import mean_l1, test_pairs
+from vrneural.distill.evaluate import mean_l1, mean_value, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
 from vrneural.distill.outputs import (
     clear_outputs,
@@ -436,6 +436,7 @@ def _train(asked: DistillConfig, on_step=None, epochs_flag: str = "--epochs") ->
         "init_from": init if resume is None else resume.get("init_from"),
         # the teacher on the same test slices: what `distill` compares the student with
         "teacher_test_l1": float(mean_l1(teacher, data, pairs)),  # frozen: no autograd graph
+        "test_mean": mean_value(data, pairs),  # the L1 of predicting black
     }
     if cfg.force and resume is None and rank == 0:
         clear_outputs(outs)

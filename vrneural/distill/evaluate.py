@@ -47,3 +47,12 @@ def mean_l1(model: NeuralModel, data: SliceData, pairs: list[int]) -> float:
         wi, wo = data.dirs(p)
         total += float((model.predict(wi, wo, uv) - data.target(p, shard=False)).abs().mean())
     return total / max(len(pairs), 1)
+
+
+def mean_value(data: SliceData, pairs: list[int]) -> float:
+    """Mean absolute value of the targets over ``pairs``: the L1 of a model that predicts
+    black, the scale against which a test L1 reads as a fraction."""
+    total = 0.0
+    for p in pairs:
+        total += float(data.target(p, shard=False).abs().mean())
+    return total / max(len(pairs), 1)

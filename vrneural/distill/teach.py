@@ -13,7 +13,7 @@ from vrneural.config import given, resolved
 from vrneural.distill.config import RESUME_FREE, TeachConfig
 from vrneural.distill.core import DistillNet
 from vrneural.distill.data import SliceData
-from vrneural.distill.evaluate import test_pairs
+from vrneural.distill.evaluate import mean_value, test_pairs
 from vrneural.distill.models import NeuralModel, make_spec
 from vrneural.distill.outputs import (
     clear_outputs,
@@ -143,6 +143,7 @@ def run_teach(asked: TeachConfig, on_step=None, epochs_flag: str = "--epochs") -
             "split": {"train": train, "test": test},
             "parallax": parallax,
             "versions": {"torch": str(torch.__version__)},
+            "test_mean": mean_value(data, pairs),  # the L1 of predicting black
         }
         if cfg.force and resume is None and rank == 0:
             clear_outputs(outs)

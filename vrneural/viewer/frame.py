@@ -16,7 +16,7 @@ from vrneural.scoring.metrics import pixels_per_degree
 from vrneural.viewer.backends import _capabilities, target_format
 from vrneural.viewer.camera import project
 from vrneural.viewer.controls import effective_lights
-from vrneural.viewer.hud import panel
+from vrneural.viewer.hud import LINE_PX, PAD, panel
 from vrneural.viewer.hud_text import hud_lines
 from vrneural.viewer.outputs import FlipWorker, Recorder, save_shot
 from vrneural.viewer.shot import shot_settings
@@ -319,7 +319,11 @@ class FrameWork:
 
     def _hud_panel(self, st, last):
         lines, alert = hud_lines(self, st, last)
-        return panel(lines, alert, max_width=self.canvas.get_physical_size()[0] - 16)
+        w, h = self.canvas.get_physical_size()
+        # the statistics take at most half of a small window (two lines at least); the help
+        # may take all of it
+        tall = h - 16 if self.live.help else max(h // 2, 2 * LINE_PX + 2 * PAD)
+        return panel(lines, alert, max_width=w - 16, max_height=tall)
 
     # ----- read-backs
 

@@ -29,12 +29,23 @@ def _font(size: int = FONT_PX):
         return ImageFont.load_default(size=size)
 
 
-def panel(lines: list[str], alert: set[int] | None = None, max_width: int = 4096) -> np.ndarray:
+def panel(
+    lines: list[str],
+    alert: set[int] | None = None,
+    max_width: int = 4096,
+    max_height: int = 4096,
+) -> np.ndarray:
     """``[H, W, 4]`` uint8 (straight alpha): ``lines`` on a translucent dark panel, the ones
     whose index is in ``alert`` in amber; at most ``max_width`` pixels wide (longer lines are
-    cut)."""
+    cut) and ``max_height`` high: the lines that do not fit become a last line that counts
+    them (a small window keeps most of its image, and the HUD's first lines)."""
     from PIL import Image, ImageDraw
 
+    fit = max(1, (max_height - 2 * PAD) // LINE_PX)
+    if len(lines) > fit:
+        keep = max(fit - 1, 1)
+        lines = [*lines[:keep], f"+{len(lines) - keep} lines (F2 hides)"]
+        alert = {i for i in alert or () if i < keep}
     font = _font()
     width = int(max((font.getlength(s) for s in lines), default=0)) + 2 * PAD
     width = max(16, min(width, max_width))
