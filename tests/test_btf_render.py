@@ -116,14 +116,14 @@ def test_edge_texels_are_lit_and_shadowed_like_interior_ones():
             ps = pt.build_scene(Tile([Part(heightfield(hh), bsdf)]), 1, ring=ring)
             ps.z_ref = float(pt.height_field(ps, 32).mean())
             out.append(pt.render_slice(ps, pt.sensor(ps, wo, 8, 256), wi, 256, 5))
-        assert out[0].min() < 0.2 * out[0].max()  # shadows: the case is not trivial
+        assert out[0].min() < 0.3 * out[0].max()  # shadows: the case is not trivial (0.2)
         d = np.abs(np.roll(out[1], (-4, -4), (0, 1)) - out[0]) / out[0].mean()
         return float(d.mean()), float(d[[0, -1]].mean() + d[:, [0, -1]].mean()) / 2
 
-    # measured: 2.8% (all) and 2.6% (edges) at 256 samples, Monte Carlo noise only (1.4% at
-    # 1024); without the copies 23-37%
+    # measured: 0.23% (all) and 0.22% (edges) at 256 multi-jittered samples, Monte Carlo
+    # noise only (independent samples: 2.8% and 2.6%); without the copies 21-29%
     whole, edges = rel_diff(pt.copy_ring(0.16, 75))
-    assert whole < 0.05 and edges < 0.05, (whole, edges)
+    assert whole < 0.01 and edges < 0.01, (whole, edges)
     assert min(rel_diff(0)) > 0.15  # the negative control: no copies, edges see nothing
 
 
@@ -177,6 +177,7 @@ def test_tiny_preset_end_to_end(tiny, tmp_path, capsys):
         assert int.from_bytes(f.read(12)[8:12], "little") == 2
     gen = b.meta["generator"]
     assert gen["preset"] == "weave" and gen["spp"] == 4 and gen["mitsuba_variant"] == "scalar_rgb"
+    assert gen["sampler"] == "multijitter"
     from vrneural.cli import main
 
     assert main(["btf", "info", str(tiny)]) == 0
@@ -230,6 +231,7 @@ def test_interrupted_render_resumes_to_the_same_bytes(tiny, tmp_path, monkeypatc
         (["weave", "--spp", "0", "-o", "x.btf"], "--spp = 0 is out of range"),
         (["weave", "--res", "7", "-o", "x.btf"], "must be even"),
         (["weave", "--bounces", "0", "-o", "x.btf"], "--bounces = 0 is out of range"),
+        (["weave", "--spp", "128", "-o", "x.btf"], "a = floor(sqrt(spp)); nearest 121 or 132, "),
         (["weave", "-o", "x.png"], ".btf"),
     ],
 )
@@ -270,6 +272,45 @@ def test_noise_floor_of_a_render(tiny):
     assert r["views"] == [0, 2] and r["preset"] == "weave" and r["spp"] == 4
     assert 0 < r["l1"] < 0.5 * r["mean"]
     assert r["l1_vs_converged"] == pytest.approx(r["l1"] / 2**0.5)
+
+
+def test_multijittered_samples_are_less_noisy_than_independent_ones(tiny, tmp_path, monkeypatch):
+    """The default sampler against `--sampler independent` at the same sample count: the L1
+    between two sample seeds (the noise floor, `noise_floor`'s measure) is lower on the weave
+    at 16 samples; `noise_floor` re-renders with the file's own sampler, and a header written
+    before the option existed counts as independent (what it was rendered with)."""
+    from vrneural.btf.config import RENDER_BEFORE, RenderConfig, jitter_grid
+    from vrneural.btf.pt_render import build, noise_floor
+
+    assert [jitter_grid(n) for n in (1, 4, 5, 8, 64, 128)] == [1, 4, 6, 8, 64, 132]
+    assert RenderConfig(spp=128, sampler="independent").validate() is None
+    cfg = RenderConfig(preset="weave", res=16, dirs=3, spp=16)
+    ps, _, _ = build(cfg)
+    wi, wo = _dir(40, 30), _dir(50, 200)
+    l1 = {}
+    for kind in ("multijitter", "independent"):
+        cam = pt.sensor(ps, wo, 16, 16, kind)
+        a, b = (pt.render_slice(ps, cam, wi, 16, seed) for seed in (1, 2))
+        l1[kind] = float(np.abs(a - b).mean() / a.mean())
+    assert l1["multijitter"] < 0.8 * l1["independent"], l1
+    out = tmp_path / "ind.btf"
+    args = ["btf", "render", "weave", "--res", 8, "--dirs", 3, "--spp", 5]
+    r = _vrn(*args, "--sampler", "independent", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert noise_floor(out, views=1, progress=False)["sampler"] == "independent"
+    assert noise_floor(tiny, views=1, progress=False)["sampler"] == "multijitter"
+    from vrneural.btf import pt_render
+
+    real = pt_render.read_btf
+
+    def before_the_option(path):
+        b = real(path)
+        del b.meta["generator"]["sampler"]
+        return b
+
+    monkeypatch.setattr(pt_render, "read_btf", before_the_option)
+    assert RENDER_BEFORE == {"sampler": "independent"}
+    assert noise_floor(tiny, views=1, progress=False)["sampler"] == "independent"
 
 
 def test_render_stops_on_sigterm_and_resumes(tmp_path):
@@ -348,3 +389,22 @@ def test_every_preset_builds_and_renders_a_slice(preset):
     img = pt.render_slice(ps, cam, spherical(np.radians(30.0), np.radians(20.0)), 4, 0)
     assert img.shape[:2] == (8, 8) and np.isfinite(img).all() and img.min() >= 0
     assert img.mean() > 1e-3 and img.std() > 0
+
+
+def test_a_partial_from_before_the_sampler_option_resumes_only_as_independent(tmp_path):
+    """An interrupted render whose header has no `sampler` (written before the option) was
+    drawn with independent samples: resuming it with them is allowed, with the new default
+    it is the one-line "other settings" error naming the sampler."""
+    from vrneural.btf.config import RenderConfig
+    from vrneural.btf.format import BtfWriter, check_partial_settings
+    from vrneural.config import config_dict
+    from vrneural.errors import VrnError
+
+    out = tmp_path / "old.btf"
+    gen = config_dict(RenderConfig(preset="weave", res=8, dirs=3, spp=4))
+    old = {k: v for k, v in gen.items() if k != "sampler"}
+    BtfWriter(out, direction_set(3), direction_set(3), (8, 8), {"generator": old})
+    assert (tmp_path / "old.btf.partial").exists()
+    check_partial_settings(out, gen | {"sampler": "independent"})
+    with pytest.raises(VrnError, match="sampler: 'independent' there, 'multijitter' here"):
+        check_partial_settings(out, gen)

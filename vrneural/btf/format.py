@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from vrneural.btf.config import RENDER_BEFORE
 from vrneural.errors import VrnError
 from vrneural.formats.container import ContainerWriter, read_container, write_container
 from vrneural.formats.f16 import F16_MAX
@@ -183,6 +184,8 @@ def check_partial_settings(path, generator: dict) -> None:
     except VrnError as e:
         raise VrnError(f"{e}; pass --force instead of --resume to start over") from None
     have = old.get("generator", {})
+    if have.get("config") == "RenderConfig":  # a render from before a field was added
+        have = RENDER_BEFORE | have
     diff = [
         f"{k}: {have.get(k)!r} there, {v!r} here" for k, v in generator.items() if have.get(k) != v
     ]

@@ -140,18 +140,22 @@ def pebbles(rng, count: int = 34) -> Tile:
     return Tile(parts, f"{len(placed)} packed pebbles of six stones on sand")
 
 
-def fur(rng, tufts: int = 144, per_tuft: int = 14) -> Tile:
+def fur(rng, tufts: int = 144, per_tuft: int = 40) -> Tile:
     """Cut pile: ``tufts`` tufts (on a jittered grid) of ``per_tuft`` thin tapered strands
     each, standing on a backing, leaning and curling. The tufts' yarn colour follows patches
     of several tufts (cream, russet, near-black: a calico coat) and their height varies by tuft
-    (0.07-0.19 tile widths), so taller tufts hide and shadow their neighbours.
+    (0.07-0.19 tile widths), so taller tufts hide and shadow their neighbours. Strands are
+    fine (radius 0.0035 tile widths at the root, a quarter of a texel at 64^2, 40 a tuft): a
+    texel sees several, as a camera sees fur, not one strand that changes from view to view.
 
-    The second version. On the first (100 tufts of three reds and greys chosen per tuft, all
-    0.11-0.16 tall) the lobes beat NeuMIP with parallax (0.93): a noisy carpet whose texels
-    change strand from view to view, which a per-texel lobe averages as well as a network.
-    Patches larger than a tuft slide under a texel as the view tilts; they made the two tie
-    (1.005). A short pile (0.035-0.075) and finer patches made the lobes win again (0.92):
-    docs/quality-research.md."""
+    The third version. The second had 14 strands a tuft of radius 0.009 (about a texel
+    wide): Lafortune / NeuMIP with offset 1.12 there, 1.16 with the finer strands; a combed
+    nap (every tuft leaning 31 degrees along +u) made it 1.08. On the first (100 tufts of
+    three reds and greys chosen per tuft, all 0.11-0.16 tall) the lobes beat NeuMIP with
+    parallax (0.93): a noisy carpet whose texels change strand from view to view, which a
+    per-texel lobe averages as well as a network. Patches larger than a tuft slide under a
+    texel as the view tilts; they made the two tie (1.005). A short pile (0.035-0.075) and
+    finer patches made the lobes win again (0.92): docs/quality-research.md."""
     k = round(np.sqrt(tufts))
     base = (np.stack(np.meshgrid(np.arange(k), np.arange(k)), -1).reshape(-1, 2) + 0.5) / k
     centres = (base + (rng.random(base.shape) - 0.5) * 0.6 / k) % 1.0
@@ -173,8 +177,8 @@ def fur(rng, tufts: int = 144, per_tuft: int = 14) -> Tile:
             curl = rng.normal(0, 0.02, 2)
             xy = p0 + np.outer(t, tilt * h) + np.outer(t**2, curl)
             path = np.column_stack([xy, h * t])
-            radius = 0.009 * (1.0 - 0.8 * t)
-            groups[int(c)].append(tube(path, radius, sides=6, ref=[1.0, 0.0, 0.0]))
+            radius = 0.0035 * (1.0 - 0.7 * t)
+            groups[int(c)].append(tube(path, radius, sides=5, ref=[1.0, 0.0, 0.0]))
     parts = [
         Part(merge(g), plastic(cols[i], 0.35), name=f"yarn{i}") for i, g in enumerate(groups) if g
     ]

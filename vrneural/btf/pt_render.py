@@ -23,7 +23,7 @@ import numpy as np
 from tqdm import tqdm
 
 from vrneural.btf import pathtrace as pt
-from vrneural.btf.config import RenderConfig
+from vrneural.btf.config import RENDER_BEFORE, RenderConfig
 from vrneural.btf.dirs import MAX_THETA_DEG, direction_set
 from vrneural.btf.format import BtfWriter, read_btf
 from vrneural.btf.pt_presets import PT_PRESETS
@@ -92,7 +92,7 @@ def render_btf(
             ) as bar,
         ):
             for v in todo:
-                cam = pt.sensor(ps, dirs[v], cfg.res, cfg.spp)
+                cam = pt.sensor(ps, dirs[v], cfg.res, cfg.spp, cfg.sampler)
                 view = np.empty((L, cfg.res, cfg.res, 3), np.float32)
                 for li in range(L):
                     if stop.flag:
@@ -116,7 +116,7 @@ def noise_floor(path, views: int = 6, progress: bool = True) -> dict:
     if gen.get("config") != "RenderConfig":
         raise VrnError(f"{path}: not made by btf render (no RenderConfig in its header)")
     fields = {f.name for f in dataclasses.fields(RenderConfig)}
-    cfg = RenderConfig(**{k: v for k, v in gen.items() if k in fields})
+    cfg = RenderConfig(**{k: v for k, v in (RENDER_BEFORE | gen).items() if k in fields})
     cfg = dataclasses.replace(cfg, sample_seed=cfg.sample_seed + 1)
     t0 = time.perf_counter()
     ps, _, _ = build(cfg)
@@ -126,7 +126,7 @@ def noise_floor(path, views: int = 6, progress: bool = True) -> dict:
     n = 0
     with tqdm(total=len(pick) * len(dirs), desc="noise", disable=not progress) as bar:
         for v in pick:
-            cam = pt.sensor(ps, dirs[v], cfg.res, cfg.spp)
+            cam = pt.sensor(ps, dirs[v], cfg.res, cfg.spp, cfg.sampler)
             for li in range(len(dirs)):
                 seed = pt.slice_seed(cfg.sample_seed, li, int(v))
                 b = pt.render_slice(ps, cam, dirs[li], cfg.spp, seed)
@@ -141,6 +141,7 @@ def noise_floor(path, views: int = 6, progress: bool = True) -> dict:
         "file": str(path),
         "preset": cfg.preset,
         "spp": cfg.spp,
+        "sampler": cfg.sampler,
         "views": [int(v) for v in pick],
         "l1": l1,
         "l1_vs_converged": l1 / np.sqrt(2.0),
