@@ -4,7 +4,9 @@ that render them: ``tests/data/frames_before_41.npz`` holds, per configuration, 
 eyes (the ``rgba16float`` colour targets, raw) and counters. Rendered at 59801ef, main just
 before #41 merged (first recorded at e90c611; again after #36 changed every atlas). The packs
 have carried prefiltered pyramids since (#39), which the loop before did not know: the
-configurations render with ``neural_lod=False``, level 0 alone, as it did.
+configurations render with ``neural_lod=False``, level 0 alone, as it did, and with
+``neural_filter="exact"``, the filter in the shader that the loop before had (the sampler's
+filtering, the default since, is held to these frames in tests/test_neural_filter.py).
 
 Regenerate only on purpose (the point is that they stay the old frames):
 ``python tests/frame_refs.py`` with the old code checked out.
@@ -25,7 +27,7 @@ COUNTERS = ("updated_objects", "culled_objects", "blocks_shaded", "blocks_backfa
 def configs() -> dict:
     """name -> (scene factory, Settings kwargs, frames, jitter, per-frame light scale)."""
     base = dict(eyes=2, reuse=2, schedule="staggered", texture_res=128, eye_res=(48, 40),
-                n_lights=3, fov_y=96.0, neural_lod=False)  # fmt: skip
+                n_lights=3, fov_y=96.0, neural_lod=False, neural_filter="exact")  # fmt: skip
     return {
         "texture": ("builtin", base, 4, None),
         "burst_f16": ("builtin", {**base, "schedule": "burst", "precision": "f16"}, 3, None),

@@ -42,15 +42,20 @@ def quad_atlas(
     return fixture_quad_atlas(res, lo, hi, mesh=quad_mesh(size, tilt))
 
 
-def assert_moved_lookup_parity(at, mat, unmoved, eye, lp, lc, tiling) -> None:
+def assert_moved_lookup_parity(
+    at, mat, unmoved, eye, lp, lc, tiling, filtering: str = "exact"
+) -> None:
     """The texture-space pass of ``mat`` (a pack whose lookups move: height parallax or the
     neural offset) at ``eye`` against its numpy twin: 99.9% of texels within 2 float16 ulps,
-    none over 5%, and the move (``mat`` against ``unmoved``) at least 50x that error."""
+    none over 5%, and the move (``mat`` against ``unmoved``) at least 50x that error;
+    ``filtering`` of the neural textures and the height field (codegen_sample.FILTERS)."""
     from vrneural.runtime import reference as ref
     from vrneural.runtime.texture_pass import shade_texture_space
 
     want, wc = ref.shade_texture_space(at, mat, np.eye(4), eye, lp, lc, tiling=tiling)
-    got, gc = shade_texture_space(at, mat, np.eye(4), eye, lp, lc, tiling=tiling)
+    got, gc = shade_texture_space(
+        at, mat, np.eye(4), eye, lp, lc, tiling=tiling, filtering=filtering
+    )
     np.testing.assert_array_equal(gc, wc)
     w16 = want.astype(np.float16).astype(np.float32)
     scale = 1e-2 * max(w16.max(), 1e-12)
@@ -63,7 +68,7 @@ def assert_moved_lookup_parity(at, mat, unmoved, eye, lp, lc, tiling) -> None:
     assert np.abs(base - want).max() > 50 * np.abs(got - w16).max()  # the move shows
 
 
-def assert_auto_march_parity(mat, unmoved) -> None:
+def assert_auto_march_parity(mat, unmoved, filtering: str = "exact") -> None:
     """March ``"auto"`` of ``mat`` (a pack whose lookups move) on the sphere's atlas at a
     tiling where some blocks span at most half a texel of the march's grid per atlas texel and
     others more: both routes run in one dispatch, and the kernel follows the twin
@@ -82,7 +87,7 @@ def assert_auto_march_parity(mat, unmoved) -> None:
     assert 0.2 < per_block.mean() < 0.8, per_block.mean()  # both routes are taken
     lp, lc = np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
     for eye in (np.float32([0.0, 1.5, 0.8]), np.float32([1.2, 0.3, 0.5])):
-        assert_moved_lookup_parity(at, auto, unmoved, eye, lp, lc, tl)
+        assert_moved_lookup_parity(at, auto, unmoved, eye, lp, lc, tl, filtering)
 
 
 def render_grazing_plane(tmp_path, pack, mode):

@@ -107,7 +107,9 @@ def test_batched_evaluator_multiply_adds_equal_the_networks_macs(sizes):
 @pytest.mark.parametrize(
     "name, make",
     [("texture_space_coarse_fine_f32.wgsl", lambda: texture_space_wgsl(
-        random_material(7, width=4, channels=2, tex_res=4), "f32", 2))],
+        random_material(7, width=4, channels=2, tex_res=4), "f32", 2)),
+     ("texture_space_coarse_fine_f32_hardware.wgsl", lambda: texture_space_wgsl(
+        random_material(7, width=4, channels=2, tex_res=4), "f32", 2, filtering="hardware"))],
 )  # fmt: skip
 def test_golden_wgsl(name, make):
     """The whole generated kernel for a fixed small pack, as checked in."""

@@ -131,10 +131,12 @@ def test_distill_trains_a_pyramid_and_names_levels_that_do_not_fit(tmp_path):
 
 
 @pytest.mark.gpu
+@pytest.mark.parametrize("filtering", ["exact", "hardware"])
 @pytest.mark.parametrize("tiling", [1.0, 3.0, 11.0, 40.0])
-def test_gpu_lod_lookups_follow_the_twin(tiling):
+def test_gpu_lod_lookups_follow_the_twin(tiling, filtering):
     """The texture-space kernel computes each block's footprint and looks the pyramid up as
-    the numpy twin does (lod 0, 1, 2.9 and 4.7, clamped to the top level 3)."""
+    the numpy twin does (lod 0, 1, 2.9 and 4.7, clamped to the top level 3); "hardware":
+    trilinear by the sampler."""
     from runtime_helpers import quad_atlas
 
     from vrneural.runtime import reference as ref
@@ -145,7 +147,7 @@ def test_gpu_lod_lookups_follow_the_twin(tiling):
     eye, lp, lc = np.float32([0.2, 0.1, 1.5]), np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
     tl = (tiling, tiling, 0, 0)
     want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
-    got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
+    got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl, filtering=filtering)
     np.testing.assert_array_equal(gc, wc)
     w16 = want.astype(np.float16).astype(np.float32)
     # f32 math in another order, f16 storage on both sides: 2 f16 ulps (see test_runtime_texture)
@@ -153,11 +155,13 @@ def test_gpu_lod_lookups_follow_the_twin(tiling):
 
 
 @pytest.mark.gpu
-def test_gpu_lod_that_varies_between_blocks_follows_the_twin():
+@pytest.mark.parametrize("filtering", ["exact", "hardware"])
+def test_gpu_lod_that_varies_between_blocks_follows_the_twin(filtering):
     """On a sphere the level of detail differs from block to block (the material is compressed
     toward its poles), so the lanes of one SIMD group read different pyramid levels: llvmpipe
     read textureDimensions at such a level as the first lane's (garbage where they differed);
-    the level's size is now derived from level 0's."""
+    the level's size is now derived from level 0's. The sampler ("hardware") takes each
+    lane's own level."""
     from vrneural.atlas import build_atlas
     from vrneural.runtime import reference as ref
     from vrneural.runtime.assets import get_mesh
@@ -170,7 +174,7 @@ def test_gpu_lod_that_varies_between_blocks_follows_the_twin():
     lod = ref.block_lod(m, ref.texture_blocks(at, np.eye(4), tl)["foot"])
     assert lod.max() - lod.min() > 1.0  # varies
     want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
-    got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
+    got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl, filtering=filtering)
     np.testing.assert_array_equal(gc, wc)
     w16 = want.astype(np.float16).astype(np.float32)
     assert (np.abs(got - w16) / (np.abs(w16) + 1e-2 * max(w16.max(), 1e-12))).max() <= 2 * 2.0**-10

@@ -53,9 +53,10 @@ def test_packs_without_an_offset_generate_no_offset_stage():
 
 
 @pytest.mark.gpu
-@pytest.mark.parametrize("method,march", [("student", "texel"), ("student", "block"),
-                                          ("neumip", "texel")])  # fmt: skip
-def test_gpu_texture_space_offset_follows_the_twin(method, march):
+@pytest.mark.parametrize("method,march,filtering", [
+    ("student", "texel", "exact"), ("student", "block", "exact"), ("neumip", "texel", "exact"),
+    ("student", "texel", "hardware"), ("neumip", "texel", "hardware")])  # fmt: skip
+def test_gpu_texture_space_offset_follows_the_twin(method, march, filtering):
     """The texture-space kernel moves each texel's lookups as neural_offset.offset_uv does
     (per eye: a grazing and a near-normal eye), within the height route's tolerance."""
     from runtime_helpers import assert_moved_lookup_parity, quad_atlas
@@ -66,7 +67,7 @@ def test_gpu_texture_space_offset_follows_the_twin(method, march):
     lp, lc = np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
     tl = (2.0, 2.0, 0, 0)
     for eye in (np.float32([0.2, 0.1, 1.5]), np.float32([2.5, -1.0, 0.4])):
-        assert_moved_lookup_parity(at, m, plain, eye, lp, lc, tl)
+        assert_moved_lookup_parity(at, m, plain, eye, lp, lc, tl, filtering)
 
 
 @pytest.mark.gpu

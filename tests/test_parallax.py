@@ -229,10 +229,15 @@ def test_relief_measure_and_the_auto_choice():
 
 
 @pytest.mark.gpu
-@pytest.mark.parametrize("mesh,march", [("quad", "texel"), ("sphere", "texel"), ("quad", "block")])
-def test_gpu_texture_space_parallax_follows_the_twin(mesh, march):
+@pytest.mark.parametrize(
+    "mesh,march,filtering",
+    [("quad", "texel", "exact"), ("sphere", "texel", "exact"), ("quad", "block", "exact"),
+     ("sphere", "texel", "hardware"), ("quad", "block", "hardware")],
+)  # fmt: skip
+def test_gpu_texture_space_parallax_follows_the_twin(mesh, march, filtering):
     """The texture-space kernel marches each texel's view ray through the height field as the
-    numpy twin does (per eye: two eye positions), at a grazing and a near-normal view."""
+    numpy twin does (per eye: two eye positions), at a grazing and a near-normal view; with
+    filtering "hardware" the height field and the neural textures through the sampler."""
     from runtime_helpers import assert_moved_lookup_parity, quad_atlas
 
     from vrneural.atlas import build_atlas
@@ -249,16 +254,18 @@ def test_gpu_texture_space_parallax_follows_the_twin(mesh, march):
     tl = (2.0, 2.0, 0, 0)
     flat = random_material(0, tex_res=16)
     for eye in eyes:
-        assert_moved_lookup_parity(at, m, flat, eye, lp, lc, tl)
+        assert_moved_lookup_parity(at, m, flat, eye, lp, lc, tl, filtering)
 
 
 @pytest.mark.gpu
-def test_gpu_texture_space_auto_march_follows_the_twin():
+@pytest.mark.parametrize("filtering", ["exact", "hardware"])
+def test_gpu_texture_space_auto_march_follows_the_twin(filtering):
     """March "auto": per block where a block spans at most a texel of the height field, per
     texel elsewhere, decided per block in the kernel as the twin decides it."""
     from runtime_helpers import assert_auto_march_parity
 
-    assert_auto_march_parity(parallax_material(16, amp=0.06), random_material(0, tex_res=16))
+    flat = random_material(0, tex_res=16)
+    assert_auto_march_parity(parallax_material(16, amp=0.06), flat, filtering)
 
 
 def test_flat_packs_generate_the_same_kernels_as_before():

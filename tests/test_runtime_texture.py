@@ -37,12 +37,13 @@ def test_twin_lambertian_plane_is_analytic():
 @pytest.mark.gpu
 @pytest.mark.parametrize("arch", ["coarse_fine", "single"])
 @pytest.mark.parametrize(
-    "precision, weights",
+    "precision, weights, filtering",
     # storage weights: the comparison baseline (streamed ones: the test after next)
-    [("f32", "constants"), ("f16", "constants"), ("f32", "storage")],
-    ids=["f32-constants", "f16-constants", "f32-storage"],
-)
-def test_gpu_matches_twin(arch, precision, weights):
+    [("f32", "constants", "exact"), ("f16", "constants", "exact"), ("f32", "storage", "exact"),
+     ("f32", "constants", "hardware"), ("f16", "constants", "hardware")],
+    ids=["f32-constants", "f16-constants", "f32-storage", "f32-hardware", "f16-hardware"],
+)  # fmt: skip
+def test_gpu_matches_twin(arch, precision, weights, filtering):
     from vrneural.runtime import texture_pass
 
     at = quad_atlas(32)
@@ -50,7 +51,7 @@ def test_gpu_matches_twin(arch, precision, weights):
     model = np.eye(4, dtype=np.float32)
     model[:3, 3] = [0.05, -0.02, 0.0]
     args = (at, mat, model, EYE, LP, LC, TILING, precision)
-    got, cg = texture_pass.shade_texture_space(*args, weights=weights)
+    got, cg = texture_pass.shade_texture_space(*args, weights=weights, filtering=filtering)
     want, cw = reference.shade_texture_space(*args)
     np.testing.assert_array_equal(cg, cw)
     assert np.isfinite(got).all()
@@ -93,16 +94,17 @@ def test_gpu_matches_twin_for_a_wider_student(precision, width):
     [(3.7, 5.3, -2.31, -7.9), (37.3, 41.9, 1000.37, -513.1)],  # negative uvs; large uvs
     ids=["negative", "large"],
 )
-def test_gpu_neural_texture_wrap_matches_twin(tiling):
+@pytest.mark.parametrize("filtering", ["exact", "hardware"])
+def test_gpu_neural_texture_wrap_matches_twin(tiling, filtering):
     """The samplers wrap texel indices without an integer division (wrap_index in
     neural_material.wgsl): material UVs far outside [0, 1) in both directions give the twin's
-    np.mod indices."""
+    np.mod indices; so does the sampler's repeat mode ("hardware")."""
     from vrneural.runtime import texture_pass
 
     at = quad_atlas(32)
     mat = random_material(5)
     args = (at, mat, np.eye(4, dtype=np.float32), EYE, LP, LC, tiling, "f32")
-    got, _ = texture_pass.shade_texture_space(*args)
+    got, _ = texture_pass.shade_texture_space(*args, filtering=filtering)
     want, _ = reference.shade_texture_space(*args)
     err = np.abs(got[..., :3] - _f16(want[..., :3])) / (np.abs(want[..., :3]) + 1e-2)
     # f32 both sides (2 f16 ulps, as above); at uv ~ 1e3 the f32 texel coordinate itself has

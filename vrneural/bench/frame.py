@@ -15,7 +15,9 @@ spell of a shared machine hits every condition:
   forward pass doing one bilinear sample per fragment and nothing else, and the bare
   texture-space kernel (the same facing test, geometry records read and texels stored; no
   shading), alone and with the neural-texture lookups at the blocks' texels (``texture_loads``:
-  the traffic any shading of them needs).
+  the traffic any shading of them needs);
+- the runtime's neural-texture filtering ("hardware": the sampler's) against the exact
+  float32 filter in the shader (``*_exact``: the full and staggered updates and the loads floor).
 
 With ``--parallax-steps S`` the same rounds also time the texture-space update of the same two
 materials with height-field parallax of up to S steps, marched per texel, once per 2x2 block and
@@ -157,12 +159,13 @@ def loop(r, frames: int, f0: int) -> dict:
     }
 
 
-def _renderer(scene, c, eye_res, target: str, depth: int = 2, march: str = "pack"):
+def _renderer(scene, c, eye_res, target: str, depth: int = 2, march: str = "pack",
+              neural_filter: str = "hardware"):  # fmt: skip
     prof = get_profile("quest3")
     r = timing.make_renderer(scene, eyes=2, reuse=c.reuse, texture_res=c.texture_res,
                              eye_res=eye_res, fps=prof.fps, fov_y=prof.fov_y, n_lights=c.lights,
                              schedule="staggered", frames_in_flight=depth, target=target,
-                             parallax_march=march)  # fmt: skip
+                             parallax_march=march, neural_filter=neural_filter)  # fmt: skip
     r.wait()
     return r
 
@@ -183,6 +186,7 @@ def run_frame(cfg: FrameConfig) -> dict:
         scene = timing.bench_scene(c.lights)
         hdr = _renderer(scene, c, eye_res, "hdr")
         disp = _renderer(scene, c, eye_res, "display")
+        exact = _renderer(scene, c, eye_res, "hdr", neural_filter="exact")  # the other filter
         doc["timestamp_check"] = hdr.timestamp_check
         par = {}  # (kind, march) -> renderer of the materials with parallax of that kind
         kinds = {"parallax": c.parallax_steps, "offset": c.neural_offset}
@@ -215,7 +219,10 @@ def run_frame(cfg: FrameConfig) -> dict:
             updates = {"texture_full": (hdr, "main", 1), "texture_bare": (hdr, "bare", 1),
                        "texture_loads": (hdr, "bare_loads", 1),
                        "texture_slice": (hdr, "main", n1),
-                       "texture_slice_bare": (hdr, "bare", n1)}  # fmt: skip
+                       "texture_slice_bare": (hdr, "bare", n1),
+                       "texture_full_exact": (exact, "main", 1),
+                       "texture_loads_exact": (exact, "bare_loads", 1),
+                       "texture_slice_exact": (exact, "main", n1)}  # fmt: skip
             for (kind, march), rr in par.items():  # the same update, with parallax
                 sfx = kind + ("" if march == "texel" else f"_{march}")
                 updates[f"texture_full_{sfx}"] = (rr, "main", 1)

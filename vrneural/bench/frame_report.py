@@ -16,6 +16,11 @@ PASS_RATIOS = (
     ("texture_vs_loads_floor", "texture_full", "texture_loads"),
     ("loads_floor_vs_bare", "texture_loads", "texture_bare"),
     ("texture_slice_vs_bare", "texture_slice", "texture_slice_bare"),
+    # the neural textures filtered exactly in the shader (Settings.neural_filter "exact")
+    ("exact_texture_vs_bare", "texture_full_exact", "texture_bare"),
+    ("exact_loads_floor_vs_bare", "texture_loads_exact", "texture_bare"),
+    ("hardware_vs_exact_full", "texture_full", "texture_full_exact"),
+    ("hardware_vs_exact_slice", "texture_slice", "texture_slice_exact"),
     # --parallax-steps: the same update with height-field parallax
     ("parallax_vs_texture", "texture_full_parallax", "texture_full"),
     ("parallax_slice_vs_texture_slice", "texture_slice_parallax", "texture_slice"),

@@ -32,7 +32,7 @@ from vrneural.material import ARCHS, NeuralMaterial
 from vrneural.mlp import pack_weights, wgsl_type
 from vrneural.parallax import AUTO_BLOCK_FOOT_TEXELS, height_bounds
 from vrneural.runtime.codegen_mlp import network_wgsl
-from vrneural.runtime.codegen_sample import samplers_wgsl
+from vrneural.runtime.codegen_sample import FILTERS, samplers_wgsl
 from vrneural.runtime.interface import (
     LIGHT,
     SCREEN_PARAMS,
@@ -90,6 +90,9 @@ class MaterialSpec:
     offset_net: list | None = None
     offset_ch: int = 0
     offset_consts: tuple = ()
+    #: how the kernels filter the neural textures (and the height field): "exact" or
+    #: "hardware" (runtime/codegen_sample.py:FILTERS)
+    filtering: str = "exact"
 
 
 def reference_weights(mat: NeuralMaterial) -> str:
@@ -161,8 +164,13 @@ def _max_width(mat: NeuralMaterial) -> int:
     return max(max(lay.n_in, lay.n_out) for lay in _layers(mat))
 
 
-def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSpec:
-    """Shapes and (for the buffer variant) layer tables of ``mat``."""
+def material_spec(
+    mat: NeuralMaterial, weights: str = "constants", filtering: str = "exact"
+) -> MaterialSpec:
+    """Shapes and (for the buffer variant) layer tables of ``mat``; ``filtering``: one of
+    :data:`~vrneural.runtime.codegen_sample.FILTERS`."""
+    if filtering not in FILTERS:
+        raise VrnError(f"neural filter = {filtering!r} is not allowed; choose one of {FILTERS}")
     nets, texs = ARCHS[mat.arch]
     layers = _layers(mat)
     dims_in = [lay.n_in for lay in layers]
@@ -193,6 +201,7 @@ def material_spec(mat: NeuralMaterial, weights: str = "constants") -> MaterialSp
         parallax_march=mat.parallax_march,
         height_consts=_height_consts(mat),
         **_offset_fields(mat),
+        filtering=filtering,
     )
 
 
@@ -255,13 +264,15 @@ def texture_space_wgsl(
     weights: str = "constants",
     radiance_format: str = "rgba16float",
     subgroups: bool = False,
+    filtering: str = "exact",
 ) -> str:
     """WGSL of the texture-space pass for ``mat`` (see shaders/texture_space.wgsl);
-    ``subgroups``: compaction with subgroup operations (device feature "subgroup")."""
+    ``subgroups``: compaction with subgroup operations (device feature "subgroup");
+    ``filtering``: how neural textures are filtered (codegen_sample.FILTERS)."""
     _check_weights(mat, weights)
     if radiance_format not in RADIANCE_FORMATS:
         raise VrnError(f"radiance format {radiance_format!r} not in {RADIANCE_FORMATS}")
-    T, spec = wgsl_type(precision), material_spec(mat, weights)
+    T, spec = wgsl_type(precision), material_spec(mat, weights, filtering)
     return render_wgsl(
         "texture_space",
         T=T,
@@ -284,10 +295,11 @@ def screen_space_wgsl(
     n_lights: int = 1,
     weights: str = "constants",
     subgroups: bool = False,
+    filtering: str = "exact",
 ) -> str:
     """WGSL of the per-pixel screen-space pass for ``mat`` (see shaders/screen_space.wgsl)."""
     _check_weights(mat, weights)
-    T, spec = wgsl_type(precision), material_spec(mat, weights)
+    T, spec = wgsl_type(precision), material_spec(mat, weights, filtering)
     return render_wgsl(
         "screen_space",
         T=T,

@@ -6,6 +6,13 @@ layer, two per u32; see gpu_material.py) sampled by manual bilinear wrap: 4 ``te
 8 channels and ``unpack2x16float``, exactly as ``material.sample_bilinear_wrap`` (the texel
 taps and weights from ``bilinear_taps`` in neural_material.wgsl). With a prefiltered pyramid,
 ``*_lod`` blends two levels (``material.sample_lod``).
+
+With ``filtering = "hardware"`` (:data:`FILTERS`) the textures are ``texture_2d_array<f32>``
+(rgba16float, 4 channels per layer) read by ``textureSampleLevel`` through one repeat, linear,
+linear-mipmap sampler (``neural_samp``): the same bilinear wrap and trilinear blend, done by
+the texture unit (one instruction per 4 channels instead of 4 loads, the wrap and the
+weights in the shader), its weights at the adapter's sub-texel precision (float on llvmpipe:
+the exact variant's values to float32 rounding; commonly 8 fractional bits on GPUs).
 """
 
 from __future__ import annotations
@@ -13,6 +20,39 @@ from __future__ import annotations
 from vrneural.gpu.unroll import IND
 
 I2, I3 = IND * 2, IND * 3
+
+#: how the kernels filter neural textures: "exact" (taps and weights computed in float32 in the
+#: shader, the twin's arithmetic) or "hardware" (the sampler's filtering)
+FILTERS = ("exact", "hardware")
+
+
+def hardware_sampler_fn(name: str, tex: str, channels: int, lod: int = 0) -> list[str]:
+    """``name(uv) -> array<f32, channels>`` by the sampler (level 0), or with ``lod`` (the
+    pyramid's top level) ``name(uv, lod)``: trilinear between the levels around ``lod``."""
+    if lod:
+        head = [
+            f"// Trilinear lookup in the prefiltered pyramid (levels 0..{lod}) by the sampler: "
+            "levels",
+            "// floor(lod) and the next blended by the fraction (twin: material.sample_lod).",
+            f"fn {name}(uv: vec2<f32>, lod_in: f32) -> array<f32, {channels}> {{",
+            f"{IND}let lod = clamp(lod_in, 0.0, {lod}.0);",
+        ]
+        lv = "lod"
+    else:
+        head = [
+            f"// Bilinear wrap lookup of {channels} channels at material uv by the sampler "
+            "(texel centres",
+            "// at (i + 0.5) / W; twin: material.sample_bilinear_wrap).",
+            f"fn {name}(uv: vec2<f32>) -> array<f32, {channels}> {{",
+        ]
+        lv = "0.0"
+    layers = (channels + 3) // 4
+    lines = [
+        f"{IND}let v{k} = textureSampleLevel({tex}, neural_samp, uv, {k}, {lv});"
+        for k in range(layers)
+    ]
+    vals = ", ".join(f"v{c // 4}.{'xyzw'[c % 4]}" for c in range(channels))
+    return [*head, *lines, f"{IND}return array<f32, {channels}>({vals});", "}"]
 
 
 def sampler_fn(name: str, tex: str, channels: int, level: bool = False) -> list[str]:
@@ -92,6 +132,14 @@ def samplers_wgsl(spec) -> str:
     texs = [("sample_a", "tex_a", spec.ca)]
     if spec.arch == "coarse_fine":
         texs.append(("sample_b", "tex_b", spec.cb))
+    if spec.filtering == "hardware":
+        lines = [line for n, t, c in texs for line in hardware_sampler_fn(n, t, c)]
+        if spec.lod_levels > 1:
+            for n, t, c in texs:
+                lines += hardware_sampler_fn(n + "_lod", t, c, spec.lod_levels - 1)
+        if spec.offset_net:
+            lines += hardware_sampler_fn("sample_off", "off_tex", spec.offset_ch)
+        return "\n".join(lines)
     lines = [line for n, t, c in texs for line in sampler_fn(n, t, c)]
     if spec.lod_levels > 1:
         for n, t, c in texs:

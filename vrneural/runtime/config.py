@@ -16,6 +16,7 @@ from vrneural.runtime.settings import (
     FRAMES_IN_FLIGHT_MAX,
     LIGHTS_MAX,
     MODES,
+    NEURAL_FILTERS,
     RADIANCE,
     Settings,
 )
@@ -57,6 +58,14 @@ class RunConfig:
         "material, as at the headset's density; else per texel), pack (the march it trained "
         "with), texel or block",
         choices=("auto", "pack", "texel", "block"),  # vrneural.parallax.RENDER_MARCHES
+    )
+    neural_filter: str = opt(
+        "hardware",
+        "how neural textures are filtered: hardware (the sampler's bilinear and trilinear "
+        "filtering, its weights at the adapter's sub-texel precision: 8 bits on most GPUs) or "
+        "exact (taps and weights in float32 in the shader, as the numpy twin); --mode "
+        "reference is always exact",
+        choices=NEURAL_FILTERS,
     )
     radiance: str | None = unset(
         "per-eye",
@@ -150,10 +159,13 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     if not hasattr(adapter, "limits"):
         raise VrnError("resolve: adapter must be adapter_summary() (vrneural.gpu.device)")
     cfg = resolved(cfg)  # the fields not given: their defaults
-    for name, allowed in (("mode", MODES), ("schedule", SCHEDULES)):
+    for name, allowed in (
+        ("mode", MODES), ("schedule", SCHEDULES), ("neural_filter", NEURAL_FILTERS)
+    ):  # fmt: skip
         if getattr(cfg, name) not in allowed:
             raise VrnError(
-                f"--{name} = {getattr(cfg, name)!r} is not allowed; choose {', '.join(allowed)}"
+                f"--{name.replace('_', '-')} = {getattr(cfg, name)!r} is not allowed; choose "
+                f"{', '.join(allowed)}"
             )
     reuse_given, budget = parse_reuse(cfg.reuse, cfg.reuse_budget)
     for name in ("frames", "eyes", "texture_res", "lights"):
@@ -263,6 +275,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         neural_lod=bool(cfg.neural_lod),
         parallax_march=cfg.parallax_march,
         frames_in_flight=cfg.frames_in_flight,
+        neural_filter=cfg.neural_filter,
     )
 
 

@@ -37,19 +37,29 @@ def _words(tex: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.ascontiguousarray(data).view("<u4"))  # (lo, hi) half pairs
 
 
-def upload_feature_texture(tex: np.ndarray, label: str = "", levels=()):
-    """``tex: [H, W, C]`` float16 -> a ``texture_2d_array`` (rgba32uint, 8 float16 channels
-    per texel and layer, ceil(C/8) layers), with ``levels`` (the pyramid's levels 1.., each
-    ``[H >> k, W >> k, C]``) as its mip levels."""
+def _halves(tex: np.ndarray) -> np.ndarray:
+    """``[H, W, C]`` float16 -> ``[layers, H, W, 4]`` float16: 4 channels per texel and layer."""
+    h, w, c = tex.shape
+    data = np.zeros((h, w, -(-c // 4) * 4), np.float16)
+    data[..., :c] = tex
+    return np.ascontiguousarray(data.reshape(h, w, -1, 4).transpose(2, 0, 1, 3))
+
+
+def upload_feature_texture(tex: np.ndarray, label: str = "", levels=(), filtering: str = "exact"):
+    """``tex: [H, W, C]`` float16 -> a ``texture_2d_array``, with ``levels`` (the pyramid's
+    levels 1.., each ``[H >> k, W >> k, C]``) as its mip levels: for ``filtering`` "exact"
+    rgba32uint (8 float16 channels per texel and layer, ceil(C/8) layers), for "hardware"
+    rgba16float (4 channels per layer, ceil(C/4) layers; the same values, filterable)."""
     import wgpu
 
     h, w, c = tex.shape
-    layers = (c + 7) // 8
+    hw = filtering == "hardware"
+    layers = (c + 3) // 4 if hw else (c + 7) // 8
     dev = get_device()
     t = dev.create_texture(
         size=(w, h, layers),
         mip_level_count=1 + len(levels),
-        format="rgba32uint",
+        format="rgba16float" if hw else "rgba32uint",
         usage=wgpu.TextureUsage.TEXTURE_BINDING | wgpu.TextureUsage.COPY_DST,
         label=label,
     )
@@ -57,37 +67,59 @@ def upload_feature_texture(tex: np.ndarray, label: str = "", levels=()):
         lh, lw = a.shape[:2]
         dev.queue.write_texture(
             {"texture": t, "mip_level": k},
-            _words(a),
-            {"bytes_per_row": lw * 16, "rows_per_image": lh},
+            _halves(np.asarray(a, np.float16)) if hw else _words(a),
+            {"bytes_per_row": lw * (8 if hw else 16), "rows_per_image": lh},
             (lw, lh, layers),
         )
     return t
 
 
+def neural_sampler():
+    """The sampler of filtering "hardware": wrap (repeat), bilinear, linear between levels."""
+    return get_device().create_sampler(
+        address_mode_u="repeat",
+        address_mode_v="repeat",
+        mag_filter="linear",
+        min_filter="linear",
+        mipmap_filter="linear",
+        label="neural",
+    )
+
+
 class GpuMaterial:
     """Textures (and the weight buffers, for buffer weights) of one material on the device."""
 
-    def __init__(self, mat: NeuralMaterial, weights: str = "constants"):
+    def __init__(self, mat: NeuralMaterial, weights: str = "constants", filtering: str = "exact"):
         import wgpu
 
         self.mat = mat
+        self.filtering = filtering
         names = ARCHS[mat.arch][1]
         self.textures = [
-            upload_feature_texture(mat.textures[n], f"neural.{n}", mat.levels.get(n, ()))
+            upload_feature_texture(mat.textures[n], f"neural.{n}", mat.levels.get(n, ()), filtering)
             for n in names
         ]
         self.views = [t.create_view(dimension="2d-array") for t in self.textures]
-        #: the height field of a parallax material (r32float ``[H, W]``: the float16 values
-        #: exactly; read with ``textureLoad``, see neural_material.wgsl), else None
+        #: the sampler of filtering "hardware" (neural textures and height field), else None
+        self.sampler = neural_sampler() if filtering == "hardware" else None
+        #: the height field of a parallax material (``[H, W]``: the float16 values exactly;
+        #: r32float read with ``textureLoad``, or r16float through the sampler for filtering
+        #: "hardware"; see neural_material.wgsl), else None
         self.height = None
         if mat.parallax_steps:
-            h32 = np.asarray(mat.height, np.float32)
             tb = wgpu.TextureUsage.TEXTURE_BINDING
-            self.height = upload_texture(h32, "r32float", tb, "neural.height")
+            if self.sampler is not None:
+                h16 = np.asarray(mat.height, np.float16)
+                self.height = upload_texture(h16, "r16float", tb, "neural.height")
+            else:
+                h32 = np.asarray(mat.height, np.float32)
+                self.height = upload_texture(h32, "r32float", tb, "neural.height")
         #: the offset texture of a neural-offset material (as the neural textures), else None
         self.offset = None
         if mat.parallax_kind == "neural":
-            self.offset = upload_feature_texture(mat.offset_tex, "neural.offset")
+            self.offset = upload_feature_texture(
+                mat.offset_tex, "neural.offset", filtering=filtering
+            )
         self.weights, self.uniforms = None, []
         if weights in ("storage", "streamed"):
             self.weights = upload_buffer(packed_weights(mat), wgpu.BufferUsage.STORAGE, "weights")
@@ -100,6 +132,8 @@ class GpuMaterial:
     def resources(self) -> dict:
         """Its resources by binding name (runtime/interface.py:material_bindings)."""
         out = dict(zip(("tex_a", "tex_b"), self.views, strict=False))
+        if self.sampler is not None:
+            out["neural_samp"] = self.sampler
         if self.weights is not None:
             out["weights"] = {"buffer": self.weights}
         for i, b in enumerate(self.uniforms):

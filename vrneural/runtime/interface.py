@@ -63,6 +63,8 @@ MATERIAL_BINDING = 7
 HEIGHT_BINDING = 18
 #: binding of the offset texture of a neural-offset material (both passes)
 OFFSET_BINDING = 19
+#: binding of the neural textures' sampler (filtering "hardware", both passes)
+NEURAL_SAMPLER_BINDING = 11
 #: first binding of the uniform weight buffers (one per layer, then the biases)
 UNIFORM_WEIGHTS_BINDING = 20
 
@@ -74,15 +76,20 @@ def lights_binding(n_lights: int, slot: int = 1) -> Binding:
 
 def material_bindings(spec) -> list[Binding]:
     """A material's resources (:class:`~vrneural.runtime.codegen.MaterialSpec`): neural
-    textures, the height field of parallax or the offset texture of a neural offset, buffer
-    weights; read by neural_material.wgsl and
+    textures (and their sampler, for filtering "hardware"), the height field of parallax or the
+    offset texture of a neural offset, buffer weights; read by neural_material.wgsl and
     bound from :meth:`~vrneural.runtime.gpu_material.GpuMaterial.resources`."""
     first = MATERIAL_BINDING
-    tex = "texture_2d_array<u32>"
+    hw = spec.filtering == "hardware"
+    tex = "texture_2d_array<f32>" if hw else "texture_2d_array<u32>"
     out = [Binding(first, "tex_a", "texture", tex, "coarse / features")]
+    if hw:
+        out.append(Binding(NEURAL_SAMPLER_BINDING, "neural_samp", "sampler", "sampler",
+                           "repeat, linear, linear mipmaps"))  # fmt: skip
     if spec.parallax_steps > 0:
         out.append(Binding(HEIGHT_BINDING, "height_tex", "texture", "texture_2d<f32>",
-                           "r32float, UV units", sample_type="unfilterable-float"))  # fmt: skip
+                           "r16float, UV units" if hw else "r32float, UV units",
+                           sample_type=None if hw else "unfilterable-float"))  # fmt: skip
     if spec.offset_net:
         out.append(Binding(OFFSET_BINDING, "off_tex", "texture", tex, "neural offset texture"))
     if spec.arch == "coarse_fine":

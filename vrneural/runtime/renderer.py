@@ -39,7 +39,13 @@ from vrneural.runtime.output import tonemap
 from vrneural.runtime.schedule import frame_slice
 from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget
 from vrneural.runtime.screen_res import choose, level_sides, mesh_area, wanted_side
-from vrneural.runtime.settings import ADAPTIVE_PERIOD_MAX, FRAMES_IN_FLIGHT_MAX, RADIANCE, Settings
+from vrneural.runtime.settings import (
+    ADAPTIVE_PERIOD_MAX,
+    FRAMES_IN_FLIGHT_MAX,
+    NEURAL_FILTERS,
+    RADIANCE,
+    Settings,
+)
 from vrneural.runtime.stats import FrameResults, FrameStats
 from vrneural.runtime.texture_pass import CounterBuffer, TextureSpacePass, TextureTarget
 from vrneural.warn import VrnWarning
@@ -76,6 +82,11 @@ class Renderer(FrameEncoding):
         check_int("frames_in_flight", s.frames_in_flight, 1, FRAMES_IN_FLIGHT_MAX)
         if s.target not in TARGETS:
             raise VrnError(f"target = {s.target!r} is not allowed; choose {', '.join(TARGETS)}")
+        if s.neural_filter not in NEURAL_FILTERS:
+            raise VrnError(
+                f"neural_filter = {s.neural_filter!r} is not allowed; choose "
+                f"{', '.join(NEURAL_FILTERS)}"
+            )
         if s.target == "display" and s.mode != "texture":
             raise VrnError(
                 f"target = 'display' needs mode 'texture' (mode {s.mode!r} writes HDR pixels "
@@ -260,9 +271,9 @@ class Renderer(FrameEncoding):
     def _make_pass(self, mat):
         s = self.s
         if s.mode == "texture":
-            return TextureSpacePass(mat, s.precision, len(self.lights))
+            return TextureSpacePass(mat, s.precision, len(self.lights), filtering=s.neural_filter)
         if s.mode == "screen":
-            return ScreenSpacePass(mat, s.precision, len(self.lights))
+            return ScreenSpacePass(mat, s.precision, len(self.lights), filtering=s.neural_filter)
         if s.mode == "reference":
             return ScreenSpacePass(mat, "f32", len(self.lights), weights=reference_weights(mat))
         raise VrnError(f"mode = {s.mode!r} is not allowed; choose texture, screen or reference")

@@ -50,14 +50,20 @@ class ScreenSpacePass:
     """Compiled per-pixel kernel for one material."""
 
     def __init__(
-        self, mat: NeuralMaterial, precision="f32", n_lights=1, weights="constants", subgroups=None
+        self,
+        mat: NeuralMaterial,
+        precision="f32",
+        n_lights=1,
+        weights="constants",
+        subgroups=None,
+        filtering="exact",
     ):
         self.mat = mat
         self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
         self.subgroups = has_feature("subgroup") if subgroups is None else subgroups
-        self.code = screen_space_wgsl(mat, precision, n_lights, weights, self.subgroups)
-        self.gmat = GpuMaterial(mat, weights)
-        self.bindings = screen_bindings(material_spec(mat, weights), n_lights)
+        self.code = screen_space_wgsl(mat, precision, n_lights, weights, self.subgroups, filtering)
+        self.gmat = GpuMaterial(mat, weights, filtering)
+        self.bindings = screen_bindings(material_spec(mat, weights, filtering), n_lights)
         self.pipes = {
             e: compute_pipeline(self.code, e, label=f"screen_space/{e}")
             for e in ("cull", "args", "main")

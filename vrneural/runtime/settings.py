@@ -14,6 +14,9 @@ FRAMES_IN_FLIGHT_MAX = 3
 LIGHTS_MAX = 64
 #: the longest refresh sweep of adaptive reuse, in frames
 ADAPTIVE_PERIOD_MAX = 16
+#: how the texture and screen passes filter neural textures (runtime/codegen_sample.py:FILTERS;
+#: the reference mode always "exact")
+NEURAL_FILTERS = ("exact", "hardware")
 
 
 @dataclass
@@ -62,6 +65,10 @@ class Settings:
     #: eye colour targets: "hdr" (rgba16float radiance: EXR, FLIP) or "display" (8-bit
     #: Reinhard-tonemapped sRGB, texture mode only: where HDR output is not needed)
     target: str = "hdr"
+    #: neural-texture filtering of the texture and screen passes: "hardware" (the sampler's
+    #: bilinear / trilinear filtering: its weights at the adapter's sub-texel precision) or
+    #: "exact" (taps and weights in float32 in the shader, the numpy twin's arithmetic)
+    neural_filter: str = "hardware"
 
 
 def shaded_material(mat, s: Settings, cache: dict):

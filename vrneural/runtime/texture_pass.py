@@ -115,16 +115,19 @@ class TextureSpacePass:
         weights: str = "constants",
         radiance_format: str = "rgba16float",
         subgroups: bool | None = None,
+        filtering: str = "exact",
     ):
         self.mat = mat
         self.radiance_format = radiance_format  # rgba32float: no f16 clamp, 2x memory
         self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
         self.subgroups = has_feature("subgroup") if subgroups is None else subgroups
+        self.filtering = filtering  # neural textures: "exact" or "hardware" (codegen_sample)
         self.code = texture_space_wgsl(
-            mat, precision, n_lights, weights, radiance_format, self.subgroups
+            mat, precision, n_lights, weights, radiance_format, self.subgroups, filtering
         )
-        self.gmat = GpuMaterial(mat, weights)
-        self.bindings = texture_bindings(material_spec(mat, weights), n_lights, radiance_format)
+        self.gmat = GpuMaterial(mat, weights, filtering)
+        spec = material_spec(mat, weights, filtering)
+        self.bindings = texture_bindings(spec, n_lights, radiance_format)
 
     def pipeline(self, entry: str = "main"):
         """The compiled entry point (one for every texture side: the kernel takes its texels
@@ -250,7 +253,7 @@ class TextureTarget:
             bare = ("P", "geo_pos", "geo_nrm", "geo_tan", "geo_uv01", "geo_uv23", "out_tex", "cand")
             used = {
                 "bare": bare,
-                "bare_loads": (*bare, *(k for k in ("tex_a", "tex_b") if k in res)),
+                "bare_loads": (*bare, *(k for k in ("tex_a", "tex_b", "neural_samp") if k in res)),
                 "cull": ("P", "geo_pos", "geo_nrm", "counters", "cand", "todo", "todo_n"),
                 "args": ARGS_BINDINGS,
                 "main_compacted": tuple(k for k in res if k not in ("cand", "todo_n", "ind")),
@@ -341,10 +344,12 @@ def shade_texture_space(
     radiance_format: str = "rgba16float",
     subgroups: bool | None = None,
     margin: float = 0.0,
+    filtering: str = "exact",
 ):
     """GPU texture-space pass on a fresh (zeroed) texture; returns ``(radiance [R, R, 4]
     float32, counters [4])`` like the numpy twin of the same name. ``subgroups``: None = use
-    them where the device has the feature; ``margin``: see :func:`pack_params_into`."""
+    them where the device has the feature; ``margin``: see :func:`pack_params_into`;
+    ``filtering``: of the neural textures (codegen_sample.FILTERS)."""
     lp = np.asarray(light_pos, np.float64).reshape(-1, 3)
     tp = TextureSpacePass(
         mat,
@@ -353,6 +358,7 @@ def shade_texture_space(
         weights,
         radiance_format=radiance_format,
         subgroups=subgroups,
+        filtering=filtering,
     )
     counters = CounterBuffer(1)
     tgt = TextureTarget(tp, GpuAtlas(atlas), counters)

@@ -6,7 +6,8 @@
 // dirs = [wi, wo, h] in the local frame (9 floats). Neural textures are texture_2d_array<u32>
 // (rgba32uint: 8 float16 channels per texel and layer, two per u32, see gpu_material.py)
 // sampled by manual bilinear wrap (4 textureLoads per 8 channels, unpack2x16float),
-// exactly like sample_bilinear_wrap. The bindings are declared by runtime/interface.py
+// exactly like sample_bilinear_wrap; or, with mat.filtering "hardware", texture_2d_array<f32>
+// (rgba16float) read through the sampler neural_samp (runtime/codegen_sample.py). The bindings are declared by runtime/interface.py
 // (material_bindings). Weights are WGSL constants in unrolled code, or read from
 // buffers in loops (storage or uniform weights; wide teachers and the >=10x comparison).
 
@@ -55,6 +56,13 @@ const H_MAX: f32 = {{ mat.height_consts[1] }};
 const H_ASPECT: f32 = {{ mat.height_consts[2] }};  // W / H of the texel grid
 const T_MAX: f32 = {{ mat.height_consts[3] }};  // the steepest view's |d| (parallax.slope_max)
 
+{% if mat.filtering == 'hardware' %}
+// Bilinear wrap lookup of the height field (the neural textures' texel grid), by the sampler
+// (r16float: the pack's float16 heights).
+fn height_at(uv: vec2<f32>) -> f32 {
+    return textureSampleLevel(height_tex, neural_samp, uv, 0.0).x;
+}
+{% else %}
 // Bilinear wrap lookup of the height field (the neural textures' texel grid).
 fn height_at(uv: vec2<f32>) -> f32 {
     let dims = vec2<i32>(textureDimensions(height_tex));
@@ -71,6 +79,7 @@ fn height_at(uv: vec2<f32>) -> f32 {
         + textureLoad(height_tex, vec2<i32>(xi1, yi1), 0).x * fx;
     return top * (1.0 - fy) + bot * fy;
 }
+{% endif %}
 
 // UV shift per unit height along the (extended, wo.z > 0) view: vrneural/parallax.py:ray_slope.
 fn parallax_d(wo: vec3<f32>) -> vec2<f32> {
