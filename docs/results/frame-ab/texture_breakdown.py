@@ -38,7 +38,7 @@ res = int(sys.argv[1]) if len(sys.argv) > 1 else 512
 rounds = int(sys.argv[2]) if len(sys.argv) > 2 else 5
 class C: reuse=4; texture_res=res; lights=1
 scene = timing.bench_scene(1)
-r = _renderer(scene, C, (1032, 1104), "hdr")
+r = _renderer(scene, C, (1032, 1104), "hdr", neural_filter="exact")  # its rewrites target the exact filter
 print("non-empty blocks", [n.gatlas.non_empty_blocks for n in r.neural])
 
 def replace_fn(code, name, body):
