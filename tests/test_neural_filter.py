@@ -107,3 +107,19 @@ def test_frames_through_the_sampler_are_the_exact_filters(name, monkeypatch):
         assert rel.max() <= 0.03 and changed <= 0.15 and rel.mean() <= 1e-3
     else:  # llvmpipe: 0.06% of the values change, by at most 0.08%
         assert rel.max() <= 3e-3 and changed <= 5e-3
+
+
+@pytest.mark.gpu
+def test_run_records_the_filter_and_says_when_it_is_not_the_default(tmp_path, capsys):
+    import json
+
+    from vrneural.cli import main
+
+    for filt in ("exact", "hardware"):
+        out = tmp_path / filt
+        argv = ["run", "--frames", "1", "--eyes", "1", "--profile", "tiny", "--neural-filter",
+                filt, "--no-video", "--save-frames", "none", "--out", str(out)]  # fmt: skip
+        assert main(argv) == 0
+        said = capsys.readouterr().out
+        assert json.loads((out / "summary.json").read_text())["resolved"]["neural_filter"] == filt
+        assert ("neural-filter=exact" in said) == (filt == "exact")

@@ -443,6 +443,7 @@ def human_summary(sm: dict) -> str:
     shared += " mips" if r.get("mips") else ""
     shared += " screen-res" if r.get("screen_res") else ""
     shared += " no-neural-lod" if r.get("neural_lod") is False else ""
+    shared += " neural-filter=exact" if r.get("neural_filter") == "exact" else ""
     space = (
         f"reuse={reuse} schedule={r['schedule']}{shared} "
         if texture
