@@ -199,15 +199,18 @@ def plot(doc: dict, path) -> None:
     fig, (a1, a2) = rp.figure(11.0, 3.8, 2)
     groups = [
         ["forward_floor_constant", "forward_floor_sample", "forward", "forward_display"],
-        ["texture_bare", "texture_loads", "texture_full"],
-        ["texture_slice_bare", "texture_slice"],
-    ]
+        ["texture_bare", "texture_loads", "texture_full", "texture_loads_exact",
+         "texture_full_exact"],
+        ["texture_slice_bare", "texture_slice", "texture_slice_exact"],
+    ]  # fmt: skip
     key = "cpu_ms" if "cpu_ms" in sm["passes"]["forward"] else "wall_ms"  # the ratios' clock
     x, pos, labels = 0, [], []
     for names in groups:  # a gap of half a bar between the groups
-        for n in names:
+        for n in (n for n in names if n in sm["passes"]):  # results from before *_exact too
             floor = "floor" in n or "bare" in n or "loads" in n
-            a1.bar(x, sm["passes"][n][key], color="0.7" if floor else "C0")
+            exact = n.endswith("_exact")
+            colour = ("0.85" if floor else "C1") if exact else ("0.7" if floor else "C0")
+            a1.bar(x, sm["passes"][n][key], color=colour)
             pos.append(x)
             labels.append(n.replace("forward_", "").replace("texture_", "tex ").replace("_", " "))
             x += 1
@@ -216,7 +219,7 @@ def plot(doc: dict, path) -> None:
     a1.set_ylabel(
         "ms, each pass alone (" + ("CPU, all threads" if key == "cpu_ms" else "wall") + ")"
     )
-    a1.set_title("passes (grey: floors)", fontsize=9)
+    a1.set_title("passes (grey: floors; orange, light grey: the exact neural filter)", fontsize=9)
     d = list(sm["loops"])
     for key, lab in (("wall_ms", "wall / frame"), ("host_cpu_ms", "host CPU / frame"),
                      ("gpu_ms", "GPU / frame (passes alone, wall)")):  # fmt: skip
