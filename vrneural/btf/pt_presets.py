@@ -143,14 +143,18 @@ def pebbles(rng, count: int = 34) -> Tile:
 def fur(rng, tufts: int = 144, per_tuft: int = 40) -> Tile:
     """Cut pile: ``tufts`` tufts (on a jittered grid) of ``per_tuft`` thin tapered strands
     each, standing on a backing, leaning and curling. The tufts' yarn colour follows patches
-    of several tufts (cream, russet, near-black: a calico coat) and their height varies by tuft
-    (0.07-0.19 tile widths), so taller tufts hide and shadow their neighbours. Strands are
-    fine (radius 0.0035 tile widths at the root, a quarter of a texel at 64^2, 40 a tuft): a
-    texel sees several, as a camera sees fur, not one strand that changes from view to view.
+    of a few tufts (cream, russet, near-black: a calico coat; the patch field's frequencies
+    2-6 cycles a tile) and their height varies by tuft (0.07-0.19 tile widths), so taller
+    tufts hide and shadow their neighbours and a texel's colour changes with the view. Strands
+    are fine (radius 0.0035 tile widths at the root, a quarter of a texel at 64^2, 40 a tuft):
+    a texel sees several, as a camera sees fur, not one strand that changes from view to view.
 
-    The third version. The second had 14 strands a tuft of radius 0.009 (about a texel
-    wide): Lafortune / NeuMIP with offset 1.12 there, 1.16 with the finer strands; a combed
-    nap (every tuft leaning 31 degrees along +u) made it 1.08. On the first (100 tufts of
+    The fourth version. The third had patches at 1-3 cycles a tile (Lafortune / NeuMIP with
+    offset 1.16 over five seeds, 1.20 with these); at 4-10 cycles it fell back to 1.15, and
+    tipped strands (each strand's upper third in a contrasting colour) gave 1.12. The second
+    had 14 strands a tuft of radius 0.009 (about a texel wide): 1.12 there, 1.16 with the
+    finer strands; a combed nap (every tuft leaning 31 degrees along +u) made it 1.08. On the
+    first (100 tufts of
     three reds and greys chosen per tuft, all 0.11-0.16 tall) the lobes beat NeuMIP with
     parallax (0.93): a noisy carpet whose texels change strand from view to view, which a
     per-texel lobe averages as well as a network. Patches larger than a tuft slide under a
@@ -161,7 +165,7 @@ def fur(rng, tufts: int = 144, per_tuft: int = 40) -> Tile:
     centres = (base + (rng.random(base.shape) - 0.5) * 0.6 / k) % 1.0
     cols = [(0.80, 0.72, 0.58), (0.60, 0.24, 0.06), (0.07, 0.05, 0.04)]
     # patches: a coarse periodic field looked up at each tuft's centre, cut into three bands
-    field = spectral_noise(rng, 64, 1, 3, beta=2.0)
+    field = spectral_noise(rng, 64, 2, 6, beta=2.0)
     ij = (centres * len(field)).astype(int) % len(field)  # nearest cell, (x, y)
     at = field[ij[:, 1], ij[:, 0]]
     colour = np.digitize(at, np.quantile(at, [0.4, 0.7]))
