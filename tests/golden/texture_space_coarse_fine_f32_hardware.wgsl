@@ -86,37 +86,6 @@ fn dirs9(wi: vec3<f32>, wo: vec3<f32>) -> array<f32, 9> {
     return array<f32, 9>(wi.x, wi.y, wi.z, wo.x, wo.y, wo.z, h.x, h.y, h.z);
 }
 
-// i mod n in [0, n) for an integer-valued float i (|i| < 2^24), without an integer division:
-// CPU adapters have no vector integer divide (LLVM scalarises it), and this is the sampler's
-// inner loop. The reciprocal's rounding can leave the result one period off; the selects fix it.
-fn wrap_index(i: f32, n: i32) -> i32 {
-    let fn_ = f32(n);
-    var m = i - fn_ * floor(i * (1.0 / fn_));
-    m = select(m, m - fn_, m >= fn_);
-    m = select(m, m + fn_, m < 0.0);
-    return i32(m);
-}
-
-// The wrapped texels and weights of a bilinear lookup at uv in a dims-sized texel grid
-// (texel centres at (i + 0.5) / W): corners i0, i1 and the weight f of i1 per axis.
-struct Taps {
-    i0: vec2<i32>,
-    i1: vec2<i32>,
-    f: vec2<f32>,
-}
-
-fn bilinear_taps(uv: vec2<f32>, dims: vec2<i32>) -> Taps {
-    let x = uv.x * f32(dims.x) - 0.5;
-    let y = uv.y * f32(dims.y) - 0.5;
-    let x0 = floor(x);
-    let y0 = floor(y);
-    let xi0 = wrap_index(x0, dims.x);
-    let yi0 = wrap_index(y0, dims.y);
-    let xi1 = select(xi0 + 1, 0, xi0 + 1 == dims.x);
-    let yi1 = select(yi0 + 1, 0, yi0 + 1 == dims.y);
-    return Taps(vec2<i32>(xi0, yi0), vec2<i32>(xi1, yi1), vec2<f32>(x - x0, y - y0));
-}
-
 // The training data's direction range (vrneural/grazing.py): cos and sin of theta_i_max and
 // theta_o_max, exact float32 values.
 const COS_I_MAX: f32 = 0.258819043636322;

@@ -18,12 +18,9 @@ the exact variant's values to float32 rounding; commonly 8 fractional bits on GP
 from __future__ import annotations
 
 from vrneural.gpu.unroll import IND
+from vrneural.runtime.settings import NEURAL_FILTERS as FILTERS  # noqa: F401 (re-exported)
 
 I2, I3 = IND * 2, IND * 3
-
-#: how the kernels filter neural textures: "exact" (taps and weights computed in float32 in the
-#: shader, the twin's arithmetic) or "hardware" (the sampler's filtering)
-FILTERS = ("exact", "hardware")
 
 
 def hardware_sampler_fn(name: str, tex: str, channels: int, lod: int = 0) -> list[str]:

@@ -67,7 +67,7 @@ def upload_feature_texture(tex: np.ndarray, label: str = "", levels=(), filterin
         lh, lw = a.shape[:2]
         dev.queue.write_texture(
             {"texture": t, "mip_level": k},
-            _halves(np.asarray(a, np.float16)) if hw else _words(a),
+            _halves(a) if hw else _words(a),
             {"bytes_per_row": lw * (8 if hw else 16), "rows_per_image": lh},
             (lw, lh, layers),
         )
@@ -93,7 +93,6 @@ class GpuMaterial:
         import wgpu
 
         self.mat = mat
-        self.filtering = filtering
         names = ARCHS[mat.arch][1]
         self.textures = [
             upload_feature_texture(mat.textures[n], f"neural.{n}", mat.levels.get(n, ()), filtering)
@@ -107,13 +106,9 @@ class GpuMaterial:
         #: "hardware"; see neural_material.wgsl), else None
         self.height = None
         if mat.parallax_steps:
+            fmt = "r32float" if self.sampler is None else "r16float"  # casts the heights
             tb = wgpu.TextureUsage.TEXTURE_BINDING
-            if self.sampler is not None:
-                h16 = np.asarray(mat.height, np.float16)
-                self.height = upload_texture(h16, "r16float", tb, "neural.height")
-            else:
-                h32 = np.asarray(mat.height, np.float32)
-                self.height = upload_texture(h32, "r32float", tb, "neural.height")
+            self.height = upload_texture(mat.height, fmt, tb, "neural.height")
         #: the offset texture of a neural-offset material (as the neural textures), else None
         self.offset = None
         if mat.parallax_kind == "neural":

@@ -14,8 +14,9 @@ FRAMES_IN_FLIGHT_MAX = 3
 LIGHTS_MAX = 64
 #: the longest refresh sweep of adaptive reuse, in frames
 ADAPTIVE_PERIOD_MAX = 16
-#: how the texture and screen passes filter neural textures (runtime/codegen_sample.py:FILTERS;
-#: the reference mode always "exact")
+#: how the texture and screen passes filter neural textures: "exact" (taps and weights computed
+#: in float32 in the shader, the twin's arithmetic) or "hardware" (the sampler's filtering;
+#: runtime/codegen_sample.py); the reference mode always "exact"
 NEURAL_FILTERS = ("exact", "hardware")
 
 

@@ -121,7 +121,6 @@ class TextureSpacePass:
         self.radiance_format = radiance_format  # rgba32float: no f16 clamp, 2x memory
         self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
         self.subgroups = has_feature("subgroup") if subgroups is None else subgroups
-        self.filtering = filtering  # neural textures: "exact" or "hardware" (codegen_sample)
         self.code = texture_space_wgsl(
             mat, precision, n_lights, weights, radiance_format, self.subgroups, filtering
         )

@@ -7,9 +7,10 @@
 // (rgba32uint: 8 float16 channels per texel and layer, two per u32, see gpu_material.py)
 // sampled by manual bilinear wrap (4 textureLoads per 8 channels, unpack2x16float),
 // exactly like sample_bilinear_wrap; or, with mat.filtering "hardware", texture_2d_array<f32>
-// (rgba16float) read through the sampler neural_samp (runtime/codegen_sample.py). The bindings are declared by runtime/interface.py
-// (material_bindings). Weights are WGSL constants in unrolled code, or read from
-// buffers in loops (storage or uniform weights; wide teachers and the >=10x comparison).
+// (rgba16float) read through the sampler neural_samp (runtime/codegen_sample.py). The
+// bindings are declared by runtime/interface.py (material_bindings). Weights are WGSL
+// constants in unrolled code, or read from buffers in loops (storage or uniform weights; wide
+// teachers and the >=10x comparison).
 
 
 {% macro wrap_fn() %}
@@ -130,7 +131,9 @@ fn apply_output(r: vec3<f32>) -> vec3<f32> {
 {% endmacro %}
 
 {% macro material_fns(mat, T, nets, samplers) %}
+{% if mat.filtering != 'hardware' %}
 {{ wrap_fn() }}
+{% endif %}
 // The training data's direction range (vrneural/grazing.py): cos and sin of theta_i_max and
 // theta_o_max, exact float32 values.
 const COS_I_MAX: f32 = {{ mat.dir_consts[0] }};
