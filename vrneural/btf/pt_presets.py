@@ -148,18 +148,22 @@ def fur(rng, tufts: int = 144, per_tuft: int = 40) -> Tile:
     tufts hide and shadow their neighbours and a texel's colour changes with the view. Strands
     are fine (radius 0.0035 tile widths at the root, a quarter of a texel at 64^2, 40 a tuft):
     a texel sees several, as a camera sees fur, not one strand that changes from view to view.
+    The strands' coating is glossy (GGX alpha 0.12), as a hair's cuticle: each strand a
+    narrow highlight along its own axis, so a texel's few strands, leaning their own ways,
+    give it several small highlights scattered over the (light, view) pairs.
 
-    The fourth version. The third had patches at 1-3 cycles a tile (Lafortune / NeuMIP with
-    offset 1.16 over five seeds, 1.20 with these); at 4-10 cycles it fell back to 1.15, and
-    tipped strands (each strand's upper third in a contrasting colour) gave 1.12. The second
-    had 14 strands a tuft of radius 0.009 (about a texel wide): 1.12 there, 1.16 with the
-    finer strands; a combed nap (every tuft leaning 31 degrees along +u) made it 1.08. On the
-    first (100 tufts of
-    three reds and greys chosen per tuft, all 0.11-0.16 tall) the lobes beat NeuMIP with
-    parallax (0.93): a noisy carpet whose texels change strand from view to view, which a
-    per-texel lobe averages as well as a network. Patches larger than a tuft slide under a
-    texel as the view tilts; they made the two tie (1.005). A short pile (0.035-0.075) and
-    finer patches made the lobes win again (0.92): docs/quality-research.md."""
+    The fifth version (Lafortune / NeuMIP with offset 1.25 over five seeds). The fourth had a
+    rough coating (alpha 0.35: 1.19 over five seeds); glossy tufts that also lean more (0.35
+    instead of 0.15) fell back to 1.19 (seed 0). The third had patches at 1-3 cycles a tile
+    (1.16); at 4-10 cycles it fell back to 1.15, and tipped strands (each strand's upper third
+    in a contrasting colour) gave 1.12. The second had 14 strands a tuft of radius 0.009
+    (about a texel wide): 1.12 there, 1.16 with the finer strands; a combed nap (every tuft
+    leaning 31 degrees along +u) made it 1.08. On the first (100 tufts of three reds and greys
+    chosen per tuft, all 0.11-0.16 tall) the lobes beat NeuMIP with parallax (0.93): a noisy
+    carpet whose texels change strand from view to view, which a per-texel lobe averages as
+    well as a network. Patches larger than a tuft slide under a texel as the view tilts; they
+    made the two tie (1.005). A short pile (0.035-0.075) and finer patches made the lobes win
+    again (0.92): docs/quality-research.md."""
     k = round(np.sqrt(tufts))
     base = (np.stack(np.meshgrid(np.arange(k), np.arange(k)), -1).reshape(-1, 2) + 0.5) / k
     centres = (base + (rng.random(base.shape) - 0.5) * 0.6 / k) % 1.0
@@ -184,7 +188,7 @@ def fur(rng, tufts: int = 144, per_tuft: int = 40) -> Tile:
             radius = 0.0035 * (1.0 - 0.7 * t)
             groups[int(c)].append(tube(path, radius, sides=5, ref=[1.0, 0.0, 0.0]))
     parts = [
-        Part(merge(g), plastic(cols[i], 0.35), name=f"yarn{i}") for i, g in enumerate(groups) if g
+        Part(merge(g), plastic(cols[i], 0.12), name=f"yarn{i}") for i, g in enumerate(groups) if g
     ]
     back = heightfield(0.002 * spectral_noise(rng, 32, 2, 12))
     parts.append(Part(back, diffuse((0.20, 0.16, 0.11)), name="backing"))
