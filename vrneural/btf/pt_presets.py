@@ -140,15 +140,16 @@ def pebbles(rng, count: int = 34) -> Tile:
     return Tile(parts, f"{len(placed)} packed pebbles of six stones on sand")
 
 
-def fur(rng, tufts: int = 144, per_tuft: int = 40) -> Tile:
+def fur(rng, tufts: int = 144, per_tuft: int = 40, gloss: float = 0.12, lean: float = 0.15) -> Tile:
     """Cut pile: ``tufts`` tufts (on a jittered grid) of ``per_tuft`` thin tapered strands
-    each, standing on a backing, leaning and curling. The tufts' yarn colour follows patches
-    of a few tufts (cream, russet, near-black: a calico coat; the patch field's frequencies
-    2-6 cycles a tile) and their height varies by tuft (0.07-0.19 tile widths), so taller
-    tufts hide and shadow their neighbours and a texel's colour changes with the view. Strands
+    each, standing on a backing, leaning (each tuft by a slope of standard deviation ``lean``)
+    and curling. The tufts' yarn colour follows patches of a few tufts (cream, russet,
+    near-black: a calico coat; the patch field's frequencies 2-6 cycles a tile) and their
+    height varies by tuft (0.07-0.19 tile widths), so taller tufts hide and shadow their
+    neighbours and a texel's colour changes with the view. Strands
     are fine (radius 0.0035 tile widths at the root, a quarter of a texel at 64^2, 40 a tuft):
     a texel sees several, as a camera sees fur, not one strand that changes from view to view.
-    The strands' coating is glossy (GGX alpha 0.12), as a hair's cuticle: each strand a
+    The strands' coating is glossy (GGX alpha ``gloss``), as a hair's cuticle: each strand a
     narrow highlight along its own axis, so a texel's few strands, leaning their own ways,
     give it several small highlights scattered over the (light, view) pairs.
 
@@ -177,18 +178,18 @@ def fur(rng, tufts: int = 144, per_tuft: int = 40) -> Tile:
     groups: list[list] = [[] for _ in cols]
     t = np.linspace(0.0, 1.0, 7)
     for (cx, cy), c, top in zip(centres, colour, tall, strict=True):
-        lean = rng.normal(0, 0.15, 2)
+        tuft_lean = rng.normal(0, lean, 2)
         for _ in range(per_tuft):
             p0 = np.array([cx, cy]) + rng.normal(0, 0.022, 2)
             h = top * rng.uniform(0.85, 1.0)
-            tilt = lean + rng.normal(0, 0.12, 2)
+            tilt = tuft_lean + rng.normal(0, 0.12, 2)
             curl = rng.normal(0, 0.02, 2)
             xy = p0 + np.outer(t, tilt * h) + np.outer(t**2, curl)
             path = np.column_stack([xy, h * t])
             radius = 0.0035 * (1.0 - 0.7 * t)
             groups[int(c)].append(tube(path, radius, sides=5, ref=[1.0, 0.0, 0.0]))
     parts = [
-        Part(merge(g), plastic(cols[i], 0.12), name=f"yarn{i}") for i, g in enumerate(groups) if g
+        Part(merge(g), plastic(cols[i], gloss), name=f"yarn{i}") for i, g in enumerate(groups) if g
     ]
     back = heightfield(0.002 * spectral_noise(rng, 32, 2, 12))
     parts.append(Part(back, diffuse((0.20, 0.16, 0.11)), name="backing"))

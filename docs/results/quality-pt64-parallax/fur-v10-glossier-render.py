@@ -2,11 +2,13 @@
 
     python fur-v10-glossier-render.py btf render fur --res 64 --dirs 24 --spp 64 --bounces 5 -o fur.btf
 """
+import functools
 import sys
+
 from vrneural.btf import pt_presets as P
 
-_plastic = P.plastic
-P.plastic = lambda colour, alpha: _plastic(colour, 0.06 if alpha == 0.12 else alpha)
+P.PT_PRESETS["fur"] = functools.partial(P.fur, gloss=0.06)
 if __name__ == "__main__":
     from vrneural.cli import main
+
     sys.exit(main(sys.argv[1:]))
