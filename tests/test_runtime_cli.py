@@ -3,6 +3,7 @@
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from vrneural.cli import main
@@ -57,6 +58,7 @@ def test_missing_pack_file(capsys, tmp_path):
         (["--eye-res", "12xfoo"], "--eye-res"),
         (["--mode", "reference", "--reference", "missing.vrnm"], "'missing.vrnm': file not"),
         (["--reference", "t.vrnm"], "only used by --mode reference"),
+        (["--target", "display", "--mode", "screen"], "--target display needs --mode texture"),
     ],
 )
 def test_bad_flags(capsys, tmp_path, argv, needle):
@@ -96,6 +98,28 @@ def test_tiny_run_writes_summary_and_frames(capsys, tmp_path):
     assert sm["frames_in_flight"] == 2 and sm["host_cpu_ms"]["median"] > 0
     assert (out / "frame0000_eye1.png").is_file() and (out / "frame0005_eye0.exr").is_file()
     assert "frame ms" in capsys.readouterr().out
+
+
+@pytest.mark.gpu
+def test_display_target_run_writes_png_frames_and_video_without_exr(capsys, tmp_path):
+    """`--target display`: the eyes drawn into 8-bit sRGB targets; the saved PNGs within one
+    level of the HDR run's (its tonemap of the same frames), no EXR, a video, and the summary
+    says which target it used."""
+    import imageio.v3 as iio
+
+    outs = {}
+    for target in ("hdr", "display"):
+        outs[target] = out = tmp_path / target
+        argv = ["--profile", "tiny", "--frames", "3", "--target", target, "--out", str(out)]
+        assert main(["run", *argv, "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    assert printed.count("(+ .exr)") == 1  # the HDR run's frames line, not the display run's
+    disp = outs["display"]
+    assert not list(disp.glob("*.exr")) and (disp / "stereo.mp4").is_file()
+    assert json.loads((disp / "summary.json").read_text())["config"]["target"] == "display"
+    for name in ("frame0000_eye0.png", "frame0002_eye1.png"):
+        a, b = (iio.imread(outs[t] / name).astype(int) for t in ("hdr", "display"))
+        assert a.shape == b.shape and np.abs(a - b).max() <= 1 and b.max() > 50
 
 
 @pytest.mark.gpu

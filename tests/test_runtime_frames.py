@@ -140,6 +140,45 @@ def test_display_target_is_the_tonemap_of_the_hdr_frame_within_one_level():
 
 
 @pytest.mark.gpu
+@pytest.mark.parametrize("name", ["texture", "screen", "bench_1light"])
+def test_a_compute_cleared_colour_gives_the_same_frames_as_the_passes_clear(name):
+    """Settings.colour_clear: the compute clear (GPUs' default) and the render pass's own
+    clear (CPU adapters') give the same bits and counters, frame after frame (a colour not
+    cleared would keep the last frame's pixels where nothing is drawn now)."""
+    got = {c: render(name, colour_clear=c) for c in ("compute", "pass")}
+    for a, b in zip(got["compute"], got["pass"], strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("target", ["hdr", "display"])
+def test_the_colour_clear_kernel_blackens_every_texel_of_both_eyes(target):
+    """forward.clear_colour (a compute pass; the render pass then loads the colour): every
+    texel of the eyes' shared target 0 after it, whatever was there (its twin: np.zeros)."""
+    from vrneural.gpu.readback import read_texture
+    from vrneural.runtime import forward as fw
+
+    et = fw.EyeTargets.side_by_side(2, 24, 16, 1, target=target)[1]  # the second eye's
+    tex = et.colour
+    assert tex.format == fw.TARGETS[target] and tex.size[:2] == (48, 16)
+    from vrneural.gpu.device import get_device
+
+    d = get_device()
+    enc = d.create_command_encoder()  # something else first: a render pass's clear to grey
+    rp = enc.begin_render_pass(color_attachments=[{
+        "view": et.colour_view, "load_op": "clear", "store_op": "store",
+        "clear_value": (0.5, 0.25, 1.0, 1.0)}])  # fmt: skip
+    rp.end()
+    d.queue.submit([enc.finish()])
+    assert read_texture(tex).min() > 0
+    enc = d.create_command_encoder()
+    fw.clear_colour(enc, et)
+    d.queue.submit([enc.finish()])
+    dtype = np.float16 if target == "hdr" else np.uint8
+    np.testing.assert_array_equal(read_texture(tex), np.zeros((16, 48, 4), dtype))
+
+
+@pytest.mark.gpu
 def test_settings_errors_are_one_line():
     from vrneural.errors import VrnError
 
@@ -147,6 +186,8 @@ def test_settings_errors_are_one_line():
         _renderer(frames_in_flight=4)
     with pytest.raises(VrnError, match="target = 'ldr' is not allowed"):
         _renderer(target="ldr")
+    with pytest.raises(VrnError, match="colour_clear = 'fast' is not allowed"):
+        _renderer(colour_clear="fast")
 
 
 @pytest.mark.gpu

@@ -38,6 +38,7 @@ def main(args) -> int:
         what = "left eye | right eye" if sm["resolved"]["eyes"] == 2 else "one eye"
         print(f"  video   {out}/{mp4.name} ({what})")
     if pngs:
-        print(f"  frames  {', '.join(pngs)} (+ .exr)")
+        exr = any(f.endswith(".exr") for f in sm["files"])
+        print(f"  frames  {', '.join(pngs)}" + (" (+ .exr)" if exr else ""))
     print(f"  summary {out}/summary.json")
     return 0

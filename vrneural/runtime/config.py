@@ -18,6 +18,7 @@ from vrneural.runtime.settings import (
     MODES,
     NEURAL_FILTERS,
     RADIANCE,
+    TARGETS,
     Settings,
 )
 
@@ -78,6 +79,13 @@ class RunConfig:
         f"frames the GPU may queue while the next is encoded (1-{FRAMES_IN_FLIGHT_MAX}; 1: the "
         "host waits for each frame before encoding the next)",
     )
+    target: str = opt(
+        "hdr",
+        "eye colour targets: hdr (rgba16float radiance: PNG + EXR frames) or display (8-bit "
+        "tonemapped sRGB, half the bytes per pixel: PNG frames and video, no EXR; --mode "
+        "texture only)",
+        choices=TARGETS,
+    )
     profile: str | None = opt(None, "device profile: quest3 (default), quest2, preview, tiny")
     texture_res: int | None = opt(
         None, "radiance texture side per eye per object (default: the profile's)"
@@ -110,7 +118,9 @@ class RunConfig:
         "that each eye keeps 256)",
     )
     save_frames: str = opt(
-        "first,last", "frames saved as PNG + EXR: 'first,last', 'all', 'none', '0,45'"
+        "first,last",
+        "frames saved as PNG + EXR (PNG alone with --target display): 'first,last', 'all', "
+        "'none', '0,45'",
     )
     force: bool = opt(False, "overwrite an existing output directory")
 
@@ -160,13 +170,19 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         raise VrnError("resolve: adapter must be adapter_summary() (vrneural.gpu.device)")
     cfg = resolved(cfg)  # the fields not given: their defaults
     for name, allowed in (
-        ("mode", MODES), ("schedule", SCHEDULES), ("neural_filter", NEURAL_FILTERS)
+        ("mode", MODES), ("schedule", SCHEDULES), ("neural_filter", NEURAL_FILTERS),
+        ("target", TARGETS),
     ):  # fmt: skip
         if getattr(cfg, name) not in allowed:
             raise VrnError(
                 f"--{name.replace('_', '-')} = {getattr(cfg, name)!r} is not allowed; choose "
                 f"{', '.join(allowed)}"
             )
+    if cfg.target == "display" and cfg.mode != "texture":
+        raise VrnError(
+            f"--target display needs --mode texture (--mode {cfg.mode} writes HDR pixels from a "
+            "compute pass); drop --target or use --mode texture"
+        )
     reuse_given, budget = parse_reuse(cfg.reuse, cfg.reuse_budget)
     for name in ("frames", "eyes", "texture_res", "lights"):
         v = getattr(cfg, name)
@@ -276,6 +292,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         parallax_march=cfg.parallax_march,
         frames_in_flight=cfg.frames_in_flight,
         neural_filter=cfg.neural_filter,
+        target=cfg.target,
     )
 
 

@@ -112,14 +112,16 @@ class FrameEncoding:
         if shared:
             if e is not None:  # a pass clears the whole target: the other eyes' too
                 raise ValueError("encode_forward: eyes side by side are drawn together (e=None)")
-            rp = fw.begin_pass(enc, ets[0], ts(name))
+            clear_ts = ts(name) if ets[0].compute_clear else None  # the clear's time counts
+            rp = fw.begin_pass(enc, ets[0], ts(name), clear_ts)
             for et, b in zip(ets, bundles, strict=True):
                 fw.viewport(rp, et)
                 rp.execute_bundles([b])
             rp.end()
             return
         for k in range(len(ets)) if e is None else (e,):
-            rp = fw.begin_pass(enc, ets[k], ts(name))
+            clear_ts = ts(name) if ets[k].compute_clear else None
+            rp = fw.begin_pass(enc, ets[k], ts(name), clear_ts)
             rp.execute_bundles([bundles[k]])
             rp.end()
 

@@ -19,13 +19,16 @@ from vrneural.gpu.device import get_device
 from vrneural.gpu.readback import upload_buffer
 from vrneural.gpu.shaders import render_wgsl
 from vrneural.gpu.uniforms import UniformArena
+from vrneural.runtime import settings
 from vrneural.runtime.interface import FRAME, LIGHT, OBJECT, forward_bindings, structs_wgsl
 from vrneural.runtime.reference import normal_matrix
 from vrneural.runtime.texture_pass import light_words
 
 #: eye colour targets: ``hdr`` (linear radiance, for EXR and FLIP) or ``display`` (Reinhard
-#: tonemapped, sRGB-encoded 8 bits: half the bytes where HDR output is not needed)
-TARGETS = {"hdr": "rgba16float", "display": "rgba8unorm-srgb"}
+#: tonemapped, sRGB-encoded 8 bits: half the bytes where HDR output is not needed). The display
+#: target is rgba8unorm, sRGB-encoded by the fragment shader: a storage texture, so that
+#: :func:`clear_colour` can clear it (an ``-srgb`` format cannot be one)
+TARGETS = dict(zip(settings.TARGETS, ("rgba16float", "rgba8unorm"), strict=True))
 DEPTH_FORMAT = "depth32float"
 VIS_FORMAT = "rg32uint"
 FRAME_BYTES = FRAME.size  # 96
@@ -137,15 +140,17 @@ class EyeTargets:
     def __init__(
         self, width: int, height: int, n_lights: int, vis: bool = False, arena=None,
         target: str = "hdr", share: EyeTargets | None = None, x0: int = 0, columns: int = 1,
+        compute_clear: bool = True,
     ):  # fmt: skip
         import wgpu
 
         dev = get_device()
         tu = wgpu.TextureUsage
         self.size = (width, height)  # this eye's image
+        #: begin_pass clears the colour with clear_colour (else in the render pass)
+        self.compute_clear = compute_clear if share is None else share.compute_clear
         self.x0 = x0  # its first column in the textures
         self.target = target
-        storage = tu.STORAGE_BINDING if target == "hdr" else 0  # the screen pass writes HDR
 
         def texture(fmt: str, usage):
             return dev.create_texture(size=(width * columns, height, 1), format=fmt, usage=usage)
@@ -154,13 +159,15 @@ class EyeTargets:
         if share is not None:
             self.colour, self.depth, self.vis = share.colour, share.depth, share.vis
             self.colour_view, self.depth_view = share.colour_view, share.depth_view
-            self.vis_view = share.vis_view
+            self.vis_view, self._clear = share.vis_view, share._clear
         else:
-            usage = rt | tu.COPY_SRC | storage | tu.TEXTURE_BINDING
+            # storage: cleared by a compute pass (clear_colour); the screen pass writes HDR
+            usage = rt | tu.COPY_SRC | tu.STORAGE_BINDING | tu.TEXTURE_BINDING
             self.colour = texture(TARGETS[target], usage)
             self.depth = texture(DEPTH_FORMAT, rt)
             self.vis = texture(VIS_FORMAT, rt | tu.TEXTURE_BINDING) if vis else None
             self.colour_view = self.colour.create_view()
+            self._clear = _clear_group(self.colour, TARGETS[target])
             self.depth_view = self.depth.create_view()
             self.vis_view = self.vis.create_view() if vis else None
         self.n_lights = max(1, n_lights)
@@ -172,13 +179,15 @@ class EyeTargets:
 
     @classmethod
     def side_by_side(
-        cls, n: int, width: int, height: int, n_lights: int, arena=None, target: str = "hdr"
-    ) -> list[EyeTargets]:
+        cls, n: int, width: int, height: int, n_lights: int, arena=None, target: str = "hdr",
+        compute_clear: bool = True,
+    ) -> list[EyeTargets]:  # fmt: skip
         """``n`` eyes' targets in one set of textures ``n * width`` wide, eye ``e`` in the
         columns from ``e * width``: one render pass draws every eye (a viewport each,
         :func:`viewport`), each with its own frame uniforms. Single-pass stereo: one pass
         begun, cleared and ended per frame instead of one per eye."""
-        first = cls(width, height, n_lights, False, arena, target, columns=n)
+        first = cls(width, height, n_lights, False, arena, target, columns=n,
+                    compute_clear=compute_clear)  # fmt: skip
         rest = [
             cls(width, height, n_lights, False, arena, target, share=first, x0=e * width)
             for e in range(1, n)
@@ -285,10 +294,58 @@ def viewport(rp, eye: EyeTargets) -> None:
     rp.set_viewport(eye.x0, 0, eye.size[0], eye.size[1], 0.0, 1.0)
 
 
-def begin_pass(encoder, eye: EyeTargets, timestamp_writes=None):
-    """A render pass clearing colour to black, depth to 1 (and visibility to 0)."""
+@functools.cache
+def _clear_pipeline(fmt: str):
+    """A compute pipeline storing black in every texel of a ``fmt`` storage texture."""
+    code = f"""
+@group(0) @binding(0) var dst: texture_storage_2d<{fmt}, write>;
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) g: vec3<u32>) {{
+    if (any(g.xy >= textureDimensions(dst))) {{ return; }}
+    textureStore(dst, g.xy, vec4<f32>(0.0));
+}}"""
+    dev = get_device()
+    mod = dev.create_shader_module(code=code, label=f"clear {fmt}")
+    return dev.create_compute_pipeline(
+        layout="auto", compute={"module": mod, "entry_point": "main"}, label=f"clear {fmt}"
+    )
+
+
+def _clear_group(tex, fmt: str):
+    """(pipeline, bind group, workgroups) of :func:`clear_colour` for ``tex``."""
+    pipe = _clear_pipeline(fmt)
+    bg = get_device().create_bind_group(
+        layout=pipe.get_bind_group_layout(0),
+        entries=[{"binding": 0, "resource": tex.create_view()}],
+    )
+    return pipe, bg, ((tex.size[0] + 7) // 8, (tex.size[1] + 7) // 8)
+
+
+def clear_colour(encoder, eye: EyeTargets, timestamp_writes=None) -> None:
+    """Clear ``eye``'s colour texture (all of it: every eye drawn into it) to black in a
+    compute pass. A render pass's clear goes through the raster back end, which some GPUs
+    have little of: on an NVIDIA H200 (graphics on a few of its multiprocessors) clearing
+    both Quest 3 eyes' rgba16float target took 1.3 ms in a render pass, 0.09 ms in compute
+    (docs/results/h200/raster_floor.py), and the main job's frame fell from 4.4 to 3.2 ms. On
+    lavapipe the compute pass is the slower (the main job's forward pass 130 -> 150-180 ms),
+    so CPU adapters keep the render pass's clear (``Settings.colour_clear``)."""
+    pipe, bg, groups = eye._clear
+    cp = encoder.begin_compute_pass(timestamp_writes=timestamp_writes)
+    cp.set_pipeline(pipe)
+    cp.set_bind_group(0, bg)
+    cp.dispatch_workgroups(*groups)
+    cp.end()
+
+
+def begin_pass(encoder, eye: EyeTargets, timestamp_writes=None, clear_writes=None):
+    """A render pass over ``eye``'s targets: colour black (with ``eye.compute_clear``
+    cleared first by :func:`clear_colour`, timed by ``clear_writes``, then loaded; else
+    cleared by the pass), depth cleared to 1 (and visibility to 0)."""
     clear = {"load_op": "clear", "store_op": "store", "clear_value": (0, 0, 0, 0)}
     att = [{"view": eye.colour_view, **clear}]
+    if eye.compute_clear:
+        clear_colour(encoder, eye, clear_writes)
+        att = [{"view": eye.colour_view, "load_op": "load", "store_op": "store"}]
     if eye.vis is not None:
         att.append({"view": eye.vis_view, **clear})
     return encoder.begin_render_pass(

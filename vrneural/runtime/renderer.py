@@ -41,6 +41,7 @@ from vrneural.runtime.screen_pass import ScreenSpacePass, ScreenTarget
 from vrneural.runtime.screen_res import choose, level_sides, mesh_area, wanted_side
 from vrneural.runtime.settings import (
     ADAPTIVE_PERIOD_MAX,
+    COLOUR_CLEARS,
     FRAMES_IN_FLIGHT_MAX,
     NEURAL_FILTERS,
     RADIANCE,
@@ -87,6 +88,11 @@ class Renderer(FrameEncoding):
                 f"neural_filter = {s.neural_filter!r} is not allowed; choose "
                 f"{', '.join(NEURAL_FILTERS)}"
             )
+        if s.colour_clear not in COLOUR_CLEARS:
+            raise VrnError(
+                f"colour_clear = {s.colour_clear!r} is not allowed; choose "
+                f"{', '.join(COLOUR_CLEARS)}"
+            )
         if s.target == "display" and s.mode != "texture":
             raise VrnError(
                 f"target = 'display' needs mode 'texture' (mode {s.mode!r} writes HDR pixels "
@@ -105,10 +111,17 @@ class Renderer(FrameEncoding):
         nl = max(1, len(self.lights))
         #: every per-frame uniform, written with one write_buffer per frame
         self.arena = UniformArena("frame uniforms")
+        cc = s.colour_clear
+        if cc == "auto":  # each the faster where measured (forward.clear_colour)
+            from vrneural.gpu.device import adapter_summary
+
+            cc = "pass" if adapter_summary().is_cpu else "compute"
+        #: how the forward pass clears the colour: "compute" or "pass" (auto resolved)
+        self.colour_clear = cc
+        kw = {"target": s.target, "compute_clear": cc == "compute"}
         if screen:  # the per-pixel pass reads and writes each eye's own targets
             self.eye_t = [
-                fw.EyeTargets(w, h, nl, vis=True, arena=self.arena, target=s.target)
-                for _ in range(s.eyes)
+                fw.EyeTargets(w, h, nl, vis=True, arena=self.arena, **kw) for _ in range(s.eyes)
             ]
         else:  # the eyes side by side: one forward pass draws them all
             max_tex = int(self.dev.limits["max-texture-dimension-2d"])
@@ -118,7 +131,7 @@ class Renderer(FrameEncoding):
                     f"side by side in one target {s.eyes * w} pixels wide, above the adapter "
                     f"maximum {max_tex}; use a width of at most {max_tex // s.eyes}"
                 )
-            self.eye_t = fw.EyeTargets.side_by_side(s.eyes, w, h, nl, self.arena, s.target)
+            self.eye_t = fw.EyeTargets.side_by_side(s.eyes, w, h, nl, self.arena, **kw)
         self.head = OrbitPath() if scene.head == "orbit" else PoseLogPath(scene.head)
         # Floating origin: everything uploaded to the GPU is relative to the first eye position
         # (subtracted in float64), so scenes far from the world origin keep f32 precision.

@@ -260,11 +260,22 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
     interrupted = False
     bar = tqdm(range(s.frames), desc="vrneural run", unit="frame", disable=not progress)
 
-    def write_frame(f: int, hdr) -> None:
-        for e, img in enumerate(hdr):
+    display = s.target == "display"  # 8-bit sRGB eyes: PNG frames and video, no EXR
+
+    def read() -> list[np.ndarray]:  # the last frame's eyes: HDR radiance or display colours
+        return r.read_display() if display else r.read_eyes()
+
+    def write_frame(f: int, eyes) -> None:
+        for e, img in enumerate(eyes):
             name = f"frame{f:04d}_eye{e}"
-            files.append(str(write_png(out / f"{name}.png", tonemap(img))))
-            files.append(str(write_exr(out / f"{name}.exr", img)))
+            files.append(str(write_png(out / f"{name}.png", img if display else tonemap(img))))
+            if not display:
+                files.append(str(write_exr(out / f"{name}.exr", img)))
+
+    def video_frame(img) -> np.ndarray:  # an eye as the video shows it, uint8 sRGB
+        if display:  # averaged in sRGB values (the HDR path averages radiance)
+            return np.round(downscale(img, cfg.video_scale)).astype(np.uint8)
+        return tonemap(downscale(img, cfg.video_scale))
 
     # Ctrl-C stops between frames (a second one at once): every frame counted in the summary
     # is in the video and its saved images, and the video stays playable
@@ -275,11 +286,11 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
                 st = r.frame(f)
                 stop.second_raises = False  # writing: finish it, so saved files stay whole
                 if f in save or video is not None:
-                    hdr = r.read_eyes()
+                    eyes = read()
                     if f in save:
-                        write_frame(f, hdr)
+                        write_frame(f, eyes)
                     if video is not None:
-                        video.add([tonemap(downscale(img, cfg.video_scale)) for img in hdr])
+                        video.add([video_frame(img) for img in eyes])
                 stats.append(st)
                 if stop.flag:
                     break
@@ -304,7 +315,7 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
     with Stop():  # more Ctrl-C while the video and summary are written: finish writing them
         last = len(stats) - 1
         if interrupted and clean and "last" in cfg.save_frames.lower() and last not in save:
-            write_frame(last, r.read_eyes())  # --save-frames last: the last frame rendered
+            write_frame(last, read())  # --save-frames last: the last frame rendered
         if video is not None:
             try:
                 files.append(str(video.close()))
@@ -320,7 +331,7 @@ def _run(cfg: RunConfig, od: OutputDir, progress: bool) -> dict:
         kept = ["summary.json"]
         n_png = sum(f.endswith(".png") for f in files)
         if n_png:
-            kept.append(f"{n_png} frame PNG(s) + EXR")
+            kept.append(f"{n_png} frame PNG(s)" + ("" if display else " + EXR"))
         if any(f.endswith(".mp4") for f in files):
             kept.append(f"{Path(video.path).name} ({len(stats)} frames)")
         raise interrupt_saying(
@@ -338,6 +349,7 @@ VIDEO_MIN_PX = 256
 def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
     settings = dataclasses.asdict(dataclasses.replace(s, reference=None))
     settings["reference"] = cfg.reference
+    settings["colour_clear"] = r.colour_clear  # "auto" resolved for this adapter
     warm = stats[1:] if len(stats) > 1 else stats  # frame 0 includes shader compilation
     atlases = {n.idx: n.atlas for n in r.neural}
     gpu_names = sorted({k for st in stats for k in st.gpu_ms})

@@ -18,6 +18,12 @@ ADAPTIVE_PERIOD_MAX = 16
 #: in float32 in the shader, the twin's arithmetic) or "hardware" (the sampler's filtering;
 #: runtime/codegen_sample.py); the reference mode always "exact"
 NEURAL_FILTERS = ("exact", "hardware")
+#: eye colour targets (Settings.target; their formats: vrneural.runtime.forward.TARGETS)
+TARGETS = ("hdr", "display")
+#: how the forward pass clears the eyes' colour: "compute" (a compute pass, then the render pass
+#: loads it), "pass" (the render pass's own clear), "auto" (compute on GPUs, pass on CPU adapters:
+#: each the faster where measured, runtime/forward.py: clear_colour)
+COLOUR_CLEARS = ("auto", "compute", "pass")
 
 
 @dataclass
@@ -66,6 +72,8 @@ class Settings:
     #: eye colour targets: "hdr" (rgba16float radiance: EXR, FLIP) or "display" (8-bit
     #: Reinhard-tonemapped sRGB, texture mode only: where HDR output is not needed)
     target: str = "hdr"
+    #: how the forward pass clears the eyes' colour (COLOUR_CLEARS); the frames are the same
+    colour_clear: str = "auto"
     #: neural-texture filtering of the texture and screen passes: "hardware" (the sampler's
     #: bilinear / trilinear filtering: its weights at the adapter's sub-texel precision) or
     #: "exact" (taps and weights in float32 in the shader, the numpy twin's arithmetic)

@@ -1,7 +1,7 @@
 // Forward pass per eye (and the visibility pass of the screen-space modes).
 // Vertex buffer: triangles expanded (3 vertices per face), per vertex position.xyz, normal.xyz,
 // atlas uv, triangle index (u32). Colour target rgba16float (HDR), or with `display` an
-// rgba8unorm-srgb target holding Reinhard x / (1 + x) (the sRGB encoding is the target's);
+// rgba8unorm target holding Reinhard x / (1 + x), sRGB-encoded here (twin: output.tonemap);
 // depth32float, less-test.
 // Template parameters: n_active (lights shaded, a
 // compile-time loop count, 0 allowed), display (bool), mips (bool: neural objects sample
@@ -76,7 +76,10 @@ fn plain_colour(world: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
 // what the colour target stores: HDR radiance, or (display) its Reinhard tonemap
 fn out_colour(c: vec3<f32>) -> vec4<f32> {
 {% if display %}
-    return vec4<f32>(c / (vec3<f32>(1.0) + c), 1.0);
+    let x = c / (vec3<f32>(1.0) + c);
+    let srgb = select(1.055 * pow(x, vec3<f32>(1.0 / 2.4)) - 0.055, 12.92 * x,
+                      x <= vec3<f32>(0.0031308));
+    return vec4<f32>(srgb, 1.0);
 {% else %}
     return vec4<f32>(c, 1.0);
 {% endif %}
