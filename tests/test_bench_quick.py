@@ -86,7 +86,7 @@ def test_frame_breakdown_has_every_pass_floor_and_depth(results):
     want = {"texture_full", "texture_bare", "texture_loads", "texture_slice",
             "texture_slice_bare", "forward", "forward_floor_sample", "forward_floor_constant",
             "forward_display", "texture_full_exact", "texture_loads_exact",
-            "texture_slice_exact"}  # fmt: skip
+            "texture_slice_exact", "forward_floor_screen", "colour_store"}  # fmt: skip
     assert set(sm["passes"]) == want
     assert all(_finite(v["wall_ms"]) and v["wall_ms"] > 0 for v in sm["passes"].values())
     assert set(sm["loops"]) == {"1", "2", "3"}

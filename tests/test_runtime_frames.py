@@ -179,6 +179,33 @@ def test_the_colour_clear_kernel_blackens_every_texel_of_both_eyes(target):
 
 
 @pytest.mark.gpu
+@pytest.mark.parametrize("target", ["hdr", "display"])
+def test_bench_frames_raster_floor_covers_every_pixel_of_both_eyes_once(target):
+    """bench frame's raster floor (one constant-colour triangle per viewport through the
+    renderer's own forward-pass encoding): every pixel of both eyes holds the constant, as
+    the twin says (0.5 in HDR; output.tonemap of it on the display target)."""
+    from vrneural.bench.frame import screen_floor_bundles
+    from vrneural.runtime.output import tonemap
+
+    r = _renderer(target=target)
+    r.frame(0)
+    r.wait()
+    enc = r.dev.create_command_encoder()
+    r.encode_forward(enc, None, screen_floor_bundles(r))
+    r.dev.queue.submit([enc.finish()])
+    want = np.full((40, 48, 3), 0.5, np.float32)
+    if target == "display":
+        got = r.read_display()
+        want = tonemap(want)
+    else:
+        got = [e[..., :3] for e in r.read_eyes()]
+    for g in got:
+        assert np.abs(g.astype(np.float32) - want.astype(np.float32)).max() <= (
+            1 if target == "display" else 0
+        )
+
+
+@pytest.mark.gpu
 def test_settings_errors_are_one_line():
     from vrneural.errors import VrnError
 

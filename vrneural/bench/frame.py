@@ -12,7 +12,10 @@ spell of a shared machine hits every condition:
   timestamps or the wall clock): a full texture-space update,
   a staggered frame's update, the forward pass of both eyes (HDR and the 8-bit display target);
 - the floors over the same geometry, targets and candidates: a constant-colour forward pass, a
-  forward pass doing one bilinear sample per fragment and nothing else, and the bare
+  forward pass doing one bilinear sample per fragment and nothing else, the raster floor (one
+  constant-colour triangle over each eye's viewport, the same clears: every pixel covered once)
+  against a compute pass storing the same texels (``colour_store``: the adapter's render
+  back end against the whole chip; on an NVIDIA H200 the one was 30x the other), and the bare
   texture-space kernel (the same facing test, geometry records read and texels stored; no
   shading), alone and with the neural-texture lookups at the blocks' texels (``texture_loads``:
   the traffic any shading of them needs);
@@ -124,6 +127,34 @@ def forward(r, bundles=None):
     return encode
 
 
+def screen_floor_bundles(r) -> list:
+    """Per eye, a render bundle drawing one triangle over its viewport in a constant colour
+    (forward.screen_floor_pipeline): every pixel covered once, the raster floor of the
+    adapter over these targets."""
+    from vrneural.runtime import forward as fw
+
+    out = []
+    for et in r.eye_t:
+        enc = r.dev.create_render_bundle_encoder(
+            color_formats=et.formats(), depth_stencil_format=fw.DEPTH_FORMAT
+        )
+        enc.set_pipeline(fw.screen_floor_pipeline(et.n_lights, et.target))
+        enc.draw(3)
+        out.append(enc.finish())
+    return out
+
+
+def colour_store(r):
+    """An encoder callback: the compute pass that stores black in every texel of the eyes'
+    colour target (forward.clear_colour): the same texels written by the whole chip."""
+    from vrneural.runtime import forward as fw
+
+    def encode(enc, timer) -> None:
+        fw.clear_colour(enc, r.eye_t[0], timer.writes("colour_store"))
+
+    return encode
+
+
 def floor_bundles(r, fragment: str) -> list:
     """Per eye, a render bundle of the renderer's draws with every fragment entry point
     replaced by ``fragment`` (``fs_floor_constant``, ``fs_floor_sample``)."""
@@ -201,6 +232,7 @@ def run_frame(cfg: FrameConfig) -> dict:
             doc.setdefault("auto_block_share", {})[kind] = own
             doc["auto_block_share_by_side"] = by_side  # the same scene with larger materials
         floors = {k: floor_bundles(hdr, k) for k in ("fs_floor_sample", "fs_floor_constant")}
+        floors["fs_floor_screen"] = screen_floor_bundles(hdr)
         n1 = c.reuse + 1
         bar = timing.progress(c.rounds, "bench frame", c.progress, unit="round")
         f = n1 * 2  # after a cycle of warm-up
@@ -233,8 +265,9 @@ def run_frame(cfg: FrameConfig) -> dict:
             hdr.wait()
             f += 1
             p["forward"] = time_passes(hdr, forward(hdr), rep)
-            for k, bundles in floors.items():  # forward_floor_constant, forward_floor_sample
+            for k, bundles in floors.items():  # forward_floor_constant, _sample, _screen
                 p[k.replace("fs_", "forward_")] = time_passes(hdr, forward(hdr, bundles), rep)
+            p["colour_store"] = time_passes(hdr, colour_store(hdr), rep)
             disp.frame(f)
             disp.wait()
             p["forward_display"] = time_passes(disp, forward(disp), rep)

@@ -11,6 +11,9 @@ PASS_RATIOS = (
     ("forward_vs_sample_floor", "forward", "forward_floor_sample"),
     ("forward_vs_constant_floor", "forward", "forward_floor_constant"),
     ("sample_floor_vs_constant_floor", "forward_floor_sample", "forward_floor_constant"),
+    # the raster floor (one triangle over each viewport) and the same texels stored in compute
+    ("forward_vs_screen_floor", "forward", "forward_floor_screen"),
+    ("screen_floor_vs_colour_store", "forward_floor_screen", "colour_store"),
     ("display_vs_hdr_forward", "forward_display", "forward"),
     ("texture_vs_bare", "texture_full", "texture_bare"),
     ("texture_vs_loads_floor", "texture_full", "texture_loads"),
@@ -198,7 +201,8 @@ def plot(doc: dict, path) -> None:
     sm = doc["summary"]
     fig, (a1, a2) = rp.figure(11.0, 3.8, 2)
     groups = [
-        ["forward_floor_constant", "forward_floor_sample", "forward", "forward_display"],
+        ["colour_store", "forward_floor_screen", "forward_floor_constant", "forward_floor_sample",
+         "forward", "forward_display"],
         ["texture_bare", "texture_loads", "texture_full", "texture_loads_exact",
          "texture_full_exact"],
         ["texture_slice_bare", "texture_slice", "texture_slice_exact"],
@@ -207,7 +211,7 @@ def plot(doc: dict, path) -> None:
     x, pos, labels = 0, [], []
     for names in groups:  # a gap of half a bar between the groups
         for n in (n for n in names if n in sm["passes"]):  # results from before *_exact too
-            floor = "floor" in n or "bare" in n or "loads" in n
+            floor = "floor" in n or "bare" in n or "loads" in n or n == "colour_store"
             exact = n.endswith("_exact")
             colour = ("0.85" if floor else "C1") if exact else ("0.7" if floor else "C0")
             a1.bar(x, sm["passes"][n][key], color=colour)

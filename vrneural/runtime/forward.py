@@ -129,6 +129,32 @@ def render_pipeline(
     )
 
 
+@functools.cache
+def screen_floor_pipeline(n_lights: int, target: str = "hdr"):
+    """The raster floor (`bench frame`): a triangle covering the viewport in a constant colour,
+    depth-tested and written as the forward pass's draws are, into ``target``'s colour alone
+    (no visibility target); no vertex buffer, no bindings."""
+    import wgpu
+
+    mod = _module(n_lights, n_lights, target == "display")
+    return get_device().create_render_pipeline(
+        layout="auto",
+        vertex={"module": mod, "entry_point": "vs_screen", "buffers": []},
+        primitive={"topology": "triangle-list", "cull_mode": "none"},
+        depth_stencil={
+            "format": DEPTH_FORMAT,
+            "depth_write_enabled": True,
+            "depth_compare": wgpu.CompareFunction.less,
+        },
+        fragment={
+            "module": mod,
+            "entry_point": "fs_floor_constant",
+            "targets": [{"format": TARGETS[target]}],
+        },
+        label="screen floor",
+    )
+
+
 class EyeTargets:
     """Per-eye colour (``target``: :data:`TARGETS`), depth and (screen modes) visibility
     textures, their views, and the frame uniforms (regions of ``arena``, the renderer's

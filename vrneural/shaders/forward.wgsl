@@ -45,6 +45,16 @@ fn vs_main(v: VIn) -> VOut {
     return o;
 }
 
+// The raster floor of `bench frame`: one triangle covering the viewport (vertex_index 0..2, no
+// vertex buffer, no bindings), at depth 0.5, drawn with fs_floor_constant.
+@vertex
+fn vs_screen(@builtin(vertex_index) i: u32) -> VOut {
+    var o: VOut;
+    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    o.clip = vec4<f32>(p * 2.0 - 1.0, 0.5, 1.0);
+    return o;
+}
+
 // 1 / pi and 1 / (8 pi): the BRDF's constant factors as multiplies (a division per fragment
 // and light cost 10% of the pass on lavapipe, `vrneural bench frame`)
 const INV_PI: f32 = 0.3183098861837907;
