@@ -15,7 +15,8 @@ spell of a shared machine hits every condition:
   forward pass doing one bilinear sample per fragment and nothing else, the raster floor (one
   constant-colour triangle over each eye's viewport, the same clears: every pixel covered once)
   against a compute pass storing the same texels (``colour_store``: the adapter's render
-  back end against the whole chip; on an NVIDIA H200 the one was 30x the other), and the bare
+  back end against the whole chip; on an NVIDIA H200 the one was 30x the other by timestamps,
+  docs/results/h200/raster_floor.py), and the bare
   texture-space kernel (the same facing test, geometry records read and texels stored; no
   shading), alone and with the neural-texture lookups at the blocks' texels (``texture_loads``:
   the traffic any shading of them needs);

@@ -157,6 +157,14 @@ def markdown(doc: dict) -> list[str]:
         rows.append([k, v["median"], f"[{v['range'][0]:.3g}, {v['range'][1]:.3g}]", v["clock"],
                      target if target is not None else "-", ok])  # fmt: skip
     md += rp.table(["ratio", "median", "range", "clock", "target", ""], rows)
+    raster = sm["ratios"].get("screen_floor_vs_colour_store")
+    if raster is not None:
+        md += ["", f"Raster floor / colour store {raster['median']:.3g}: on this adapter a render "
+               "pass that only covers the eyes' targets takes that many times as long as a "
+               "compute pass writing the same texels"
+               + (" (by the wall clock, which adds a submit's own cost to each: a lower bound "
+                  "where the compute pass is short)" if raster["clock"] == "wall" else "")
+               + "."]  # fmt: skip
     for kind, share in doc.get("auto_block_share", {}).items():
         md += ["", f"March auto ({kind}): {100 * share:.0f}% of the blocks march once per "
                "2x2 block (at most one texel of the grid wide), the rest per texel."]  # fmt: skip
