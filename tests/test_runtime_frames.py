@@ -118,13 +118,17 @@ def test_wall_clock_passes_render_the_same_frames():
 
 
 @pytest.mark.gpu
-def test_display_target_is_the_tonemap_of_the_hdr_frame_within_one_level():
-    """The 8-bit display target (Reinhard in the fragment shader, sRGB by the target) against
-    output.tonemap of the HDR frame: at most 1 level apart (the HDR path rounds to f16 first;
-    the sRGB encoders round differently), nearly always equal."""
+@pytest.mark.parametrize("clear", ["pass", "compute"])
+def test_display_target_is_the_tonemap_of_the_hdr_frame_within_one_level(clear):
+    """The 8-bit display target (Reinhard in the fragment shader; sRGB by an rgba8unorm-srgb
+    target where the render pass clears it, by the shader into rgba8unorm where a compute pass
+    does) against output.tonemap of the HDR frame: at most 1 level apart (the HDR path rounds
+    to f16 first; the sRGB encoders round differently), nearly always equal."""
     from vrneural.errors import VrnError
 
-    hdr, disp = _renderer(), _renderer(target="display")
+    hdr, disp = _renderer(), _renderer(target="display", colour_clear=clear)
+    want_fmt = {"pass": "rgba8unorm-srgb", "compute": "rgba8unorm"}[clear]
+    assert disp.eye_t[0].colour.format == want_fmt
     for f in range(2):
         hdr.frame(f)
         disp.frame(f)
@@ -160,7 +164,7 @@ def test_the_colour_clear_kernel_blackens_every_texel_of_both_eyes(target):
 
     et = fw.EyeTargets.side_by_side(2, 24, 16, 1, target=target)[1]  # the second eye's
     tex = et.colour
-    assert tex.format == fw.TARGETS[target] and tex.size[:2] == (48, 16)
+    assert tex.format == et.format == fw.colour_format(target, True) and tex.size[:2] == (48, 16)
     from vrneural.gpu.device import get_device
 
     d = get_device()

@@ -139,7 +139,7 @@ def screen_floor_bundles(r) -> list:
         enc = r.dev.create_render_bundle_encoder(
             color_formats=et.formats(), depth_stencil_format=fw.DEPTH_FORMAT
         )
-        enc.set_pipeline(fw.screen_floor_pipeline(et.n_lights, et.target))
+        enc.set_pipeline(fw.screen_floor_pipeline(et.n_lights, et.format))
         enc.draw(3)
         out.append(enc.finish())
     return out

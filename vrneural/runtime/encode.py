@@ -138,19 +138,19 @@ class FrameEncoding:
             if fragment is not None:
                 tgt = (n or self.neural[0]).targets
                 tgt = tgt[e if len(tgt) > 1 else 0]
-                pipe = fw.render_pipeline(nl, fragment, False, na, s.target, mips)
+                pipe = fw.render_pipeline(nl, fragment, False, na, et.format, mips)
                 key = ("eye", e, tgt.R) if n is not None else ("floor", e, tgt.R)
                 bg = d.bind_group(tgt.sample_view, key, mips)
             elif n is None:
                 pipe = fw.render_pipeline(
-                    nl, "fs_plain_vis" if vis else "fs_plain", vis, na, s.target
+                    nl, "fs_plain_vis" if vis else "fs_plain", vis, na, et.format
                 )
                 bg = d.bind_group(None, "plain")
             elif vis:
                 pipe = fw.render_pipeline(nl, "fs_neural_vis", True, na)
                 bg = d.bind_group(None, "plain")
             else:
-                pipe = fw.render_pipeline(nl, "fs_neural", False, na, s.target, mips)
+                pipe = fw.render_pipeline(nl, "fs_neural", False, na, et.format, mips)
                 tgt = n.targets[e if len(n.targets) > 1 else 0]  # shared: one for both
                 bg = d.bind_group(tgt.sample_view, ("eye", e), mips)
             out.append((pipe, bg, d))

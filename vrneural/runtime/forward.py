@@ -25,10 +25,10 @@ from vrneural.runtime.reference import normal_matrix
 from vrneural.runtime.texture_pass import light_words
 
 #: eye colour targets: ``hdr`` (linear radiance, for EXR and FLIP) or ``display`` (Reinhard
-#: tonemapped, sRGB-encoded 8 bits: half the bytes where HDR output is not needed). The display
-#: target is rgba8unorm, sRGB-encoded by the fragment shader: a storage texture, so that
-#: :func:`clear_colour` can clear it (an ``-srgb`` format cannot be one)
-TARGETS = dict(zip(settings.TARGETS, ("rgba16float", "rgba8unorm"), strict=True))
+#: tonemapped, sRGB-encoded 8 bits: half the bytes where HDR output is not needed), and the
+#: format each renders into (the display target's when its colour is cleared by the render pass;
+#: see :func:`colour_format`)
+TARGETS = dict(zip(settings.TARGETS, ("rgba16float", "rgba8unorm-srgb"), strict=True))
 DEPTH_FORMAT = "depth32float"
 VIS_FORMAT = "rg32uint"
 FRAME_BYTES = FRAME.size  # 96
@@ -47,15 +47,23 @@ def expanded_vertices(mesh, uv_atlas: np.ndarray | None) -> np.ndarray:
     return rows
 
 
+def colour_format(target: str, compute_clear: bool) -> str:
+    """The eyes' colour format for ``target``: :data:`TARGETS`'s, but the display target
+    cleared by :func:`clear_colour` is ``rgba8unorm`` (an ``-srgb`` format cannot be a storage
+    texture), its sRGB encoding done by the fragment shader instead of the target."""
+    return "rgba8unorm" if target == "display" and compute_clear else TARGETS[target]
+
+
 @functools.cache
-def _module(n_lights: int, n_active: int, display: bool, mips: bool = False):
+def _module(n_lights: int, n_active: int, fmt: str, mips: bool = False):
     frame, obj = forward_bindings(n_lights)
     code = render_wgsl(
         "forward",
         structs=structs_wgsl(FRAME, LIGHT, OBJECT),
         bindings=frame.wgsl() + "\n" + obj.wgsl(),
         n_active=n_active,
-        display=display,
+        display=fmt != TARGETS["hdr"],  # Reinhard-tonemapped
+        encode_srgb=fmt == "rgba8unorm",  # not by the target
         mips=mips,
     )
     return get_device().create_shader_module(code=code, label="forward")
@@ -98,21 +106,21 @@ def render_pipeline(
     fragment: str,
     vis: bool,
     n_active: int | None = None,
-    target: str = "hdr",
+    fmt: str = TARGETS["hdr"],
     mips: bool = False,
 ):
     """Cached render pipeline for entry point ``fragment`` (``vis``: colour + visibility):
-    a lights array of ``n_lights``, ``n_active`` of them shaded (default all), colour target
-    ``target`` (:data:`TARGETS`); ``mips``: neural objects sample their radiance textures' mip
-    chains."""
+    a lights array of ``n_lights``, ``n_active`` of them shaded (default all), colour format
+    ``fmt`` (``EyeTargets.format``); ``mips``: neural objects sample their radiance textures'
+    mip chains."""
     import wgpu
 
     mips = mips and fragment in ("fs_neural", "fs_floor_sample")
-    mod = _module(n_lights, n_lights if n_active is None else n_active, target == "display", mips)
+    mod = _module(n_lights, n_lights if n_active is None else n_active, fmt, mips)
     frame_l, neural_l, plain_l = _layouts()
     obj_l = neural_l if fragment in SAMPLING else plain_l
     layout = get_device().create_pipeline_layout(bind_group_layouts=[frame_l, obj_l])
-    targets = [{"format": TARGETS[target]}]
+    targets = [{"format": fmt}]
     if vis:
         targets.append({"format": VIS_FORMAT})
     return get_device().create_render_pipeline(
@@ -130,13 +138,13 @@ def render_pipeline(
 
 
 @functools.cache
-def screen_floor_pipeline(n_lights: int, target: str = "hdr"):
+def screen_floor_pipeline(n_lights: int, fmt: str = TARGETS["hdr"]):
     """The raster floor (`bench frame`): a triangle covering the viewport in a constant colour,
-    depth-tested and written as the forward pass's draws are, into ``target``'s colour alone
-    (no visibility target); no vertex buffer, no bindings."""
+    depth-tested and written as the forward pass's draws are, into a colour target of format
+    ``fmt`` alone (no visibility target); no vertex buffer, no bindings."""
     import wgpu
 
-    mod = _module(n_lights, n_lights, target == "display")
+    mod = _module(n_lights, n_lights, fmt)
     return get_device().create_render_pipeline(
         layout="auto",
         vertex={"module": mod, "entry_point": "vs_screen", "buffers": []},
@@ -149,7 +157,7 @@ def screen_floor_pipeline(n_lights: int, target: str = "hdr"):
         fragment={
             "module": mod,
             "entry_point": "fs_floor_constant",
-            "targets": [{"format": TARGETS[target]}],
+            "targets": [{"format": fmt}],
         },
         label="screen floor",
     )
@@ -177,6 +185,8 @@ class EyeTargets:
         self.compute_clear = compute_clear if share is None else share.compute_clear
         self.x0 = x0  # its first column in the textures
         self.target = target
+        #: the colour texture's format (:func:`colour_format`)
+        self.format = colour_format(target, self.compute_clear)
 
         def texture(fmt: str, usage):
             return dev.create_texture(size=(width * columns, height, 1), format=fmt, usage=usage)
@@ -188,12 +198,13 @@ class EyeTargets:
             self.vis_view, self._clear = share.vis_view, share._clear
         else:
             # storage: cleared by a compute pass (clear_colour); the screen pass writes HDR
-            usage = rt | tu.COPY_SRC | tu.STORAGE_BINDING | tu.TEXTURE_BINDING
-            self.colour = texture(TARGETS[target], usage)
+            storable = not self.format.endswith("-srgb")
+            usage = rt | tu.COPY_SRC | tu.TEXTURE_BINDING | (tu.STORAGE_BINDING * storable)
+            self.colour = texture(self.format, usage)
             self.depth = texture(DEPTH_FORMAT, rt)
             self.vis = texture(VIS_FORMAT, rt | tu.TEXTURE_BINDING) if vis else None
             self.colour_view = self.colour.create_view()
-            self._clear = _clear_group(self.colour, TARGETS[target])
+            self._clear = _clear_group(self.colour, self.format) if storable else None
             self.depth_view = self.depth.create_view()
             self.vis_view = self.vis.create_view() if vis else None
         self.n_lights = max(1, n_lights)
@@ -239,7 +250,7 @@ class EyeTargets:
 
     def formats(self) -> list[str]:
         """Colour attachment formats of its render passes (bundles must match them)."""
-        return [TARGETS[self.target]] + ([VIS_FORMAT] if self.vis is not None else [])
+        return [self.format] + ([VIS_FORMAT] if self.vis is not None else [])
 
 
 class DrawObject:
@@ -354,7 +365,10 @@ def clear_colour(encoder, eye: EyeTargets, timestamp_writes=None) -> None:
     both Quest 3 eyes' rgba16float target took 1.3 ms in a render pass, 0.09 ms in compute
     (docs/results/h200/raster_floor.py), and the main job's frame fell from 4.4 to 3.2 ms. On
     lavapipe the compute pass is the slower (the main job's forward pass 130 -> 150-180 ms),
-    so CPU adapters keep the render pass's clear (``Settings.colour_clear``)."""
+    so CPU adapters keep the render pass's clear (``Settings.colour_clear``), as a tiling GPU
+    would want (a render pass's clear costs it nothing)."""
+    if eye._clear is None:
+        raise ValueError(f"clear_colour: the eyes' colour ({eye.format}) is no storage texture")
     pipe, bg, groups = eye._clear
     cp = encoder.begin_compute_pass(timestamp_writes=timestamp_writes)
     cp.set_pipeline(pipe)

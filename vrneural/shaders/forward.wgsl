@@ -1,11 +1,13 @@
 // Forward pass per eye (and the visibility pass of the screen-space modes).
 // Vertex buffer: triangles expanded (3 vertices per face), per vertex position.xyz, normal.xyz,
-// atlas uv, triangle index (u32). Colour target rgba16float (HDR), or with `display` an
-// rgba8unorm target holding Reinhard x / (1 + x), sRGB-encoded here (twin: output.tonemap);
+// atlas uv, triangle index (u32). Colour target rgba16float (HDR), or with `display` an 8-bit
+// target holding Reinhard x / (1 + x) sRGB-encoded (twin: output.tonemap): by the target
+// (rgba8unorm-srgb), or here with `encode_srgb` (rgba8unorm, which a compute pass can clear);
 // depth32float, less-test.
 // Template parameters: n_active (lights shaded, a
-// compile-time loop count, 0 allowed), display (bool), mips (bool: neural objects sample
-// their radiance textures' mip chains).
+// compile-time loop count, 0 allowed), display (bool), encode_srgb (bool: display's sRGB
+// encoding in the shader), mips (bool: neural objects sample their radiance textures' mip
+// chains).
 //   fs_neural: bilinear sample of this eye's radiance texture at the atlas uv (clamp-to-edge;
 //              the atlas gutter guarantees valid taps); with mips, trilinear over the chain.
 //   fs_plain:  ordinary material: Lambert + Blinn-Phong under the same point lights
@@ -87,9 +89,13 @@ fn plain_colour(world: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
 fn out_colour(c: vec3<f32>) -> vec4<f32> {
 {% if display %}
     let x = c / (vec3<f32>(1.0) + c);
+{% if encode_srgb %}
     let srgb = select(1.055 * pow(x, vec3<f32>(1.0 / 2.4)) - 0.055, 12.92 * x,
                       x <= vec3<f32>(0.0031308));
     return vec4<f32>(srgb, 1.0);
+{% else %}
+    return vec4<f32>(x, 1.0);
+{% endif %}
 {% else %}
     return vec4<f32>(c, 1.0);
 {% endif %}
