@@ -114,6 +114,7 @@ def test_display_target_run_writes_png_frames_and_video_without_exr(capsys, tmp_
         assert main(["run", *argv, "--quiet"]) == 0
     printed = capsys.readouterr().out
     assert printed.count("(+ .exr)") == 1  # the HDR run's frames line, not the display run's
+    assert printed.count("target=display") == 1  # the display run's run line
     disp = outs["display"]
     assert not list(disp.glob("*.exr")) and (disp / "stereo.mp4").is_file()
     assert json.loads((disp / "summary.json").read_text())["config"]["target"] == "display"
@@ -254,6 +255,10 @@ def test_a_run_that_fails_at_setup_leaves_no_directory(capsys, tmp_path, monkeyp
     assert main(["run", "--profile", "tiny", "--eyes", "3", "--quiet"]) == 2
     assert "--eyes" in capsys.readouterr().err
     assert list(tmp_path.glob("out/run-*")) == []
+    assert not (tmp_path / "out").exists()  # nor the out/ it made for it
+    (tmp_path / "out").mkdir()  # one that was there before stays
+    assert main(["run", "--profile", "tiny", "--eyes", "3", "--quiet"]) == 2
+    assert (tmp_path / "out").is_dir() and not list((tmp_path / "out").iterdir())
     assert main(["run", "--out", "", "--quiet"]) == 2
     assert "--out is empty" in capsys.readouterr().err
 

@@ -133,6 +133,12 @@ def markdown(doc: dict) -> list[str]:
         "(wrong) disagree with their pass's wall time and are not used. The renderer's own "
         "check of its passes inside a frame (runtime/timecheck.py): "
         f"{covered or 'no timestamps'}.",
+        "Floors: `forward_floor_constant` / `forward_floor_sample`, the forward pass's draws "
+        "with a constant colour / one bilinear sample per fragment; `forward_floor_screen`, "
+        "its clears and one constant-colour triangle over each eye's viewport (the raster "
+        "floor); `colour_store`, the compute pass storing black in every texel of the eyes' "
+        "colour target; `texture_bare` / `texture_loads`, the texture-space kernel without "
+        "shading / with only its neural-texture lookups.",
         "",
         "## Passes (each alone)",
         "",
@@ -159,11 +165,13 @@ def markdown(doc: dict) -> list[str]:
     md += rp.table(["ratio", "median", "range", "clock", "target", ""], rows)
     raster = sm["ratios"].get("screen_floor_vs_colour_store")
     if raster is not None:
-        md += ["", f"Raster floor / colour store {raster['median']:.3g}: on this adapter a render "
-               "pass that only covers the eyes' targets takes that many times as long as a "
-               "compute pass writing the same texels"
-               + (" (by the wall clock, which adds a submit's own cost to each: a lower bound "
-                  "where the compute pass is short)" if raster["clock"] == "wall" else "")
+        md += ["", f"Raster floor / colour store {raster['median']:.3g}: what covering every "
+               "pixel once costs a forward pass here (its clears and one triangle per viewport) "
+               "over what storing the eyes' colour texels costs a compute pass; where the clear "
+               "of the colour "
+               "is that compute pass (GPUs: `Settings.colour_clear`) the floor includes it"
+               + (". By the wall clock, which adds a submit's own cost to each pass: a lower "
+                  "bound where the compute pass is short" if raster["clock"] == "wall" else "")
                + "."]  # fmt: skip
     for kind, share in doc.get("auto_block_share", {}).items():
         md += ["", f"March auto ({kind}): {100 * share:.0f}% of the blocks march once per "

@@ -15,7 +15,8 @@ def register(sub) -> None:
         help="render a scene (texture-space neural shading with reuse), write frames + summary",
         description="Render SCENE (TOML; a built-in scene when omitted) offscreen on any "
         "adapter: per-eye radiance textures shaded by the generated student, reused for N "
-        "frames, a stereo forward pass; writes OUT/summary.json, PNG + EXR frames, a video.",
+        "frames, a stereo forward pass; writes OUT/summary.json, PNG frames (+ EXR with "
+        "--target hdr, the default), a video.",
     )
     p.add_argument("scene", nargs="?", default=None, help="scene file (TOML)")
     add_config_args(p, RunConfig, skip=("scene",))

@@ -174,6 +174,7 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
     if cfg.out:
         with OutputDir(cfg.out, "run", force=cfg.force) as od:
             return _run(cfg, od, progress)
+    new_parent = not Path("out").exists()  # default_out makes out/ itself: then it goes too
     out = default_out()
     try:
         with OutputDir(out, "run", force=cfg.force) as od:
@@ -183,6 +184,8 @@ def run(cfg: RunConfig, progress: bool = True) -> dict:
         if out.is_dir() and all(c.name == OUTPUT_MARK for c in out.iterdir()):
             (out / OUTPUT_MARK).unlink(missing_ok=True)
             out.rmdir()
+            if new_parent and not any(out.parent.iterdir()):
+                out.parent.rmdir()
         raise
 
 
@@ -456,6 +459,7 @@ def human_summary(sm: dict) -> str:
     shared += " screen-res" if r.get("screen_res") else ""
     shared += " no-neural-lod" if r.get("neural_lod") is False else ""
     shared += " neural-filter=exact" if r.get("neural_filter") == "exact" else ""
+    shared += " target=display" if r.get("target") == "display" else ""
     space = (
         f"reuse={reuse} schedule={r['schedule']}{shared} "
         if texture

@@ -17,13 +17,14 @@ ROWS = [  # label in main-job.json, label on the plot
     ("e90c611", "e90c611 (#41 filed)"),
     ("682f982_in_flight_1", "682f982, 1 in flight"),
     ("682f982", "682f982 (session start)"),
-    ("depth_discarded", "+ depth discarded"),
-    ("depth24plus", "+ depth24plus"),
-    ("depth16unorm", "+ depth16unorm"),
-    ("display_srgb_target", "+ 8-bit sRGB target"),
+    ("depth_discarded", "682f982+ depth discarded"),
+    ("depth24plus", "682f982+ depth24plus"),
+    ("depth16unorm", "682f982+ depth16unorm"),
+    ("display_srgb_target", "682f982+ 8-bit sRGB target"),
+    ("compute_clear_trial", "682f982+ compute clear"),
     ("now", "now: colour cleared in compute"),
     ("now_display", "now, --target display"),
-    ("half_eyes_1032x1104", "682f982, half-size eyes"),
+    ("half_eyes_1032x1104", "682f982+, 1/4 of the pixels"),
 ]
 fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.6), gridspec_kw={"width_ratios": [1.15, 1]})
 y = range(len(ROWS))
@@ -40,7 +41,7 @@ a1.text(7.11 / 2.5, len(ROWS) - 0.4, " 2.5x e90c611", fontsize=7, color="0.3")
 a1.set_yticks(list(y), [lab for _, lab in ROWS], fontsize=8)
 a1.invert_yaxis()
 a1.set_xlabel("ms")
-a1.set_xlim(0, 9.5)
+a1.set_xlim(0, 11.5)
 a1.legend(fontsize=7, loc="lower right")
 a1.set_title("the main job (quest3, 2 eyes, N = 4, 3 lights) on an NVIDIA H200", fontsize=9)
 
