@@ -108,20 +108,22 @@ class FrameEncoding:
         bundles = bundles or self._bundles
         ts = timer.writes if timer is not None else self._writes
         ets = self.eye_t
+
+        def begin(et):  # the clear's time (a compute pass where there is one) counts too
+            return fw.begin_pass(enc, et, ts(name), ts(name) if et.compute_clear else None)
+
         shared = len(ets) > 1 and ets[1].colour is ets[0].colour
         if shared:
             if e is not None:  # a pass clears the whole target: the other eyes' too
                 raise ValueError("encode_forward: eyes side by side are drawn together (e=None)")
-            clear_ts = ts(name) if ets[0].compute_clear else None  # the clear's time counts
-            rp = fw.begin_pass(enc, ets[0], ts(name), clear_ts)
+            rp = begin(ets[0])
             for et, b in zip(ets, bundles, strict=True):
                 fw.viewport(rp, et)
                 rp.execute_bundles([b])
             rp.end()
             return
         for k in range(len(ets)) if e is None else (e,):
-            clear_ts = ts(name) if ets[k].compute_clear else None
-            rp = fw.begin_pass(enc, ets[k], ts(name), clear_ts)
+            rp = begin(ets[k])
             rp.execute_bundles([bundles[k]])
             rp.end()
 

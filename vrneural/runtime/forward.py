@@ -100,6 +100,19 @@ VERTEX_BUFFER = {
 SAMPLING = ("fs_neural", "fs_floor_sample", "fs_floor_constant")
 
 
+def _raster_state() -> dict:
+    """Primitive and depth state of every forward-pass pipeline: triangle lists, no culling,
+    depth less-tested and written."""
+    return {
+        "primitive": {"topology": "triangle-list", "cull_mode": "none"},
+        "depth_stencil": {
+            "format": DEPTH_FORMAT,
+            "depth_write_enabled": True,
+            "depth_compare": "less",
+        },
+    }
+
+
 @functools.cache
 def render_pipeline(
     n_lights: int,
@@ -113,8 +126,6 @@ def render_pipeline(
     a lights array of ``n_lights``, ``n_active`` of them shaded (default all), colour format
     ``fmt`` (``EyeTargets.format``); ``mips``: neural objects sample their radiance textures'
     mip chains."""
-    import wgpu
-
     mips = mips and fragment in ("fs_neural", "fs_floor_sample")
     mod = _module(n_lights, n_lights if n_active is None else n_active, fmt, mips)
     frame_l, neural_l, plain_l = _layouts()
@@ -126,12 +137,7 @@ def render_pipeline(
     return get_device().create_render_pipeline(
         layout=layout,
         vertex={"module": mod, "entry_point": "vs_main", "buffers": [VERTEX_BUFFER]},
-        primitive={"topology": "triangle-list", "cull_mode": "none"},
-        depth_stencil={
-            "format": DEPTH_FORMAT,
-            "depth_write_enabled": True,
-            "depth_compare": wgpu.CompareFunction.less,
-        },
+        **_raster_state(),
         fragment={"module": mod, "entry_point": fragment, "targets": targets},
         label=fragment,
     )
@@ -142,18 +148,11 @@ def screen_floor_pipeline(n_lights: int, fmt: str = TARGETS["hdr"]):
     """The raster floor (`bench frame`): a triangle covering the viewport in a constant colour,
     depth-tested and written as the forward pass's draws are, into a colour target of format
     ``fmt`` alone (no visibility target); no vertex buffer, no bindings."""
-    import wgpu
-
     mod = _module(n_lights, n_lights, fmt)
     return get_device().create_render_pipeline(
         layout="auto",
         vertex={"module": mod, "entry_point": "vs_screen", "buffers": []},
-        primitive={"topology": "triangle-list", "cull_mode": "none"},
-        depth_stencil={
-            "format": DEPTH_FORMAT,
-            "depth_write_enabled": True,
-            "depth_compare": wgpu.CompareFunction.less,
-        },
+        **_raster_state(),
         fragment={
             "module": mod,
             "entry_point": "fs_floor_constant",
