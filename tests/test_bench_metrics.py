@@ -177,6 +177,11 @@ def test_a_bench_sets_its_own_defaults_for_a_shared_part(capsys):
     d = DistanceConfig().resolved().budget
     assert (d.teacher_epochs, d.epochs, d.btf_res) == (24, 24, 32)
     assert TradeoffConfig().resolved().budget.epochs == 4
+    # the distance bench's reference has 64 samples per pixel (minified material), tradeoff 16
+    assert (DistanceConfig().resolved().score.spp, TradeoffConfig().resolved().score.spp) == (
+        64,
+        16,
+    )
     q = DistanceConfig(quick=True).resolved().budget
     assert (q.teacher_epochs, q.epochs) == (1, 1)
     args = build_parser().parse_args(["bench", "distance", "--epochs", "7"])
@@ -190,3 +195,31 @@ def test_a_bench_sets_its_own_defaults_for_a_shared_part(capsys):
         main(["bench", "tradeoff", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "--epochs EPOCHS epochs of each small network (default: 4)" in text
+
+
+def test_distance_texel_size_is_the_materials_on_the_sphere():
+    """--texel-mm is the size of a material texel on the scaled sphere at tiling 1: measured on
+    the built-in sphere mesh near its equator (UV unit one radian), and the texels under a
+    pixel grow with distance and tiling as the pixel's footprint does."""
+    from vrneural.bench.distance import base_tiling, conditions, texels_per_pixel
+    from vrneural.bench.train_configs import DistanceConfig
+    from vrneural.runtime.assets import get_mesh
+
+    c = DistanceConfig(texel_mm=1.0).resolved()
+    m = get_mesh("sphere")
+    p = m.positions * (c.size / float(np.ptp(m.positions, axis=0).max()))
+    f = m.faces
+    e3 = p[f[:, 1]] - p[f[:, 0]]
+    duv = (m.uv[f[:, 1]] - m.uv[f[:, 0]]) * base_tiling(c) * c.budget.btf_res  # in texels
+    eq = (np.abs(p[f[:, 0], 1]) < 0.05 * c.size) & (np.abs(duv[:, 1]) > 1e-3)
+    eq &= np.abs(duv[:, 0]) < 1e-3 * np.abs(duv[:, 1])  # edges along a meridian
+    mm = np.linalg.norm(e3[eq], axis=1) / np.abs(duv[eq, 1]) * 1e3
+    assert eq.sum() > 10 and np.allclose(mm, 1.0, rtol=0.02), (eq.sum(), mm)
+    ppd = 23.0
+    near, far = (texels_per_pixel(c, d, 1.0, ppd) for d in (1.0, 10.0))
+    assert 0.4 < near < 0.8 and abs(far / near - 9.75 / 0.75) < 1e-6
+    assert abs(texels_per_pixel(c, 1.0, 8.0, ppd) / near - 8) < 1e-9
+    conds = {x.name: x for x in conditions(c)}
+    assert conds["tiling 8"].tiling == 8 * conds["1 m"].tiling == 8 * base_tiling(c)
+    old = DistanceConfig(texel_mm=0.25 / 32 * 1e3).resolved()  # the scale before --texel-mm
+    assert abs(base_tiling(old) - 1.0) < 1e-12

@@ -5,6 +5,7 @@ import itertools
 import json
 import math
 
+import numpy as np
 import pytest
 
 from vrneural.cli import main
@@ -199,13 +200,28 @@ def test_distance_records_each_feature(results):
     assert {r["family"] for r in doc["records"]} == {"distance", "tiling"}
     for rec in doc["records"]:
         names = [v["variant"] for v in rec["variants"]]
-        assert names == ["all off", "mips", "screen res", "neural LOD", "all on"]
+        assert names == ["all off", "mips", "screen res", "neural LOD", "neural LOD, trained",
+                         "all on"]  # fmt: skip
         for v in rec["variants"]:
             assert 0 <= v["flip"]["mean"] <= 1 and v["change_ref"] > 0 and v["flicker"] > 0
             assert v["texels_shaded"] > 0 and v["texture_side"] <= 256
+        net = rec["network_flip"]  # each pack's own error against the teacher, supersampled
+        assert set(net) == {"student", "student_pyr", "student_lod"}
+        assert all(0 < x <= 1 for x in net.values()) and net["student_pyr"] == net["student"]
+        packs = ["student"] * 3 + ["student_pyr", "student_lod", "student_pyr"]
+        assert [v["pack"] for v in rec["variants"]] == packs
+        assert rec["variants"][4]["flip_network"] == net["student_lod"]
+    tpp = {r["condition"]: r["texels_per_pixel"] for r in doc["records"]}
+    assert tpp["10 m"] > 5 * tpp["1 m"] and tpp["tiling 8"] > 1  # minified where it is for
     from vrneural.formats.vrnm import read_vrnm
 
-    assert read_vrnm(results[0] / "distance" / "packs" / "student_lod.vrnm").lod_levels == 4
+    packs = results[0] / "distance" / "packs"
+    assert read_vrnm(packs / "student_lod.vrnm").lod_levels == 4
+    # the plain student's network with a pyramid of its textures' box averages
+    pyr, plain = read_vrnm(packs / "student_pyr.vrnm"), read_vrnm(packs / "student.vrnm")
+    assert pyr.lod_levels == 4 and plain.lod_levels == 1
+    for k, t in plain.textures.items():
+        assert np.array_equal(pyr.textures[k], t)
 
 
 def _err(capsys, argv):
@@ -228,6 +244,7 @@ def test_bench_user_errors_are_one_line(capsys, tmp_path):
     assert "not allowed" in _err(capsys, ["kernels", "--networks", "resnet", "--out", o])
     assert "--threads" in _err(capsys, ["kernels", "--threads", "-1", "--out", o])
     assert "--crop = 8 is out of range" in _err(capsys, ["tradeoff", "--crop", "8", "--out", o])
+    assert "--texel-mm = 0" in _err(capsys, ["distance", "--texel-mm", "0", "--out", o])
     # a training budget out of range: one line under tradeoff's own flag names, and no --out
     for flag, value in (("--btf-res", "0"), ("--btf-dirs", "1"), ("--teacher-epochs", "0")):
         msg = _err(capsys, ["tradeoff", "--quick", flag, value, "--out", o])

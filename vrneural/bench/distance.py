@@ -9,8 +9,13 @@ the temporal change (mean |frame - previous| of the displayed image against the 
 above 1 is flicker the ground truth does not have), the shading work (texels shaded for the
 object per frame, texture side, shading ms) and the frame time. Variants: all three features
 off, each alone, and all three on (``--mips``: radiance mip chains; ``--screen-res``: texture
-side from the screen; ``lod``: the student with prefiltered neural textures, trained with
-``--lod-levels 4``).
+side from the screen; neural LOD: the same student with a pyramid of its neural textures' box
+averages, and, as a variant of its own, a student trained with ``--lod-levels 4``).
+
+The material's texels are ``--texel-mm`` on the sphere at tiling 1 (1 mm: about a pixel at
+1 m, so 10 m and tiling 8 minify it; each record has its texels per pixel), and each pack's
+own error against the teacher (``network``: the pack per pixel with the reference's samples)
+is measured beside the reference's noise floor: what no filter can remove.
 """
 
 from __future__ import annotations
@@ -31,31 +36,50 @@ from vrneural.runtime.config import REUSE_MAX
 from vrneural.runtime.profiles import get_profile
 from vrneural.scoring import metrics
 
-#: name -> (mips, screen_res, prefiltered neural textures)
+#: name -> (mips, screen_res, the pack: ``student``, or one with prefiltered neural textures:
+#: ``student_pyr`` the same student with a pyramid of its textures' box averages, the filter
+#: alone; ``student_lod`` a student trained with its pyramid, ``distill --lod-levels 4``)
 VARIANTS = {
-    "all off": (False, False, False),
-    "mips": (True, False, False),
-    "screen res": (False, True, False),
-    "neural LOD": (False, False, True),
-    "all on": (True, True, True),
+    "all off": (False, False, "student"),
+    "mips": (True, False, "student"),
+    "screen res": (False, True, "student"),
+    "neural LOD": (False, False, "student_pyr"),
+    "neural LOD, trained": (False, False, "student_lod"),
+    "all on": (True, True, "student_pyr"),
 }
+PACKS = ("student", "student_pyr", "student_lod")
+
+
+def base_tiling(c: DistanceConfig) -> float:
+    """BTF tiles per material-UV unit at tiling 1 for material texels of ``--texel-mm``: the
+    built-in sphere's UV unit is one radian, ``size / 2`` metres along a great circle."""
+    return (c.size / 2) / (c.budget.btf_res * c.texel_mm * 1e-3)
+
+
+def texels_per_pixel(c: DistanceConfig, distance: float, tiling: float, ppd: float) -> float:
+    """Material texels under one pixel's width where the sphere faces the eye (above 1: the
+    material is minified, what the filtering features are for)."""
+    pixel = (distance - c.size / 2) * np.radians(1.0 / ppd)
+    return float(pixel / (c.texel_mm * 1e-3 / tiling))
 
 
 def conditions(c: DistanceConfig) -> list[ts.Condition]:
     first = 8
     window = list(range(first, first + c.score.scored))
+    base = base_tiling(c)
     out = []
     for d in c.distances:
         out.append(ts.Condition(f"{d:g} m", "distance", d, window[-1] + 1, window, d,
-                                tiling=1.0, size=c.size))  # fmt: skip
+                                tiling=base, size=c.size, meta={"tiling": 1.0}))  # fmt: skip
     for t in c.tilings:
         out.append(ts.Condition(f"tiling {t:g}", "tiling", t, window[-1] + 1, window, 1.0,
-                                tiling=t, size=c.size))  # fmt: skip
+                                tiling=base * t, size=c.size, meta={"tiling": t}))  # fmt: skip
     return out
 
 
 def check(c: DistanceConfig) -> None:
     check_range("--size", c.size, 0.001, 10.0)
+    check_range("--texel-mm", c.texel_mm, 0.001, 1000.0)
     rp.check_texture_res(c.texture_res, "--texture-res")
     check_range("--reuse", c.reuse, 0, REUSE_MAX)
     c.score.check()
@@ -83,7 +107,7 @@ def run_distance(cfg: DistanceConfig) -> dict:
         doc = rp.header("distance", c)
         budget = c.budget.of(c.preset)
         tt = time.perf_counter()
-        paths = train_packs(root / "packs", budget, c.progress, only=("student", "student_lod"))
+        paths = train_packs(root / "packs", budget, c.progress, only=PACKS)
         mats = load_packs(paths)
         doc["packs"] = {"budget": budget, "seconds": time.perf_counter() - tt}
         prof = get_profile("quest3")
@@ -100,18 +124,25 @@ def run_distance(cfg: DistanceConfig) -> dict:
             ref, _, _, floor = ts.reference_pair(rscene, rs, cond, c.score, full, ppd, 2)
             bar.update()
             rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
-                   "noise_floor": floor, "variants": []}  # fmt: skip
+                   "noise_floor": floor, "uv_tiling": cond.tiling,
+                   "texels_per_pixel": texels_per_pixel(c, cond.distance, cond.meta["tiling"], ppd),
+                   "network_flip": {}, "variants": []}  # fmt: skip
             cache: dict = {}
             own = {}  # pack -> its level 0 per pixel, supersampled: the filtering error alone
-            for key in ("student", "student_lod"):
+            for key in ("student", "student_lod"):  # (student_pyr's level 0 is student's)
                 bar.set_postfix_str(f"{cond.name}: {key} supersampled")
                 lvl0 = dataclasses.replace(mats[key], levels={})
                 os_ = settings(c, cond, prof, False, False, "reference", lvl0)
                 own[key] = ts.reference(ts.scene_for(cond, lvl0, lvl0), os_, cond, c.score.crop,
                                         full, cond.scored, c.score.spp, 0)  # fmt: skip
-            for name, (mips, screen, lod) in VARIANTS.items():
+                # the network's own error: no filter removes it (same samples as the reference)
+                rec["network_flip"][key] = float(np.mean(
+                    [metrics.flip_hdr_eyes(ref[f], own[key][f], ppd) for f in cond.scored]
+                ))  # fmt: skip
+            own["student_pyr"] = own["student"]
+            rec["network_flip"]["student_pyr"] = rec["network_flip"]["student"]
+            for name, (mips, screen, key) in VARIANTS.items():
                 bar.set_postfix_str(f"{cond.name}: {name}")
-                key = "student_lod" if lod else "student"
                 mat = mats[key]
                 s = settings(c, cond, prof, mips, screen)
                 imgs, st = ts.render(
@@ -121,8 +152,9 @@ def run_distance(cfg: DistanceConfig) -> dict:
                 own_f = [metrics.flip_hdr_eyes(own[key][f], imgs[f], ppd) for f in cond.scored]
                 w = st[1:]
                 rec["variants"].append({
-                    "variant": name, "mips": mips, "screen_res": screen, "neural_lod": lod,
-                    "flip_own": float(np.mean(own_f)),
+                    "variant": name, "mips": mips, "screen_res": screen, "pack": key,
+                    "neural_lod": key != "student",
+                    "flip_own": float(np.mean(own_f)), "flip_network": rec["network_flip"][key],
                     **{k: sc[k] for k in ("flip", "psnr", "ssim", "change", "change_ref")},
                     "flicker": sc["change"] / max(sc["change_ref"], 1e-12),
                     "texels_shaded": float(np.mean([4 * x.object_blocks[0] for x in w])),
@@ -141,34 +173,49 @@ def finish(root, doc: dict, t0: float) -> dict:
         "# Distance: level of detail at distance and under tiling",
         "",
         rp.adapter_line(doc),
-        f"A {doc['config']['size']:g} m neural sphere, crops of the quest3 eye image at "
-        f"{doc['ppd']:.1f} ppd following it, slow head sway; reference: the teacher per pixel "
+        f"A {doc['config']['size']:g} m neural sphere, its material's texels "
+        f"{doc['config'].get('texel_mm', 7.8):g} mm at tiling 1, crops of the quest3 eye "
+        f"image at {doc['ppd']:.1f} ppd following it, slow head sway; reference: the teacher "
+        "per pixel "
         f"with {doc['config']['spp']} stratified samples. flicker: the mean frame-to-frame "
         "change of the displayed image over the reference's own (1 = as steady as the truth). "
         "FLIP own: against the variant's own pack (level 0) per pixel with the same samples, "
-        "the filtering error without the network's error against the teacher. "
-        "texels: texels shaded for the sphere per frame; side: its radiance texture's median "
-        "side." + (" **Quick run: reduced settings.**" if doc["config"]["quick"] else ""),
+        "the filtering error without the network's error against the teacher. network: the "
+        "variant's pack per pixel with the reference's samples against the reference, the "
+        "network's own error, which no filter removes (FLIP's floor for that variant). "
+        "texels/px: material texels under a pixel's width where the sphere faces the eye "
+        "(above 1: minified). texels: texels shaded for the sphere per frame; side: its "
+        "radiance texture's median side."
+        + (" **Quick run: reduced settings.**" if doc["config"]["quick"] else ""),
         "",
     ]
     rows = []
     for rec in doc["records"]:
         for v in rec["variants"]:
-            rows.append([rec["condition"], v["variant"],
+            tpp = rec.get("texels_per_pixel")
+            rows.append([rec["condition"], "-" if tpp is None else f"{tpp:.2g}", v["variant"],
                          f"{v['flip']['mean']:.4f} ({v['flip']['worst']:.4f})",
-                         f"{v['flip_own']:.4f}", f"{rec['noise_floor']:.4f}", v["flicker"],
+                         f"{v['flip_own']:.4f}", f"{rec['noise_floor']:.4f}",
+                         "-" if "flip_network" not in v else f"{v['flip_network']:.4f}",
+                         v["flicker"],
                          v["texels_shaded"], v["texture_side"],
                          v["frame_ms"]["mean"]])  # fmt: skip
-    md += rp.table(["condition", "variant", "FLIP (worst)", "FLIP own", "floor", "flicker",
-                    "texels", "side", "frame ms"], rows)  # fmt: skip
+    md += rp.table(["condition", "texels/px", "variant", "FLIP (worst)", "FLIP own", "floor",
+                    "network", "flicker", "texels", "side", "frame ms"], rows)  # fmt: skip
     return rp.finish(root, doc, md, t0, [("distance.png", "distance", png)])
 
 
 def png(doc: dict, path) -> None:
-    fig, axes = rp.figure(13, 4.0, 3)
-    for fam, ax in (("distance", axes[0]), ("tiling", axes[1])):
+    """FLIP against the teacher (and each pack's own error, which no filter removes) and
+    flicker, over distance and over tiling."""
+    fig, axes = rp.figure(17, 4.0, 4)
+    for k, fam in enumerate(("distance", "tiling")):
         recs = sorted((r for r in doc["records"] if r["family"] == fam), key=lambda r: r["value"])
+        ax, axf = axes[k], axes[2 + k]
+        xlabel = "distance, m" if fam == "distance" else "tiling (at 1 m)"
         if not recs:
+            ax.set_visible(False)
+            axf.set_visible(False)
             continue
         x = [r["value"] for r in recs]
         for i, v in enumerate(recs[0]["variants"]):
@@ -176,23 +223,20 @@ def png(doc: dict, path) -> None:
                               label=v["variant"])  # fmt: skip
             ax.plot(x, [r["variants"][i]["flip_own"] for r in recs], "s:", lw=1, ms=3,
                     color=line.get_color())  # fmt: skip
+            axf.plot(x, [r["variants"][i]["flicker"] for r in recs], "o-", lw=1,
+                     label=v["variant"])  # fmt: skip
+        for key, mk in (("student", "x"), ("student_lod", "+")):
+            if all(key in r.get("network_flip", {}) for r in recs):
+                ax.plot(x, [r["network_flip"][key] for r in recs], mk + "-.", color="0.45",
+                        lw=0.8, label=f"network alone ({key})")  # fmt: skip
         ax.plot(x, [r["noise_floor"] for r in recs], "k--", lw=0.8, label="noise floor")
-        ax.set_xscale("log")
-        ax.set_xlabel("distance, m" if fam == "distance" else "tiling")
-        ax.set_ylabel("FLIP vs supersampled teacher (dotted: vs own pack)")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=6)
-    recs = sorted(
-        (r for r in doc["records"] if r["family"] == "distance"), key=lambda r: r["value"]
-    )
-    for i, v in enumerate(recs[0]["variants"] if recs else []):
-        axes[2].plot([r["value"] for r in recs], [r["variants"][i]["flicker"] for r in recs],
-                     "o-", lw=1, label=v["variant"])  # fmt: skip
-    axes[2].axhline(1.2, color="k", ls="--", lw=0.8, label="1.2x the reference")
-    axes[2].set_xscale("log")
-    axes[2].set_xlabel("distance, m")
-    axes[2].set_ylabel("flicker (change / reference's)")
-    axes[2].grid(alpha=0.3)
-    axes[2].legend(fontsize=6)
+        axf.axhline(1.2, color="k", ls="--", lw=0.8, label="1.2x the reference")
+        for a, ylabel in ((ax, "FLIP vs supersampled teacher (dotted: vs own pack)"),
+                          (axf, "flicker (change / reference's)")):  # fmt: skip
+            a.set_xscale("log")
+            a.set_xlabel(xlabel)
+            a.set_ylabel(ylabel)
+            a.grid(alpha=0.3)
+            a.legend(fontsize=6)
     fig.suptitle(f"bench distance on {doc['adapter']['name']}", fontsize=9)
     rp.save_png(fig, path)

@@ -29,6 +29,10 @@ RUNS = {
 #: trained only when asked for (``train_packs(only=...)``): the distilled student with
 #: prefiltered neural textures (bench distance)
 EXTRA_RUNS = {"student_lod": dict(method="student", lod_levels=4)}
+#: exported from another run's checkpoint when asked for (``only``): the distilled student with
+#: a pyramid of box averages of its own neural textures (``export --lod-levels 4``): the same
+#: network as ``student``, so a comparison with it isolates the filter (bench distance)
+DERIVED = {"student_pyr": ("student", 4)}
 PACKS = ("teacher", *RUNS)
 
 
@@ -41,13 +45,19 @@ def train_packs(
     from vrneural.distill.distill import run_distill
     from vrneural.distill.teach import run_teach
 
+    derived = {k: v for k, v in DERIVED.items() if only is not None and k in only}
+    need = {src for src, _ in derived.values()}
     runs = {
-        k: v for k, v in (RUNS | EXTRA_RUNS).items() if (k in RUNS if only is None else k in only)
+        k: v
+        for k, v in (RUNS | EXTRA_RUNS).items()
+        if (k in RUNS if only is None else k in only or k in need)
     }
-    paths = {k: d / f"{k}.vrnm" for k in ("teacher", *runs)}
+    paths = {k: d / f"{k}.vrnm" for k in ("teacher", *runs, *derived)}
     stamp = d / "budget.json"
     want = json.dumps(budget, sort_keys=True)
-    if stamp.exists() and stamp.read_text() == want and all(p.exists() for p in paths.values()):
+    trained = [p for k, p in paths.items() if k not in derived]
+    if stamp.exists() and stamp.read_text() == want and all(p.exists() for p in trained):
+        derive(d, paths, derived, missing_only=True)
         return paths
     d.mkdir(parents=True, exist_ok=True)
     stamp.unlink(missing_ok=True)
@@ -75,11 +85,25 @@ def train_packs(
                 **common,
             )
         )
+    derive(d, paths, derived)
     missing = [str(p) for p in paths.values() if not p.exists()]
     if missing:
         raise VrnError(f"training finished but packs are missing: {', '.join(missing)}")
     stamp.write_text(want)
     return paths
+
+
+def derive(d: Path, paths: dict, derived: dict, missing_only: bool = False) -> None:
+    """Export each :data:`DERIVED` pack from its source run's checkpoint in ``d``."""
+    from vrneural.distill.checkpoint import load_checkpoint
+    from vrneural.distill.export import export_checkpoint
+
+    for name, (src, levels) in derived.items():
+        if missing_only and paths[name].exists():
+            continue
+        pt = d / f"{src}.pt"
+        export_checkpoint(load_checkpoint(pt), paths[name], force=True, source=str(pt),
+                          lod_levels=levels)  # fmt: skip
 
 
 #: the packs `bench tradeoff --packs DIR` cannot do without: the reference and the base

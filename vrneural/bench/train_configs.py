@@ -228,6 +228,12 @@ class DistanceConfig(QuickConfig):
         (1, 4, 8, 16), "material tilings, at 1 m", items=floats(0.01, 1000.0)
     )
     size: float = opt(0.5, "sphere diameter (m)")
+    texel_mm: float = opt(
+        1.0,
+        "size (mm) of one material texel on the sphere at tiling 1 (about a quest3 pixel at "
+        "1 m, so that 10 m and tiling 8 minify the material; 7.8 for a 32^2 BTF is one tile "
+        "per sphere radian, this bench's scale before 2026-12-04)",
+    )
     texture_res: int | None = unset(
         1200, "radiance texture side (the cap screen-res chooses under)"
     )
@@ -237,8 +243,13 @@ class DistanceConfig(QuickConfig):
     budget: PackBudget = part(PackBudget)
 
     #: packs trained 24 epochs, not the shared 4: with 4, the LOD pack's level 0 is noisier
-    #: than the plain student's and flickers more at 0.3 m (docs/lod.md); 24 cost a minute
-    DEFAULTS: ClassVar[dict] = {"teacher_epochs": 24, "epochs": 24}
+    #: than the plain student's and flickers more at 0.3 m (docs/lod.md); 24 cost a minute.
+    #: A reference of 64 samples per pixel, not 16: where the material is minified (7 texels
+    #: per pixel at 10 m) 16 samples alias, and the reference's own frame-to-frame change,
+    #: which flicker is judged against, is then mostly its sampling noise (docs/lod.md).
+    #: BTFs of 24 x 24 directions, not 10 x 10: with 10 the student's own error against the
+    #: teacher (supersampled) is 3x larger at 10 m and swamps the filtering it is to judge
+    DEFAULTS: ClassVar[dict] = {"teacher_epochs": 24, "epochs": 24, "spp": 64, "btf_dirs": 24}
 
 
 #: ``--quick``: the CI-sized run, under the flags given
