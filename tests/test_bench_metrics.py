@@ -178,10 +178,8 @@ def test_a_bench_sets_its_own_defaults_for_a_shared_part(capsys):
     assert (d.teacher_epochs, d.epochs, d.btf_res) == (24, 24, 32)
     assert TradeoffConfig().resolved().budget.epochs == 4
     # the distance bench's reference has 64 samples per pixel (minified material), tradeoff 16
-    assert (DistanceConfig().resolved().score.spp, TradeoffConfig().resolved().score.spp) == (
-        64,
-        16,
-    )
+    assert DistanceConfig().resolved().score.spp == 64
+    assert TradeoffConfig().resolved().score.spp == 16
     q = DistanceConfig(quick=True).resolved().budget
     assert (q.teacher_epochs, q.epochs) == (1, 1)
     args = build_parser().parse_args(["bench", "distance", "--epochs", "7"])
@@ -216,9 +214,10 @@ def test_distance_texel_size_is_the_materials_on_the_sphere():
     mm = np.linalg.norm(e3[eq], axis=1) / np.abs(duv[eq, 1]) * 1e3
     assert eq.sum() > 10 and np.allclose(mm, 1.0, rtol=0.02), (eq.sum(), mm)
     ppd = 23.0
-    near, far = (texels_per_pixel(c, d, 1.0, ppd) for d in (1.0, 10.0))
+    base = base_tiling(c)
+    near, far = (texels_per_pixel(c, d, base, ppd) for d in (1.0, 10.0))
     assert 0.4 < near < 0.8 and abs(far / near - 9.75 / 0.75) < 1e-6
-    assert abs(texels_per_pixel(c, 1.0, 8.0, ppd) / near - 8) < 1e-9
+    assert abs(texels_per_pixel(c, 1.0, 8 * base, ppd) / near - 8) < 1e-9
     conds = {x.name: x for x in conditions(c)}
     assert conds["tiling 8"].tiling == 8 * conds["1 m"].tiling == 8 * base_tiling(c)
     old = DistanceConfig(texel_mm=0.25 / 32 * 1e3).resolved()  # the scale before --texel-mm

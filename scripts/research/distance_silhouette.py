@@ -27,8 +27,6 @@ from vrneural.bench import distance as dist
 from vrneural.bench import trade_scene as ts
 from vrneural.bench.packs import load_packs, train_packs
 from vrneural.bench.train_configs import DistanceConfig
-from vrneural.runtime.profiles import get_profile
-from vrneural.scoring import metrics
 
 
 def flip_map(ref: np.ndarray, test: np.ndarray, ppd: float) -> np.ndarray:
@@ -56,16 +54,12 @@ def main() -> None:
     c = DistanceConfig(out=str(a.out)).resolved()
     budget = c.budget.of(c.preset)
     mats = load_packs(train_packs(a.out / "packs", budget, True, only=dist.PACKS))
-    prof = get_profile("quest3")
-    full, ppd = prof.eye_res, metrics.pixels_per_degree(prof.eye_res[1], prof.fov_y)
+    prof, full, ppd = dist.quest3_view()
     cond = next(x for x in dist.conditions(c) if x.family == "distance" and x.value == a.distance)
     f = cond.scored[0]
-    img = {}
-    for key in ("teacher", "student"):
-        m = dataclasses.replace(mats[key], levels={})
-        s = dist.settings(c, cond, prof, False, False, "reference", m)
-        img[key] = ts.reference(ts.scene_for(cond, m, m), s, cond, c.score.crop, full, [f],
-                                c.score.spp, 0)[f]  # fmt: skip
+    img = {
+        k: dist.supersampled(c, cond, prof, full, mats[k], [f])[f] for k in ("teacher", "student")
+    }
     pack = mats["student_pyr" if a.mips or a.screen_res else "student"]
     s = dist.settings(c, cond, prof, a.mips, a.screen_res)
     scene = ts.scene_for(cond, pack)

@@ -15,7 +15,6 @@ DIR/packs/btf.btf`.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 from pathlib import Path
 
 import imageio.v3 as iio
@@ -26,7 +25,6 @@ from vrneural.bench import trade_scene as ts
 from vrneural.bench.packs import load_packs, train_packs
 from vrneural.bench.parts import PackBudget
 from vrneural.bench.train_configs import DistanceConfig
-from vrneural.runtime.profiles import get_profile
 from vrneural.scoring import metrics
 
 
@@ -43,16 +41,12 @@ def main() -> None:
     budget = c.budget.of(c.preset)
     print("budget", budget)
     mats = load_packs(train_packs(a.out / "packs", budget, True, only=("student",)))
-    prof = get_profile("quest3")
-    full, ppd = prof.eye_res, metrics.pixels_per_degree(prof.eye_res[1], prof.fov_y)
+    prof, full, ppd = dist.quest3_view()
     cond = next(x for x in dist.conditions(c) if x.family == "distance" and x.value == a.distance)
     f = cond.scored[0]
-    img = {}
-    for key in ("teacher", "student"):
-        m = dataclasses.replace(mats[key], levels={})
-        s = dist.settings(c, cond, prof, False, False, "reference", m)
-        scene = ts.scene_for(cond, m, m)
-        img[key] = ts.reference(scene, s, cond, c.score.crop, full, [f], c.score.spp, 0)[f]
+    img = {
+        k: dist.supersampled(c, cond, prof, full, mats[k], [f])[f] for k in ("teacher", "student")
+    }
     s = dist.settings(c, cond, prof, False, False)
     img["rendered"] = ts.render(ts.scene_for(cond, mats["student"]), s, cond, c.score.crop,
                                 full, {f})[0][f]  # fmt: skip

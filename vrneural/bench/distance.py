@@ -56,11 +56,27 @@ def base_tiling(c: DistanceConfig) -> float:
     return (c.size / 2) / (c.budget.btf_res * c.texel_mm * 1e-3)
 
 
-def texels_per_pixel(c: DistanceConfig, distance: float, tiling: float, ppd: float) -> float:
-    """Material texels under one pixel's width where the sphere faces the eye (above 1: the
-    material is minified, what the filtering features are for)."""
+def texels_per_pixel(c: DistanceConfig, distance: float, uv_tiling: float, ppd: float) -> float:
+    """Material texels under one pixel's width where the sphere faces the eye, at ``uv_tiling``
+    BTF tiles per material-UV unit (above 1: the material is minified, what the filtering
+    features are for)."""
     pixel = (distance - c.size / 2) * np.radians(1.0 / ppd)
-    return float(pixel / (c.texel_mm * 1e-3 / tiling))
+    return float(pixel / ((c.size / 2) / (uv_tiling * c.budget.btf_res)))
+
+
+def quest3_view():
+    """The quest3 profile, its full eye resolution and its pixels per degree."""
+    prof = get_profile("quest3")
+    return prof, prof.eye_res, metrics.pixels_per_degree(prof.eye_res[1], prof.fov_y)
+
+
+def supersampled(c: DistanceConfig, cond, prof, full, mat, frames) -> dict:
+    """``mat``'s level 0 per pixel on ``cond``'s ``frames``, supersampled with the reference's
+    samples (seed 0): frame -> ``[eyes, H, W, 3]``."""
+    lvl0 = dataclasses.replace(mat, levels={})
+    s = settings(c, cond, prof, False, False, "reference", lvl0)
+    return ts.reference(ts.scene_for(cond, lvl0, lvl0), s, cond, c.score.crop, full, frames,
+                        c.score.spp, 0)  # fmt: skip
 
 
 def conditions(c: DistanceConfig) -> list[ts.Condition]:
@@ -70,10 +86,10 @@ def conditions(c: DistanceConfig) -> list[ts.Condition]:
     out = []
     for d in c.distances:
         out.append(ts.Condition(f"{d:g} m", "distance", d, window[-1] + 1, window, d,
-                                tiling=base, size=c.size, meta={"tiling": 1.0}))  # fmt: skip
+                                tiling=base, size=c.size))  # fmt: skip
     for t in c.tilings:
         out.append(ts.Condition(f"tiling {t:g}", "tiling", t, window[-1] + 1, window, 1.0,
-                                tiling=base * t, size=c.size, meta={"tiling": t}))  # fmt: skip
+                                tiling=base * t, size=c.size))  # fmt: skip
     return out
 
 
@@ -110,8 +126,7 @@ def run_distance(cfg: DistanceConfig) -> dict:
         paths = train_packs(root / "packs", budget, c.progress, only=PACKS)
         mats = load_packs(paths)
         doc["packs"] = {"budget": budget, "seconds": time.perf_counter() - tt}
-        prof = get_profile("quest3")
-        full, ppd = prof.eye_res, metrics.pixels_per_degree(prof.eye_res[1], prof.fov_y)
+        prof, full, ppd = quest3_view()
         doc["ppd"] = ppd
         conds = conditions(c)
         bar = tqdm(total=len(conds) * (len(VARIANTS) + 3), desc="bench distance", unit="render",
@@ -125,16 +140,13 @@ def run_distance(cfg: DistanceConfig) -> dict:
             bar.update()
             rec = {"condition": cond.name, "family": cond.family, "value": cond.value,
                    "noise_floor": floor, "uv_tiling": cond.tiling,
-                   "texels_per_pixel": texels_per_pixel(c, cond.distance, cond.meta["tiling"], ppd),
+                   "texels_per_pixel": texels_per_pixel(c, cond.distance, cond.tiling, ppd),
                    "network_flip": {}, "variants": []}  # fmt: skip
             cache: dict = {}
             own = {}  # pack -> its level 0 per pixel, supersampled: the filtering error alone
             for key in ("student", "student_lod"):  # (student_pyr's level 0 is student's)
                 bar.set_postfix_str(f"{cond.name}: {key} supersampled")
-                lvl0 = dataclasses.replace(mats[key], levels={})
-                os_ = settings(c, cond, prof, False, False, "reference", lvl0)
-                own[key] = ts.reference(ts.scene_for(cond, lvl0, lvl0), os_, cond, c.score.crop,
-                                        full, cond.scored, c.score.spp, 0)  # fmt: skip
+                own[key] = supersampled(c, cond, prof, full, mats[key], cond.scored)
                 # the network's own error: no filter removes it (same samples as the reference)
                 rec["network_flip"][key] = float(np.mean(
                     [metrics.flip_hdr_eyes(ref[f], own[key][f], ppd) for f in cond.scored]
@@ -174,9 +186,8 @@ def finish(root, doc: dict, t0: float) -> dict:
         "",
         rp.adapter_line(doc),
         f"A {doc['config']['size']:g} m neural sphere, its material's texels "
-        f"{doc['config'].get('texel_mm', 7.8):g} mm at tiling 1, crops of the quest3 eye "
-        f"image at {doc['ppd']:.1f} ppd following it, slow head sway; reference: the teacher "
-        "per pixel "
+        f"{doc['config']['texel_mm']:g} mm at tiling 1, crops of the quest3 eye image at "
+        f"{doc['ppd']:.1f} ppd following it, slow head sway; reference: the teacher per pixel "
         f"with {doc['config']['spp']} stratified samples. flicker: the mean frame-to-frame "
         "change of the displayed image over the reference's own (1 = as steady as the truth). "
         "FLIP own: against the variant's own pack (level 0) per pixel with the same samples, "
@@ -192,13 +203,11 @@ def finish(root, doc: dict, t0: float) -> dict:
     rows = []
     for rec in doc["records"]:
         for v in rec["variants"]:
-            tpp = rec.get("texels_per_pixel")
-            rows.append([rec["condition"], "-" if tpp is None else f"{tpp:.2g}", v["variant"],
+            rows.append([rec["condition"], f"{rec['texels_per_pixel']:.2g}", v["variant"],
                          f"{v['flip']['mean']:.4f} ({v['flip']['worst']:.4f})",
                          f"{v['flip_own']:.4f}", f"{rec['noise_floor']:.4f}",
-                         "-" if "flip_network" not in v else f"{v['flip_network']:.4f}",
-                         v["flicker"],
-                         v["texels_shaded"], v["texture_side"],
+                         f"{v['flip_network']:.4f}", v["flicker"], v["texels_shaded"],
+                         v["texture_side"],
                          v["frame_ms"]["mean"]])  # fmt: skip
     md += rp.table(["condition", "texels/px", "variant", "FLIP (worst)", "FLIP own", "floor",
                     "network", "flicker", "texels", "side", "frame ms"], rows)  # fmt: skip
@@ -226,9 +235,8 @@ def png(doc: dict, path) -> None:
             axf.plot(x, [r["variants"][i]["flicker"] for r in recs], "o-", lw=1,
                      label=v["variant"])  # fmt: skip
         for key, mk in (("student", "x"), ("student_lod", "+")):
-            if all(key in r.get("network_flip", {}) for r in recs):
-                ax.plot(x, [r["network_flip"][key] for r in recs], mk + "-.", color="0.45",
-                        lw=0.8, label=f"network alone ({key})")  # fmt: skip
+            ax.plot(x, [r["network_flip"][key] for r in recs], mk + "-.", color="0.45", lw=0.8,
+                    label=f"network alone ({key})")  # fmt: skip
         ax.plot(x, [r["noise_floor"] for r in recs], "k--", lw=0.8, label="noise floor")
         axf.axhline(1.2, color="k", ls="--", lw=0.8, label="1.2x the reference")
         for a, ylabel in ((ax, "FLIP vs supersampled teacher (dotted: vs own pack)"),
