@@ -47,14 +47,15 @@ def scene(kind: str, n_lights: int):
     return builtin_scene(max(n_lights, 0)) if kind == "builtin" else bench_scene(n_lights)
 
 
-def render(name: str, wait=None, **overrides) -> tuple[np.ndarray, np.ndarray]:
+def render(name: str, wait=None, frames: int | None = None, **overrides) -> tuple:
     """Frames of configuration ``name``: eyes ``[F, E, H, W, 4]`` float16 (raw colour targets)
     and counters ``[F, 7]`` int64 (:data:`COUNTERS`). ``wait(renderer)``: called before the
-    stats are read (the new frame loop's stats arrive later); ``overrides``: Settings fields
-    set on top of the configuration's."""
+    stats are read (the new frame loop's stats arrive later); ``frames``: that many instead of
+    the configuration's; ``overrides``: Settings fields set on top of the configuration's."""
     from vrneural.runtime.renderer import Renderer, Settings
 
-    kind, kw, frames, jitter = configs()[name]
+    kind, kw, n_frames, jitter = configs()[name]
+    frames = frames or n_frames
     kw = {**kw, **overrides}
     s = Settings(
         **{k: v for k, v in kw.items() if k in {f.name for f in dataclasses.fields(Settings)}}

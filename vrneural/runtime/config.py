@@ -13,6 +13,9 @@ from vrneural.errors import VrnError, check_int, check_range, count
 from vrneural.runtime.profiles import PROFILES, get_profile
 from vrneural.runtime.schedule import SCHEDULES
 from vrneural.runtime.settings import (
+    COLOUR_CLEARS,
+    DEPTH_CLEARS,
+    DEPTH_SLICES,
     FRAMES_IN_FLIGHT_MAX,
     LIGHTS_MAX,
     MODES,
@@ -85,6 +88,21 @@ class RunConfig:
         "tonemapped sRGB, half the bytes per pixel: PNG frames and video, no EXR; --mode "
         "texture only)",
         choices=TARGETS,
+    )
+    colour_clear: str = opt(
+        "auto",
+        "how the forward pass clears the eyes' colour: compute (a compute pass; the render pass "
+        "loads it), pass (the render pass's clear), auto (compute on GPUs, pass on CPU "
+        "adapters); the same frames",
+        choices=COLOUR_CLEARS,
+    )
+    depth_clear: str = opt(
+        "auto",
+        f"how the forward pass resets the depth: pass (cleared every frame), slices (cleared "
+        f"every {DEPTH_SLICES} frames, each frame in between drawing into a nearer slice of the "
+        "depth range), auto (slices on discrete GPUs, pass elsewhere); the same frames but "
+        "where surfaces are closer than the depth's precision",
+        choices=DEPTH_CLEARS,
     )
     profile: str | None = opt(None, "device profile: quest3 (default), quest2, preview, tiny")
     texture_res: int | None = opt(
@@ -171,7 +189,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     cfg = resolved(cfg)  # the fields not given: their defaults
     for name, allowed in (
         ("mode", MODES), ("schedule", SCHEDULES), ("neural_filter", NEURAL_FILTERS),
-        ("target", TARGETS),
+        ("target", TARGETS), ("colour_clear", COLOUR_CLEARS), ("depth_clear", DEPTH_CLEARS),
     ):  # fmt: skip
         if getattr(cfg, name) not in allowed:
             raise VrnError(
@@ -293,6 +311,8 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         frames_in_flight=cfg.frames_in_flight,
         neural_filter=cfg.neural_filter,
         target=cfg.target,
+        colour_clear=cfg.colour_clear,
+        depth_clear=cfg.depth_clear,
     )
 
 

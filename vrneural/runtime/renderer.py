@@ -42,6 +42,8 @@ from vrneural.runtime.screen_res import choose, level_sides, mesh_area, wanted_s
 from vrneural.runtime.settings import (
     ADAPTIVE_PERIOD_MAX,
     COLOUR_CLEARS,
+    DEPTH_CLEARS,
+    DEPTH_SLICES,
     FRAMES_IN_FLIGHT_MAX,
     NEURAL_FILTERS,
     RADIANCE,
@@ -93,6 +95,10 @@ class Renderer(FrameEncoding):
                 f"colour_clear = {s.colour_clear!r} is not allowed; choose "
                 f"{', '.join(COLOUR_CLEARS)}"
             )
+        if s.depth_clear not in DEPTH_CLEARS:
+            raise VrnError(
+                f"depth_clear = {s.depth_clear!r} is not allowed; choose {', '.join(DEPTH_CLEARS)}"
+            )
         if s.target == "display" and s.mode != "texture":
             raise VrnError(
                 f"target = 'display' needs mode 'texture' (mode {s.mode!r} writes HDR pixels "
@@ -111,14 +117,22 @@ class Renderer(FrameEncoding):
         nl = max(1, len(self.lights))
         #: every per-frame uniform, written with one write_buffer per frame
         self.arena = UniformArena("frame uniforms")
-        cc = s.colour_clear
-        if cc == "auto":  # each the faster where measured (forward.clear_colour)
-            from vrneural.gpu.device import adapter_summary
+        from vrneural.gpu.device import adapter_summary
 
+        cc, dc = s.colour_clear, s.depth_clear
+        if cc == "auto":  # each the faster where measured (forward.clear_colour)
             cc = "pass" if adapter_summary().is_cpu else "compute"
+        if dc == "auto":  # forward.begin_pass
+            dc = "slices" if adapter_summary().adapter_type == "DiscreteGPU" else "pass"
         #: how the forward pass clears the colour: "compute" or "pass" (auto resolved)
         self.colour_clear = cc
-        kw = {"target": s.target, "compute_clear": cc == "compute"}
+        #: how it resets the depth: "pass" or "slices" (auto resolved)
+        self.depth_clear = dc
+        kw = {
+            "target": s.target,
+            "compute_clear": cc == "compute",
+            "depth_slices": DEPTH_SLICES if dc == "slices" else 1,
+        }
         if screen:  # the per-pixel pass reads and writes each eye's own targets
             self.eye_t = [
                 fw.EyeTargets(w, h, nl, vis=True, arena=self.arena, **kw) for _ in range(s.eyes)

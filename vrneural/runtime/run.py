@@ -353,6 +353,7 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
     settings = dataclasses.asdict(dataclasses.replace(s, reference=None))
     settings["reference"] = cfg.reference
     settings["colour_clear"] = r.colour_clear  # "auto" resolved for this adapter
+    settings["depth_clear"] = r.depth_clear
     warm = stats[1:] if len(stats) > 1 else stats  # frame 0 includes shader compilation
     atlases = {n.idx: n.atlas for n in r.neural}
     gpu_names = sorted({k for st in stats for k in st.gpu_ms})

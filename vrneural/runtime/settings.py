@@ -24,6 +24,16 @@ TARGETS = ("hdr", "display")
 #: loads it), "pass" (the render pass's own clear), "auto" (compute on GPUs, pass on CPU adapters:
 #: each the faster where measured, runtime/forward.py: clear_colour)
 COLOUR_CLEARS = ("auto", "compute", "pass")
+#: how the forward pass resets the eyes' depth: "pass" (the render pass clears it every frame),
+#: "slices" (cleared every DEPTH_SLICES frames; in between, each frame's depths go to a nearer
+#: slice of the depth range than the last frame's, so that whatever is left there lies behind
+#: them: runtime/forward.py: begin_pass), "auto" (slices on discrete GPUs, where a render pass's
+#: clear goes through the raster back end; pass elsewhere: a tiler clears for free, and loading
+#: depth costs it bandwidth)
+DEPTH_CLEARS = ("auto", "pass", "slices")
+#: frames one depth clear serves with depth_clear "slices" (each gets 1/DEPTH_SLICES of the
+#: depth range: 2 bits of depth32float's precision)
+DEPTH_SLICES = 4
 
 
 @dataclass
@@ -74,6 +84,9 @@ class Settings:
     target: str = "hdr"
     #: how the forward pass clears the eyes' colour (COLOUR_CLEARS); the frames are the same
     colour_clear: str = "auto"
+    #: how the forward pass resets the eyes' depth (DEPTH_CLEARS); the frames are the same but
+    #: where two surfaces are closer than the depth's precision
+    depth_clear: str = "auto"
     #: neural-texture filtering of the texture and screen passes: "hardware" (the sampler's
     #: bilinear / trilinear filtering: its weights at the adapter's sub-texel precision) or
     #: "exact" (taps and weights in float32 in the shader, the numpy twin's arithmetic)

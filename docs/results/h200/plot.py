@@ -22,8 +22,12 @@ ROWS = [  # label in main-job.json, label on the plot
     ("depth16unorm", "682f982+ depth16unorm"),
     ("display_srgb_target", "682f982+ 8-bit sRGB target"),
     ("compute_clear_trial", "682f982+ compute clear"),
-    ("now", "now: colour cleared in compute"),
-    ("now_display", "now, --target display"),
+    ("now", "6004025: colour cleared in compute"),
+    ("now_display", "6004025, --target display"),
+    ("depth_pass", "now, --depth-clear pass (= 6004025)"),
+    ("depth_slices", "now: depth cleared 1 frame in 4"),
+    ("depth_slices_in_flight_3", "now, 3 frames in flight"),
+    ("depth_slices_display", "now, --target display"),
     ("half_eyes_1032x1104", "682f982+, 1/4 of the pixels"),
 ]
 fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.6), gridspec_kw={"width_ratios": [1.15, 1]})
@@ -37,7 +41,7 @@ a1.barh([i - 0.2 for i in y], tex, 0.4, left=fwd, color="C2", label="GPU: textur
 for i, w in enumerate(wall):
     a1.text(w + 0.05, i + 0.2, f"{w:.2f} ms, {1e3 / w:.0f} FPS", va="center", fontsize=7)
 a1.axvline(7.11 / 2.5, color="0.4", ls="--", lw=1)
-a1.text(7.11 / 2.5, len(ROWS) - 0.4, " 2.5x e90c611", fontsize=7, color="0.3")
+a1.text(7.11 / 2.5, -0.75, " 2.5x e90c611", fontsize=7, color="0.3")
 a1.set_yticks(list(y), [lab for _, lab in ROWS], fontsize=8)
 a1.invert_yaxis()
 a1.set_xlabel("ms")
@@ -51,6 +55,10 @@ FLOORS = [
     ("colour loaded, not cleared + depth32float (discard)", "colour loaded + triangle"),
     ("compute clear, then colour loaded + depth32float (discard); both passes",
      "compute clear + colour loaded + triangle"),
+    ("compute clear, then colour loaded + depth32float in 4 slices (3 passes in 4 load it)",
+     "... + depth cleared 1 pass in 4"),
+    ("compute clear, then colour loaded + depth32float loaded, never cleared",
+     "... + depth never cleared"),
     ("clear alone: rgba16float + depth32float", "clear both, no draw"),
     ("clear alone: rgba16float", "clear colour, no draw"),
     ("clear alone: depth32float", "clear depth, no draw"),

@@ -9,7 +9,8 @@ their median over 5 submits, after a warm-up submit) and by the wall clock (subm
 read-back that waits for it, per pass). Configurations: the renderer's colour target
 (rgba16float with the usages the renderer gives it), without the storage usage, the 8-bit
 display target, depth formats, depth not stored, the colour loaded instead of cleared (alone,
-and after a compute pass that clears it), no depth, depth only, one eye's width, clears alone,
+and after a compute pass that clears it), the depth cleared by one pass in four (the
+renderer's depth_clear "slices") or never, no depth, depth only, one eye's width, clears alone,
 and a
 fragment shader that runs 256 dependent multiply-adds per pixel against a compute shader that
 runs the same per texel (the fragment stage's arithmetic rate against the whole chip's).
@@ -59,10 +60,12 @@ mod = dev.create_shader_module(code=WGSL)
 
 
 def render_case(colour, depth, usage=PLAIN, width=W, fs="fs_const", draw=True, load="clear",
-                depth_store="store", pre=None):  # fmt: skip
+                depth_store="store", pre=None, slices=1):  # fmt: skip
     """An encoder callback: one render pass over ``width x H`` targets (``colour``/``depth``:
     formats or None; ``load``: the colour's load op; ``depth_store``: the depth's store op;
-    ``pre``: a compute pass's encoder callback run before, on the colour texture)."""
+    ``pre``: a compute pass's encoder callback run before, on the colour texture; ``slices``:
+    the depth cleared by one pass in that many, loaded by the others, each pass drawing into a
+    nearer slice of the depth range, as the renderer's depth_clear "slices")."""
     ct = dev.create_texture(size=(width, H, 1), format=colour, usage=usage) if colour else None
     dt = None
     if depth:
@@ -79,18 +82,25 @@ def render_case(colour, depth, usage=PLAIN, width=W, fs="fs_const", draw=True, l
                       "targets": [{"format": colour}] if colour else []},
         )  # fmt: skip
 
+    n = [0]
+
     def encode(enc, timer, name):
         if pre is not None:
             pre(enc, timer, name, ct)
+        k = n[0] % slices
+        n[0] += 1
         rp = enc.begin_render_pass(
             color_attachments=[{"view": ct.create_view(), "load_op": load,
                                 "store_op": "store", "clear_value": (0, 0, 0, 1)}]
             if ct else [],
-            depth_stencil_attachment={"view": dt.create_view(), "depth_load_op": "clear",
+            depth_stencil_attachment={"view": dt.create_view(),
+                                      "depth_load_op": "load" if k else "clear",
                                       "depth_store_op": depth_store, "depth_clear_value": 1.0}
             if dt else None,
             timestamp_writes=timer.writes(name),
         )  # fmt: skip
+        if slices > 1:
+            rp.set_viewport(0, 0, width, H, 1 - (k + 1) / slices, 1 - k / slices)
         if pipe is not None:
             rp.set_pipeline(pipe)
             rp.draw(3)
@@ -136,6 +146,12 @@ CASES = {
     "compute clear, then colour loaded + depth32float (discard); both passes": render_case(
         "rgba16float", "depth32float", RENDERER, load="load", depth_store="discard",
         pre=compute_case("cs_store")),
+    "compute clear, then colour loaded + depth32float in 4 slices (3 passes in 4 load it)":
+        render_case("rgba16float", "depth32float", RENDERER, load="load",
+                    pre=compute_case("cs_store"), slices=4),
+    "compute clear, then colour loaded + depth32float loaded, never cleared": render_case(
+        "rgba16float", "depth32float", RENDERER, load="load", pre=compute_case("cs_store"),
+        slices=1 << 20),
     "rgba16float, no depth": render_case("rgba16float", None),
     "rgba8unorm-srgb + depth32float": render_case("rgba8unorm-srgb", "depth32float"),
     "rgba16float + depth24plus": render_case("rgba16float", "depth24plus"),
