@@ -194,14 +194,15 @@ def test_tradeoff_metrics_are_sane(results):
 
 @pytest.mark.gpu
 def test_distance_records_each_feature(results):
-    """Every condition has the five variants; the prefiltered student has its pyramid; the
-    frame-to-frame change is measured against the reference's own (the head sways)."""
+    """Every condition has the eight variants; MSAA leaves the shading as it is; the
+    prefiltered student has its pyramid; the frame-to-frame change is measured against the
+    reference's own (the head sways)."""
     doc = results[1]["distance"]
     assert {r["family"] for r in doc["records"]} == {"distance", "tiling"}
     for rec in doc["records"]:
         names = [v["variant"] for v in rec["variants"]]
         assert names == ["all off", "mips", "screen res", "neural LOD", "neural LOD, trained",
-                         "all on"]  # fmt: skip
+                         "all on", "4x MSAA", "all on, 4x MSAA"]  # fmt: skip
         for v in rec["variants"]:
             assert 0 <= v["flip"]["mean"] <= 1 and v["change_ref"] > 0 and v["flicker"] > 0
             assert v["texels_shaded"] > 0 and v["texture_side"] <= 256
@@ -209,7 +210,12 @@ def test_distance_records_each_feature(results):
         assert set(net) == {"student", "student_pyr", "student_lod"}
         assert all(0 < x <= 1 for x in net.values()) and net["student_pyr"] == net["student"]
         packs = ["student"] * 3 + ["student_pyr", "student_lod", "student_pyr"]
-        assert [v["pack"] for v in rec["variants"]] == packs
+        assert [v["pack"] for v in rec["variants"]] == [*packs, "student", "student_pyr"]
+        assert [v["msaa"] for v in rec["variants"]] == [1] * 6 + [4] * 2
+        by = {v["variant"]: v for v in rec["variants"]}
+        for a, b in (("all off", "4x MSAA"), ("all on", "all on, 4x MSAA")):
+            assert by[a]["texels_shaded"] == by[b]["texels_shaded"]
+            assert by[a]["flip"]["mean"] != by[b]["flip"]["mean"]
         assert rec["variants"][4]["flip_network"] == net["student_lod"]
     tpp = {r["condition"]: r["texels_per_pixel"] for r in doc["records"]}
     assert tpp["10 m"] > 5 * tpp["1 m"] and tpp["tiling 8"] > 1  # minified where it is for

@@ -327,3 +327,108 @@ def test_sliced_depth_gives_the_frames_of_a_depth_cleared_every_pass(name):
     a, b = got["slices"][0], got["pass"][0]
     assert a.shape[0] == n and (a > 0).mean() > 0.3
     np.testing.assert_array_equal(a, b)
+
+
+#: WebGPU's standard positions of 4 samples in a pixel (x right, y down)
+SAMPLES_4 = ((0.375, 0.125), (0.875, 0.375), (0.125, 0.625), (0.625, 0.875))
+
+
+def _coverage_twin(w: int, h: int, tri_px) -> np.ndarray:
+    """Numpy twin of a 4x multisampled, resolved constant triangle: per pixel, the share of
+    the standard sample positions inside triangle ``tri_px`` (pixel coordinates, y down)."""
+    (x0, y0), (x1, y1), (x2, y2) = tri_px
+    ys, xs = np.mgrid[0:h, 0:w].astype(np.float64)
+    cov = np.zeros((h, w))
+    area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+    for sx, sy in SAMPLES_4:
+        px, py = xs + sx, ys + sy
+        e = [((bx - ax) * (py - ay) - (by - ay) * (px - ax)) * np.sign(area)
+             for (ax, ay), (bx, by) in (((x0, y0), (x1, y1)), ((x1, y1), (x2, y2)),
+                                        ((x2, y2), (x0, y0)))]  # fmt: skip
+        assert min(np.abs(x).min() for x in e) > 1e-3  # no sample on an edge (no tie rule)
+        cov += np.all([x > 0 for x in e], axis=0)
+    return cov / 4
+
+
+@pytest.mark.gpu
+def test_msaa_resolves_a_triangles_edge_to_its_sample_coverage():
+    """Settings.msaa 4 through the renderer's own forward-pass encoding (multisampled targets,
+    the pass's resolve into the eyes' colour, bundles at 4 samples): a constant 0.5 triangle
+    over black, its slanted edge across both eyes, resolves to 0.5 x the share of the standard
+    sample positions it covers in every pixel (the numpy twin), 0, 1/8, ... 1/2 exactly; a
+    single-sample target gives 0 or 0.5 only."""
+    from vrneural.gpu.device import get_device
+    from vrneural.runtime import forward as fw
+
+    w, h = 48, 40
+    tri = ((-10.0, -10.0), (2.03 * w, -10.0), (-10.0, 1.71 * h))  # pixels, y down
+    ndc = [(2 * x / w - 1, 1 - 2 * y / h) for x, y in tri]
+    code = f"""
+@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {{
+    var p = array<vec2<f32>, 3>({", ".join(f"vec2<f32>({x!r}, {y!r})" for x, y in ndc)});
+    return vec4<f32>(p[i], 0.5, 1.0);
+}}
+@fragment fn fs() -> @location(0) vec4<f32> {{ return vec4<f32>(0.5, 0.5, 0.5, 1.0); }}"""
+    dev = get_device()
+    mod = dev.create_shader_module(code=code)
+    for samples in (4, 1):
+        r = _renderer(msaa=samples, eye_res=(w, h))
+        assert r.eye_t[0].samples == samples
+        pipe = dev.create_render_pipeline(
+            layout="auto", vertex={"module": mod, "entry_point": "vs"}, **fw._raster_state(),
+            fragment={"module": mod, "entry_point": "fs",
+                      "targets": [{"format": r.eye_t[0].format}]},
+            multisample={"count": samples})  # fmt: skip
+        bundles = []
+        for et in r.eye_t:
+            enc = fw.bundle_encoder(et)
+            enc.set_pipeline(pipe)
+            enc.draw(3)
+            bundles.append(enc.finish())
+        enc = dev.create_command_encoder()
+        r.encode_forward(enc, None, bundles)
+        dev.queue.submit([enc.finish()])
+        want = _coverage_twin(w, h, tri) * 0.5
+        for eye in r.read_eyes():
+            got = eye[..., 0]
+            if samples == 4:
+                np.testing.assert_array_equal(got, want.astype(np.float32))
+                assert set(np.unique(got)) >= {0.0, 0.125, 0.25, 0.375, 0.5}
+            else:
+                assert set(np.unique(got)) == {0.0, 0.5}
+                assert np.abs(got - want).max() <= 0.375  # the same edge
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("mips", [False, True])
+def test_msaa_frames_differ_from_single_sample_only_where_edges_cross_pixels(mips):
+    """The renderer at 4 samples per pixel against 1, frame after frame (the depth sliced
+    too): the same counters (shading is unchanged: the texture-space pass never sees the
+    samples); most pixels the same bits (covered by one triangle); the rest near their
+    single-sample value inside surfaces (triangle edges) or between the two sides of a
+    silhouette, and the image's mean within 2%. With radiance mips too (sampled at the
+    centroid, the level from the pixel centre's derivatives)."""
+    runs = {}
+    for m in (1, 4):
+        r = _renderer(msaa=m, depth_clear="slices", mips=mips)
+        st, eyes = [], []
+        for f in range(6):
+            st.append(r.frame(f))
+            eyes.append(np.stack(r.read_eyes()))
+        r.wait()
+        runs[m] = ([_counts(x) for x in st], np.stack(eyes))
+    assert runs[1][0] == runs[4][0]
+    a, b = runs[1][1][..., :3], runs[4][1][..., :3]
+    same = np.all(a == b, axis=-1)
+    assert 0.5 < same.mean() < 1.0
+    assert abs(a.mean() - b.mean()) <= 0.02 * a.mean()  # 1.1% here (tiny eyes: many edges)
+
+
+@pytest.mark.gpu
+def test_msaa_errors_are_one_line():
+    from vrneural.errors import VrnError
+
+    with pytest.raises(VrnError, match="msaa = 2 is not allowed; choose 1, 4"):
+        _renderer(msaa=2)
+    with pytest.raises(VrnError, match="msaa = 4 needs mode 'texture'"):
+        _renderer(msaa=4, mode="screen")

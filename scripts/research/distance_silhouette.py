@@ -10,6 +10,7 @@ pixel (HDR, both eyes) is then averaged over three regions: the silhouette band 
 the whole image's FLIP sum.
 
     python scripts/research/distance_silhouette.py DIR [--distance 10] [--mips] [--screen-res]
+        [--msaa 4]
 
 DIR: a `bench distance` output folder (its packs are reused when the budget matches).
 """
@@ -49,6 +50,7 @@ def main() -> None:
     ap.add_argument("--distance", type=float, default=10.0)
     ap.add_argument("--mips", action="store_true")
     ap.add_argument("--screen-res", action="store_true")
+    ap.add_argument("--msaa", type=int, default=1, help="samples per pixel of the render")
     ap.add_argument("--band", type=int, default=1, help="pixels each side of the edge")
     a = ap.parse_args()
     c = DistanceConfig(out=str(a.out)).resolved()
@@ -61,12 +63,14 @@ def main() -> None:
         k: dist.supersampled(c, cond, prof, full, mats[k], [f])[f] for k in ("teacher", "student")
     }
     pack = mats["student_pyr" if a.mips or a.screen_res else "student"]
-    s = dist.settings(c, cond, prof, a.mips, a.screen_res)
+    s = dist.settings(c, cond, prof, a.mips, a.screen_res, msaa=a.msaa)
     scene = ts.scene_for(cond, pack)
     img["rendered"] = ts.render(scene, s, cond, c.score.crop, full, {f})[0][f]
     bare = dataclasses.replace(scene, objects=scene.objects[1:])  # the floor alone
-    img["bare"] = ts.render(bare, s, cond, c.score.crop, full, {f})[0][f]
-    mask = np.abs(img["rendered"] - img["bare"]).max(-1) > 0  # [eyes, H, W]
+    s1 = dataclasses.replace(s, msaa=1)  # the mask from single-sample renders (no blending)
+    img["bare"] = ts.render(bare, s1, cond, c.score.crop, full, {f})[0][f]
+    img["single"] = ts.render(scene, s1, cond, c.score.crop, full, {f})[0][f]
+    mask = np.abs(img["single"] - img["bare"]).max(-1) > 0  # [eyes, H, W]
     k = np.ones((2 * a.band + 1,) * 2, bool)
     band = np.stack([ndimage.binary_dilation(m, k) & ~ndimage.binary_erosion(m, k)
                      for m in mask])  # fmt: skip

@@ -10,7 +10,9 @@ above 1 is flicker the ground truth does not have), the shading work (texels sha
 object per frame, texture side, shading ms) and the frame time. Variants: all three features
 off, each alone, and all three on (``--mips``: radiance mip chains; ``--screen-res``: texture
 side from the screen; neural LOD: the same student with a pyramid of its neural textures' box
-averages, and, as a variant of its own, a student trained with ``--lod-levels 4``).
+averages, and, as a variant of its own, a student trained with ``--lod-levels 4``); and 4x
+MSAA (``run --msaa 4``) alone and with all three: the silhouette, where the sphere's pixels
+meet the background, is aliased by one sample per pixel whatever the texture filters do.
 
 The material's texels are ``--texel-mm`` on the sphere at tiling 1 (1 mm: about a pixel at
 1 m, so 10 m and tiling 8 minify it; each record has its texels per pixel), and each pack's
@@ -38,14 +40,17 @@ from vrneural.scoring import metrics
 
 #: name -> (mips, screen_res, the pack: ``student``, or one with prefiltered neural textures:
 #: ``student_pyr`` the same student with a pyramid of its textures' box averages, the filter
-#: alone; ``student_lod`` a student trained with its pyramid, ``distill --lod-levels 4``)
+#: alone; ``student_lod`` a student trained with its pyramid, ``distill --lod-levels 4``;
+#: samples per pixel of the eyes: 4x MSAA, for the silhouette, which no texture filter reaches)
 VARIANTS = {
-    "all off": (False, False, "student"),
-    "mips": (True, False, "student"),
-    "screen res": (False, True, "student"),
-    "neural LOD": (False, False, "student_pyr"),
-    "neural LOD, trained": (False, False, "student_lod"),
-    "all on": (True, True, "student_pyr"),
+    "all off": (False, False, "student", 1),
+    "mips": (True, False, "student", 1),
+    "screen res": (False, True, "student", 1),
+    "neural LOD": (False, False, "student_pyr", 1),
+    "neural LOD, trained": (False, False, "student_lod", 1),
+    "all on": (True, True, "student_pyr", 1),
+    "4x MSAA": (False, False, "student", 4),
+    "all on, 4x MSAA": (True, True, "student_pyr", 4),
 }
 PACKS = ("student", "student_pyr", "student_lod")
 
@@ -104,14 +109,15 @@ def check(c: DistanceConfig) -> None:
     c.budget.check([c.preset])
 
 
-def settings(c: DistanceConfig, cond, prof, mips: bool, screen: bool, mode="texture", ref=None):
+def settings(c: DistanceConfig, cond, prof, mips: bool, screen: bool, mode="texture", ref=None,
+             msaa: int = 1):  # fmt: skip
     from vrneural.runtime.renderer import Settings
 
     return Settings(
         eyes=2, reuse=c.reuse, texture_res=c.texture_res, eye_res=(c.score.crop, c.score.crop),
         frames=cond.frames, fps=prof.fps, fov_y=prof.fov_y, ipd=prof.ipd, n_lights=2,
         mode=mode, precision="f32", reference=ref, crop=(0, 0, *prof.eye_res), mips=mips,
-        screen_res=screen,
+        screen_res=screen, msaa=msaa,
     )  # fmt: skip
 
 
@@ -153,10 +159,10 @@ def run_distance(cfg: DistanceConfig) -> dict:
                 ))  # fmt: skip
             own["student_pyr"] = own["student"]
             rec["network_flip"]["student_pyr"] = rec["network_flip"]["student"]
-            for name, (mips, screen, key) in VARIANTS.items():
+            for name, (mips, screen, key, msaa) in VARIANTS.items():
                 bar.set_postfix_str(f"{cond.name}: {name}")
                 mat = mats[key]
-                s = settings(c, cond, prof, mips, screen)
+                s = settings(c, cond, prof, mips, screen, msaa=msaa)
                 imgs, st = ts.render(
                     ts.scene_for(cond, mat), s, cond, c.score.crop, full, set(cond.scored)
                 )
@@ -164,7 +170,7 @@ def run_distance(cfg: DistanceConfig) -> dict:
                 own_f = [metrics.flip_hdr_eyes(own[key][f], imgs[f], ppd) for f in cond.scored]
                 w = st[1:]
                 rec["variants"].append({
-                    "variant": name, "mips": mips, "screen_res": screen, "pack": key,
+                    "variant": name, "mips": mips, "screen_res": screen, "pack": key, "msaa": msaa,
                     "neural_lod": key != "student",
                     "flip_own": float(np.mean(own_f)), "flip_network": rec["network_flip"][key],
                     **{k: sc[k] for k in ("flip", "psnr", "ssim", "change", "change_ref")},

@@ -136,10 +136,8 @@ def screen_floor_bundles(r) -> list:
 
     out = []
     for et in r.eye_t:
-        enc = r.dev.create_render_bundle_encoder(
-            color_formats=et.formats(), depth_stencil_format=fw.DEPTH_FORMAT
-        )
-        enc.set_pipeline(fw.screen_floor_pipeline(et.n_lights, et.format))
+        enc = fw.bundle_encoder(et)
+        enc.set_pipeline(fw.screen_floor_pipeline(et.n_lights, et.format, et.samples))
         enc.draw(3)
         out.append(enc.finish())
     return out

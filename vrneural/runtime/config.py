@@ -19,6 +19,7 @@ from vrneural.runtime.settings import (
     FRAMES_IN_FLIGHT_MAX,
     LIGHTS_MAX,
     MODES,
+    MSAA,
     NEURAL_FILTERS,
     RADIANCE,
     TARGETS,
@@ -103,6 +104,13 @@ class RunConfig:
         "depth range), auto (slices on discrete GPUs, pass elsewhere); the same frames but "
         "where surfaces are closer than the depth's precision",
         choices=DEPTH_CLEARS,
+    )
+    msaa: int = opt(
+        1,
+        "samples per pixel of the eyes' colour and depth: 4 antialiases silhouettes and seams "
+        "by coverage (each pixel still shaded once per triangle, from the radiance texture); "
+        "--mode texture only",
+        choices=MSAA,
     )
     profile: str | None = opt(None, "device profile: quest3 (default), quest2, preview, tiny")
     texture_res: int | None = opt(
@@ -196,6 +204,13 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
                 f"--{name.replace('_', '-')} = {getattr(cfg, name)!r} is not allowed; choose "
                 f"{', '.join(allowed)}"
             )
+    if cfg.msaa not in MSAA:
+        raise VrnError(f"--msaa = {cfg.msaa!r} is not allowed; choose {', '.join(map(str, MSAA))}")
+    if cfg.msaa > 1 and cfg.mode != "texture":
+        raise VrnError(
+            f"--msaa {cfg.msaa} needs --mode texture (--mode {cfg.mode} shades each pixel once "
+            "from a single-sample visibility target); drop --msaa or use --mode texture"
+        )
     if cfg.target == "display" and cfg.mode != "texture":
         raise VrnError(
             f"--target display needs --mode texture (--mode {cfg.mode} writes HDR pixels from a "
@@ -313,6 +328,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         target=cfg.target,
         colour_clear=cfg.colour_clear,
         depth_clear=cfg.depth_clear,
+        msaa=cfg.msaa,
     )
 
 

@@ -133,26 +133,26 @@ class FrameEncoding:
         objects then sample the first radiance texture)."""
         s = self.s
         vis = s.mode != "texture"
-        nl, na, mips = et.n_lights, len(self.lights), s.mips
+        nl, na, mips, ms = et.n_lights, len(self.lights), s.mips, et.samples
         out = []
         for d, n in self.draws:
             d = d if n is None else n.draw  # a neural object: the atlas level in use
             if fragment is not None:
                 tgt = (n or self.neural[0]).targets
                 tgt = tgt[e if len(tgt) > 1 else 0]
-                pipe = fw.render_pipeline(nl, fragment, False, na, et.format, mips)
+                pipe = fw.render_pipeline(nl, fragment, False, na, et.format, mips, ms)
                 key = ("eye", e, tgt.R) if n is not None else ("floor", e, tgt.R)
                 bg = d.bind_group(tgt.sample_view, key, mips)
             elif n is None:
                 pipe = fw.render_pipeline(
-                    nl, "fs_plain_vis" if vis else "fs_plain", vis, na, et.format
+                    nl, "fs_plain_vis" if vis else "fs_plain", vis, na, et.format, False, ms
                 )
                 bg = d.bind_group(None, "plain")
             elif vis:
                 pipe = fw.render_pipeline(nl, "fs_neural_vis", True, na)
                 bg = d.bind_group(None, "plain")
             else:
-                pipe = fw.render_pipeline(nl, "fs_neural", False, na, et.format, mips)
+                pipe = fw.render_pipeline(nl, "fs_neural", False, na, et.format, mips, ms)
                 tgt = n.targets[e if len(n.targets) > 1 else 0]  # shared: one for both
                 bg = d.bind_group(tgt.sample_view, ("eye", e), mips)
             out.append((pipe, bg, d))

@@ -30,6 +30,8 @@ from vrneural.runtime.texture_pass import light_words
 #: see :func:`colour_format`)
 TARGETS = dict(zip(settings.TARGETS, ("rgba16float", "rgba8unorm-srgb"), strict=True))
 DEPTH_FORMAT = "depth32float"
+#: samples per pixel the eyes' targets may have (WebGPU's: 1 and 4; Settings.msaa)
+SAMPLE_COUNTS = (1, 4)
 VIS_FORMAT = "rg32uint"
 FRAME_BYTES = FRAME.size  # 96
 
@@ -121,11 +123,12 @@ def render_pipeline(
     n_active: int | None = None,
     fmt: str = TARGETS["hdr"],
     mips: bool = False,
+    samples: int = 1,
 ):
     """Cached render pipeline for entry point ``fragment`` (``vis``: colour + visibility):
     a lights array of ``n_lights``, ``n_active`` of them shaded (default all), colour format
     ``fmt`` (``EyeTargets.format``); ``mips``: neural objects sample their radiance textures'
-    mip chains."""
+    mip chains; ``samples``: the targets' samples per pixel (``EyeTargets.samples``)."""
     mips = mips and fragment in ("fs_neural", "fs_floor_sample")
     mod = _module(n_lights, n_lights if n_active is None else n_active, fmt, mips)
     frame_l, neural_l, plain_l = _layouts()
@@ -139,15 +142,17 @@ def render_pipeline(
         vertex={"module": mod, "entry_point": "vs_main", "buffers": [VERTEX_BUFFER]},
         **_raster_state(),
         fragment={"module": mod, "entry_point": fragment, "targets": targets},
+        multisample={"count": samples},
         label=fragment,
     )
 
 
 @functools.cache
-def screen_floor_pipeline(n_lights: int, fmt: str = TARGETS["hdr"]):
+def screen_floor_pipeline(n_lights: int, fmt: str = TARGETS["hdr"], samples: int = 1):
     """The raster floor (`bench frame`): a triangle covering the viewport in a constant colour,
     depth-tested and written as the forward pass's draws are, into a colour target of format
-    ``fmt`` alone (no visibility target); no vertex buffer, no bindings."""
+    ``fmt`` alone (no visibility target), ``samples`` per pixel; no vertex buffer, no
+    bindings."""
     mod = _module(n_lights, n_lights, fmt)
     return get_device().create_render_pipeline(
         layout="auto",
@@ -158,6 +163,7 @@ def screen_floor_pipeline(n_lights: int, fmt: str = TARGETS["hdr"]):
             "entry_point": "fs_floor_constant",
             "targets": [{"format": fmt}],
         },
+        multisample={"count": samples},
         label="screen floor",
     )
 
@@ -169,20 +175,30 @@ class EyeTargets:
 
     ``share``: draw into the textures of another ``EyeTargets`` instead, in the ``width``
     columns from ``x0`` (:meth:`side_by_side`); ``columns``: textures that many eyes wide;
-    ``depth_slices``: render passes one depth clear serves (:func:`begin_pass`)."""
+    ``depth_slices``: render passes one depth clear serves (:func:`begin_pass`); ``samples``:
+    samples per pixel (4: multisampled colour and depth, resolved into the colour texture at
+    the end of each pass; the fragment shader still runs once per pixel and triangle, so a
+    pixel covered by one triangle keeps its value, and one that a silhouette or a triangle's
+    edge crosses becomes the coverage-weighted mean of the triangles covering it)."""
 
     def __init__(
         self, width: int, height: int, n_lights: int, vis: bool = False, arena=None,
         target: str = "hdr", share: EyeTargets | None = None, x0: int = 0, columns: int = 1,
-        compute_clear: bool = True, depth_slices: int = 1,
+        compute_clear: bool = True, depth_slices: int = 1, samples: int = 1,
     ):  # fmt: skip
         import wgpu
 
         dev = get_device()
         tu = wgpu.TextureUsage
         self.size = (width, height)  # this eye's image
-        #: begin_pass clears the colour with clear_colour (else in the render pass)
-        self.compute_clear = compute_clear if share is None else share.compute_clear
+        if samples not in SAMPLE_COUNTS:
+            raise ValueError(f"EyeTargets: samples = {samples} is not one of {SAMPLE_COUNTS}")
+        #: samples per pixel of the colour and depth attachments
+        self.samples = samples if share is None else share.samples
+        #: begin_pass clears the colour with clear_colour (else in the render pass; with
+        #: samples the resolve writes every pixel: nothing to clear there)
+        own = compute_clear and self.samples == 1
+        self.compute_clear = own if share is None else share.compute_clear
         self.x0 = x0  # its first column in the textures
         #: the eyes' targets that own the textures (itself unless ``share``): the depth's state
         self.owner = self if share is None else share
@@ -197,20 +213,28 @@ class EyeTargets:
         #: the colour texture's format (:func:`colour_format`)
         self.format = colour_format(target, self.compute_clear)
 
-        def texture(fmt: str, usage):
-            return dev.create_texture(size=(width * columns, height, 1), format=fmt, usage=usage)
+        def texture(fmt: str, usage, samples: int = 1):
+            return dev.create_texture(size=(width * columns, height, 1), format=fmt, usage=usage,
+                                      sample_count=samples)  # fmt: skip
 
         rt = tu.RENDER_ATTACHMENT
         if share is not None:
             self.colour, self.depth, self.vis = share.colour, share.depth, share.vis
             self.colour_view, self.depth_view = share.colour_view, share.depth_view
             self.vis_view, self._clear = share.vis_view, share._clear
+            self.ms_view = share.ms_view
         else:
             # storage: cleared by a compute pass (clear_colour); the screen pass writes HDR
             storable = not self.format.endswith("-srgb")
             usage = rt | tu.COPY_SRC | tu.TEXTURE_BINDING | (tu.STORAGE_BINDING * storable)
             self.colour = texture(self.format, usage)
-            self.depth = texture(DEPTH_FORMAT, rt)
+            self.depth = texture(DEPTH_FORMAT, rt, self.samples)
+            #: the multisampled colour the pass draws into (None: the colour texture itself)
+            self.ms_view = None
+            if self.samples > 1:
+                if vis:
+                    raise ValueError("EyeTargets: no visibility target with samples above 1")
+                self.ms_view = texture(self.format, rt, self.samples).create_view()
             self.vis = texture(VIS_FORMAT, rt | tu.TEXTURE_BINDING) if vis else None
             self.colour_view = self.colour.create_view()
             self._clear = _clear_group(self.colour, self.format) if storable else None
@@ -226,14 +250,15 @@ class EyeTargets:
     @classmethod
     def side_by_side(
         cls, n: int, width: int, height: int, n_lights: int, arena=None, target: str = "hdr",
-        compute_clear: bool = True, depth_slices: int = 1,
+        compute_clear: bool = True, depth_slices: int = 1, samples: int = 1,
     ) -> list[EyeTargets]:  # fmt: skip
         """``n`` eyes' targets in one set of textures ``n * width`` wide, eye ``e`` in the
         columns from ``e * width``: one render pass draws every eye (a viewport each,
         :func:`viewport`), each with its own frame uniforms. Single-pass stereo: one pass
         begun, cleared and ended per frame instead of one per eye."""
         first = cls(width, height, n_lights, False, arena, target, columns=n,
-                    compute_clear=compute_clear, depth_slices=depth_slices)  # fmt: skip
+                    compute_clear=compute_clear, depth_slices=depth_slices,
+                    samples=samples)  # fmt: skip
         rest = [
             cls(width, height, n_lights, False, arena, target, share=first, x0=e * width)
             for e in range(1, n)
@@ -315,9 +340,7 @@ def _sampler(mips: bool = False):
 def record_bundle(eye: EyeTargets, draws: list):
     """A render bundle of ``eye``'s draws, ``[(pipeline, object bind group, DrawObject)]``
     in order: replayed by every frame's forward pass (one call instead of four per draw)."""
-    enc = get_device().create_render_bundle_encoder(
-        color_formats=eye.formats(), depth_stencil_format=DEPTH_FORMAT
-    )
+    enc = bundle_encoder(eye)
     if eye._bind is None:  # group 0 (frame uniforms + lights), shared by every pipeline
         ar = eye.arena
         res = {
@@ -333,6 +356,13 @@ def record_bundle(eye: EyeTargets, draws: list):
         enc.set_vertex_buffer(0, d.vbuf)
         enc.draw(d.n_vertices)
     return enc.finish()
+
+
+def bundle_encoder(eye: EyeTargets):
+    """A render bundle encoder for ``eye``'s passes (its formats and samples)."""
+    return get_device().create_render_bundle_encoder(
+        color_formats=eye.formats(), depth_stencil_format=DEPTH_FORMAT, sample_count=eye.samples
+    )
 
 
 def viewport(rp, eye: EyeTargets) -> None:
@@ -411,7 +441,10 @@ def begin_pass(encoder, eye: EyeTargets, timestamp_writes=None, clear_writes=Non
     (docs/results/h200/raster_floor.py); a loaded depth costs nothing to set up there."""
     clear = {"load_op": "clear", "store_op": "store", "clear_value": (0, 0, 0, 0)}
     att = [{"view": eye.colour_view, **clear}]
-    if eye.compute_clear:
+    if eye.ms_view is not None:  # drawn multisampled, resolved into the colour texture
+        att = [{"view": eye.ms_view, "resolve_target": eye.colour_view, **clear,
+                "store_op": "discard"}]  # fmt: skip
+    elif eye.compute_clear:
         clear_colour(encoder, eye, clear_writes)
         att = [{"view": eye.colour_view, "load_op": "load", "store_op": "store"}]
     if eye.vis is not None:

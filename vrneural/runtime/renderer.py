@@ -45,6 +45,7 @@ from vrneural.runtime.settings import (
     DEPTH_CLEARS,
     DEPTH_SLICES,
     FRAMES_IN_FLIGHT_MAX,
+    MSAA,
     NEURAL_FILTERS,
     RADIANCE,
     Settings,
@@ -99,6 +100,13 @@ class Renderer(FrameEncoding):
             raise VrnError(
                 f"depth_clear = {s.depth_clear!r} is not allowed; choose {', '.join(DEPTH_CLEARS)}"
             )
+        if s.msaa not in MSAA:
+            raise VrnError(f"msaa = {s.msaa!r} is not allowed; choose {', '.join(map(str, MSAA))}")
+        if s.msaa > 1 and s.mode != "texture":
+            raise VrnError(
+                f"msaa = {s.msaa} needs mode 'texture' (mode {s.mode!r} shades each pixel once "
+                "from a single-sample visibility target)"
+            )
         if s.target == "display" and s.mode != "texture":
             raise VrnError(
                 f"target = 'display' needs mode 'texture' (mode {s.mode!r} writes HDR pixels "
@@ -133,6 +141,8 @@ class Renderer(FrameEncoding):
             "compute_clear": cc == "compute",
             "depth_slices": DEPTH_SLICES if dc == "slices" else 1,
         }
+        if not screen:
+            kw["samples"] = s.msaa
         if screen:  # the per-pixel pass reads and writes each eye's own targets
             self.eye_t = [
                 fw.EyeTargets(w, h, nl, vis=True, arena=self.arena, **kw) for _ in range(s.eyes)

@@ -34,6 +34,8 @@ DEPTH_CLEARS = ("auto", "pass", "slices")
 #: frames one depth clear serves with depth_clear "slices" (each gets 1/DEPTH_SLICES of the
 #: depth range: 2 bits of depth32float's precision)
 DEPTH_SLICES = 4
+#: samples per pixel of the eyes' targets (Settings.msaa; WebGPU's sample counts)
+MSAA = (1, 4)
 
 
 @dataclass
@@ -87,6 +89,9 @@ class Settings:
     #: how the forward pass resets the eyes' depth (DEPTH_CLEARS); the frames are the same but
     #: where two surfaces are closer than the depth's precision
     depth_clear: str = "auto"
+    #: samples per pixel of the eyes' colour and depth (MSAA; 4: silhouettes and seams
+    #: antialiased by coverage, each pixel still shaded once per triangle; mode texture only)
+    msaa: int = 1
     #: neural-texture filtering of the texture and screen passes: "hardware" (the sampler's
     #: bilinear / trilinear filtering: its weights at the adapter's sub-texel precision) or
     #: "exact" (taps and weights in float32 in the shader, the numpy twin's arithmetic)

@@ -29,9 +29,12 @@ struct VIn {
 }
 struct VOut {
     @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) uv: vec2<f32>,
+    // centroid: with MSAA a pixel that a triangle's edge crosses is shaded at a point inside
+    // the triangle's covered samples, not at the pixel's centre outside it (an atlas uv
+    // extrapolated past the chart, into its gutter); with one sample it is the centre
+    @location(0) @interpolate(perspective, centroid) world: vec3<f32>,
+    @location(1) @interpolate(perspective, centroid) normal: vec3<f32>,
+    @location(2) @interpolate(perspective, centroid) uv: vec2<f32>,
     @location(3) @interpolate(flat) tri: u32,
 }
 
