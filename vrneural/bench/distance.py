@@ -11,8 +11,9 @@ object per frame, texture side, shading ms) and the frame time. Variants: all th
 off, each alone, and all three on (``--mips``: radiance mip chains; ``--screen-res``: texture
 side from the screen; neural LOD: the same student with a pyramid of its neural textures' box
 averages, and, as a variant of its own, a student trained with ``--lod-levels 4``); and 4x
-MSAA (``run --msaa 4``) alone and with all three: the silhouette, where the sphere's pixels
-meet the background, is aliased by one sample per pixel whatever the texture filters do.
+MSAA (``run --msaa 4``) alone, with all three, and with all but the radiance mips: the
+silhouette, where the sphere's pixels meet the background, is aliased by one sample per pixel
+whatever the texture filters do.
 
 The material's texels are ``--texel-mm`` on the sphere at tiling 1 (1 mm: about a pixel at
 1 m, so 10 m and tiling 8 minify it; each record has its texels per pixel), and each pack's
@@ -51,6 +52,9 @@ VARIANTS = {
     "all on": (True, True, "student_pyr", 1),
     "4x MSAA": (False, False, "student", 4),
     "all on, 4x MSAA": (True, True, "student_pyr", 4),
+    # without the radiance mips: with screen res a radiance texel is already about a pixel,
+    # and the mips' trilinear lookup blurs the material further (docs/lod.md)
+    "screen res + neural LOD, 4x MSAA": (False, True, "student_pyr", 4),
 }
 PACKS = ("student", "student_pyr", "student_lod")
 

@@ -28,6 +28,8 @@ ROWS = [  # label in main-job.json, label on the plot
     ("depth_slices", "now: depth cleared 1 frame in 4"),
     ("depth_slices_in_flight_3", "now, 3 frames in flight"),
     ("depth_slices_display", "now, --target display"),
+    ("release_sixth_call", "now, sixth call"),
+    ("release_msaa4", "now, --msaa 4"),
     ("half_eyes_1032x1104", "682f982+, 1/4 of the pixels"),
 ]
 fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.6), gridspec_kw={"width_ratios": [1.15, 1]})
@@ -45,8 +47,8 @@ a1.text(7.11 / 2.5, -0.75, " 2.5x e90c611", fontsize=7, color="0.3")
 a1.set_yticks(list(y), [lab for _, lab in ROWS], fontsize=8)
 a1.invert_yaxis()
 a1.set_xlabel("ms")
-a1.set_xlim(0, 11.5)
-a1.legend(fontsize=7, loc="lower right")
+a1.set_xlim(0, 15.5)
+a1.legend(fontsize=7, loc="upper right")
 a1.set_title("the main job (quest3, 2 eyes, N = 4, 3 lights) on an NVIDIA H200", fontsize=9)
 
 floor = json.loads((HERE / "raster_floor.json").read_text())["rows"]
