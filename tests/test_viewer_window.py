@@ -344,3 +344,19 @@ def test_hud_leaves_a_small_window_most_of_its_image(display):
     from vrneural.viewer.hud import LINE_PX, PAD
 
     assert rows.size and rows.max() < 8 + max(80 // 2, 2 * LINE_PX + 2 * PAD), rows
+
+
+def test_a_multisampled_view_shows_its_offscreen_frame(display):
+    """`vrneural view --msaa 4 --depth-clear slices` (the run options pass through): the
+    window shows the resolved, multisampled frame (HUD off), bit for bit the offscreen
+    renderer's with the same settings, past a depth-slice cycle."""
+    from vrneural.viewer import View
+    from vrneural.viewer.present import compose
+
+    v = View(profile="tiny", eyes=2, eye_res="96x80", frames=6, msaa=4, depth_clear="slices")
+    recs = run_script(v, {0: [key("F2")]})
+    assert [r.frame for r in recs] == list(range(6)) and not recs[-1].settings["hud"]
+    assert v.r.eye_t[0].samples == 4 and v.r.depth_clear == "slices"
+    shown = v.shown
+    assert shown.shape == (80, 192, 3) and shown.std() > 5
+    np.testing.assert_array_equal(shown, compose(v.replay_offscreen()))
