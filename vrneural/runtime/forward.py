@@ -30,8 +30,6 @@ from vrneural.runtime.texture_pass import light_words
 #: see :func:`colour_format`)
 TARGETS = dict(zip(settings.TARGETS, ("rgba16float", "rgba8unorm-srgb"), strict=True))
 DEPTH_FORMAT = "depth32float"
-#: samples per pixel the eyes' targets may have (WebGPU's: 1 and 4; Settings.msaa)
-SAMPLE_COUNTS = (1, 4)
 VIS_FORMAT = "rg32uint"
 FRAME_BYTES = FRAME.size  # 96
 
@@ -191,8 +189,8 @@ class EyeTargets:
         dev = get_device()
         tu = wgpu.TextureUsage
         self.size = (width, height)  # this eye's image
-        if samples not in SAMPLE_COUNTS:
-            raise ValueError(f"EyeTargets: samples = {samples} is not one of {SAMPLE_COUNTS}")
+        if samples not in settings.MSAA:
+            raise ValueError(f"EyeTargets: samples = {samples} is not one of {settings.MSAA}")
         #: samples per pixel of the colour and depth attachments
         self.samples = samples if share is None else share.samples
         #: begin_pass clears the colour with clear_colour (else in the render pass; with

@@ -140,9 +140,8 @@ class Renderer(FrameEncoding):
             "target": s.target,
             "compute_clear": cc == "compute",
             "depth_slices": DEPTH_SLICES if dc == "slices" else 1,
+            "samples": s.msaa,  # 1 in the screen modes (checked above)
         }
-        if not screen:
-            kw["samples"] = s.msaa
         if screen:  # the per-pixel pass reads and writes each eye's own targets
             self.eye_t = [
                 fw.EyeTargets(w, h, nl, vis=True, arena=self.arena, **kw) for _ in range(s.eyes)
