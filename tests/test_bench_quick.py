@@ -194,7 +194,7 @@ def test_tradeoff_metrics_are_sane(results):
 
 @pytest.mark.gpu
 def test_distance_records_each_feature(results):
-    """Every condition has the nine variants; MSAA leaves the shading as it is; the
+    """Every condition has the ten variants; MSAA leaves the shading as it is; the
     prefiltered student has its pyramid; the frame-to-frame change is measured against the
     reference's own (the head sways)."""
     doc = results[1]["distance"]
@@ -202,7 +202,7 @@ def test_distance_records_each_feature(results):
     for rec in doc["records"]:
         names = [v["variant"] for v in rec["variants"]]
         assert names == ["all off", "mips", "screen res", "neural LOD", "neural LOD, trained",
-                         "all on", "4x MSAA", "all on, 4x MSAA",
+                         "all on", "screen res + neural LOD", "4x MSAA", "all on, 4x MSAA",
                          "screen res + neural LOD, 4x MSAA"]  # fmt: skip
         for v in rec["variants"]:
             assert 0 <= v["flip"]["mean"] <= 1 and v["change_ref"] > 0 and v["flicker"] > 0
@@ -210,10 +210,14 @@ def test_distance_records_each_feature(results):
         net = rec["network_flip"]  # each pack's own error against the teacher, supersampled
         assert set(net) == {"student", "student_pyr", "student_lod"}
         assert all(0 < x <= 1 for x in net.values()) and net["student_pyr"] == net["student"]
-        packs = ["student"] * 3 + ["student_pyr", "student_lod", "student_pyr"]
+        packs = ["student"] * 3 + ["student_pyr", "student_lod", "student_pyr", "student_pyr"]
         assert [v["pack"] for v in rec["variants"]] == [*packs, "student", *["student_pyr"] * 2]
-        assert [v["msaa"] for v in rec["variants"]] == [1] * 6 + [4] * 3
+        assert [v["msaa"] for v in rec["variants"]] == [1] * 7 + [4] * 3
         by = {v["variant"]: v for v in rec["variants"]}
+        # the neural textures at the pixel's footprint without the mips (lod_footprint auto)
+        for v in rec["variants"]:
+            pixel = v["screen_res"] and not v["mips"]
+            assert v["lod_scale"] >= 1 and (v["lod_scale"] == 1 or pixel)
         for a, b in (("all off", "4x MSAA"), ("all on", "all on, 4x MSAA")):
             assert by[a]["texels_shaded"] == by[b]["texels_shaded"]
             assert by[a]["flip"]["mean"] != by[b]["flip"]["mean"]

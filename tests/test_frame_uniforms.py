@@ -83,10 +83,11 @@ def test_texture_target_update_writes_the_params_record():
         eye = RNG.normal(size=3) * 100 + model[:3, 3]
         lp, lc = RNG.normal(size=(2, 3)), RNG.random((2, 3))
         tiling, phase, period, slot, margin = (2.0, 3.0, 0.5, 0.25), rep % 2, 2, rep % 2, 0.03
-        tgt.update(model, eye, tiling, lp, lc, phase, period, slot, margin)
+        scale = 1.0 + 0.7 * rep
+        tgt.update(model, eye, tiling, lp, lc, phase, period, slot, margin, scale)
         p = TEXTURE_PARAMS.zeros()
         span = tgt.gatlas.block_list(period)[1][phase]
-        pack_params_into(p, model, eye, tiling, *span, slot, margin)
+        pack_params_into(p, model, eye, tiling, *span, slot, margin, lod_scale=scale)
         got = arena.host[tgt.p_off : tgt.p_off + TEXTURE_PARAMS.size]
         assert got.tobytes() == p.tobytes()
         lights = LIGHT.zeros(3)

@@ -132,11 +132,14 @@ def test_distill_trains_a_pyramid_and_names_levels_that_do_not_fit(tmp_path):
 
 @pytest.mark.gpu
 @pytest.mark.parametrize("filtering", ["exact", "hardware"])
-@pytest.mark.parametrize("tiling", [1.0, 3.0, 11.0, 40.0])
-def test_gpu_lod_lookups_follow_the_twin(tiling, filtering):
+@pytest.mark.parametrize(
+    ("tiling", "scale"), [(1.0, 1.0), (3.0, 1.0), (11.0, 1.0), (40.0, 1.0), (1.0, 2.5), (3.0, 1.7)]
+)
+def test_gpu_lod_lookups_follow_the_twin(tiling, scale, filtering):
     """The texture-space kernel computes each block's footprint and looks the pyramid up as
     the numpy twin does (lod 0, 1, 2.9 and 4.7, clamped to the top level 3); "hardware":
-    trilinear by the sampler."""
+    trilinear by the sampler. ``scale``: the footprint of a pixel larger than the texel
+    (``lod_scale``, resolution from the screen): lod 1.3 and 2.3."""
     from runtime_helpers import quad_atlas
 
     from vrneural.runtime import reference as ref
@@ -146,12 +149,17 @@ def test_gpu_lod_lookups_follow_the_twin(tiling, filtering):
     at = quad_atlas(32)
     eye, lp, lc = np.float32([0.2, 0.1, 1.5]), np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
     tl = (tiling, tiling, 0, 0)
-    want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
-    got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl, filtering=filtering)
+    want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl, lod_scale=scale)
+    got, gc = shade_texture_space(
+        at, m, np.eye(4), eye, lp, lc, tiling=tl, filtering=filtering, lod_scale=scale
+    )
     np.testing.assert_array_equal(gc, wc)
     w16 = want.astype(np.float16).astype(np.float32)
     # f32 math in another order, f16 storage on both sides: 2 f16 ulps (see test_runtime_texture)
     assert (np.abs(got - w16) / (np.abs(w16) + 1e-2 * max(w16.max(), 1e-12))).max() <= 2 * 2.0**-10
+    if scale != 1.0:  # the scale moved the level: not the texel's footprint's image
+        one, _ = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
+        assert np.abs(one - want).max() > 0.05 * want.max()
 
 
 @pytest.mark.gpu

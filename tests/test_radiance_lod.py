@@ -157,3 +157,80 @@ def test_a_far_object_is_shaded_at_a_smaller_side():
     on = fixed.max(-1) > 0
     assert ((got.max(-1) > 0) == on).mean() > 0.99
     assert np.abs(got[on] - fixed[on]).mean() < 0.1 * fixed[on].mean()
+
+
+@pytest.mark.gpu
+def test_the_pixel_footprint_prefilters_what_a_rounded_up_side_leaves():
+    """Resolution from the screen rounds the side up to a power of two, so a texel can be up to
+    2.5x smaller than a pixel; with lod_footprint "pixel" the pyramid is looked up at the
+    pixel's footprint there (the scale side / wanted side, in summary's object_lod_scale), and
+    the tiled sphere's pixels vary less than with the texel's footprint (scale 1). "auto": the
+    pixel's without radiance mips, the texel's with them (the mips filter the rest)."""
+    from test_neural_lod import pyramid_material
+
+    from vrneural.bench import trade_scene as ts
+    from vrneural.runtime.renderer import Settings
+    from vrneural.runtime.screen_res import wanted_side
+
+    mat = pyramid_material(4)
+    s = Settings(eyes=1, reuse=0, texture_res=1024, eye_res=(128, 128), fov_y=12.0, n_lights=2,
+                 screen_res=True)  # fmt: skip
+    cond = ts.Condition("d", "rest", 0.0, 1, [0], distance=3.0, tiling=2.0)
+    got = {}
+    for fp, mips in (("pixel", False), ("texel", False), ("auto", False), ("auto", True)):
+        sc, s1 = ts.scene_for(cond, mat), dataclasses.replace(s, lod_footprint=fp, mips=mips)
+        r, st, img = _render(sc, s1, 1, cond.centre())  # the sphere fills most of the eye
+        n = r.neural[0]
+        c, rad = r.world_sphere(n)
+        d = float(np.linalg.norm(c - r.eyes_at(0)[0].position)) - rad
+        cover = float(np.mean(n.levels[n.level_sides[0]][0].tri_ids != 0xFFFFFFFF))
+        want = wanted_side(n.area, cover, d, s.fov_y, s.eye_res[1])
+        side = st[0].object_res[0]
+        assert side >= want  # rounded up
+        scale = side / want if fp == "pixel" or (fp == "auto" and not mips) else 1.0
+        assert st[0].object_lod_scale == [pytest.approx(scale, rel=1e-6)]
+        got[fp + " mips" * mips] = img
+    np.testing.assert_array_equal(got["auto"], got["pixel"])
+    assert 1.2 < side / want < 2.0  # this case: a scale that moves the level
+    on = got["texel"].max(-1) > 0
+    assert ((got["pixel"].max(-1) > 0) == on).all()  # the same pixels covered
+    sd = {k: np.abs(np.diff(v, axis=1))[on[:, 1:] & on[:, :-1]].mean() for k, v in got.items()}
+    assert sd["pixel"] < 0.9 * sd["texel"], sd
+
+
+def test_run_takes_the_lod_footprint_and_refuses_another(capsys):
+    from vrneural.cli import main
+    from vrneural.errors import VrnError
+    from vrneural.gpu.device import adapter_summary
+    from vrneural.runtime.config import RunConfig, resolve
+    from vrneural.runtime.scene import builtin_scene
+
+    with pytest.raises(SystemExit) as e:  # argparse's choices
+        main(["run", "--lod-footprint", "screen", "--profile", "tiny"])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--lod-footprint" in err and "screen" in err
+    assert RunConfig().lod_footprint == "auto"
+    ad, scene = adapter_summary(), builtin_scene(1)
+    cfg = RunConfig(profile="tiny", screen_res=True, lod_footprint="texel")
+    assert resolve(cfg, scene, ad).lod_footprint == "texel"
+    with pytest.raises(VrnError, match=r"--lod-footprint = 'screen' is not allowed; choose auto"):
+        resolve(RunConfig(profile="tiny", lod_footprint="screen"), scene, ad)
+
+
+@pytest.mark.gpu
+def test_run_with_screen_res_records_sides_and_footprint_scales(tmp_path):
+    import json
+
+    from vrneural.cli import main
+
+    out = tmp_path / "run"
+    argv = ["run", "--frames", "2", "--eyes", "1", "--profile", "tiny", "--screen-res",
+            "--no-video", "--save-frames", "none", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    sm = json.loads((out / "summary.json").read_text())
+    assert sm["resolved"]["lod_footprint"] == "auto" and sm["resolved"]["screen_res"]
+    pf = sm["per_frame"]
+    n = len(pf["object_res"][0])
+    assert n >= 1 and all(len(x) == n for x in pf["object_lod_scale"])
+    assert all(s >= 1.0 for x in pf["object_lod_scale"] for s in x)

@@ -50,10 +50,12 @@ VARIANTS = {
     "neural LOD": (False, False, "student_pyr", 1),
     "neural LOD, trained": (False, False, "student_lod", 1),
     "all on": (True, True, "student_pyr", 1),
+    # without the radiance mips: with screen res a radiance texel is already about a pixel,
+    # and the mips' trilinear lookup blurs the material further; the neural textures are then
+    # prefiltered to the pixel's footprint (Settings.lod_footprint "auto": docs/lod.md)
+    "screen res + neural LOD": (False, True, "student_pyr", 1),
     "4x MSAA": (False, False, "student", 4),
     "all on, 4x MSAA": (True, True, "student_pyr", 4),
-    # without the radiance mips: with screen res a radiance texel is already about a pixel,
-    # and the mips' trilinear lookup blurs the material further (docs/lod.md)
     "screen res + neural LOD, 4x MSAA": (False, True, "student_pyr", 4),
 }
 PACKS = ("student", "student_pyr", "student_lod")
@@ -181,6 +183,7 @@ def run_distance(cfg: DistanceConfig) -> dict:
                     "flicker": sc["change"] / max(sc["change_ref"], 1e-12),
                     "texels_shaded": float(np.mean([4 * x.object_blocks[0] for x in w])),
                     "texture_side": int(np.median([x.object_res[0] for x in w])),
+                    "lod_scale": float(np.median([x.object_lod_scale[0] for x in w])),
                     **tr.work(st),
                 })  # fmt: skip
                 bar.update()
@@ -206,7 +209,8 @@ def finish(root, doc: dict, t0: float) -> dict:
         "network's own error, which no filter removes (FLIP's floor for that variant). "
         "texels/px: material texels under a pixel's width where the sphere faces the eye "
         "(above 1: minified). texels: texels shaded for the sphere per frame; side: its "
-        "radiance texture's median side."
+        "radiance texture's median side; lod x: the neural textures' footprint in its atlas "
+        "texels (above 1: a pixel's, with screen res and no mips)."
         + (" **Quick run: reduced settings.**" if doc["config"]["quick"] else ""),
         "",
     ]
@@ -217,10 +221,10 @@ def finish(root, doc: dict, t0: float) -> dict:
                          f"{v['flip']['mean']:.4f} ({v['flip']['worst']:.4f})",
                          f"{v['flip_own']:.4f}", f"{rec['noise_floor']:.4f}",
                          f"{v['flip_network']:.4f}", v["flicker"], v["texels_shaded"],
-                         v["texture_side"],
+                         v["texture_side"], f"{v.get('lod_scale', 1.0):.2f}",
                          v["frame_ms"]["mean"]])  # fmt: skip
     md += rp.table(["condition", "texels/px", "variant", "FLIP (worst)", "FLIP own", "floor",
-                    "network", "flicker", "texels", "side", "frame ms"], rows)  # fmt: skip
+                    "network", "flicker", "texels", "side", "lod x", "frame ms"], rows)  # fmt: skip
     return rp.finish(root, doc, md, t0, [("distance.png", "distance", png)])
 
 

@@ -111,7 +111,7 @@ def texture_update(r, entry: str, phase: int, period: int, f: int):
                 zip(r._shading_eyes(eyes), n.targets, strict=True)
             ):
                 tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, k * r.s.eyes + e,
-                           margin)  # fmt: skip
+                           margin, n.lod_scale)  # fmt: skip
                 bound = tgt.dispatch(cp, phase, period, entry, bound)
         cp.end()
 

@@ -18,6 +18,7 @@ from vrneural.runtime.settings import (
     DEPTH_SLICES,
     FRAMES_IN_FLIGHT_MAX,
     LIGHTS_MAX,
+    LOD_FOOTPRINTS,
     MODES,
     MSAA,
     NEURAL_FILTERS,
@@ -50,6 +51,15 @@ class RunConfig:
         False,
         "each object's radiance-texture side from its size on screen (about one texel per "
         "pixel; a power of two up to its own side)",
+    )
+    lod_footprint: str = opt(
+        "auto",
+        "with --screen-res, the footprint a pack's prefiltered neural textures are looked up "
+        "at: pixel (an atlas texel or, where larger, the pixel where the object is nearest the "
+        "eye: the texture is then prefiltered as the screen shows it), texel (an atlas texel, "
+        "as without --screen-res: the radiance mips filter the rest) or auto (pixel without "
+        "--mips, texel with them)",
+        choices=LOD_FOOTPRINTS,
     )
     neural_lod: bool = opt(
         True,
@@ -198,6 +208,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     for name, allowed in (
         ("mode", MODES), ("schedule", SCHEDULES), ("neural_filter", NEURAL_FILTERS),
         ("target", TARGETS), ("colour_clear", COLOUR_CLEARS), ("depth_clear", DEPTH_CLEARS),
+        ("lod_footprint", LOD_FOOTPRINTS),
     ):  # fmt: skip
         if getattr(cfg, name) not in allowed:
             raise VrnError(
@@ -321,6 +332,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         reuse_budget=budget,
         mips=bool(cfg.mips),
         screen_res=bool(cfg.screen_res),
+        lod_footprint=cfg.lod_footprint,
         neural_lod=bool(cfg.neural_lod),
         parallax_march=cfg.parallax_march,
         frames_in_flight=cfg.frames_in_flight,

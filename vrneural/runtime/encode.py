@@ -64,7 +64,9 @@ class FrameEncoding:
             tiling = (n.desc.material.tiling,) * 2 + (0.0, 0.0)
             for e, ((pos, margin), tgt) in enumerate(zip(shading, n.targets, strict=True)):
                 slot = k * self.s.eyes + e
-                tgt.update(n.desc.model, pos, tiling, lp, lc, phase, period, slot, margin)
+                tgt.update(
+                    n.desc.model, pos, tiling, lp, lc, phase, period, slot, margin, n.lod_scale
+                )
                 bound = tgt.dispatch(cp, phase, period, bound=bound)
 
     def _encode_eyes(self, enc, eyes, lp, lc) -> tuple:

@@ -28,6 +28,9 @@ class NeuralObject:
     levels: dict = field(default_factory=dict)
     level_sides: tuple = ()  # the sides it may use, largest first (its own side first)
     area: float = 0.0  # mesh surface, object space, m^2
+    #: the neural-texture footprint's scale at its last update: the pixel over the atlas texel
+    #: where the level's texel is the smaller (screen_res with lod_footprint "pixel"), else 1
+    lod_scale: float = 1.0
     sphere: tuple = (None, None, 0.0, None)  # (model bytes, world centre, radius, [c, 1]): cache
 
 

@@ -221,11 +221,14 @@ def shade_texture_space(
     period: int = 1,
     previous: np.ndarray | None = None,
     margin: float = 0.0,
+    lod_scale: float = 1.0,
 ):
     """Twin of the texture-space pass. Returns ``(radiance [R, R, 4] float32, counters [4])``.
 
     Only block rows ``by % period == phase`` are processed; texels not written keep
-    ``previous`` (zeros by default). ``margin``: see :func:`shade_points`. Counters: blocks
+    ``previous`` (zeros by default). ``margin``: see :func:`shade_points`; ``lod_scale``: the
+    prefiltered neural textures' footprint in atlas texels (the pass's ``P.lod.x``: above 1
+    where a pixel is larger than the texel, ``Settings.lod_footprint``). Counters: blocks
     shaded, back-facing blocks skipped, coarse MLP evaluations, fine MLP evaluations
     (``single``: 0 and per-texel evaluations).
     """
@@ -236,7 +239,7 @@ def shade_texture_space(
     tx, ty, pos, n, t, b, uvs = (g[k] for k in ("tx", "ty", "pos", "n", "t", "b", "uvs"))
     rad, front, nc, nf = shade_points(
         mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision, margin,
-        block_lod(mat, g["foot"]), g["foot"],
+        block_lod(mat, g["foot"] * np.float32(lod_scale)), g["foot"],
     )  # fmt: skip
     w = front
     out[ty[w], tx[w], :3] = rad[w]

@@ -289,14 +289,20 @@ class Renderer(FrameEncoding):
         self._bundles = None  # the eyes' draws name the level's vertices and texture
 
     def _level_for(self, n: NeuralObject, eyes) -> int:
-        """The side :mod:`~vrneural.runtime.screen_res` picks for ``n`` seen by ``eyes``."""
+        """The side :mod:`~vrneural.runtime.screen_res` picks for ``n`` seen by ``eyes``; sets
+        ``n.lod_scale`` (``Settings.lod_footprint``)."""
         s = self.s
         c, r = self.world_sphere(n)
         d = min(float(np.linalg.norm(c - e.position)) for e in eyes) - r
         cover = float(np.mean(n.levels[n.level_sides[0]][0].tri_ids != 0xFFFFFFFF))
         h = s.crop[3] if s.crop else s.eye_res[1]
         want = wanted_side(n.area, cover, max(d, 0.01), s.fov_y, h)
-        return choose(n.level_sides, n.side, want)
+        side = choose(n.level_sides, n.side, want)
+        # the pixel over the texel where the texel is the smaller (a side rounded up, or kept
+        # by the hysteresis): the neural textures are then prefiltered to what a pixel covers
+        pixel = s.lod_footprint == "pixel" or (s.lod_footprint == "auto" and not s.mips)
+        n.lod_scale = max(1.0, side / want) if pixel else 1.0
+        return side
 
     def rebase(self, model: np.ndarray) -> np.ndarray:
         """``model [4, 4]`` with the floating origin subtracted (float64)."""
@@ -470,6 +476,7 @@ class Renderer(FrameEncoding):
         if s.mode == "texture":  # per neural object: side, texels allocated; blocks shaded later
             st.object_res = [n.side for n in self.neural]
             st.object_texels = [n.side**2 * len(n.targets) for n in self.neural]
+            st.object_lod_scale = [n.lod_scale for n in self.neural]
             st._objects = (len(self.neural), s.eyes)
         st._start, st.in_flight = t0, self.results.in_flight()
         self.results.submitted(slot, st, names, wall or None)

@@ -376,6 +376,8 @@ def make_summary(cfg, s, scene, adapter, stats, setup_s, files, r) -> dict:
         per_frame["object_res"] = [st.object_res for st in stats]
         per_frame["object_texels_allocated"] = [st.object_texels for st in stats]
         per_frame["object_texels_shaded"] = [[4 * b for b in st.object_blocks] for st in stats]
+        per_frame["object_lod_scale"] = [[round(x, 4) for x in st.object_lod_scale]
+                                         for st in stats]  # fmt: skip
     ref = str(Path(cfg.reference).resolve()) if cfg.reference else None
     evals = [a + b for a, b in zip(per_frame["mlp_coarse"], per_frame["mlp_fine"], strict=True)]
     return {

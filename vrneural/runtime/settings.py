@@ -36,6 +36,14 @@ DEPTH_CLEARS = ("auto", "pass", "slices")
 DEPTH_SLICES = 4
 #: samples per pixel of the eyes' targets (Settings.msaa; WebGPU's sample counts)
 MSAA = (1, 4)
+#: the footprint the prefiltered neural textures are looked up at, with resolution from the
+#: screen (Settings.lod_footprint): "pixel" (one atlas texel or, where it is larger, the pixel
+#: where the object is nearest the eye: the chosen side is a power of two at or above the one
+#: giving a texel per pixel, so a texel is up to 2.5x smaller than a pixel, and a radiance
+#: texture prefiltered only to its texel aliases once the forward pass minifies it without
+#: mips: docs/lod.md), "texel" (one atlas texel, as without resolution from the screen: the
+#: radiance mips filter the rest), "auto" (pixel without radiance mips, texel with them)
+LOD_FOOTPRINTS = ("auto", "pixel", "texel")
 
 
 @dataclass
@@ -71,6 +79,8 @@ class Settings:
     #: each object's radiance texture side chosen at each update from its size on screen
     #: (about one texel per pixel; a power of two up to its side above; runtime/screen_res.py)
     screen_res: bool = False
+    #: with screen_res, the footprint of the neural-texture lookups (LOD_FOOTPRINTS)
+    lod_footprint: str = "auto"
     #: sample the packs' prefiltered neural-texture pyramids at each block's footprint (False:
     #: level 0 everywhere, as packs without pyramids)
     neural_lod: bool = True

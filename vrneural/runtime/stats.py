@@ -66,10 +66,12 @@ class FrameStats:
     def __init__(self, frame: int, updated: int, culled: int, untimed: tuple, waiter=None):
         self.frame = frame
         #: per neural object (texture mode; known at once): its radiance texture side and the
-        #: texels allocated for it (all eyes); ``object_blocks`` (a GPU field): the 2x2 blocks
-        #: shaded for it this frame
+        #: texels allocated for it (all eyes); the footprint scale of its neural-texture lookups
+        #: at its last update (Settings.lod_footprint); ``object_blocks`` (a GPU field): the 2x2
+        #: blocks shaded for it this frame
         self.object_res: list = []
         self.object_texels: list = []
+        self.object_lod_scale: list = []
         self.updated_objects = updated
         self.culled_objects = culled
         self.untimed = untimed

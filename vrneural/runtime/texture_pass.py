@@ -24,20 +24,22 @@ from vrneural.runtime.interface import LIGHT, TEXTURE_PARAMS, texture_bindings
 from vrneural.runtime.radiance_mips import MipChain, mip_count
 from vrneural.runtime.reference import normal_matrix
 
-PARAMS_BYTES = TEXTURE_PARAMS.size  # 176
+PARAMS_BYTES = TEXTURE_PARAMS.size  # 192
 WORKGROUP_SIZE = 64  # 1D workgroups of the shading kernels
 
 
 def pack_params_into(
-    p: np.ndarray, model, eye, tiling, offset=0, count=0, slot=0, margin=0.0, base=None
-) -> None:
+    p: np.ndarray, model, eye, tiling, offset=0, count=0, slot=0, margin=0.0, base=None,
+    lod_scale=1.0
+) -> None:  # fmt: skip
     """Write the ``Params`` uniform of texture_space.wgsl into the record ``p``
     (:data:`~vrneural.runtime.interface.TEXTURE_PARAMS`). ``model`` is taken relative to
     ``eye`` in float64 first (:func:`~vrneural.runtime.reference.camera_relative`: the shaded
     eye sits at the origin); ``offset, count``: this dispatch's span of the atlas's candidate
     block list; ``margin`` (m): blocks facing any point within it of ``eye`` are shaded (a
     radiance texture shared by both eyes); ``base``: :func:`params_base` of ``model`` when the
-    caller keeps it."""
+    caller keeps it; ``lod_scale``: the prefiltered neural textures' footprint in atlas texels
+    (:func:`~vrneural.runtime.reference.block_lod`; above 1 where a pixel is the larger)."""
     b = params_base(model) if base is None else base
     p["model"] = b[:16].reshape(4, 4)
     p["normal_mat"] = b[16:32].reshape(4, 4)
@@ -45,6 +47,7 @@ def pack_params_into(
     p["eye"] = (0.0, 0.0, 0.0, margin)
     p["tiling"] = tiling
     p["sched"] = (offset, count, slot, 0)
+    p["lod"] = (lod_scale, 0.0, 0.0, 0.0)
 
 
 def params_base(model) -> np.ndarray:
@@ -264,12 +267,13 @@ class TextureTarget:
         return self.binds[key]
 
     def update(
-        self, model, eye, tiling, light_pos, light_rgb, phase=0, period=1, slot=0, margin=0.0
-    ):
+        self, model, eye, tiling, light_pos, light_rgb, phase=0, period=1, slot=0, margin=0.0,
+        lod_scale=1.0
+    ):  # fmt: skip
         """Write this dispatch's uniforms (before encoding it; the renderer's arena sends them
         with the frame). World quantities are made relative to ``eye`` in float64 first
-        (:func:`~vrneural.runtime.reference.camera_relative`). ``margin``: see
-        :func:`pack_params_into`."""
+        (:func:`~vrneural.runtime.reference.camera_relative`). ``margin``,
+        ``lod_scale``: see :func:`pack_params_into`."""
         key = model.tobytes() if isinstance(model, np.ndarray) else repr(model)
         if self._base is None or self._base[0] != key:  # computed again when the model changes
             self._base = (key, params_base(model), np.asarray(model, np.float64)[:3, 3].copy())
@@ -288,6 +292,7 @@ class TextureTarget:
         w[32:36] = (0.0, 0.0, 0.0, margin)
         w[36:40] = tiling
         wu[40:44] = (offset, count, slot, 0)
+        w[44:48] = (lod_scale, 0.0, 0.0, 0.0)
         light_words(lw, light_pos, light_rgb, e)
         ar.mark(self.p_off, PARAMS_BYTES)
         ar.mark(self.l_off, lw.nbytes)
@@ -344,10 +349,12 @@ def shade_texture_space(
     subgroups: bool | None = None,
     margin: float = 0.0,
     filtering: str = "exact",
+    lod_scale: float = 1.0,
 ):
     """GPU texture-space pass on a fresh (zeroed) texture; returns ``(radiance [R, R, 4]
     float32, counters [4])`` like the numpy twin of the same name. ``subgroups``: None = use
-    them where the device has the feature; ``margin``: see :func:`pack_params_into`;
+    them where the device has the feature; ``margin``, ``lod_scale``: see
+    :func:`pack_params_into`;
     ``filtering``: of the neural textures (codegen_sample.FILTERS)."""
     lp = np.asarray(light_pos, np.float64).reshape(-1, 3)
     tp = TextureSpacePass(
@@ -361,7 +368,7 @@ def shade_texture_space(
     )
     counters = CounterBuffer(1)
     tgt = TextureTarget(tp, GpuAtlas(atlas), counters)
-    tgt.update(model, eye, tiling, lp, light_rgb, phase, period, 0, margin)
+    tgt.update(model, eye, tiling, lp, light_rgb, phase, period, 0, margin, lod_scale)
     enc = get_device().create_command_encoder()
     tgt.encode(enc, phase, period)
     get_device().queue.submit([enc.finish()])

@@ -106,9 +106,10 @@ fn shade_block(k: u32) -> vec4<u32> {
 {% if mat.lod_levels > 1 %}
     // prefiltered neural textures: the level of detail of the block's footprint, one atlas
     // texel in the full-resolution texture's texels, from its triangle's uv Jacobian (the
-    // geometry atlas's tangent w; twin: reference.block_lod)
+    // geometry atlas's tangent w), or a pixel's where that is larger (P.lod.x, resolution from
+    // the screen; twin: reference.block_lod)
     let dims = vec2<f32>(textureDimensions({{ 'tex_b' if mat.arch == 'coarse_fine' else 'tex_a' }}, 0));
-    let foot = geo_tan[k].w * max(P.tiling.x, P.tiling.y) * max(dims.x, dims.y);
+    let foot = geo_tan[k].w * max(P.tiling.x, P.tiling.y) * P.lod.x * max(dims.x, dims.y);
     let lod = log2(max(foot, 1.0));
 {% set L = '_lod' %}
 {% set LA = ', lod' %}
