@@ -16,6 +16,7 @@ struct Params {
     eye: vec4<f32>,  // eye position (camera-relative: 0); w: facing margin, metres
     tiling: vec4<f32>,  // material uv = uv * tiling.xy + tiling.zw
     sched: vec4<u32>,  // (candidate list offset, candidate count, counter slot, unused)
+    lod: vec4<f32>,  // x: the neural-texture footprint's scale (1: one atlas texel; Settings.lod_footprint), yzw unused
 }
 struct Light {
     pos: vec4<f32>,  // world position, metres (relative to the shaded eye where noted)
