@@ -221,7 +221,7 @@ def finish(root, doc: dict, t0: float) -> dict:
                          f"{v['flip']['mean']:.4f} ({v['flip']['worst']:.4f})",
                          f"{v['flip_own']:.4f}", f"{rec['noise_floor']:.4f}",
                          f"{v['flip_network']:.4f}", v["flicker"], v["texels_shaded"],
-                         v["texture_side"], f"{v.get('lod_scale', 1.0):.2f}",
+                         v["texture_side"], f"{v['lod_scale']:.2f}",
                          v["frame_ms"]["mean"]])  # fmt: skip
     md += rp.table(["condition", "texels/px", "variant", "FLIP (worst)", "FLIP own", "floor",
                     "network", "flicker", "texels", "side", "lod x", "frame ms"], rows)  # fmt: skip
