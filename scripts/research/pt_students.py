@@ -1,0 +1,120 @@
+"""Score the students of a multi-seed run against NeuMIP and the two ablations (issue #35).
+
+``bench quality --repeats 5`` trains and scores every method of the table, the Lafortune fit
+included (35 minutes of its own on the mosaic). The students' targets need only the four
+networks, so a run may train them with ``vrneural teach`` / ``vrneural distill`` (the bench's
+settings: ``--max-test-slices 0 --parallax off``, teacher 48 epochs, networks 50) into
+
+    ROOT/PRESET.btf                 the BTF
+    ROOT/PRESET/sS/METHOD.vrnm      METHOD in student, neumip, single8, student_nodistill
+
+and score them here with ``vrneural eval`` (its whole-BTF L1 is the bench's to 1e-11). Writes
+``OUT.json`` and ``OUT.md``: the L1 of every network and seed, the means, and the bench's three
+verdicts (student within 10% of NeuMIP on the means; below the single-level net and below the
+no-distillation student, on the means and seed pair by seed pair)::
+
+    python scripts/research/pt_students.py ROOT --presets bark,mosaic,fur -o OUT
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+METHODS = ("student", "neumip", "single8", "student_nodistill")
+
+
+def score(root: Path, preset: str) -> dict:
+    """L1 (whole BTF, f32) of every pack of ``preset`` found, by method, in seed order."""
+    packs = sorted((root / preset).glob("s*/*.vrnm"))
+    packs = [p for p in packs if p.stem in METHODS]
+    if not packs:
+        sys.exit(f"{root / preset}: no packs s*/{{{','.join(METHODS)}}}.vrnm")
+    cmd = ["vrneural", "eval", *map(str, packs), "--btf", str(root / f"{preset}.btf")]
+    r = subprocess.run([*cmd, "--json", "--quiet"], capture_output=True, text=True, check=True)
+    doc = json.loads(r.stdout)
+    out: dict = {m: {} for m in METHODS}
+    for p, rec in zip(packs, doc["packs"], strict=True):
+        out[p.stem][int(p.parent.name[1:])] = rec["scores"][0]["l1"]
+    return {m: dict(sorted(v.items())) for m, v in out.items() if v}
+
+
+def verdicts(l1: dict) -> dict:
+    """The bench's three student targets, on the seed means and per seed pair."""
+    mean = {m: statistics.fmean(v.values()) for m, v in l1.items()}
+    out: dict = {"mean": mean, "seeds": {m: list(v) for m, v in l1.items()}}
+    if "neumip" in mean:
+        out["student_over_neumip"] = mean["student"] / mean["neumip"]
+        out["student_over_neumip_by_seed"] = [
+            l1["student"][s] / l1["neumip"][s] for s in l1["student"] if s in l1["neumip"]
+        ]
+        out["within_10pct_of_neumip"] = out["student_over_neumip"] <= 1.10
+    for base in ("single8", "student_nodistill"):
+        if base not in mean:
+            continue
+        pairs = [s for s in l1["student"] if s in l1[base]]
+        out[f"student_over_{base}"] = mean["student"] / mean[base]
+        out[f"below_{base}"] = mean["student"] < mean[base]
+        out[f"below_{base}_pairs"] = [
+            sum(l1["student"][s] < l1[base][s] for s in pairs),
+            len(pairs),
+        ]
+    return out
+
+
+def _cell(v: dict, k: str) -> str:
+    """A method's mean L1 and its seed count, or '-'."""
+    return f"{v['mean'][k]:.5f} ({len(v['seeds'][k])})" if k in v["mean"] else "-"
+
+
+def _ratio(v: dict, base: str) -> str:
+    """The student over ``base`` on the means, and the seed pairs where it is below."""
+    if f"student_over_{base}" not in v:
+        return "-"
+    a, n = v[f"below_{base}_pairs"]
+    return f"{v[f'student_over_{base}']:.3f} ({a} of {n})"
+
+
+def report(res: dict) -> str:
+    lines = [
+        "| preset | student | NeuMIP | single-level 8 | no distillation | student / NeuMIP "
+        "(by seed) | student / single8 (pairs below) | student / no-distill (pairs below) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for p, v in res.items():
+        by = v.get("student_over_neumip_by_seed", [])
+        rng = f" ({min(by):.2f}-{max(by):.2f})" if by else ""
+        son = f"{v['student_over_neumip']:.3f}{rng}" if "student_over_neumip" in v else "-"
+        cells = [_cell(v, k) for k in METHODS]
+        lines.append(
+            f"| {p} | {' | '.join(cells)} | {son} | {_ratio(v, 'single8')} | "
+            f"{_ratio(v, 'student_nodistill')} |"
+        )
+    note = "Means of the whole-BTF L1 over the seeds (their count in brackets).\n"
+    return "\n".join(lines) + "\n\n" + note
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("root", type=Path)
+    ap.add_argument("--presets", default="bark,mosaic,fur")
+    ap.add_argument("-o", "--out", type=Path, required=True, help="OUT.json and OUT.md")
+    a = ap.parse_args()
+    res = {}
+    for p in a.presets.split(","):
+        l1 = score(a.root, p)
+        res[p] = verdicts(l1) | {
+            "l1": {m: {str(s): x for s, x in v.items()} for m, v in l1.items()}
+        }
+        print(p, json.dumps({k: v for k, v in res[p].items() if k != "l1"}, indent=1), flush=True)
+    a.out.with_suffix(".json").write_text(json.dumps(res, indent=1) + "\n")
+    a.out.with_suffix(".md").write_text(report(res))
+    print(report(res))
+
+
+if __name__ == "__main__":
+    main()

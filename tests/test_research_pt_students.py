@@ -1,0 +1,43 @@
+"""scripts/research/pt_students.py: the student targets it reports (issue #35's five-seed
+students) are the bench's rules, on the seed means and seed pair by seed pair."""
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+PATH = Path(__file__).resolve().parents[1] / "scripts" / "research" / "pt_students.py"
+
+
+@pytest.fixture(scope="module")
+def mod():
+    spec = importlib.util.spec_from_file_location("pt_students", PATH)
+    m = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(m)
+    return m
+
+
+def test_verdicts_on_means_and_pairs(mod):
+    l1 = {
+        "student": {0: 1.05, 1: 1.20, 2: 0.95},
+        "neumip": {0: 1.0, 1: 1.0, 2: 1.0},
+        "single8": {0: 1.10, 1: 1.10, 2: 1.05},
+        "student_nodistill": {0: 1.00, 2: 0.90},  # seed 1 missing: two pairs only
+    }
+    v = mod.verdicts(l1)
+    assert v["student_over_neumip"] == pytest.approx(3.2 / 3)
+    assert v["student_over_neumip_by_seed"] == pytest.approx([1.05, 1.20, 0.95])
+    assert v["within_10pct_of_neumip"] is True
+    assert v["below_single8"] is True  # 3.2 / 3 against 3.25 / 3
+    assert v["below_single8_pairs"] == [2, 3]
+    assert v["below_student_nodistill"] is False
+    assert v["below_student_nodistill_pairs"] == [0, 2]
+    row = mod.report({"bark": v}).splitlines()[2]
+    assert row.startswith("| bark | 1.06667 (3) | 1.00000 (3) |")
+    assert "1.067 (0.95-1.20)" in row and "(0 of 2)" in row
+
+
+def test_a_miss_of_the_10pct_target(mod):
+    v = mod.verdicts({"student": {0: 1.2, 1: 1.1}, "neumip": {0: 1.0, 1: 1.0}})
+    assert v["within_10pct_of_neumip"] is False
+    assert "below_single8" not in v
