@@ -43,8 +43,18 @@ def score(root: Path, preset: str) -> dict:
     return {m: dict(sorted(v.items())) for m, v in out.items() if v}
 
 
+def _record(l1s) -> dict:
+    """A bench method record (``vrneural.bench.quality_report``'s input) of these L1s."""
+    return {"whole_l1": statistics.fmean(l1s), "whole_l1_seeds": list(l1s)}
+
+
 def verdicts(l1: dict) -> dict:
-    """The bench's three student targets, on the seed means and per seed pair."""
+    """The bench's three student targets (``quality_report.targets``, on the seed means) and
+    its seed pairs (``quality_report.seed_pairs``, over the seeds both networks have)."""
+    from vrneural.bench.quality_report import TARGETS, seed_pairs, targets
+
+    met = targets({m: _record(v.values()) for m, v in l1.items()})
+    name = {base: t for t, (base, _) in TARGETS.items()}
     mean = {m: statistics.fmean(v.values()) for m, v in l1.items()}
     out: dict = {"mean": mean, "seeds": {m: list(v) for m, v in l1.items()}}
     if "neumip" in mean:
@@ -52,17 +62,15 @@ def verdicts(l1: dict) -> dict:
         out["student_over_neumip_by_seed"] = [
             l1["student"][s] / l1["neumip"][s] for s in l1["student"] if s in l1["neumip"]
         ]
-        out["within_10pct_of_neumip"] = out["student_over_neumip"] <= 1.10
+        out["within_10pct_of_neumip"] = met[name["neumip"]]
     for base in ("single8", "student_nodistill"):
         if base not in mean:
             continue
-        pairs = [s for s in l1["student"] if s in l1[base]]
+        both = [s for s in l1["student"] if s in l1[base]]
+        pairs = seed_pairs({k: _record([l1[k][s] for s in both]) for k in ("student", base)})
         out[f"student_over_{base}"] = mean["student"] / mean[base]
-        out[f"below_{base}"] = mean["student"] < mean[base]
-        out[f"below_{base}_pairs"] = [
-            sum(l1["student"][s] < l1[base][s] for s in pairs),
-            len(pairs),
-        ]
+        out[f"below_{base}"] = met[name[base]]
+        out[f"below_{base}_pairs"] = list(pairs[base])
     return out
 
 
