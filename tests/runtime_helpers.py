@@ -1,11 +1,12 @@
-"""Hand-made meshes and atlases for the runtime tests (independent of vrneural.atlas), and the
-multiply-add count of generated WGSL."""
+"""Hand-made meshes and atlases for the runtime tests (independent of vrneural.atlas), the
+multiply-add count of generated WGSL, and the check of a `vrneural run` option's choices."""
 
 from __future__ import annotations
 
 import re
 
 import numpy as np
+import pytest
 
 from vrneural.atlas.types import Atlas, Mesh
 
@@ -141,3 +142,27 @@ def mode_and_move_gaps(tmp_path, moved, unmoved) -> tuple[float, float]:
 def count_macs(wgsl: str) -> int:
     """Multiply-adds by constant weights in unrolled WGSL (``<literal> * <value>`` terms)."""
     return len(re.findall(r"(?<![\w.])-?[0-9][0-9.e+-]*[fh] \* ", wgsl))
+
+
+def assert_run_takes_choice(capsys, field: str, default, good, bad, match: str, **cfg) -> None:
+    """`vrneural run --FIELD BAD` stops in argparse's choices (exit 2, one line naming the flag
+    and the value); ``RunConfig``'s default is ``default``; ``resolve`` keeps ``good`` (beside
+    the other fields ``cfg``) and refuses ``bad`` given in Python with ``match``."""
+    from vrneural.cli import main
+    from vrneural.errors import VrnError
+    from vrneural.gpu.device import adapter_summary
+    from vrneural.runtime.config import RunConfig, resolve
+    from vrneural.runtime.scene import builtin_scene
+
+    flag = "--" + field.replace("_", "-")
+    with pytest.raises(SystemExit) as e:
+        main(["run", flag, bad, "--profile", "tiny"])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and flag in err and bad in err
+    assert getattr(RunConfig(), field) == default
+    ad, scene = adapter_summary(), builtin_scene(1)
+    got = resolve(RunConfig(profile="tiny", **cfg, **{field: good}), scene, ad)
+    assert getattr(got, field) == good
+    with pytest.raises(VrnError, match=match):
+        resolve(RunConfig(profile="tiny", **{field: bad}), scene, ad)

@@ -59,23 +59,10 @@ def test_an_unknown_filter_is_a_one_line_error():
 
 
 def test_run_takes_the_filter_and_refuses_another(capsys):
-    from vrneural.cli import main
-    from vrneural.gpu.device import adapter_summary
-    from vrneural.runtime.config import RunConfig, resolve
-    from vrneural.runtime.scene import builtin_scene
+    from runtime_helpers import assert_run_takes_choice
 
-    with pytest.raises(SystemExit) as e:  # argparse's choices
-        main(["run", "--neural-filter", "nearest", "--profile", "tiny"])
-    assert e.value.code == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "--neural-filter" in err and "nearest" in err
-    assert RunConfig().neural_filter == "hardware"
-    ad, scene = adapter_summary(), builtin_scene(1)
-    assert resolve(RunConfig(profile="tiny", neural_filter="exact"), scene, ad).neural_filter == (
-        "exact"
-    )
-    with pytest.raises(VrnError, match=r"--neural-filter = 'nearest' is not allowed"):
-        resolve(RunConfig(profile="tiny", neural_filter="nearest"), scene, ad)
+    match = r"--neural-filter = 'nearest' is not allowed"
+    assert_run_takes_choice(capsys, "neural_filter", "hardware", "exact", "nearest", match)
 
 
 @pytest.mark.gpu

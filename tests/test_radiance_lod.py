@@ -199,23 +199,12 @@ def test_the_pixel_footprint_prefilters_what_a_rounded_up_side_leaves():
 
 
 def test_run_takes_the_lod_footprint_and_refuses_another(capsys):
-    from vrneural.cli import main
-    from vrneural.errors import VrnError
-    from vrneural.gpu.device import adapter_summary
-    from vrneural.runtime.config import RunConfig, resolve
-    from vrneural.runtime.scene import builtin_scene
+    from runtime_helpers import assert_run_takes_choice
 
-    with pytest.raises(SystemExit) as e:  # argparse's choices
-        main(["run", "--lod-footprint", "screen", "--profile", "tiny"])
-    assert e.value.code == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "--lod-footprint" in err and "screen" in err
-    assert RunConfig().lod_footprint == "auto"
-    ad, scene = adapter_summary(), builtin_scene(1)
-    cfg = RunConfig(profile="tiny", screen_res=True, lod_footprint="texel")
-    assert resolve(cfg, scene, ad).lod_footprint == "texel"
-    with pytest.raises(VrnError, match=r"--lod-footprint = 'screen' is not allowed; choose auto"):
-        resolve(RunConfig(profile="tiny", lod_footprint="screen"), scene, ad)
+    match = r"--lod-footprint = 'screen' is not allowed; choose auto"
+    assert_run_takes_choice(
+        capsys, "lod_footprint", "auto", "texel", "screen", match, screen_res=True
+    )
 
 
 @pytest.mark.gpu
