@@ -1,20 +1,13 @@
 """scripts/research/distance_student_seeds.py: its budgets, the pack names it trains into and
 the table it writes (the training and rendering are the CLI's and the bench's, tested there)."""
 
-import importlib.util
-from pathlib import Path
-
 import pytest
-
-PATH = Path(__file__).resolve().parents[1] / "scripts" / "research" / "distance_student_seeds.py"
+from script_helpers import load_research
 
 
 @pytest.fixture(scope="module")
 def mod():
-    spec = importlib.util.spec_from_file_location("distance_student_seeds", PATH)
-    m = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(m)
-    return m
+    return load_research("distance_student_seeds")
 
 
 def test_budgets(mod):

@@ -1,20 +1,13 @@
 """scripts/research/pt_students.py: the student targets it reports (issue #35's five-seed
 students) are the bench's rules, on the seed means and seed pair by seed pair."""
 
-import importlib.util
-from pathlib import Path
-
 import pytest
-
-PATH = Path(__file__).resolve().parents[1] / "scripts" / "research" / "pt_students.py"
+from script_helpers import load_research
 
 
 @pytest.fixture(scope="module")
 def mod():
-    spec = importlib.util.spec_from_file_location("pt_students", PATH)
-    m = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(m)
-    return m
+    return load_research("pt_students")
 
 
 def test_verdicts_on_means_and_pairs(mod):
