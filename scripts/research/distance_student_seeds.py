@@ -13,8 +13,8 @@ first scored frame::
         --budgets 24,48,48+ema --conds "tiling 8,10 m"
 
 A budget is ``EPOCHS`` or ``EPOCHS+ema`` (``--ema 0.999``). Writes ``OUT/seeds.json`` and
-``OUT/seeds.md`` (FLIP per seed, the mean, the spread, and each condition's mean colour
-against the teacher's).
+``OUT/seeds.md`` (FLIP per seed, the mean and the spread; the JSON also holds each render's
+mean colour beside the teacher's).
 """
 
 from __future__ import annotations
