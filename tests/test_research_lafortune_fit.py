@@ -4,14 +4,14 @@ bench's own numbers (same fit, split and scoring), and reuses its fit when run a
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
+from script_helpers import RESEARCH
 from test_bench_quality_btf import _btf
 
 from vrneural.cli import main
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "research" / "lafortune_fit.py"
+SCRIPT = RESEARCH / "lafortune_fit.py"
 
 
 def test_matches_the_bench(tmp_path):
