@@ -222,3 +222,26 @@ def test_distance_texel_size_is_the_materials_on_the_sphere():
     assert conds["tiling 8"].tiling == 8 * conds["1 m"].tiling == 8 * base_tiling(c)
     old = DistanceConfig(texel_mm=0.25 / 32 * 1e3).resolved()  # the scale before --texel-mm
     assert abs(base_tiling(old) - 1.0) < 1e-12
+
+
+def test_distance_variants_are_chosen_by_key(capsys):
+    """--variants names variants by the keys its help lists (every variant's, in the table's
+    order); a key that names none is a one-line error listing them."""
+    from vrneural.bench.distance import VARIANTS, check, selected, variant_key
+    from vrneural.bench.train_configs import DistanceConfig
+    from vrneural.cli import main
+    from vrneural.errors import VrnError
+
+    keys = [variant_key(n) for n in VARIANTS]
+    assert len(set(keys)) == len(keys) and keys[0] == "all-off" and "all-on+4x-msaa" in keys
+    with pytest.raises(SystemExit):
+        main(["bench", "distance", "--help"])
+    text = "".join(capsys.readouterr().out.split())  # the help's list, unwrapped
+    assert ",".join(keys) in text
+    assert selected(DistanceConfig().resolved()) == list(VARIANTS)
+    c = DistanceConfig(variants=("taps", "all-off")).resolved()
+    assert selected(c) == ["all off", "taps"]
+    with pytest.raises(VrnError, match=r"^--variants: 'tap' is not a variant; choose from all-off"):
+        selected(DistanceConfig(variants=("tap",)).resolved())
+    with pytest.raises(VrnError, match=r"^--taps = 1 is out of range; allowed \[2, 8\]$"):
+        check(DistanceConfig(taps=1).resolved())

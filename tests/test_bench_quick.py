@@ -194,16 +194,18 @@ def test_tradeoff_metrics_are_sane(results):
 
 @pytest.mark.gpu
 def test_distance_records_each_feature(results):
-    """Every condition has the ten variants; MSAA leaves the shading as it is; the
-    prefiltered student has its pyramid; the frame-to-frame change is measured against the
-    reference's own (the head sways)."""
+    """Every condition has the thirteen variants; MSAA leaves the shading as it is; the
+    prefiltered student has its pyramid; footprint taps multiply the evaluations where the
+    material is minified; the frame-to-frame change is measured against the reference's own
+    (the head sways)."""
     doc = results[1]["distance"]
     assert {r["family"] for r in doc["records"]} == {"distance", "tiling"}
     for rec in doc["records"]:
         names = [v["variant"] for v in rec["variants"]]
         assert names == ["all off", "mips", "screen res", "neural LOD", "neural LOD, trained",
                          "all on", "screen res + neural LOD", "4x MSAA", "all on, 4x MSAA",
-                         "screen res + neural LOD, 4x MSAA"]  # fmt: skip
+                         "screen res + neural LOD, 4x MSAA", "taps", "screen res + taps, 4x MSAA",
+                         "screen res + neural LOD + taps, 4x MSAA"]  # fmt: skip
         for v in rec["variants"]:
             assert 0 <= v["flip"]["mean"] <= 1 and v["change_ref"] > 0 and v["flicker"] > 0
             assert v["texels_shaded"] > 0 and v["texture_side"] <= 256
@@ -211,8 +213,10 @@ def test_distance_records_each_feature(results):
         assert set(net) == {"student", "student_pyr", "student_lod"}
         assert all(0 < x <= 1 for x in net.values()) and net["student_pyr"] == net["student"]
         packs = ["student"] * 3 + ["student_pyr", "student_lod", "student_pyr", "student_pyr"]
-        assert [v["pack"] for v in rec["variants"]] == [*packs, "student", *["student_pyr"] * 2]
-        assert [v["msaa"] for v in rec["variants"]] == [1] * 7 + [4] * 3
+        packs += ["student", "student_pyr", "student_pyr", "student", "student", "student_pyr"]
+        assert [v["pack"] for v in rec["variants"]] == packs
+        assert [v["msaa"] for v in rec["variants"]] == [1] * 7 + [4] * 3 + [1, 4, 4]
+        assert [v["lod_taps"] for v in rec["variants"]] == [1] * 10 + [4] * 3
         by = {v["variant"]: v for v in rec["variants"]}
         # the neural textures at the pixel's footprint without the mips (lod_footprint auto)
         for v in rec["variants"]:
@@ -222,6 +226,9 @@ def test_distance_records_each_feature(results):
             assert by[a]["texels_shaded"] == by[b]["texels_shaded"]
             assert by[a]["flip"]["mean"] != by[b]["flip"]["mean"]
         assert rec["variants"][4]["flip_network"] == net["student_lod"]
+        if rec["texels_per_pixel"] > 4:  # minified: taps 2 to 4 per axis on most texels
+            assert by["taps"]["mlp_per_frame"] > 3 * by["all off"]["mlp_per_frame"]
+            assert by["taps"]["texels_shaded"] == by["all off"]["texels_shaded"]
     tpp = {r["condition"]: r["texels_per_pixel"] for r in doc["records"]}
     assert tpp["10 m"] > 5 * tpp["1 m"] and tpp["tiling 8"] > 1  # minified where it is for
     from vrneural.formats.vrnm import read_vrnm

@@ -13,7 +13,10 @@ side from the screen; neural LOD: the same student with a pyramid of its neural 
 averages, and, as a variant of its own, a student trained with ``--lod-levels 4``); and 4x
 MSAA (``run --msaa 4``) alone, with all three, and with all but the radiance mips: the
 silhouette, where the sphere's pixels meet the background, is aliased by one sample per pixel
-whatever the texture filters do.
+whatever the texture filters do; and footprint taps (``run --lod-taps``, ``--taps`` per axis):
+the network's output averaged over each texel's footprint, the exact prefilter that the
+pyramid's averaged latents approximate, alone and with resolution from the screen (whose
+pixel footprint they then cover) and 4x MSAA. ``--variants`` renders some of them.
 
 The material's texels are ``--texel-mm`` on the sphere at tiling 1 (1 mm: about a pixel at
 1 m, so 10 m and tiling 8 minify it; each record has its texels per pixel), and each pack's
@@ -34,31 +37,57 @@ from vrneural.bench import trade_scene as ts
 from vrneural.bench import tradeoff as tr
 from vrneural.bench.packs import load_packs, train_packs
 from vrneural.bench.train_configs import DistanceConfig
-from vrneural.errors import VrnError, check_range
+from vrneural.errors import VrnError, check_int, check_range
 from vrneural.runtime.config import REUSE_MAX
 from vrneural.runtime.profiles import get_profile
+from vrneural.runtime.settings import LOD_TAPS_MAX
 from vrneural.scoring import metrics
+
+#: stands for ``--taps`` (footprint taps per axis) in :data:`VARIANTS`
+TAPS = -1
 
 #: name -> (mips, screen_res, the pack: ``student``, or one with prefiltered neural textures:
 #: ``student_pyr`` the same student with a pyramid of its textures' box averages, the filter
 #: alone; ``student_lod`` a student trained with its pyramid, ``distill --lod-levels 4``;
-#: samples per pixel of the eyes: 4x MSAA, for the silhouette, which no texture filter reaches)
+#: samples per pixel of the eyes: 4x MSAA, for the silhouette, which no texture filter reaches;
+#: footprint taps per axis at most, ``run --lod-taps``: the network's output averaged over the
+#: footprint, the exact prefilter the pyramid approximates)
 VARIANTS = {
-    "all off": (False, False, "student", 1),
-    "mips": (True, False, "student", 1),
-    "screen res": (False, True, "student", 1),
-    "neural LOD": (False, False, "student_pyr", 1),
-    "neural LOD, trained": (False, False, "student_lod", 1),
-    "all on": (True, True, "student_pyr", 1),
+    "all off": (False, False, "student", 1, 1),
+    "mips": (True, False, "student", 1, 1),
+    "screen res": (False, True, "student", 1, 1),
+    "neural LOD": (False, False, "student_pyr", 1, 1),
+    "neural LOD, trained": (False, False, "student_lod", 1, 1),
+    "all on": (True, True, "student_pyr", 1, 1),
     # without the radiance mips: with screen res a radiance texel is already about a pixel,
     # and the mips' trilinear lookup blurs the material further; the neural textures are then
     # prefiltered to the pixel's footprint (Settings.lod_footprint "auto": docs/lod.md)
-    "screen res + neural LOD": (False, True, "student_pyr", 1),
-    "4x MSAA": (False, False, "student", 4),
-    "all on, 4x MSAA": (True, True, "student_pyr", 4),
-    "screen res + neural LOD, 4x MSAA": (False, True, "student_pyr", 4),
+    "screen res + neural LOD": (False, True, "student_pyr", 1, 1),
+    "4x MSAA": (False, False, "student", 4, 1),
+    "all on, 4x MSAA": (True, True, "student_pyr", 4, 1),
+    "screen res + neural LOD, 4x MSAA": (False, True, "student_pyr", 4, 1),
+    "taps": (False, False, "student", 1, TAPS),
+    "screen res + taps, 4x MSAA": (False, True, "student", 4, TAPS),
+    "screen res + neural LOD + taps, 4x MSAA": (False, True, "student_pyr", 4, TAPS),
 }
 PACKS = ("student", "student_pyr", "student_lod")
+
+
+def variant_key(name: str) -> str:
+    """A variant's key on the command line (``--variants``): ``"all on, 4x MSAA"`` ->
+    ``"all-on+4x-msaa"``."""
+    return "-".join(name.lower().replace(" + ", "+").replace(", ", "+").split())
+
+
+def selected(c: DistanceConfig) -> list[str]:
+    """The names of the variants ``--variants`` keeps (all without it), in the table's order;
+    a one-line error for a key that names none."""
+    keys = {variant_key(n): n for n in VARIANTS}
+    for k in c.variants:
+        if k not in keys:
+            raise VrnError(f"--variants: {k!r} is not a variant; choose from {', '.join(keys)}")
+    want = set(c.variants) or set(keys)
+    return [n for k, n in keys.items() if k in want]
 
 
 def base_tiling(c: DistanceConfig) -> float:
@@ -109,21 +138,23 @@ def check(c: DistanceConfig) -> None:
     check_range("--texel-mm", c.texel_mm, 0.001, 1000.0)
     rp.check_texture_res(c.texture_res, "--texture-res")
     check_range("--reuse", c.reuse, 0, REUSE_MAX)
+    check_int("--taps", c.taps, 2, LOD_TAPS_MAX)
     c.score.check()
     if not (c.distances or c.tilings):
         raise VrnError("--distances and --tilings are both empty; give at least one condition")
+    selected(c)
     c.budget.check([c.preset])
 
 
 def settings(c: DistanceConfig, cond, prof, mips: bool, screen: bool, mode="texture", ref=None,
-             msaa: int = 1):  # fmt: skip
+             msaa: int = 1, taps: int = 1):  # fmt: skip
     from vrneural.runtime.renderer import Settings
 
     return Settings(
         eyes=2, reuse=c.reuse, texture_res=c.texture_res, eye_res=(c.score.crop, c.score.crop),
         frames=cond.frames, fps=prof.fps, fov_y=prof.fov_y, ipd=prof.ipd, n_lights=2,
         mode=mode, precision="f32", reference=ref, crop=(0, 0, *prof.eye_res), mips=mips,
-        screen_res=screen, msaa=msaa,
+        screen_res=screen, msaa=msaa, lod_taps=taps,
     )  # fmt: skip
 
 
@@ -141,7 +172,8 @@ def run_distance(cfg: DistanceConfig) -> dict:
         prof, full, ppd = quest3_view()
         doc["ppd"] = ppd
         conds = conditions(c)
-        bar = tqdm(total=len(conds) * (len(VARIANTS) + 3), desc="bench distance", unit="render",
+        names = selected(c)
+        bar = tqdm(total=len(conds) * (len(names) + 3), desc="bench distance", unit="render",
                    disable=not c.progress)  # fmt: skip
         for cond in conds:
             teacher = mats["teacher"]
@@ -165,10 +197,12 @@ def run_distance(cfg: DistanceConfig) -> dict:
                 ))  # fmt: skip
             own["student_pyr"] = own["student"]
             rec["network_flip"]["student_pyr"] = rec["network_flip"]["student"]
-            for name, (mips, screen, key, msaa) in VARIANTS.items():
+            for name in names:
+                mips, screen, key, msaa, taps = VARIANTS[name]
+                taps = c.taps if taps == TAPS else taps
                 bar.set_postfix_str(f"{cond.name}: {name}")
                 mat = mats[key]
-                s = settings(c, cond, prof, mips, screen, msaa=msaa)
+                s = settings(c, cond, prof, mips, screen, msaa=msaa, taps=taps)
                 imgs, st = ts.render(
                     ts.scene_for(cond, mat), s, cond, c.score.crop, full, set(cond.scored)
                 )
@@ -177,7 +211,7 @@ def run_distance(cfg: DistanceConfig) -> dict:
                 w = st[1:]
                 rec["variants"].append({
                     "variant": name, "mips": mips, "screen_res": screen, "pack": key, "msaa": msaa,
-                    "neural_lod": key != "student",
+                    "neural_lod": key != "student", "lod_taps": taps,
                     "flip_own": float(np.mean(own_f)), "flip_network": rec["network_flip"][key],
                     **{k: sc[k] for k in ("flip", "psnr", "ssim", "change", "change_ref")},
                     "flicker": sc["change"] / max(sc["change_ref"], 1e-12),
@@ -210,7 +244,9 @@ def finish(root, doc: dict, t0: float) -> dict:
         "texels/px: material texels under a pixel's width where the sphere faces the eye "
         "(above 1: minified). texels: texels shaded for the sphere per frame; side: its "
         "radiance texture's median side; lod x: the neural textures' footprint in its atlas "
-        "texels (above 1: a pixel's, with screen res and no mips)."
+        "texels (above 1: a pixel's, with screen res and no mips). taps: the network's output "
+        f"averaged over each texel's footprint at up to {doc['config']['taps']} x "
+        f"{doc['config']['taps']} points (run --lod-taps {doc['config']['taps']})."
         + (" **Quick run: reduced settings.**" if doc["config"]["quick"] else ""),
         "",
     ]

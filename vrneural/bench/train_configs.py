@@ -238,6 +238,19 @@ class DistanceConfig(QuickConfig):
         1200, "radiance texture side (the cap screen-res chooses under)"
     )
     reuse: int = opt(4, "N (staggered)")
+    variants: tuple[str, ...] = opt(
+        (),
+        "the variants rendered, by key (comma-separated; default all): all-off, mips, "
+        "screen-res, neural-lod, neural-lod+trained, all-on, screen-res+neural-lod, 4x-msaa, "
+        "all-on+4x-msaa, screen-res+neural-lod+4x-msaa, taps, screen-res+taps+4x-msaa, "
+        "screen-res+neural-lod+taps+4x-msaa",
+        items=listed(),
+    )
+    taps: int = opt(
+        4,
+        "footprint taps per axis at most of the variants with taps (run --lod-taps): up to "
+        "taps^2 network evaluations per texel",
+    )
     score: Scored = part(Scored)
     preset: str = opt("leather", "synthetic BTF preset of the trained packs")
     budget: PackBudget = part(PackBudget)

@@ -25,7 +25,7 @@ from itertools import accumulate
 
 import numpy as np
 
-from vrneural.errors import VrnError
+from vrneural.errors import VrnError, check_int
 from vrneural.gpu.shaders import render_wgsl
 from vrneural.grazing import boundary_consts
 from vrneural.material import ARCHS, NeuralMaterial
@@ -41,6 +41,8 @@ from vrneural.runtime.interface import (
     structs_wgsl,
     texture_bindings,
 )
+from vrneural.runtime.reference import STRETCH_MAX
+from vrneural.runtime.settings import LOD_TAPS_MAX
 
 PRECISIONS = ("auto", "f16", "f32")
 WEIGHTS = ("constants", "storage", "uniform", "streamed")
@@ -257,6 +259,13 @@ def resolve_precision(precision: str, is_cpu: bool, has_f16: bool) -> str:
 RADIANCE_FORMATS = ("rgba16float", "rgba32float")
 
 
+def check_taps(taps) -> int:
+    """``taps`` (footprint taps per axis, ``Settings.lod_taps``) as an int, or a one-line error
+    naming the allowed range."""
+    check_int("--lod-taps", taps, 1, LOD_TAPS_MAX)
+    return int(taps)
+
+
 def texture_space_wgsl(
     mat: NeuralMaterial,
     precision: str = "f32",
@@ -265,10 +274,12 @@ def texture_space_wgsl(
     radiance_format: str = "rgba16float",
     subgroups: bool = False,
     filtering: str = "exact",
+    taps: int = 1,
 ) -> str:
     """WGSL of the texture-space pass for ``mat`` (see shaders/texture_space.wgsl);
     ``subgroups``: compaction with subgroup operations (device feature "subgroup");
-    ``filtering``: how neural textures are filtered (codegen_sample.FILTERS)."""
+    ``filtering``: how neural textures are filtered (codegen_sample.FILTERS); ``taps``: the
+    most footprint taps per axis (``Settings.lod_taps``; 1: none, the code of before)."""
     _check_weights(mat, weights)
     if radiance_format not in RADIANCE_FORMATS:
         raise VrnError(f"radiance format {radiance_format!r} not in {RADIANCE_FORMATS}")
@@ -286,6 +297,8 @@ def texture_space_wgsl(
         subgroups=subgroups,
         auto_foot=repr(float(AUTO_BLOCK_FOOT_TEXELS)),
         march_side=repr(float(max(mat.march_grid[:2], default=0))),  # the grid's larger side
+        taps=check_taps(taps),
+        stretch_max=STRETCH_MAX,
     )
 
 

@@ -19,6 +19,7 @@ from vrneural.runtime.settings import (
     FRAMES_IN_FLIGHT_MAX,
     LIGHTS_MAX,
     LOD_FOOTPRINTS,
+    LOD_TAPS_MAX,
     MODES,
     MSAA,
     NEURAL_FILTERS,
@@ -65,6 +66,14 @@ class RunConfig:
         True,
         "sample a pack's prefiltered neural-texture pyramid at each block's footprint "
         "(packs without one: level 0 alone); off: level 0 everywhere",
+    )
+    lod_taps: int = opt(
+        1,
+        "footprint taps per axis at most (texture mode): where an atlas texel's footprint "
+        "(or, with --lod-footprint pixel, the pixel's, longer along the view where the surface "
+        "is seen obliquely) spans n > 1 neural texels, shade n points along each axis and store "
+        "their mean: an exact prefilter, at up to N^2 the network's evaluations "
+        f"(1 to {LOD_TAPS_MAX}; 1: one per texel)",
     )
     parallax_march: str = opt(
         "auto",
@@ -222,6 +231,13 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
             f"--msaa {cfg.msaa} needs --mode texture (--mode {cfg.mode} shades each pixel once "
             "from a single-sample visibility target); drop --msaa or use --mode texture"
         )
+    check_int("--lod-taps", cfg.lod_taps, 1, LOD_TAPS_MAX)
+    if cfg.lod_taps > 1 and cfg.mode != "texture":
+        raise VrnError(
+            f"--lod-taps {cfg.lod_taps} needs --mode texture (the taps average the texture-space "
+            f"pass's texels; --mode {cfg.mode} shades each pixel once); drop --lod-taps or use "
+            "--mode texture"
+        )
     if cfg.target == "display" and cfg.mode != "texture":
         raise VrnError(
             f"--target display needs --mode texture (--mode {cfg.mode} writes HDR pixels from a "
@@ -334,6 +350,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
         screen_res=bool(cfg.screen_res),
         lod_footprint=cfg.lod_footprint,
         neural_lod=bool(cfg.neural_lod),
+        lod_taps=int(cfg.lod_taps),
         parallax_march=cfg.parallax_march,
         frames_in_flight=cfg.frames_in_flight,
         neural_filter=cfg.neural_filter,

@@ -108,9 +108,77 @@ def block_lod(mat: NeuralMaterial, foot: np.ndarray) -> np.ndarray | None:
     return np.log2(np.maximum(texels, np.float32(1))).astype(np.float32)
 
 
+#: the most a footprint is stretched along the view (1 / cos theta_o at most: 8, as a GPU's
+#: anisotropic filtering at most 8x), in the texture-space pass's footprint taps
+STRETCH_MAX = 8.0
+
+
+def footprint_taps(mat: NeuralMaterial, foot, taps: int, wo=None, pixel: bool = False) -> dict:
+    """The texture-space pass's footprint taps (``Settings.lod_taps``) of blocks whose
+    footprint is ``foot: [N]`` in tiled material UV (one atlas texel's, times the pass's
+    ``lod_scale``). With ``pixel`` (the pass's ``lod_scale`` above 1: the footprint is a
+    pixel's) it is stretched along the view's direction in the tangent plane by ``1 / cos``
+    of its angle to the normal (at most :data:`STRETCH_MAX`), as a pixel's is on a surface
+    seen obliquely: ``wo: [N, 3]`` the view in each block's tangent frame. Returns ``na, nb:
+    [N]`` taps along the view and across it (each the footprint's width there in the
+    full-resolution neural texture's texels, rounded, 1 to ``taps``), ``a, b: [N, 2]`` the
+    steps between them in material UV and ``lod`` (``[N]``; None without pyramids), the
+    level of each tap's share. Twin of the kernel's ``na, nb, step_a * ma, step_b * mb, lod_t``."""
+    name = "fine" if mat.arch == "coarse_fine" else "features"
+    side = np.float32(max(mat.textures[name].shape[:2]))
+    foot = np.asarray(foot, np.float32)
+    f32 = np.float32
+    if pixel:
+        wo = np.asarray(wo, np.float32)
+        stretch = f32(1) / np.maximum(wo[:, 2], f32(1 / STRETCH_MAX))
+        xy = wo[:, :2]
+        ln = np.sqrt((xy * xy).sum(-1, keepdims=True))
+        ma = np.where((xy * xy).sum(-1, keepdims=True) > 1e-12, xy / np.maximum(ln, 1e-30),
+                      f32([1, 0]))  # fmt: skip
+    else:
+        stretch = np.ones_like(foot)
+        ma = np.tile(f32([1, 0]), (len(foot), 1))
+    mb = np.stack([-ma[:, 1], ma[:, 0]], -1)
+    tb = foot * side
+    ta = tb * stretch
+    na = np.clip(np.floor(ta + f32(0.5)), 1, taps).astype(f32)
+    nb = np.clip(np.floor(tb + f32(0.5)), 1, taps).astype(f32)
+    lod = None
+    if mat.lod_levels > 1:
+        lod = np.log2(np.maximum(np.maximum(ta / na, tb / nb), f32(1))).astype(f32)
+    a = ((foot * stretch) / na)[:, None] * ma
+    b = (foot / nb)[:, None] * mb
+    return {"na": na.astype(np.int64), "nb": nb.astype(np.int64), "a": a.astype(f32),
+            "b": b.astype(f32), "lod": lod}  # fmt: skip
+
+
+def tapped_forward(mat, wi, wo, uvs, precision, lod, foot, taps: dict | None):
+    """:func:`~vrneural.material.material_forward` averaged over each block's footprint taps
+    (:func:`footprint_taps`; None: one point per texel, at ``lod``): the mean over ``na x nb``
+    evaluations at ``uvs`` shifted by ``(i + 0.5 - na / 2) a + (j + 0.5 - nb / 2) b`` (``i``
+    fastest, the kernel's order), each at the taps' ``lod``."""
+    if taps is None:
+        return material_forward(mat, wi, wo, uvs, precision, lod, foot)
+    f32 = np.float32
+    na, nb, a, b, tlod = (taps[k] for k in ("na", "nb", "a", "b", "lod"))
+    out = np.zeros((len(wi), 4, 3), np.float32)
+    for ka, kb in {(int(x), int(y)) for x, y in zip(na, nb, strict=True)}:
+        m = (na == ka) & (nb == kb)
+        for j in range(ka * kb):
+            ca = f32(j % ka) + f32(0.5) - f32(0.5) * f32(ka)
+            cb = f32(j // ka) + f32(0.5) - f32(0.5) * f32(kb)
+            o = ca * a[m] + cb * b[m]  # [M, 2]
+            out[m] += material_forward(
+                mat, wi[m], wo[m], uvs[m] + o[:, None, :], precision,
+                None if tlod is None else tlod[m], None if foot is None else foot[m],
+            )  # fmt: skip
+        out[m] *= f32(1) / (f32(ka) * f32(kb))
+    return out
+
+
 def shade_points(
     mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision="f32", margin=0.0, lod=None,
-    foot=None,
+    foot=None, taps=None,
 ):  # fmt: skip
     """Radiance ``[N, 4, 3]`` of ``N`` points (frames ``[N, 3]``) whose 4 texels have material
     UVs ``uvs: [N, 4, 2]``, lit by point lights ``light_pos, light_rgb: [L, 3]`` (W/sr), seen
@@ -119,12 +187,15 @@ def shade_points(
     the eye (the shared radiance texture of both eyes); its view beyond the horizon is then
     evaluated at the range's edge (:mod:`vrneural.grazing`). ``lod: [N]``: the blocks'
     levels of detail in the prefiltered neural textures (None: level 0); ``foot: [N]`` their
-    atlas texels' tiled material-UV length (march ``"auto"``)."""
+    atlas texels' tiled material-UV length (march ``"auto"``); ``taps``: footprint taps
+    ``(footprint [N], taps per axis at most, pixel)`` (:func:`footprint_taps`; None: one point
+    per texel), the evaluations then counted per tap."""
     f32 = np.float32
     v = np.asarray(eye, f32) - pos
     wo_w = safe_normalize(v, n)
     wo = np.stack([(wo_w * t).sum(-1), (wo_w * b).sum(-1), (wo_w * n).sum(-1)], -1)
     front = (wo[:, 2] > 0) | ((v * n).sum(-1) > -f32(margin))
+    tp = None if taps is None else footprint_taps(mat, taps[0], taps[1], wo, taps[2])
     acc = np.zeros((pos.shape[0], 4, 3), f32)
     n_coarse = 0
     for lp, lc in zip(np.asarray(light_pos, f32), np.asarray(light_rgb, f32), strict=True):
@@ -134,12 +205,13 @@ def shade_points(
         wi = np.stack([(wiw * t).sum(-1), (wiw * b).sum(-1), (wiw * n).sum(-1)], -1)
         lit = front & (wi[:, 2] > 0)
         if lit.any():
-            y = material_forward(
+            tl = None if tp is None else {k: None if v is None else v[lit] for k, v in tp.items()}
+            y = tapped_forward(
                 mat, wi[lit], wo[lit], uvs[lit], precision, None if lod is None else lod[lit],
-                None if foot is None else foot[lit],
+                None if foot is None else foot[lit], tl,
             )  # fmt: skip
             acc[lit] += y * (lc / d2[lit])[:, None, :]
-        n_coarse += int(lit.sum())
+        n_coarse += int(lit.sum()) if tp is None else int((tp["na"] * tp["nb"])[lit].sum())
     acc = np.nan_to_num(np.clip(acc, 0, F16_MAX), nan=0.0)
     return acc, front, n_coarse, 4 * n_coarse
 
@@ -222,13 +294,15 @@ def shade_texture_space(
     previous: np.ndarray | None = None,
     margin: float = 0.0,
     lod_scale: float = 1.0,
+    taps: int = 1,
 ):
     """Twin of the texture-space pass. Returns ``(radiance [R, R, 4] float32, counters [4])``.
 
     Only block rows ``by % period == phase`` are processed; texels not written keep
     ``previous`` (zeros by default). ``margin``: see :func:`shade_points`; ``lod_scale``: the
     prefiltered neural textures' footprint in atlas texels (the pass's ``P.lod.x``: above 1
-    where a pixel is larger than the texel, ``Settings.lod_footprint``). Counters: blocks
+    where a pixel is larger than the texel, ``Settings.lod_footprint``); ``taps``: footprint
+    taps per axis at most (``Settings.lod_taps``, :func:`footprint_taps`). Counters: blocks
     shaded, back-facing blocks skipped, coarse MLP evaluations, fine MLP evaluations
     (``single``: 0 and per-texel evaluations).
     """
@@ -237,9 +311,11 @@ def shade_texture_space(
     model, eye, light_pos = camera_relative(model, eye, light_pos)
     g = texture_blocks(atlas, model, tiling, phase, period)
     tx, ty, pos, n, t, b, uvs = (g[k] for k in ("tx", "ty", "pos", "n", "t", "b", "uvs"))
+    fs = g["foot"] * np.float32(lod_scale)
+    tp = (fs, taps, lod_scale > 1) if taps > 1 else None
     rad, front, nc, nf = shade_points(
         mat, pos, n, t, b, uvs, eye, light_pos, light_rgb, precision, margin,
-        block_lod(mat, g["foot"] * np.float32(lod_scale)), g["foot"],
+        block_lod(mat, fs), g["foot"], tp,
     )  # fmt: skip
     w = front
     out[ty[w], tx[w], :3] = rad[w]

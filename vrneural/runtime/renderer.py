@@ -313,7 +313,9 @@ class Renderer(FrameEncoding):
     def _make_pass(self, mat):
         s = self.s
         if s.mode == "texture":
-            return TextureSpacePass(mat, s.precision, len(self.lights), filtering=s.neural_filter)
+            return TextureSpacePass(
+                mat, s.precision, len(self.lights), filtering=s.neural_filter, taps=s.lod_taps
+            )
         if s.mode == "screen":
             return ScreenSpacePass(mat, s.precision, len(self.lights), filtering=s.neural_filter)
         if s.mode == "reference":

@@ -461,6 +461,7 @@ def human_summary(sm: dict) -> str:
     shared += " mips" if r.get("mips") else ""
     shared += " screen-res" if r.get("screen_res") else ""
     shared += " no-neural-lod" if r.get("neural_lod") is False else ""
+    shared += f" lod-taps={r['lod_taps']}" if r.get("lod_taps", 1) > 1 else ""
     shared += " neural-filter=exact" if r.get("neural_filter") == "exact" else ""
     shared += " target=display" if r.get("target") == "display" else ""
     space = (

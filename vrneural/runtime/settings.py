@@ -44,6 +44,9 @@ MSAA = (1, 4)
 #: mips: docs/lod.md), "texel" (one atlas texel, as without resolution from the screen: the
 #: radiance mips filter the rest), "auto" (pixel without radiance mips, texel with them)
 LOD_FOOTPRINTS = ("auto", "pixel", "texel")
+#: the most footprint taps per axis of the texture-space pass (Settings.lod_taps): 8 x 8 = 64
+#: network evaluations per texel at most
+LOD_TAPS_MAX = 8
 
 
 @dataclass
@@ -84,6 +87,13 @@ class Settings:
     #: sample the packs' prefiltered neural-texture pyramids at each block's footprint (False:
     #: level 0 everywhere, as packs without pyramids)
     neural_lod: bool = True
+    #: footprint taps (texture mode): where an atlas texel's footprint (or, with lod_footprint
+    #: "pixel", the pixel's, stretched along the view by 1 / cos where the surface is seen
+    #: obliquely) spans n > 1 neural texels, the texture-space pass shades n points along each
+    #: axis (rounded, at most lod_taps) and stores their mean, the network's output averaged
+    #: over the footprint (an exact prefilter, at the taps' count in evaluations; a pyramid is
+    #: then looked up at each tap's share). 1: one point per texel, as before
+    lod_taps: int = 1
     #: where the texture-space pass marches a pack's parallax (height field or neural offset):
     #: "auto" (once per 2x2 block where the block spans at most one texel of the march's
     #: grid, else per texel: vrneural.parallax.auto_blocks), "pack" (the march it trained

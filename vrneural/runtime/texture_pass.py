@@ -119,13 +119,15 @@ class TextureSpacePass:
         radiance_format: str = "rgba16float",
         subgroups: bool | None = None,
         filtering: str = "exact",
+        taps: int = 1,
     ):
         self.mat = mat
+        self.taps = taps  # footprint taps per axis at most (Settings.lod_taps)
         self.radiance_format = radiance_format  # rgba32float: no f16 clamp, 2x memory
         self.n_lights = max(1, n_lights)  # size of the lights uniform (0 lights: one unused)
         self.subgroups = has_feature("subgroup") if subgroups is None else subgroups
         self.code = texture_space_wgsl(
-            mat, precision, n_lights, weights, radiance_format, self.subgroups, filtering
+            mat, precision, n_lights, weights, radiance_format, self.subgroups, filtering, taps
         )
         self.gmat = GpuMaterial(mat, weights, filtering)
         spec = material_spec(mat, weights, filtering)
@@ -350,12 +352,14 @@ def shade_texture_space(
     margin: float = 0.0,
     filtering: str = "exact",
     lod_scale: float = 1.0,
+    taps: int = 1,
 ):
     """GPU texture-space pass on a fresh (zeroed) texture; returns ``(radiance [R, R, 4]
     float32, counters [4])`` like the numpy twin of the same name. ``subgroups``: None = use
     them where the device has the feature; ``margin``, ``lod_scale``: see
     :func:`pack_params_into`;
-    ``filtering``: of the neural textures (codegen_sample.FILTERS)."""
+    ``filtering``: of the neural textures (codegen_sample.FILTERS); ``taps``: footprint taps
+    per axis at most (``Settings.lod_taps``)."""
     lp = np.asarray(light_pos, np.float64).reshape(-1, 3)
     tp = TextureSpacePass(
         mat,
@@ -365,6 +369,7 @@ def shade_texture_space(
         radiance_format=radiance_format,
         subgroups=subgroups,
         filtering=filtering,
+        taps=taps,
     )
     counters = CounterBuffer(1)
     tgt = TextureTarget(tp, GpuAtlas(atlas), counters)

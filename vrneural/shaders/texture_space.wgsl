@@ -103,6 +103,13 @@ fn shade_block(k: u32) -> vec4<u32> {
     let uv3 = tiled(q23.zw);
 {% endif %}
     let uc = (uv0 + uv1 + uv2 + uv3) * 0.25;
+{% if taps > 1 %}
+    // the footprint the taps cover (below): one atlas texel, or a pixel where that is larger
+    // (P.lod.x), in tiled material UV and in the full-resolution neural texture's texels
+    let tap_uv = geo_tan[k].w * max(P.tiling.x, P.tiling.y) * P.lod.x;
+    let tap_dims = vec2<f32>(textureDimensions({{ 'tex_b' if mat.arch == 'coarse_fine' else 'tex_a' }}, 0));
+    let tap_foot = tap_uv * max(tap_dims.x, tap_dims.y);
+{% endif %}
 {% if mat.lod_levels > 1 %}
     // prefiltered neural textures: the level of detail of the block's footprint, one atlas
     // texel in the full-resolution texture's texels, from its triangle's uv Jacobian (the
@@ -117,9 +124,7 @@ fn shade_block(k: u32) -> vec4<u32> {
 {% set L = '' %}
 {% set LA = '' %}
 {% endif %}
-{% for k in range(4) %}
-    var acc{{ k }} = vec3<f32>(0.0);
-{% endfor %}
+{% set hoist %}
     // the light-independent part of every first layer, once per block / texel (neural_material)
 {% if mat.arch == 'coarse_fine' %}
     let pa = pre_a(sample_a{{ L }}(uc{{ LA }}));
@@ -131,9 +136,8 @@ fn shade_block(k: u32) -> vec4<u32> {
     let pa{{ k }} = pre_a(sample_a{{ L }}(uv{{ k }}{{ LA }}));
 {% endfor %}
 {% endif %}
-    // directions beyond the data's range: evaluated at its boundary (neural_material.to_range)
-    let wo_e = view_ext(wo);
-    var n_coarse = 0u;
+{% endset %}
+{% set light_loop %}
     for (var li = 0u; li < {{ n_active }}u; li++) {
         let lv = lights[li].pos.xyz - s.pos;
         let d2 = max(dot(lv, lv), 1e-12);
@@ -155,6 +159,52 @@ fn shade_block(k: u32) -> vec4<u32> {
 {% endif %}
         }
     }
+{% endset %}
+{% for k in range(4) %}
+    var acc{{ k }} = vec3<f32>(0.0);
+{% endfor %}
+{% if taps > 1 %}
+    // directions beyond the data's range: evaluated at its boundary (neural_material.to_range)
+    let wo_e = view_ext(wo);
+    var n_coarse = 0u;
+    // footprint taps (Settings.lod_taps; twin: reference.footprint_taps): na x nb taps over the
+    // footprint (tap_foot; a pixel's, P.lod.x > 1, stretched along the view by 1 / cos, as on a
+    // surface seen obliquely), each count its width there in texels rounded (1 to {{ taps }}),
+    // each tap looked up at its share's level and shaded; the texel keeps their mean, the
+    // network's output averaged over the footprint rather than the network of averaged inputs
+    let pixel = P.lod.x > 1.0;
+    let stretch = select(1.0, 1.0 / max(wo.z, {{ 1.0 / stretch_max }}), pixel);
+    let along = pixel && dot(wo.xy, wo.xy) > 1e-12;
+    let ma = select(vec2<f32>(1.0, 0.0), wo.xy / max(length(wo.xy), 1e-30), along);
+    let mb = vec2<f32>(-ma.y, ma.x);
+    let ta = tap_foot * stretch;
+    let na = clamp(floor(ta + 0.5), 1.0, {{ taps }}.0);
+    let nb = clamp(floor(tap_foot + 0.5), 1.0, {{ taps }}.0);
+    let nta = u32(na);
+    let step_a = (tap_uv * stretch) / na * ma;
+    let step_b = tap_uv / nb * mb;
+{% if mat.lod_levels > 1 %}
+    let lod_t = log2(max(max(ta / na, tap_foot / nb), 1.0));
+{% endif %}
+    for (var j = 0u; j < nta * u32(nb); j++) {
+        let o = (f32(j % nta) + 0.5 - 0.5 * na) * step_a + (f32(j / nta) + 0.5 - 0.5 * nb) * step_b;
+        let uc = uc + o;
+{% for k in range(4) %}
+        let uv{{ k }} = uv{{ k }} + o;
+{% endfor %}
+{% if mat.lod_levels > 1 %}
+        let lod = lod_t;
+{% endif %}
+{{ hoist | indent(4, first=true) }}{{ light_loop | indent(4, first=true) }}    }
+    let wt = 1.0 / (na * nb);
+{% for k in range(4) %}
+    acc{{ k }} *= wt;
+{% endfor %}
+{% else %}
+{{ hoist }}    // directions beyond the data's range: evaluated at its boundary (neural_material.to_range)
+    let wo_e = view_ext(wo);
+    var n_coarse = 0u;
+{{ light_loop }}{% endif %}
 {% for k in range(4) %}
     textureStore(out_tex, vec2<u32>(x0 + {{ k % 2 }}u, y0 + {{ k // 2 }}u),
                  vec4<f32>(clamp(acc{{ k }}, vec3<f32>(0.0), vec3<f32>(OUT_MAX)), 1.0));
