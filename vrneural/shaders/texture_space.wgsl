@@ -7,6 +7,8 @@
 // to the f16 range and store rgba16float (or, as an option, rgba32float). numpy twin: runtime/reference.py:shade_texture_space.
 // Template parameters: T (f32|f16), mat (runtime/codegen.py:MaterialSpec), n_active (lights
 // shaded, 0 allowed: black), the generated structs, bindings and networks.
+{# and taps (the most footprint taps per axis, Settings.lod_taps: 1 compiles no tap loop), stretch_max
+   (reference.STRETCH_MAX); a Jinja comment, so that packs without taps compile the code of before #}
 {% import 'neural_material.wgsl' as nm %}
 {% import 'compact.wgsl' as cmp %}
 {% if T == 'f16' %}
