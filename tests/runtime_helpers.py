@@ -166,3 +166,24 @@ def assert_run_takes_choice(capsys, field: str, default, good, bad, match: str, 
     assert getattr(got, field) == good
     with pytest.raises(VrnError, match=match):
         resolve(RunConfig(profile="tiny", **{field: bad}), scene, ad)
+
+
+def f16_rel_err(got: np.ndarray, want: np.ndarray) -> float:
+    """The largest error of a GPU radiance texture ``got`` against its twin's ``want`` (stored
+    as float16, as the GPU stores it), relative to each texel (1% of the maximum at least)."""
+    w16 = want.astype(np.float16).astype(np.float32)
+    return float((np.abs(got - w16) / (np.abs(w16) + 1e-2 * max(w16.max(), 1e-12))).max())
+
+
+def assert_gpu_matches_twin(at, mat, eye, lp, lc, filtering="exact", **kw) -> np.ndarray:
+    """The texture-space pass on the GPU against its numpy twin (``kw``: their shared options,
+    tiling, lod_scale, taps, ...): the same counters, and the texels within 2 float16 ulps (f32
+    math in another order, f16 storage on both sides). Returns the twin's texture."""
+    from vrneural.runtime import reference as ref
+    from vrneural.runtime.texture_pass import shade_texture_space
+
+    want, wc = ref.shade_texture_space(at, mat, np.eye(4), eye, lp, lc, **kw)
+    got, gc = shade_texture_space(at, mat, np.eye(4), eye, lp, lc, filtering=filtering, **kw)
+    np.testing.assert_array_equal(gc, wc)
+    assert f16_rel_err(got, want) <= 2 * 2.0**-10
+    return want

@@ -130,9 +130,7 @@ def test_the_twin_counts_every_taps_evaluations():
     ],
 )
 def test_gpu_taps_follow_the_twin(kind, tiling, scale, taps, filtering):
-    from runtime_helpers import quad_atlas
-
-    from vrneural.runtime.texture_pass import shade_texture_space
+    from runtime_helpers import assert_gpu_matches_twin, quad_atlas
 
     m = {
         "oblique": lambda: pyramid_material(4),
@@ -144,14 +142,10 @@ def test_gpu_taps_follow_the_twin(kind, tiling, scale, taps, filtering):
     eye, lp, lc = np.float32([0.2, 0.1, 1.5]), np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
     if kind == "oblique":
         eye = np.float32([2.5, 1.2, 0.6])
-    kw = dict(tiling=(tiling, tiling, 0, 0), lod_scale=scale, taps=taps)
-    want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, **kw)
-    got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, filtering=filtering, **kw)
-    np.testing.assert_array_equal(gc, wc)
-    w16 = want.astype(np.float16).astype(np.float32)
-    assert (np.abs(got - w16) / (np.abs(w16) + 1e-2 * max(w16.max(), 1e-12))).max() <= 2 * 2.0**-10
-    one, _ = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=kw["tiling"],
-                                     lod_scale=scale)  # fmt: skip
+    tl = (tiling, tiling, 0, 0)
+    want = assert_gpu_matches_twin(at, m, eye, lp, lc, filtering, tiling=tl, lod_scale=scale,
+                                   taps=taps)  # fmt: skip
+    one, _ = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl, lod_scale=scale)
     if tiling * scale > 2:  # n > 1: the taps changed the texels
         assert np.abs(one - want).max() > 0.02 * want.max()
     else:
@@ -162,9 +156,10 @@ def test_gpu_taps_follow_the_twin(kind, tiling, scale, taps, filtering):
 def test_gpu_taps_that_vary_between_blocks_follow_the_twin():
     """On a sphere the footprint differs from block to block (compressed toward the poles),
     so neighbouring lanes loop over different tap counts."""
+    from runtime_helpers import assert_gpu_matches_twin
+
     from vrneural.atlas import build_atlas
     from vrneural.runtime.assets import get_mesh
-    from vrneural.runtime.texture_pass import shade_texture_space
 
     m = pyramid_material(4)
     at = build_atlas(get_mesh("sphere"), 128)
@@ -172,11 +167,7 @@ def test_gpu_taps_that_vary_between_blocks_follow_the_twin():
     tl = (2.5, 2.5, 0, 0)
     tp = ref.footprint_taps(m, ref.texture_blocks(at, np.eye(4), tl)["foot"], 3)
     assert set(tp["na"].tolist()) == {1, 2, 3}
-    want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl, taps=3)
-    got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl, taps=3)
-    np.testing.assert_array_equal(gc, wc)
-    w16 = want.astype(np.float16).astype(np.float32)
-    assert (np.abs(got - w16) / (np.abs(w16) + 1e-2 * max(w16.max(), 1e-12))).max() <= 2 * 2.0**-10
+    assert_gpu_matches_twin(at, m, eye, lp, lc, tiling=tl, taps=3)
 
 
 def test_run_refuses_taps_out_of_range_or_outside_texture_mode():

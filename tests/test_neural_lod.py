@@ -140,23 +140,15 @@ def test_gpu_lod_lookups_follow_the_twin(tiling, scale, filtering):
     the numpy twin does (lod 0, 1, 2.9 and 4.7, clamped to the top level 3); "hardware":
     trilinear by the sampler. ``scale``: the footprint of a pixel larger than the texel
     (``lod_scale``, resolution from the screen): lod 1.3 and 2.3."""
-    from runtime_helpers import quad_atlas
+    from runtime_helpers import assert_gpu_matches_twin, quad_atlas
 
     from vrneural.runtime import reference as ref
-    from vrneural.runtime.texture_pass import shade_texture_space
 
     m = pyramid_material(4)
     at = quad_atlas(32)
     eye, lp, lc = np.float32([0.2, 0.1, 1.5]), np.float32([[0.3, 0.4, 2.0]]), np.ones((1, 3))
     tl = (tiling, tiling, 0, 0)
-    want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl, lod_scale=scale)
-    got, gc = shade_texture_space(
-        at, m, np.eye(4), eye, lp, lc, tiling=tl, filtering=filtering, lod_scale=scale
-    )
-    np.testing.assert_array_equal(gc, wc)
-    w16 = want.astype(np.float16).astype(np.float32)
-    # f32 math in another order, f16 storage on both sides: 2 f16 ulps (see test_runtime_texture)
-    assert (np.abs(got - w16) / (np.abs(w16) + 1e-2 * max(w16.max(), 1e-12))).max() <= 2 * 2.0**-10
+    want = assert_gpu_matches_twin(at, m, eye, lp, lc, filtering, tiling=tl, lod_scale=scale)
     if scale != 1.0:  # the scale moved the level: not the texel's footprint's image
         one, _ = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
         assert np.abs(one - want).max() > 0.05 * want.max()
@@ -170,10 +162,11 @@ def test_gpu_lod_that_varies_between_blocks_follows_the_twin(filtering):
     read textureDimensions at such a level as the first lane's (garbage where they differed);
     the level's size is now derived from level 0's. The sampler ("hardware") takes each
     lane's own level."""
+    from runtime_helpers import assert_gpu_matches_twin
+
     from vrneural.atlas import build_atlas
     from vrneural.runtime import reference as ref
     from vrneural.runtime.assets import get_mesh
-    from vrneural.runtime.texture_pass import shade_texture_space
 
     m = pyramid_material(4)
     at = build_atlas(get_mesh("sphere"), 128)
@@ -181,8 +174,4 @@ def test_gpu_lod_that_varies_between_blocks_follows_the_twin(filtering):
     tl = (2.5, 2.5, 0, 0)
     lod = ref.block_lod(m, ref.texture_blocks(at, np.eye(4), tl)["foot"])
     assert lod.max() - lod.min() > 1.0  # varies
-    want, wc = ref.shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl)
-    got, gc = shade_texture_space(at, m, np.eye(4), eye, lp, lc, tiling=tl, filtering=filtering)
-    np.testing.assert_array_equal(gc, wc)
-    w16 = want.astype(np.float16).astype(np.float32)
-    assert (np.abs(got - w16) / (np.abs(w16) + 1e-2 * max(w16.max(), 1e-12))).max() <= 2 * 2.0**-10
+    assert_gpu_matches_twin(at, m, eye, lp, lc, filtering, tiling=tl)

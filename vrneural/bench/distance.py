@@ -43,32 +43,29 @@ from vrneural.runtime.profiles import get_profile
 from vrneural.runtime.settings import LOD_TAPS_MAX
 from vrneural.scoring import metrics
 
-#: stands for ``--taps`` (footprint taps per axis) in :data:`VARIANTS`
-TAPS = -1
-
 #: name -> (mips, screen_res, the pack: ``student``, or one with prefiltered neural textures:
 #: ``student_pyr`` the same student with a pyramid of its textures' box averages, the filter
 #: alone; ``student_lod`` a student trained with its pyramid, ``distill --lod-levels 4``;
 #: samples per pixel of the eyes: 4x MSAA, for the silhouette, which no texture filter reaches;
-#: footprint taps per axis at most, ``run --lod-taps``: the network's output averaged over the
-#: footprint, the exact prefilter the pyramid approximates)
+#: footprint taps, ``--taps`` per axis at most (``run --lod-taps``): the network's output
+#: averaged over the footprint, the exact prefilter the pyramid approximates)
 VARIANTS = {
-    "all off": (False, False, "student", 1, 1),
-    "mips": (True, False, "student", 1, 1),
-    "screen res": (False, True, "student", 1, 1),
-    "neural LOD": (False, False, "student_pyr", 1, 1),
-    "neural LOD, trained": (False, False, "student_lod", 1, 1),
-    "all on": (True, True, "student_pyr", 1, 1),
+    "all off": (False, False, "student", 1, False),
+    "mips": (True, False, "student", 1, False),
+    "screen res": (False, True, "student", 1, False),
+    "neural LOD": (False, False, "student_pyr", 1, False),
+    "neural LOD, trained": (False, False, "student_lod", 1, False),
+    "all on": (True, True, "student_pyr", 1, False),
     # without the radiance mips: with screen res a radiance texel is already about a pixel,
     # and the mips' trilinear lookup blurs the material further; the neural textures are then
     # prefiltered to the pixel's footprint (Settings.lod_footprint "auto": docs/lod.md)
-    "screen res + neural LOD": (False, True, "student_pyr", 1, 1),
-    "4x MSAA": (False, False, "student", 4, 1),
-    "all on, 4x MSAA": (True, True, "student_pyr", 4, 1),
-    "screen res + neural LOD, 4x MSAA": (False, True, "student_pyr", 4, 1),
-    "taps": (False, False, "student", 1, TAPS),
-    "screen res + taps, 4x MSAA": (False, True, "student", 4, TAPS),
-    "screen res + neural LOD + taps, 4x MSAA": (False, True, "student_pyr", 4, TAPS),
+    "screen res + neural LOD": (False, True, "student_pyr", 1, False),
+    "4x MSAA": (False, False, "student", 4, False),
+    "all on, 4x MSAA": (True, True, "student_pyr", 4, False),
+    "screen res + neural LOD, 4x MSAA": (False, True, "student_pyr", 4, False),
+    "taps": (False, False, "student", 1, True),
+    "screen res + taps, 4x MSAA": (False, True, "student", 4, True),
+    "screen res + neural LOD + taps, 4x MSAA": (False, True, "student_pyr", 4, True),
 }
 PACKS = ("student", "student_pyr", "student_lod")
 
@@ -198,8 +195,8 @@ def run_distance(cfg: DistanceConfig) -> dict:
             own["student_pyr"] = own["student"]
             rec["network_flip"]["student_pyr"] = rec["network_flip"]["student"]
             for name in names:
-                mips, screen, key, msaa, taps = VARIANTS[name]
-                taps = c.taps if taps == TAPS else taps
+                mips, screen, key, msaa, tapped = VARIANTS[name]
+                taps = c.taps if tapped else 1
                 bar.set_postfix_str(f"{cond.name}: {name}")
                 mat = mats[key]
                 s = settings(c, cond, prof, mips, screen, msaa=msaa, taps=taps)

@@ -201,7 +201,7 @@ def max_texture_res(adapter) -> int:
 def resolve(cfg: RunConfig, scene, adapter) -> Settings:
     """Profile < scene < CLI (``--texture-res`` also beats objects' ``texture_res``);
     validates ranges against the adapter (``AdapterSummary``)."""
-    from vrneural.runtime.codegen import resolve_precision
+    from vrneural.runtime.codegen import check_taps, resolve_precision
     from vrneural.runtime.scene import Scene  # tomllib, packs: when a run resolves, not for --help
 
     if not isinstance(cfg, RunConfig):
@@ -231,7 +231,7 @@ def resolve(cfg: RunConfig, scene, adapter) -> Settings:
             f"--msaa {cfg.msaa} needs --mode texture (--mode {cfg.mode} shades each pixel once "
             "from a single-sample visibility target); drop --msaa or use --mode texture"
         )
-    check_int("--lod-taps", cfg.lod_taps, 1, LOD_TAPS_MAX)
+    check_taps(cfg.lod_taps)
     if cfg.lod_taps > 1 and cfg.mode != "texture":
         raise VrnError(
             f"--lod-taps {cfg.lod_taps} needs --mode texture (the taps average the texture-space "

@@ -95,6 +95,13 @@ def non_empty_blocks(tri_ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.nonzero(b)
 
 
+def footprint_side(mat: NeuralMaterial) -> np.float32:
+    """The larger side of the neural texture a footprint is measured in (the fine texture of a
+    coarse-to-fine material, else its features): the kernel's ``max(dims.x, dims.y)``."""
+    name = "fine" if mat.arch == "coarse_fine" else "features"
+    return np.float32(max(mat.textures[name].shape[:2]))
+
+
 def block_lod(mat: NeuralMaterial, foot: np.ndarray) -> np.ndarray | None:
     """Each block's level of detail in ``mat``'s prefiltered neural textures (None without
     pyramids): ``log2`` of its footprint in the full-resolution texture's texels (at least 1):
@@ -102,9 +109,7 @@ def block_lod(mat: NeuralMaterial, foot: np.ndarray) -> np.ndarray | None:
     times the texture's larger side. Twin of the texture-space kernel's ``lod``."""
     if mat.lod_levels <= 1:
         return None
-    name = "fine" if mat.arch == "coarse_fine" else "features"
-    side = np.float32(max(mat.textures[name].shape[:2]))
-    texels = np.asarray(foot, np.float32) * side
+    texels = np.asarray(foot, np.float32) * footprint_side(mat)
     return np.log2(np.maximum(texels, np.float32(1))).astype(np.float32)
 
 
@@ -124,8 +129,7 @@ def footprint_taps(mat: NeuralMaterial, foot, taps: int, wo=None, pixel: bool = 
     full-resolution neural texture's texels, rounded, 1 to ``taps``), ``a, b: [N, 2]`` the
     steps between them in material UV and ``lod`` (``[N]``; None without pyramids), the
     level of each tap's share. Twin of the kernel's ``na, nb, step_a * ma, step_b * mb, lod_t``."""
-    name = "fine" if mat.arch == "coarse_fine" else "features"
-    side = np.float32(max(mat.textures[name].shape[:2]))
+    side = footprint_side(mat)
     foot = np.asarray(foot, np.float32)
     f32 = np.float32
     if pixel:
