@@ -377,7 +377,7 @@ def test_direct_light_matches_btf_synth_on_a_heightfield():
     assert worst < 0.02, worst
 
 
-@pytest.mark.parametrize("preset", ["weave", "pebbles", "fur", "bark", "mosaic"])
+@pytest.mark.parametrize("preset", ["weave", "pebbles", "fur", "bark", "mosaic", "berber"])
 def test_every_preset_builds_and_renders_a_slice(preset):
     """Each preset's Mitsuba scene loads (its BSDFs and bitmap textures are valid plugins)
     and a tiny slice from above renders finite, positive, textured values."""
@@ -389,6 +389,23 @@ def test_every_preset_builds_and_renders_a_slice(preset):
     img = pt.render_slice(ps, cam, spherical(np.radians(30.0), np.radians(20.0)), 4, 0)
     assert img.shape[:2] == (8, 8) and np.isfinite(img).all() and img.min() >= 0
     assert img.mean() > 1e-3 and img.std() > 0
+
+
+def test_berber_loops_follow_their_heights():
+    """The loop pile's geometry: the tallest loop's yarn tops out at the upper height (give or
+    take the yarn's radius), lower heights give a lower pile, and the same seed the same tile."""
+    from vrneural.btf.pt_presets import berber
+
+    def rng():
+        return np.random.default_rng([0, 1])
+
+    R = 0.3 / 10  # the preset's yarn radius: 0.3 of the row pitch
+    top = berber(rng()).bounds()[1]
+    assert 0.17 - 0.5 * R < top < 0.17 + R
+    low = berber(rng(), heights=(0.04, 0.12)).bounds()[1]
+    assert 0.12 - 0.5 * R < low < 0.12 + R
+    a, b = berber(rng()), berber(rng())
+    assert all(np.array_equal(p.mesh.v, q.mesh.v) for p, q in zip(a.parts, b.parts, strict=True))
 
 
 def test_a_partial_from_before_the_sampler_option_resumes_only_as_independent(tmp_path):

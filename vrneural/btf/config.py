@@ -13,7 +13,7 @@ from vrneural.errors import VrnError, check_choice, check_range, check_seed
 #: the keys of :data:`vrneural.btf.presets.PRESETS` (sorted) and of
 #: :data:`vrneural.btf.pt_presets.PT_PRESETS` (in its order; a test checks both)
 PRESET_NAMES = ("carpet", "fabric", "leather", "metal", "stone", "wood")
-PT_PRESET_NAMES = ("weave", "pebbles", "fur", "bark", "mosaic")
+PT_PRESET_NAMES = ("weave", "pebbles", "fur", "bark", "mosaic", "berber")
 
 
 @dataclass

@@ -12,7 +12,10 @@ tile widths); all randomness comes from ``rng``, so a seed fixes the material.
   plates (a textured blend of two BSDFs), glossy sap in the cracks' walls;
 - ``mosaic``:  tall tesserae of polished and brushed metals and glossy plastics, each tilted
   and bevelled, in deep sanded grout (mirror-like highlights that jump from tile to tile,
-  walls that hide and shadow the grout, grains that slide under a texel with the view).
+  walls that hide and shadow the grout, grains that slide under a texel with the view);
+- ``berber``:  multi-level loop-pile carpet, each loop a bundle of twisted glossy fibres
+  leaning out over its feet (overhangs; high loops hide and shadow low ones; flecked yarn
+  that slides under a texel with the view).
 
 Values stay physically plausible: diffuse albedo <= 0.85, dielectrics with IOR 1.5, metals
 from Mitsuba's measured conductor data.
@@ -237,6 +240,74 @@ def bark(rng, n: int = 160) -> Tile:
     )
 
 
+def berber(
+    rng,
+    rows: int = 10,
+    loops: int = 6,
+    fibres: int = 5,
+    gloss: float = 0.2,
+    heights: tuple[float, float] = (0.05, 0.17),
+) -> Tile:
+    """Loop-pile (Berber) carpet: ``rows`` tufting rows per tile (along y), each a yarn that
+    rises into ``loops`` loops per tile and dives into the backing between them; rows offset
+    by half a loop. Each loop is more than a half circle (its sides lean out over its feet:
+    overhangs) stretched upward, and its yarn a bundle of ``fibres`` fibre cylinders twisted
+    around the centreline (glossy, GGX alpha ``gloss``). Multi-level: the loops' heights
+    (``heights``, tile widths) follow a coarse pattern, so high loops hide and shadow the low ones
+    beside them at grazing views; the yarn is flecked (oatmeal, cream, brown, charcoal; the
+    colour changes from loop to loop in patches of a few loops); dark gaps between the rows
+    show at near-normal views and close at grazing ones. Structure of a few texels that casts
+    hard shadows, hides itself and slides under a texel with the view (as on the weave), on a
+    pile: what a lobe per texel cannot follow (docs/quality-research.md)."""
+    pitch_x, pitch_y = 1.0 / rows, 1.0 / loops
+    R = 0.3 * pitch_x  # yarn radius (about 2 texels at 64^2)
+    rf = 0.45 * R  # fibre radius
+    cols = [(0.72, 0.64, 0.50), (0.82, 0.78, 0.68), (0.42, 0.27, 0.15), (0.09, 0.08, 0.07)]
+    # multi-level pattern: a coarse periodic field at the loops' tops; fleck patches: a finer one
+    level = spectral_noise(rng, 64, 1, 3, beta=2.0)
+    fleck = spectral_noise(rng, 64, 3, 8, beta=1.0)
+    pos = [
+        ((i + 0.5) * pitch_x, (j + 0.5 * (i % 2)) * pitch_y)
+        for i in range(rows)
+        for j in range(loops)
+    ]
+    pos = np.array(pos) % 1.0
+    ij = (pos * 64).astype(int) % 64
+    lv, fl = level[ij[:, 1], ij[:, 0]], fleck[ij[:, 1], ij[:, 0]]
+    rank = np.argsort(np.argsort(lv)) / (len(pos) - 1)
+    tall = heights[0] + (heights[1] - heights[0]) * rank
+    colour = np.digitize(fl, np.quantile(fl, [0.45, 0.7, 0.88]))
+    groups: list[list] = [[] for _ in cols]
+    over = np.radians(25.0)  # how far past a half circle each loop goes (its overhang)
+    phi = np.linspace(-over, np.pi + over, 25)
+    for (cx, cy), top, c in zip(pos, tall, colour, strict=True):
+        r = 0.35 * pitch_y  # loop half-width at its widest
+        stretch = top / (r * (1.0 + np.sin(over)))
+        ys = cy - r * np.cos(phi)
+        zs = stretch * r * (np.sin(phi) + np.sin(over)) - 0.5 * R
+        xs = cx + rng.normal(0, 0.08 * pitch_x) + 0.15 * R * np.sin(phi)
+        centre = np.column_stack([xs, ys, zs])
+        t = np.gradient(centre, axis=0)
+        t /= np.linalg.norm(t, axis=1, keepdims=True)
+        n1 = np.cross(t, [1.0, 0.0, 0.0])
+        n1 /= np.linalg.norm(n1, axis=1, keepdims=True)
+        n2 = np.cross(t, n1)
+        phase0 = rng.uniform(0, 2 * np.pi)
+        s = np.linspace(0.0, 1.0, len(phi))
+        for f in range(fibres):
+            ang = 2 * np.pi * (1.5 * s + f / fibres) + phase0
+            off = (R - rf) * (1.0 + 0.08 * rng.standard_normal())
+            path = centre + off * (np.cos(ang)[:, None] * n1 + np.sin(ang)[:, None] * n2)
+            m = tube(path, rf * (1.0 + 0.1 * rng.standard_normal()), sides=6, ref=[1.0, 0.0, 0.0])
+            groups[int(c)].append(m)
+    parts = [
+        Part(merge(g), plastic(cols[i], gloss), name=f"yarn{i}") for i, g in enumerate(groups) if g
+    ]
+    back = heightfield(-0.5 * R + 0.002 * spectral_noise(rng, 32, 2, 12))
+    parts.append(Part(back, diffuse((0.05, 0.045, 0.04)), name="backing"))
+    return Tile(parts, f"multi-level loop pile, {rows} rows of {loops} loops of {fibres} fibres")
+
+
 #: the grout's colour (scaled per grain)
 GROUT = np.array([1.0, 0.96, 0.9])
 
@@ -292,4 +363,5 @@ PT_PRESETS = {
     "fur": fur,
     "bark": bark,
     "mosaic": mosaic,
+    "berber": berber,
 }

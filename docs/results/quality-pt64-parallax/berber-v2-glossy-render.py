@@ -1,0 +1,14 @@
+"""berber variant: a glossier yarn (GGX alpha 0.08, the preset 0.2).
+
+    python berber-v2-glossy-render.py btf render berber --res 64 --dirs 24 --spp 64 --bounces 5 -o berber.btf
+"""
+import functools
+import sys
+
+from vrneural.btf import pt_presets as P
+
+P.PT_PRESETS["berber"] = functools.partial(P.berber, gloss=0.08)
+if __name__ == "__main__":
+    from vrneural.cli import main
+
+    sys.exit(main(sys.argv[1:]))
