@@ -33,6 +33,12 @@ def _rgb(c) -> dict:
     return {"type": "rgb", "value": [float(x) for x in c]}
 
 
+def _at(field: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """A periodic field ``[N, N]`` at points ``xy [K, 2]`` of the unit tile (nearest cell)."""
+    ij = (xy * len(field)).astype(int) % len(field)
+    return field[ij[:, 1], ij[:, 0]]
+
+
 def plastic(colour, alpha: float) -> dict:
     """A rough dielectric coating over a diffuse base (Mitsuba ``roughplastic``, GGX)."""
     return {
@@ -174,8 +180,7 @@ def fur(rng, tufts: int = 144, per_tuft: int = 40, gloss: float = 0.12, lean: fl
     cols = [(0.80, 0.72, 0.58), (0.60, 0.24, 0.06), (0.07, 0.05, 0.04)]
     # patches: a coarse periodic field looked up at each tuft's centre, cut into three bands
     field = spectral_noise(rng, 64, 2, 6, beta=2.0)
-    ij = (centres * len(field)).astype(int) % len(field)  # nearest cell, (x, y)
-    at = field[ij[:, 1], ij[:, 0]]
+    at = _at(field, centres)
     colour = np.digitize(at, np.quantile(at, [0.4, 0.7]))
     tall = rng.uniform(0.07, 0.19, len(centres))
     groups: list[list] = [[] for _ in cols]
@@ -272,16 +277,16 @@ def berber(
         for j in range(loops)
     ]
     pos = np.array(pos) % 1.0
-    ij = (pos * 64).astype(int) % 64
-    lv, fl = level[ij[:, 1], ij[:, 0]], fleck[ij[:, 1], ij[:, 0]]
+    lv, fl = _at(level, pos), _at(fleck, pos)
     rank = np.argsort(np.argsort(lv)) / (len(pos) - 1)
     tall = heights[0] + (heights[1] - heights[0]) * rank
     colour = np.digitize(fl, np.quantile(fl, [0.45, 0.7, 0.88]))
     groups: list[list] = [[] for _ in cols]
     over = np.radians(25.0)  # how far past a half circle each loop goes (its overhang)
     phi = np.linspace(-over, np.pi + over, 25)
+    s = np.linspace(0.0, 1.0, len(phi))  # along the loop, for the fibres' twist
+    r = 0.35 * pitch_y  # loop half-width at its widest
     for (cx, cy), top, c in zip(pos, tall, colour, strict=True):
-        r = 0.35 * pitch_y  # loop half-width at its widest
         stretch = top / (r * (1.0 + np.sin(over)))
         ys = cy - r * np.cos(phi)
         zs = stretch * r * (np.sin(phi) + np.sin(over)) - 0.5 * R
@@ -293,7 +298,6 @@ def berber(
         n1 /= np.linalg.norm(n1, axis=1, keepdims=True)
         n2 = np.cross(t, n1)
         phase0 = rng.uniform(0, 2 * np.pi)
-        s = np.linspace(0.0, 1.0, len(phi))
         for f in range(fibres):
             ang = 2 * np.pi * (1.5 * s + f / fibres) + phase0
             off = (R - rf) * (1.0 + 0.08 * rng.standard_normal())
