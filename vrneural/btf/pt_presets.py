@@ -250,27 +250,36 @@ def berber(
     rows: int = 10,
     loops: int = 6,
     fibres: int = 5,
-    gloss: float = 0.2,
-    heights: tuple[float, float] = (0.05, 0.17),
+    gloss: float = 0.04,
+    heights: tuple[float, float] = (0.04, 0.12),
+    flecks: tuple[float, float] = (3.0, 8.0),
+    shares: tuple[float, float, float] = (0.45, 0.7, 0.88),
+    yarn: float = 0.3,
+    backing: tuple[float, float, float] = (0.05, 0.045, 0.04),
 ) -> Tile:
     """Loop-pile (Berber) carpet: ``rows`` tufting rows per tile (along y), each a yarn that
     rises into ``loops`` loops per tile and dives into the backing between them; rows offset
     by half a loop. Each loop is more than a half circle (its sides lean out over its feet:
     overhangs) stretched upward, and its yarn a bundle of ``fibres`` fibre cylinders twisted
-    around the centreline (glossy, GGX alpha ``gloss``). Multi-level: the loops' heights
-    (``heights``, tile widths) follow a coarse pattern, so high loops hide and shadow the low ones
-    beside them at grazing views; the yarn is flecked (oatmeal, cream, brown, charcoal; the
-    colour changes from loop to loop in patches of a few loops); dark gaps between the rows
-    show at near-normal views and close at grazing ones. Structure of a few texels that casts
-    hard shadows, hides itself and slides under a texel with the view (as on the weave), on a
-    pile: what a lobe per texel cannot follow (docs/quality-research.md)."""
+    around the centreline: a shiny synthetic yarn (GGX alpha ``gloss``), each fibre's
+    highlight a narrow cone around its axis. Multi-level: the loops' heights (``heights``, tile
+    widths) follow a coarse pattern, so high loops hide and shadow the low ones beside them at
+    grazing views; the yarn is flecked (oatmeal, cream, brown, charcoal; the colour changes
+    from loop to loop in patches of a few loops: ``flecks`` is the colour field's band in
+    cycles per tile, ``shares`` its quantile cuts between the four colours); dark gaps between
+    the rows (yarn radius ``yarn`` row pitches, backing albedo ``backing``) show at
+    near-normal views and close at grazing ones. Structure of a few texels that casts hard
+    shadows, hides itself and slides under a texel with the view (as on the weave), on a pile:
+    what a lobe per texel cannot follow. The defaults are the ninth version (v9) (alpha 0.04 and
+    loops 0.04-0.12; the first had 0.2 and 0.05-0.17); the other knobs are the variants'
+    (docs/quality-research.md)."""
     pitch_x, pitch_y = 1.0 / rows, 1.0 / loops
-    R = 0.3 * pitch_x  # yarn radius (about 2 texels at 64^2)
+    R = yarn * pitch_x  # yarn radius (about 2 texels at 64^2)
     rf = 0.45 * R  # fibre radius
     cols = [(0.72, 0.64, 0.50), (0.82, 0.78, 0.68), (0.42, 0.27, 0.15), (0.09, 0.08, 0.07)]
     # multi-level pattern: a coarse periodic field at the loops' tops; fleck patches: a finer one
     level = spectral_noise(rng, 64, 1, 3, beta=2.0)
-    fleck = spectral_noise(rng, 64, 3, 8, beta=1.0)
+    fleck = spectral_noise(rng, 64, *flecks, beta=1.0)
     pos = [
         ((i + 0.5) * pitch_x, (j + 0.5 * (i % 2)) * pitch_y)
         for i in range(rows)
@@ -280,7 +289,7 @@ def berber(
     lv, fl = _at(level, pos), _at(fleck, pos)
     rank = np.argsort(np.argsort(lv)) / (len(pos) - 1)
     tall = heights[0] + (heights[1] - heights[0]) * rank
-    colour = np.digitize(fl, np.quantile(fl, [0.45, 0.7, 0.88]))
+    colour = np.digitize(fl, np.quantile(fl, shares))
     groups: list[list] = [[] for _ in cols]
     over = np.radians(25.0)  # how far past a half circle each loop goes (its overhang)
     phi = np.linspace(-over, np.pi + over, 25)
@@ -308,7 +317,7 @@ def berber(
         Part(merge(g), plastic(cols[i], gloss), name=f"yarn{i}") for i, g in enumerate(groups) if g
     ]
     back = heightfield(-0.5 * R + 0.002 * spectral_noise(rng, 32, 2, 12))
-    parts.append(Part(back, diffuse((0.05, 0.045, 0.04)), name="backing"))
+    parts.append(Part(back, diffuse(backing), name="backing"))
     return Tile(parts, f"multi-level loop pile, {rows} rows of {loops} loops of {fibres} fibres")
 
 

@@ -7,7 +7,7 @@ import sys
 
 from vrneural.btf import pt_presets as P
 
-P.PT_PRESETS["berber"] = functools.partial(P.berber, gloss=0.08)
+P.PT_PRESETS["berber"] = functools.partial(P.berber, gloss=0.08, heights=(0.05, 0.17))
 if __name__ == "__main__":
     from vrneural.cli import main
 
