@@ -391,20 +391,22 @@ def test_every_preset_builds_and_renders_a_slice(preset):
     assert img.mean() > 1e-3 and img.std() > 0
 
 
+def _berber_rng():
+    """The berber tests' generator: one fixed seed, so two calls build the same tile."""
+    return np.random.default_rng([0, 1])
+
+
 def test_berber_loops_follow_their_heights():
     """The loop pile's geometry: the tallest loop's yarn tops out at the upper height (give or
     take the yarn's radius), lower heights give a lower pile, and the same seed the same tile."""
     from vrneural.btf.pt_presets import berber
 
-    def rng():
-        return np.random.default_rng([0, 1])
-
     R = 0.3 / 10  # the preset's yarn radius: 0.3 of the row pitch
-    top = berber(rng()).bounds()[1]
+    top = berber(_berber_rng()).bounds()[1]
     assert 0.12 - 0.5 * R < top < 0.12 + R
-    high = berber(rng(), heights=(0.05, 0.17)).bounds()[1]  # the first version's pile
+    high = berber(_berber_rng(), heights=(0.05, 0.17)).bounds()[1]  # the first version's pile
     assert 0.17 - 0.5 * R < high < 0.17 + R
-    a, b = berber(rng()), berber(rng())
+    a, b = berber(_berber_rng()), berber(_berber_rng())
     assert all(np.array_equal(p.mesh.v, q.mesh.v) for p, q in zip(a.parts, b.parts, strict=True))
 
 
@@ -415,23 +417,20 @@ def test_berber_knobs_of_its_variants():
     backing's albedo."""
     from vrneural.btf.pt_presets import berber
 
-    def rng():
-        return np.random.default_rng([0, 1])
-
     def charcoal(tile):
         n = {p.name: len(p.mesh.v) for p in tile.parts}
         return n.get("yarn3", 0) / sum(v for k, v in n.items() if k.startswith("yarn"))
 
-    plain = berber(rng())
-    flecked = berber(rng(), flecks=(12.0, 32.0), shares=(0.3, 0.5, 0.7))
+    plain = berber(_berber_rng())
+    flecked = berber(_berber_rng(), flecks=(12.0, 32.0), shares=(0.3, 0.5, 0.7))
     assert charcoal(plain) == pytest.approx(0.12, abs=0.02)  # loops above the 0.88 quantile
     assert charcoal(flecked) == pytest.approx(0.30, abs=0.02)
     yarn_low = [
         min(p.mesh.v[:, 2].min() for p in t.parts if p.name.startswith("yarn"))
-        for t in (plain, berber(rng(), yarn=0.2))
+        for t in (plain, berber(_berber_rng(), yarn=0.2))
     ]
     assert yarn_low[1] > yarn_low[0]  # a thinner yarn dives less deep
-    jute = berber(rng(), backing=(0.45, 0.38, 0.26))
+    jute = berber(_berber_rng(), backing=(0.45, 0.38, 0.26))
     assert jute.parts[-1].name == "backing"
     assert np.allclose(jute.parts[-1].bsdf["reflectance"]["value"], (0.45, 0.38, 0.26))
 
