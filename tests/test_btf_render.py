@@ -435,6 +435,36 @@ def test_berber_knobs_of_its_variants():
     assert np.allclose(jute.parts[-1].bsdf["reflectance"]["value"], (0.45, 0.38, 0.26))
 
 
+def test_fur_knobs_of_its_variants():
+    """The fur variants' knobs (``fur-variants-render.py``): ``heights`` bounds the strands'
+    tips (each strand 0.85-1 of its tuft's height), ``radius`` the strands' root radius (a
+    ring's spread about its centre), ``crimp`` waves each strand sideways (its tip-to-root path
+    longer than the straight pile's, by more for a larger crimp)."""
+    from vrneural.btf.pt_presets import fur
+
+    def strands(tile):
+        return [p.mesh.v for p in tile.parts if p.name.startswith("yarn")]
+
+    plain = fur(np.random.default_rng(3), tufts=16, per_tuft=4)
+    low = fur(np.random.default_rng(3), tufts=16, per_tuft=4, heights=(0.05, 0.06))
+    tops = [max(v[:, 2].max() for v in strands(t)) for t in (plain, low)]
+    assert 0.14 * 0.85 < tops[0] <= 0.17 + 0.0035 and 0.05 * 0.85 < tops[1] <= 0.06 + 0.0035
+    thick = fur(np.random.default_rng(3), tufts=16, per_tuft=4, radius=0.009)
+    root_ring = [strands(t)[0][:5] for t in (plain, thick)]  # the first strand's root ring
+    spread = [np.linalg.norm(r - r.mean(0), axis=1).mean() for r in root_ring]
+    assert spread[1] / spread[0] == pytest.approx(0.009 / 0.0035, rel=1e-4)  # float32 vertices
+
+    lengths = []
+    for c in (0.0, 0.006, 0.012):
+        tile = fur(np.random.default_rng(3), tufts=1, per_tuft=1, crimp=c)
+        v = strands(tile)[0]
+        rings = v.reshape(-1, 5, 3).mean(1)
+        lengths.append(
+            np.linalg.norm(np.diff(rings, axis=0), axis=1).sum() / (rings[-1, 2] - rings[0, 2])
+        )
+    assert lengths[0] < lengths[1] < lengths[2]
+
+
 def test_a_partial_from_before_the_sampler_option_resumes_only_as_independent(tmp_path):
     """An interrupted render whose header has no `sampler` (written before the option) was
     drawn with independent samples: resuming it with them is allowed, with the new default

@@ -149,31 +149,42 @@ def pebbles(rng, count: int = 34) -> Tile:
     return Tile(parts, f"{len(placed)} packed pebbles of six stones on sand")
 
 
-def fur(rng, tufts: int = 144, per_tuft: int = 40, gloss: float = 0.12, lean: float = 0.15) -> Tile:
-    """Cut pile: ``tufts`` tufts (on a jittered grid) of ``per_tuft`` thin tapered strands
-    each, standing on a backing, leaning (each tuft by a slope of standard deviation ``lean``)
-    and curling. The tufts' yarn colour follows patches of a few tufts (cream, russet,
-    near-black: a calico coat; the patch field's frequencies 2-6 cycles a tile) and their
-    height varies by tuft (0.07-0.19 tile widths), so taller tufts hide and shadow their
-    neighbours and a texel's colour changes with the view. Strands
-    are fine (radius 0.0035 tile widths at the root, a quarter of a texel at 64^2, 40 a tuft):
-    a texel sees several, as a camera sees fur, not one strand that changes from view to view.
-    The strands' coating is glossy (GGX alpha ``gloss``), as a hair's cuticle: each strand a
-    narrow highlight along its own axis, so a texel's few strands, leaning their own ways,
-    give it several small highlights scattered over the (light, view) pairs.
+def fur(
+    rng,
+    tufts: int = 144,
+    per_tuft: int = 40,
+    gloss: float = 0.12,
+    lean: float = 0.15,
+    heights: tuple[float, float] = (0.14, 0.17),
+    radius: float = 0.0035,
+    crimp: float = 0.0,
+    bundle: float = 0.0,
+    twist: float = 1.5,
+) -> Tile:
+    """Clipped cut pile: ``tufts`` tufts (on a jittered grid) of ``per_tuft`` thin tapered
+    strands each, standing on a backing, leaning (each tuft by a slope of standard deviation
+    ``lean``) and curling. The tufts' yarn colour follows patches of a few tufts (cream,
+    russet, near-black: a calico coat; the patch field's frequencies 2-6 cycles a tile). The
+    pile is clipped to nearly one height (each tuft ``heights``, tile widths, 0.14-0.17): its
+    tips are one surface about 10 texels above the backing, whose patches slide coherently
+    under a texel as the view tilts (9 texels at 45 degrees, 35 at 74) while the strands' sides
+    hide and shadow what is behind them. Strands are fine (``radius`` 0.0035 tile widths at
+    the root, a quarter of a texel at 64^2, 40 a tuft): a texel sees several, as a camera sees
+    fur, not one strand that changes from view to view. The strands' coating is glossy (GGX
+    alpha ``gloss``), as a hair's cuticle: each strand a narrow highlight along its own axis.
+    ``crimp`` (wavy strands) and ``bundle``/``twist`` (each tuft a twisted yarn, a saxony
+    carpet) are the variants' knobs, off by default.
 
-    The fifth version (Lafortune / NeuMIP with offset 1.25 over five seeds). The fourth had a
-    rough coating (alpha 0.35: 1.19 over five seeds); glossy tufts that also lean more (0.35
-    instead of 0.15) fell back to 1.19 (seed 0). The third had patches at 1-3 cycles a tile
-    (1.16); at 4-10 cycles it fell back to 1.15, and tipped strands (each strand's upper third
-    in a contrasting colour) gave 1.12. The second had 14 strands a tuft of radius 0.009
-    (about a texel wide): 1.12 there, 1.16 with the finer strands; a combed nap (every tuft
-    leaning 31 degrees along +u) made it 1.08. On the first (100 tufts of three reds and greys
-    chosen per tuft, all 0.11-0.16 tall) the lobes beat NeuMIP with parallax (0.93): a noisy
-    carpet whose texels change strand from view to view, which a per-texel lobe averages as
-    well as a network. Patches larger than a tuft slide under a texel as the view tilts; they
-    made the two tie (1.005). A short pile (0.035-0.075) and finer patches made the lobes win
-    again (0.92): docs/quality-research.md."""
+    The sixth version (Lafortune / NeuMIP with offset 1.36 over five seeds). The fifth had tufts
+    of varied height (0.07-0.19: 1.25 over five seeds); a pile clipped lower (0.09-0.11) gave
+    1.27 (seed 0), shinier and lower strands 1.18, crimped thick strands 1.17, saxony tufts
+    1.07. The fourth had a rough coating (alpha 0.35: 1.19 over five seeds); glossy tufts that
+    also lean more fell back to 1.19 (seed 0). The third had patches at 1-3 cycles a tile
+    (1.16); at 4-10 cycles it fell back to 1.15, and tipped strands gave 1.12. The second had
+    14 strands a tuft of radius 0.009: 1.12 there, 1.16 with the finer strands; a combed nap
+    made it 1.08. On the first (100 tufts of three reds and greys chosen per tuft, all
+    0.11-0.16 tall) the lobes beat NeuMIP with parallax (0.93). A short pile (0.035-0.075) and
+    finer patches made the lobes win again (0.92): docs/quality-research.md."""
     k = round(np.sqrt(tufts))
     base = (np.stack(np.meshgrid(np.arange(k), np.arange(k)), -1).reshape(-1, 2) + 0.5) / k
     centres = (base + (rng.random(base.shape) - 0.5) * 0.6 / k) % 1.0
@@ -182,20 +193,31 @@ def fur(rng, tufts: int = 144, per_tuft: int = 40, gloss: float = 0.12, lean: fl
     field = spectral_noise(rng, 64, 2, 6, beta=2.0)
     at = _at(field, centres)
     colour = np.digitize(at, np.quantile(at, [0.4, 0.7]))
-    tall = rng.uniform(0.07, 0.19, len(centres))
+    tall = rng.uniform(*heights, len(centres))
     groups: list[list] = [[] for _ in cols]
-    t = np.linspace(0.0, 1.0, 7)
+    t = np.linspace(0.0, 1.0, 19 if crimp or bundle else 7)
     for (cx, cy), c, top in zip(centres, colour, tall, strict=True):
         tuft_lean = rng.normal(0, lean, 2)
+        axis = np.array([cx, cy]) + np.outer(t, tuft_lean * top)
         for _ in range(per_tuft):
-            p0 = np.array([cx, cy]) + rng.normal(0, 0.022, 2)
-            h = top * rng.uniform(0.85, 1.0)
-            tilt = tuft_lean + rng.normal(0, 0.12, 2)
-            curl = rng.normal(0, 0.02, 2)
-            xy = p0 + np.outer(t, tilt * h) + np.outer(t**2, curl)
+            if bundle:  # a twisted yarn cut off (saxony): strands wound around the tuft's axis
+                ang = rng.uniform(0, 2 * np.pi) + 2 * np.pi * twist * t
+                rr = bundle * np.sqrt(rng.uniform(0.15, 1.0))
+                h = top * rng.uniform(0.92, 1.0)
+                xy, taper = axis + rr * np.column_stack([np.cos(ang), np.sin(ang)]), 0.5
+            else:
+                p0 = np.array([cx, cy]) + rng.normal(0, 0.022, 2)
+                h = top * rng.uniform(0.85, 1.0)
+                tilt = tuft_lean + rng.normal(0, 0.12, 2)
+                curl = rng.normal(0, 0.02, 2)
+                xy, taper = p0 + np.outer(t, tilt * h) + np.outer(t**2, curl), 0.7
+            if crimp:  # a wavy strand (wool's crimp): 2-3 waves, a random plane and phase
+                a, w, ph = rng.uniform(0, 2 * np.pi), rng.uniform(2.0, 3.0), rng.uniform(0, 6.3)
+                wave = crimp * np.sqrt(t) * np.sin(2 * np.pi * w * t + ph)
+                xy = xy + np.outer(wave, [np.cos(a), np.sin(a)])
             path = np.column_stack([xy, h * t])
-            radius = 0.0035 * (1.0 - 0.7 * t)
-            groups[int(c)].append(tube(path, radius, sides=5, ref=[1.0, 0.0, 0.0]))
+            r = radius * (1.0 - taper * t)
+            groups[int(c)].append(tube(path, r, sides=5, ref=[1.0, 0.0, 0.0]))
     parts = [
         Part(merge(g), plastic(cols[i], gloss), name=f"yarn{i}") for i, g in enumerate(groups) if g
     ]
