@@ -198,7 +198,7 @@ def fur(
     t = np.linspace(0.0, 1.0, 19 if crimp or bundle else 7)
     for (cx, cy), c, top in zip(centres, colour, tall, strict=True):
         tuft_lean = rng.normal(0, lean, 2)
-        axis = np.array([cx, cy]) + np.outer(t, tuft_lean * top)
+        axis = np.array([cx, cy]) + np.outer(t, tuft_lean * top) if bundle else None
         for _ in range(per_tuft):
             if bundle:  # a twisted yarn cut off (saxony): strands wound around the tuft's axis
                 ang = rng.uniform(0, 2 * np.pi) + 2 * np.pi * twist * t

@@ -4,10 +4,9 @@ preset's keyword arguments of each version measured, v9 being the preset's defau
     python berber-variants-render.py VERSION btf render berber --res 64 --dirs 24 --spp 64 --bounces 5 -o berber.btf
 """
 
-import functools
 import sys
 
-from vrneural.btf import pt_presets as P
+from variants_render import run
 
 FIRST = dict(gloss=0.2, heights=(0.05, 0.17))  # the first version's yarn and pile
 FLECKED = dict(flecks=(12.0, 32.0), shares=(0.3, 0.5, 0.7))  # colour from loop to loop
@@ -25,9 +24,4 @@ VERSIONS = {
 }
 
 if __name__ == "__main__":
-    if len(sys.argv) < 2 or sys.argv[1] not in VERSIONS:
-        sys.exit(f"usage: {sys.argv[0]} {{{','.join(VERSIONS)}}} btf render berber ...")
-    P.PT_PRESETS["berber"] = functools.partial(P.berber, **VERSIONS[sys.argv[1]])
-    from vrneural.cli import main
-
-    sys.exit(main(sys.argv[2:]))
+    sys.exit(run("berber", VERSIONS))

@@ -5,10 +5,9 @@ defaults now, the sixth version; fur10 the fifth).
     python fur-variants-render.py VARIANT btf render fur --res 64 --dirs 24 --spp 64 --bounces 5 -o fur.btf
 """
 
-import functools
 import sys
 
-from vrneural.btf import pt_presets as P
+from variants_render import run
 
 FIFTH = dict(heights=(0.07, 0.19))  # the fifth version: tufts of varied height
 VARIANTS = {
@@ -28,9 +27,4 @@ VARIANTS = {
 }
 
 if __name__ == "__main__":
-    if len(sys.argv) < 2 or sys.argv[1] not in VARIANTS:
-        sys.exit(f"usage: {sys.argv[0]} {{{','.join(VARIANTS)}}} btf render fur ...")
-    P.PT_PRESETS["fur"] = functools.partial(P.fur, **VARIANTS[sys.argv[1]])
-    from vrneural.cli import main
-
-    sys.exit(main(sys.argv[2:]))
+    sys.exit(run("fur", VARIANTS))
