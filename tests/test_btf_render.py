@@ -3,6 +3,7 @@ Lambert, flat rough conductor), rectification, tile copies at the edges, a tiny 
 end, determinism, Ctrl-C + resume, and the one-line errors. Mitsuba runs for real (the render
 extra, which scripts/setup.sh installs); under CI=true a missing Mitsuba fails the run."""
 
+import functools
 import json
 import os
 import subprocess
@@ -16,6 +17,7 @@ from vrneural.btf import read_btf
 from vrneural.btf.brdf import ggx_d, smith_lambda
 from vrneural.btf.dirs import direction_set, spherical
 from vrneural.btf.pt_geometry import Part, Tile, heightfield
+from vrneural.btf.pt_presets import PT_PRESETS
 
 if os.environ.get("CI", "").lower() in ("1", "true", "yes"):
     import mitsuba  # noqa: F401  (CI installs the render extra: never skip there)
@@ -219,6 +221,11 @@ def test_interrupted_render_resumes_to_the_same_bytes(tiny, tmp_path, monkeypatc
     monkeypatch.setattr(pt, "render_slice", real)
     with pytest.raises(Exception, match="other settings"):
         render_btf(RenderConfig(preset="weave", res=8, dirs=3, spp=8), out, resume=True)
+    # the same settings with another material (a variant's keywords): its fingerprint differs
+    with monkeypatch.context() as m:
+        m.setitem(PT_PRESETS, "weave", functools.partial(PT_PRESETS["weave"], fibres=4))
+        with pytest.raises(Exception, match=r"other settings.*scene: '[0-9a-f]{16}' there"):
+            render_btf(cfg, out, resume=True, progress=False)
     assert render_btf(cfg, out, resume=True, progress=False) == out
     assert out.read_bytes() == tiny.read_bytes()
     assert pt_render.GENERATOR in read_btf(out).meta["generator"]["tool"]
@@ -272,6 +279,31 @@ def test_noise_floor_of_a_render(tiny):
     assert r["views"] == [0, 2] and r["preset"] == "weave" and r["spp"] == 4
     assert 0 < r["l1"] < 0.5 * r["mean"]
     assert r["l1_vs_converged"] == pytest.approx(r["l1"] / 2**0.5)
+
+
+def test_noise_floor_refuses_another_material(tiny, monkeypatch):
+    """The header's scene fingerprint: a preset built with other keywords (a variant, or
+    another version of the preset) is not re-rendered against the file, which would measure
+    the two materials' difference as noise; a one-line error names both fingerprints."""
+    from vrneural.btf.pt_render import noise_floor
+    from vrneural.errors import VrnError
+
+    rendered = read_btf(tiny).meta["generator"]["scene"]
+    monkeypatch.setitem(PT_PRESETS, "weave", functools.partial(PT_PRESETS["weave"], fibres=4))
+    with pytest.raises(VrnError, match="not the material rendered there") as e:
+        noise_floor(tiny, views=1, progress=False)
+    assert rendered in str(e.value) and "\n" not in str(e.value)
+
+
+def test_scene_fingerprint_follows_the_material():
+    """The same preset and seed give the same fingerprint; other keywords or seeds another."""
+    from vrneural.btf.pt_presets import fur
+
+    def fp(seed, **kw):
+        return fur(np.random.default_rng(seed), tufts=4, per_tuft=2, **kw).fingerprint()
+
+    assert fp(0) == fp(0) and len(fp(0)) == 16
+    assert len({fp(0), fp(1), fp(0, gloss=0.06), fp(0, bands=(0.4, 0.7))}) == 4
 
 
 def test_multijittered_samples_are_less_noisy_than_independent_ones(tiny, tmp_path, monkeypatch):
@@ -439,7 +471,8 @@ def test_fur_knobs_of_its_variants():
     """The fur variants' knobs (``fur-variants-render.py``): ``heights`` bounds the strands'
     tips (each strand 0.85-1 of its tuft's height), ``radius`` the strands' root radius (a
     ring's spread about its centre), ``crimp`` waves each strand sideways (its tip-to-root path
-    longer than the straight pile's, by more for a larger crimp)."""
+    longer than the straight pile's, by more for a larger crimp), ``carve`` cuts that share of
+    the tufts down to ``carved`` of their height, the rest unchanged."""
     from vrneural.btf.pt_presets import fur
 
     def strands(tile):
@@ -448,11 +481,11 @@ def test_fur_knobs_of_its_variants():
     plain = fur(np.random.default_rng(3), tufts=16, per_tuft=4)
     low = fur(np.random.default_rng(3), tufts=16, per_tuft=4, heights=(0.05, 0.06))
     tops = [max(v[:, 2].max() for v in strands(t)) for t in (plain, low)]
-    assert 0.14 * 0.85 < tops[0] <= 0.17 + 0.0035 and 0.05 * 0.85 < tops[1] <= 0.06 + 0.0035
+    assert 0.14 * 0.85 < tops[0] <= 0.17 + 0.002 and 0.05 * 0.85 < tops[1] <= 0.06 + 0.002
     thick = fur(np.random.default_rng(3), tufts=16, per_tuft=4, radius=0.009)
     root_ring = [strands(t)[0][:5] for t in (plain, thick)]  # the first strand's root ring
     spread = [np.linalg.norm(r - r.mean(0), axis=1).mean() for r in root_ring]
-    assert spread[1] / spread[0] == pytest.approx(0.009 / 0.0035, rel=1e-4)  # float32 vertices
+    assert spread[1] / spread[0] == pytest.approx(0.009 / 0.002, rel=1e-4)  # float32 vertices
 
     lengths = []
     for c in (0.0, 0.006, 0.012):
@@ -463,6 +496,17 @@ def test_fur_knobs_of_its_variants():
             np.linalg.norm(np.diff(rings, axis=0), axis=1).sum() / (rings[-1, 2] - rings[0, 2])
         )
     assert lengths[0] < lengths[1] < lengths[2]
+
+    # carve: that share of the tufts (those nearest the patches' borders) at ``carved`` height
+    def tips(tile):  # each plain strand 7 rings of 5 vertices; its tip the last ring's height
+        return np.concatenate([v.reshape(-1, 35, 3)[:, -5:, 2].mean(1) for v in strands(tile)])
+
+    flat = tips(plain)
+    cut = tips(fur(np.random.default_rng(3), tufts=16, per_tuft=4, carve=0.25, carved=0.4))
+    low = cut < 0.14 * 0.85
+    assert low.sum() == 4 * 4 and not (flat < 0.14 * 0.85).any()  # 4 tufts of 16, 4 strands
+    assert cut[low] == pytest.approx(flat[low] * 0.4, rel=1e-5)
+    assert cut[~low] == pytest.approx(flat[~low], rel=1e-6)
 
 
 def test_a_partial_from_before_the_sampler_option_resumes_only_as_independent(tmp_path):

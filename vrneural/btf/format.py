@@ -186,6 +186,8 @@ def check_partial_settings(path, generator: dict) -> None:
     have = old.get("generator", {})
     if have.get("config") == "RenderConfig":  # a render from before a field was added
         have = RENDER_BEFORE | have
+        if "scene" not in have:  # from before the scene's fingerprint: nothing to check it by
+            have["scene"] = generator.get("scene")
     diff = [
         f"{k}: {have.get(k)!r} there, {v!r} here" for k, v in generator.items() if have.get(k) != v
     ]

@@ -17,6 +17,7 @@ tile meet); faces are counter-clockwise seen from outside.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -61,6 +62,34 @@ class Tile:
 
     def triangles(self) -> int:
         return int(sum(len(p.mesh.f) for p in self.parts))
+
+    def fingerprint(self) -> str:
+        """16 hex digits of a SHA-256 over every part's name, shading flag, mesh arrays and
+        BSDF (its numbers and bitmaps): the same for the same material, different for a
+        variant of a preset (other keywords) or another version of it."""
+        h = hashlib.sha256()
+
+        def feed(x) -> None:
+            if isinstance(x, dict):
+                for k in sorted(x):
+                    h.update(f"<{k}>".encode())
+                    feed(x[k])
+            elif isinstance(x, list | tuple):
+                h.update(b"[")
+                for y in x:
+                    feed(y)
+                h.update(b"]")
+            elif isinstance(x, np.ndarray):
+                a = np.ascontiguousarray(x)
+                h.update(f"{a.dtype.str}{a.shape}".encode() + a.tobytes())
+            else:
+                h.update(repr(x).encode())
+
+        for p in self.parts:
+            m = p.mesh
+            feed([p.name, p.smooth, m.v, m.f, m.uv, "no normals" if m.n is None else m.n])
+            feed(p.bsdf)
+        return h.hexdigest()[:16]
 
 
 def heightfield(h: np.ndarray, size: float = 1.0) -> Mesh:

@@ -152,48 +152,62 @@ def pebbles(rng, count: int = 34) -> Tile:
 def fur(
     rng,
     tufts: int = 144,
-    per_tuft: int = 40,
+    per_tuft: int = 80,
     gloss: float = 0.12,
     lean: float = 0.15,
     heights: tuple[float, float] = (0.14, 0.17),
-    radius: float = 0.0035,
+    radius: float = 0.002,
     crimp: float = 0.0,
     bundle: float = 0.0,
     twist: float = 1.5,
+    carve: float = 0.0,
+    carved: float = 0.5,
+    bands: tuple[float, float] = (0.5, 0.5),
 ) -> Tile:
     """Clipped cut pile: ``tufts`` tufts (on a jittered grid) of ``per_tuft`` thin tapered
     strands each, standing on a backing, leaning (each tuft by a slope of standard deviation
-    ``lean``) and curling. The tufts' yarn colour follows patches of a few tufts (cream,
-    russet, near-black: a calico coat; the patch field's frequencies 2-6 cycles a tile). The
-    pile is clipped to nearly one height (each tuft ``heights``, tile widths, 0.14-0.17): its
-    tips are one surface about 10 texels above the backing, whose patches slide coherently
-    under a texel as the view tilts (9 texels at 45 degrees, 35 at 74) while the strands' sides
-    hide and shadow what is behind them. Strands are fine (``radius`` 0.0035 tile widths at
-    the root, a quarter of a texel at 64^2, 40 a tuft): a texel sees several, as a camera sees
-    fur, not one strand that changes from view to view. The strands' coating is glossy (GGX
-    alpha ``gloss``), as a hair's cuticle: each strand a narrow highlight along its own axis.
-    ``crimp`` (wavy strands) and ``bundle``/``twist`` (each tuft a twisted yarn, a saxony
-    carpet) are the variants' knobs, off by default.
+    ``lean``) and curling. The tufts' yarn colour follows patches of a few tufts: a patch
+    field (2-6 cycles a tile) cut at its quantiles ``bands`` into cream, russet and
+    near-black (the default ``(0.5, 0.5)`` leaves no russet: cream and near-black spots, half
+    each, a pelt's). The pile is clipped to nearly one height (each tuft ``heights``, tile
+    widths, 0.14-0.17): its tips are one surface about 10 texels above the backing, whose
+    spots slide coherently under a texel as the view tilts (9 texels at 45 degrees, 35 at 74)
+    while the strands' sides hide and shadow what is behind them. Strands are very fine
+    (``radius`` 0.002 tile widths at the root, an eighth of a texel at 64^2, 80 a tuft): a
+    texel sees many, as a camera sees velvet or fur, not one strand that changes from view to
+    view. The strands' coating is glossy (GGX alpha ``gloss``), as a hair's cuticle: each
+    strand a narrow highlight along its own axis. ``crimp`` (wavy strands) and
+    ``bundle``/``twist`` (each tuft a twisted yarn, a saxony carpet) are the variants' knobs,
+    off by default, as is ``carve``: the share of tufts nearest the patches' borders cut down
+    to ``carved`` of their height (a carved rug's channels outlining its pattern).
 
-    The sixth version (Lafortune / NeuMIP with offset 1.36 over five seeds). The fifth had tufts
-    of varied height (0.07-0.19: 1.25 over five seeds); a pile clipped lower (0.09-0.11) gave
-    1.27 (seed 0), shinier and lower strands 1.18, crimped thick strands 1.17, saxony tufts
-    1.07. The fourth had a rough coating (alpha 0.35: 1.19 over five seeds); glossy tufts that
-    also lean more fell back to 1.19 (seed 0). The third had patches at 1-3 cycles a tile
-    (1.16); at 4-10 cycles it fell back to 1.15, and tipped strands gave 1.12. The second had
-    14 strands a tuft of radius 0.009: 1.12 there, 1.16 with the finer strands; a combed nap
-    made it 1.08. On the first (100 tufts of three reds and greys chosen per tuft, all
-    0.11-0.16 tall) the lobes beat NeuMIP with parallax (0.93). A short pile (0.035-0.075) and
-    finer patches made the lobes win again (0.92): docs/quality-research.md."""
+    The seventh version (Lafortune / NeuMIP with offset 1.56 over five seeds, 1.48-1.66 by
+    seed). The sixth had three colours (shares 40/30/30) and 40 strands a tuft twice as thick
+    (1.36 over five seeds); two colours alone gave 1.49 over five seeds, the finer strands
+    alone 1.38 (seed 0); a taller, denser or carved pile, or glossier strands, 1.30-1.37 (seed
+    0). The fifth
+    had tufts of varied height (0.07-0.19: 1.25 over five seeds); a pile clipped lower
+    (0.09-0.11) gave 1.27 (seed 0), shinier and lower strands 1.18, crimped thick strands 1.17,
+    saxony tufts 1.07. The fourth had a rough coating (alpha 0.35: 1.19 over five seeds);
+    glossy tufts that also lean more fell back to 1.19 (seed 0). The third had patches at 1-3
+    cycles a tile (1.16); at 4-10 cycles it fell back to 1.15, and tipped strands gave 1.12.
+    The second had 14 strands a tuft of radius 0.009: 1.12 there, 1.16 with the finer strands;
+    a combed nap made it 1.08. On the first (100 tufts of three reds and greys chosen per tuft,
+    all 0.11-0.16 tall) the lobes beat NeuMIP with parallax (0.93). A short pile (0.035-0.075)
+    and finer patches made the lobes win again (0.92): docs/quality-research.md."""
     k = round(np.sqrt(tufts))
     base = (np.stack(np.meshgrid(np.arange(k), np.arange(k)), -1).reshape(-1, 2) + 0.5) / k
     centres = (base + (rng.random(base.shape) - 0.5) * 0.6 / k) % 1.0
     cols = [(0.80, 0.72, 0.58), (0.60, 0.24, 0.06), (0.07, 0.05, 0.04)]
-    # patches: a coarse periodic field looked up at each tuft's centre, cut into three bands
+    # patches: a coarse periodic field looked up at each tuft's centre, cut at ``bands``
     field = spectral_noise(rng, 64, 2, 6, beta=2.0)
     at = _at(field, centres)
-    colour = np.digitize(at, np.quantile(at, [0.4, 0.7]))
+    colour = np.digitize(at, np.quantile(at, bands))
     tall = rng.uniform(*heights, len(centres))
+    if carve:  # the tufts nearest a band's edge (in the field's rank) cut down: the channels
+        rank = np.argsort(np.argsort(at)) / (len(at) - 1)
+        edge = np.min(np.abs(rank[:, None] - np.array(bands)), axis=1)
+        tall = np.where(edge <= np.quantile(edge, carve), tall * carved, tall)
     groups: list[list] = [[] for _ in cols]
     t = np.linspace(0.0, 1.0, 19 if crimp or bundle else 7)
     for (cx, cy), c, top in zip(centres, colour, tall, strict=True):
@@ -223,7 +237,8 @@ def fur(
     ]
     back = heightfield(0.002 * spectral_noise(rng, 32, 2, 12))
     parts.append(Part(back, diffuse((0.20, 0.16, 0.11)), name="backing"))
-    return Tile(parts, f"calico cut pile, {k * k} tufts of {per_tuft} strands")
+    coat = "calico" if bands[0] < bands[1] else "spotted"
+    return Tile(parts, f"{coat} cut pile, {k * k} tufts of {per_tuft} strands")
 
 
 def bark(rng, n: int = 160) -> Tile:

@@ -70,6 +70,7 @@ def render_btf(
     with Stop() as stop:
         stop.second_raises = True
         ps, height, tile = build(cfg)
+        meta["generator"]["scene"] = tile.fingerprint()  # resuming checks it: same material
         meta["about"] = tile.about
         meta["triangles"] = tile.triangles()
         meta["tile_copies"] = (2 * ps.ring + 1) ** 2
@@ -119,7 +120,13 @@ def noise_floor(path, views: int = 6, progress: bool = True) -> dict:
     cfg = RenderConfig(**{k: v for k, v in (RENDER_BEFORE | gen).items() if k in fields})
     cfg = dataclasses.replace(cfg, sample_seed=cfg.sample_seed + 1)
     t0 = time.perf_counter()
-    ps, _, _ = build(cfg)
+    ps, _, tile = build(cfg)
+    if gen.get("scene") not in (None, tile.fingerprint()):
+        raise VrnError(
+            f"{path}: the preset {cfg.preset!r} built here is not the material rendered there "
+            f"(scene fingerprint {tile.fingerprint()}, the file's {gen['scene']}): a variant "
+            "or another version of the preset; measure it with the code that rendered it"
+        )
     dirs = direction_set(cfg.dirs)
     pick = np.unique(np.linspace(0, len(dirs) - 1, min(views, len(dirs))).round().astype(int))
     diff = total = 0.0
