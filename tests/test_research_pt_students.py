@@ -34,3 +34,14 @@ def test_a_miss_of_the_10pct_target(mod):
     v = mod.verdicts({"student": {0: 1.2, 1: 1.1}, "neumip": {0: 1.0, 1: 1.0}})
     assert v["within_10pct_of_neumip"] is False
     assert "below_single8" not in v
+
+
+def test_a_recipe_suffix_names_the_narrow_networks_only(mod):
+    assert mod.stems() == {m: m for m in mod.METHODS}
+    s = mod.stems("ws")
+    assert s["neumip"] == "neumip"  # the bench never widens NeuMIP
+    assert [s[m] for m in ("student", "single8", "student_nodistill")] == [
+        "student_ws",
+        "single8_ws",
+        "student_nodistill_ws",
+    ]

@@ -8,7 +8,10 @@ settings: ``--max-test-slices 0 --parallax off``, teacher 48 epochs, networks 50
     ROOT/PRESET.btf                 the BTF
     ROOT/PRESET/sS/METHOD.vrnm      METHOD in student, neumip, single8, student_nodistill
 
-and score them here with ``vrneural eval`` (its whole-BTF L1 is the bench's to 1e-11). Writes
+and score them here with ``vrneural eval`` (its whole-BTF L1 is the bench's to 1e-11). With
+``--suffix ws`` it scores the packs ``METHOD_ws.vrnm`` instead (another recipe of the three
+narrow networks, e.g. ``--wide-start 16`` as ``bench quality --wide-start 16`` trains them;
+NeuMIP is the plain ``neumip.vrnm``, as the bench never widens it). Writes
 ``OUT.json`` and ``OUT.md``: the L1 of every network and seed, the means, and the bench's three
 verdicts (student within 10% of NeuMIP on the means; below the single-level net and below the
 no-distillation student, on the means and seed pair by seed pair)::
@@ -28,18 +31,25 @@ from pathlib import Path
 METHODS = ("student", "neumip", "single8", "student_nodistill")
 
 
-def score(root: Path, preset: str) -> dict:
+def stems(suffix: str = "") -> dict[str, str]:
+    """The pack stem of each method: ``METHOD`` or, with a suffix, ``METHOD_SUFFIX`` for the
+    three narrow networks (NeuMIP's stays plain)."""
+    return {m: f"{m}_{suffix}" if suffix and m != "neumip" else m for m in METHODS}
+
+
+def score(root: Path, preset: str, suffix: str = "") -> dict:
     """L1 (whole BTF, f32) of every pack of ``preset`` found, by method, in seed order."""
+    method = {v: k for k, v in stems(suffix).items()}
     packs = sorted((root / preset).glob("s*/*.vrnm"))
-    packs = [p for p in packs if p.stem in METHODS]
+    packs = [p for p in packs if p.stem in method]
     if not packs:
-        sys.exit(f"{root / preset}: no packs s*/{{{','.join(METHODS)}}}.vrnm")
+        sys.exit(f"{root / preset}: no packs s*/{{{','.join(method)}}}.vrnm")
     cmd = ["vrneural", "eval", *map(str, packs), "--btf", str(root / f"{preset}.btf")]
     r = subprocess.run([*cmd, "--json", "--quiet"], capture_output=True, text=True, check=True)
     doc = json.loads(r.stdout)
     out: dict = {m: {} for m in METHODS}
     for p, rec in zip(packs, doc["packs"], strict=True):
-        out[p.stem][int(p.parent.name[1:])] = rec["scores"][0]["l1"]
+        out[method[p.stem]][int(p.parent.name[1:])] = rec["scores"][0]["l1"]
     return {m: dict(sorted(v.items())) for m, v in out.items() if v}
 
 
@@ -110,11 +120,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("root", type=Path)
     ap.add_argument("--presets", default="bark,mosaic,fur")
+    ap.add_argument("--suffix", default="", help="score METHOD_SUFFIX.vrnm (NeuMIP: neumip.vrnm)")
     ap.add_argument("-o", "--out", type=Path, required=True, help="OUT.json and OUT.md")
     a = ap.parse_args()
     res = {}
     for p in a.presets.split(","):
-        l1 = score(a.root, p)
+        l1 = score(a.root, p, a.suffix)
         res[p] = verdicts(l1) | {
             "l1": {m: {str(s): x for s, x in v.items()} for m, v in l1.items()}
         }
