@@ -121,10 +121,11 @@ def noise_floor(path, views: int = 6, progress: bool = True) -> dict:
     cfg = dataclasses.replace(cfg, sample_seed=cfg.sample_seed + 1)
     t0 = time.perf_counter()
     ps, _, tile = build(cfg)
-    if gen.get("scene") not in (None, tile.fingerprint()):
+    scene = tile.fingerprint()
+    if gen.get("scene") not in (None, scene):
         raise VrnError(
             f"{path}: the preset {cfg.preset!r} built here is not the material rendered there "
-            f"(scene fingerprint {tile.fingerprint()}, the file's {gen['scene']}): a variant "
+            f"(scene fingerprint {scene}, the file's {gen['scene']}): a variant "
             "or another version of the preset; measure it with the code that rendered it"
         )
     dirs = direction_set(cfg.dirs)
