@@ -45,3 +45,61 @@ def test_a_recipe_suffix_names_the_narrow_networks_only(mod):
         "single8_ws",
         "student_nodistill_ws",
     ]
+
+
+def test_the_tally_names_every_miss(mod):
+    hit = mod.verdicts(
+        {
+            "student": {0: 1.0},
+            "neumip": {0: 1.0},
+            "single8": {0: 1.1},
+            "student_nodistill": {0: 1.1},
+        }
+    )
+    miss = mod.verdicts(
+        {
+            "student": {0: 1.2},
+            "neumip": {0: 1.0},
+            "single8": {0: 1.1},
+            "student_nodistill": {0: 1.3},
+        }
+    )
+    t = mod.tally({"bark": hit, "weave": miss})
+    assert "within 10% of NeuMIP on 1 of 2 (not weave)" in t
+    assert "below the single-level net on 1 of 2 (not weave)" in t
+    assert "below the no-distillation student on 2 of 2." in t
+    assert t in mod.report({"bark": hit, "weave": miss})
+    assert mod.tally({}) == ""
+
+
+def test_add_keeps_the_other_presets_in_their_order(mod):
+    old = {"bark": {"x": 1}, "fur": {"x": 2}}
+    assert list(mod.merge(old, {"fur": {"x": 3}, "weave": {"x": 4}}).items()) == [
+        ("bark", {"x": 1}),
+        ("fur", {"x": 3}),
+        ("weave", {"x": 4}),
+    ]
+
+
+def test_add_writes_the_merged_table(mod, tmp_path, monkeypatch):
+    import json
+    import sys
+
+    out = tmp_path / "students"
+    out.with_suffix(".json").write_text(json.dumps({"bark": mod.verdicts({"student": {0: 1.0}})}))
+    monkeypatch.setattr(
+        mod, "score", lambda root, p, suffix="": {"student": {0: 2.0}, "neumip": {0: 1.0}}
+    )
+    monkeypatch.setattr(
+        sys, "argv", ["pt_students", str(tmp_path), "--presets", "weave", "--add", "-o", str(out)]
+    )
+    mod.main()
+    res = json.loads(out.with_suffix(".json").read_text())
+    assert list(res) == ["bark", "weave"]
+    assert res["weave"]["within_10pct_of_neumip"] is False
+    md = out.with_suffix(".md").read_text()
+    assert (
+        "| bark |" in md
+        and "| weave |" in md
+        and "within 10% of NeuMIP on 0 of 1 (not weave)" in md
+    )

@@ -14,9 +14,12 @@ narrow networks, e.g. ``--wide-start 16`` as ``bench quality --wide-start 16`` t
 NeuMIP is the plain ``neumip.vrnm``, as the bench never widens it). Writes
 ``OUT.json`` and ``OUT.md``: the L1 of every network and seed, the means, and the bench's three
 verdicts (student within 10% of NeuMIP on the means; below the single-level net and below the
-no-distillation student, on the means and seed pair by seed pair)::
+no-distillation student, on the means and seed pair by seed pair), and on how many presets
+each target is met. ``--add`` scores a few presets into an existing OUT.json, keeping the
+others::
 
     python scripts/research/pt_students.py ROOT --presets bark,mosaic,fur -o OUT
+    python scripts/research/pt_students.py ROOT2 --presets weave --add -o OUT
 """
 
 from __future__ import annotations
@@ -113,7 +116,31 @@ def report(res: dict) -> str:
             f"{_ratio(v, 'student_nodistill')} |"
         )
     note = "Means of the whole-BTF L1 over the seeds (their count in brackets).\n"
-    return "\n".join(lines) + "\n\n" + note
+    return "\n".join(lines) + "\n\n" + note + tally(res)
+
+
+def tally(res: dict) -> str:
+    """On how many presets each of the three targets is met (on the seed means)."""
+    parts = []
+    for key, what in (
+        ("within_10pct_of_neumip", "within 10% of NeuMIP"),
+        ("below_single8", "below the single-level net"),
+        ("below_student_nodistill", "below the no-distillation student"),
+    ):
+        had = [p for p, v in res.items() if key in v]
+        if had:
+            met = [p for p in had if res[p][key]]
+            miss = (
+                f" (not {', '.join(p for p in had if p not in met)})" if len(met) < len(had) else ""
+            )
+            parts.append(f"{what} on {len(met)} of {len(had)}{miss}")
+    return f"\nThe student is {'; '.join(parts)}.\n" if parts else ""
+
+
+def merge(old: dict, new: dict) -> dict:
+    """``--add``: the presets of an earlier result file, those scored again replaced in place,
+    new ones after them."""
+    return {p: new.get(p, v) for p, v in old.items()} | new
 
 
 def main() -> None:
@@ -122,6 +149,11 @@ def main() -> None:
     ap.add_argument("--presets", default="bark,mosaic,fur")
     ap.add_argument("--suffix", default="", help="score METHOD_SUFFIX.vrnm (NeuMIP: neumip.vrnm)")
     ap.add_argument("-o", "--out", type=Path, required=True, help="OUT.json and OUT.md")
+    ap.add_argument(
+        "--add",
+        action="store_true",
+        help="keep the other presets of an existing OUT.json (those scored here replace theirs)",
+    )
     a = ap.parse_args()
     res = {}
     for p in a.presets.split(","):
@@ -130,8 +162,14 @@ def main() -> None:
             "l1": {m: {str(s): x for s, x in v.items()} for m, v in l1.items()}
         }
         print(p, json.dumps({k: v for k, v in res[p].items() if k != "l1"}, indent=1), flush=True)
-    a.out.with_suffix(".json").write_text(json.dumps(res, indent=1) + "\n")
-    a.out.with_suffix(".md").write_text(report(res))
+    old = a.out.with_suffix(".json")
+    if a.add and old.exists():
+        res = merge(json.loads(old.read_text()), res)
+    from vrneural.outputs.files import atomic_path
+
+    for ext, text in ((".json", json.dumps(res, indent=1) + "\n"), (".md", report(res))):
+        with atomic_path(a.out.with_suffix(ext)) as tmp:
+            tmp.write_text(text)
     print(report(res))
 
 
