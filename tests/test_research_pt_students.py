@@ -87,6 +87,9 @@ def test_add_writes_the_merged_table(mod, tmp_path, monkeypatch):
 
     out = tmp_path / "students"
     out.with_suffix(".json").write_text(json.dumps({"bark": mod.verdicts({"student": {0: 1.0}})}))
+    out.with_suffix(".md").write_text(
+        "An introduction written by hand.\n\n" + mod.TABLE_HEAD + "\n|---|\n| bark | old |\n"
+    )
     monkeypatch.setattr(
         mod, "score", lambda root, p, suffix="": {"student": {0: 2.0}, "neumip": {0: 1.0}}
     )
@@ -103,3 +106,6 @@ def test_add_writes_the_merged_table(mod, tmp_path, monkeypatch):
         and "| weave |" in md
         and "within 10% of NeuMIP on 0 of 1 (not weave)" in md
     )
+    # the introduction is kept, the old table replaced by the merged one
+    assert md.startswith("An introduction written by hand.\n\n" + mod.TABLE_HEAD)
+    assert md.count(mod.TABLE_HEAD) == 1 and "| bark | old |" not in md

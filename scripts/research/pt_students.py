@@ -16,7 +16,7 @@ NeuMIP is the plain ``neumip.vrnm``, as the bench never widens it). Writes
 verdicts (student within 10% of NeuMIP on the means; below the single-level net and below the
 no-distillation student, on the means and seed pair by seed pair), and on how many presets
 each target is met. ``--add`` scores a few presets into an existing OUT.json, keeping the
-others::
+others, and whatever OUT.md has above its table::
 
     python scripts/research/pt_students.py ROOT --presets bark,mosaic,fur -o OUT
     python scripts/research/pt_students.py ROOT2 --presets weave --add -o OUT
@@ -32,6 +32,10 @@ import sys
 from pathlib import Path
 
 METHODS = ("student", "neumip", "single8", "student_nodistill")
+TABLE_HEAD = (
+    "| preset | student | NeuMIP | single-level 8 | no distillation | student / NeuMIP "
+    "(by seed) | student / single8 (pairs below) | student / no-distill (pairs below) |"
+)
 
 
 def stems(suffix: str = "") -> dict[str, str]:
@@ -101,11 +105,7 @@ def _ratio(v: dict, base: str) -> str:
 
 
 def report(res: dict) -> str:
-    lines = [
-        "| preset | student | NeuMIP | single-level 8 | no distillation | student / NeuMIP "
-        "(by seed) | student / single8 (pairs below) | student / no-distill (pairs below) |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
+    lines = [TABLE_HEAD, "|---|---|---|---|---|---|---|---|"]
     for p, v in res.items():
         by = v.get("student_over_neumip_by_seed", [])
         rng = f" ({min(by):.2f}-{max(by):.2f})" if by else ""
@@ -129,12 +129,17 @@ def tally(res: dict) -> str:
     ):
         had = [p for p, v in res.items() if key in v]
         if had:
-            met = [p for p in had if res[p][key]]
-            miss = (
-                f" (not {', '.join(p for p in had if p not in met)})" if len(met) < len(had) else ""
-            )
-            parts.append(f"{what} on {len(met)} of {len(had)}{miss}")
+            misses = [p for p in had if not res[p][key]]
+            miss = f" (not {', '.join(misses)})" if misses else ""
+            parts.append(f"{what} on {len(had) - len(misses)} of {len(had)}{miss}")
     return f"\nThe student is {'; '.join(parts)}.\n" if parts else ""
+
+
+def preamble(md: str) -> str:
+    """``--add``: whatever an earlier OUT.md has before its table (an introduction written by
+    hand), kept as it is."""
+    at = md.find(TABLE_HEAD)
+    return md[:at] if at > 0 else ""
 
 
 def merge(old: dict, new: dict) -> dict:
@@ -162,15 +167,18 @@ def main() -> None:
             "l1": {m: {str(s): x for s, x in v.items()} for m, v in l1.items()}
         }
         print(p, json.dumps({k: v for k, v in res[p].items() if k != "l1"}, indent=1), flush=True)
-    old = a.out.with_suffix(".json")
+    old, old_md = a.out.with_suffix(".json"), a.out.with_suffix(".md")
+    intro = ""
     if a.add and old.exists():
         res = merge(json.loads(old.read_text()), res)
+        intro = preamble(old_md.read_text()) if old_md.exists() else ""
     from vrneural.outputs.files import atomic_path
 
-    for ext, text in ((".json", json.dumps(res, indent=1) + "\n"), (".md", report(res))):
-        with atomic_path(a.out.with_suffix(ext)) as tmp:
+    md = intro + report(res)
+    for path, text in ((old, json.dumps(res, indent=1) + "\n"), (old_md, md)):
+        with atomic_path(path) as tmp:
             tmp.write_text(text)
-    print(report(res))
+    print(md)
 
 
 if __name__ == "__main__":
