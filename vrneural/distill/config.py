@@ -76,7 +76,7 @@ class StudentShape:
         "train this wide for --epochs // 2 epochs (into <output>.wide.pt), then prune to "
         "--width and train on for the rest: --width and --init-from in one run; --resume of "
         "the output continues either half (0 = off, from random weights as the paper; 16 "
-        "for the 8-wide student on hard data: its L1 0.95-0.97x on the path-traced presets; "
+        "for the 8-wide student on hard data: its L1 0.95-0.98x on the path-traced presets; "
         "see docs/training.md)",
     )
 
