@@ -167,15 +167,15 @@ def main() -> None:
             "l1": {m: {str(s): x for s, x in v.items()} for m, v in l1.items()}
         }
         print(p, json.dumps({k: v for k, v in res[p].items() if k != "l1"}, indent=1), flush=True)
-    old, old_md = a.out.with_suffix(".json"), a.out.with_suffix(".md")
+    out_json, out_md = a.out.with_suffix(".json"), a.out.with_suffix(".md")
     intro = ""
-    if a.add and old.exists():
-        res = merge(json.loads(old.read_text()), res)
-        intro = preamble(old_md.read_text()) if old_md.exists() else ""
+    if a.add and out_json.exists():
+        res = merge(json.loads(out_json.read_text()), res)
+        intro = preamble(out_md.read_text()) if out_md.exists() else ""
     from vrneural.outputs.files import atomic_path
 
     md = intro + report(res)
-    for path, text in ((old, json.dumps(res, indent=1) + "\n"), (old_md, md)):
+    for path, text in ((out_json, json.dumps(res, indent=1) + "\n"), (out_md, md)):
         with atomic_path(path) as tmp:
             tmp.write_text(text)
     print(md)
