@@ -82,6 +82,74 @@ def test_show_writes_png(small_btf, tmp_path, capsys):
         assert main(["btf", "show", str(nan), "-o", str(tmp_path / "nan.png")]) == 0
 
 
+def test_show_several_files_writes_a_gallery(small_btf, tmp_path, vrn_inproc):
+    """`btf show A B -o g.png`: one row per file, one column per pair, each panel the slice
+    nearest to its pair (of that file's own directions); --texel is one file's option."""
+    import imageio.v3 as iio
+    import matplotlib.pyplot as plt
+
+    from vrneural.btf.sheet import PAIRS, gallery_figure, gallery_slices, nearest, tonemap
+
+    d = direction_set(8)
+    other = write_btf(
+        tmp_path / "ramp.btf",
+        np.linspace(0.01, 1, 8 * 8 * 4 * 4 * 3, dtype=np.float32).reshape(8, 8, 4, 4, 3),
+        d,
+        d,
+        {"name": "ramp"},
+    )
+    a, b = read_btf(small_btf), read_btf(other)
+    for btf in (a, b):
+        got = gallery_slices(btf)
+        assert len(got) == len(PAIRS)  # pairs sharing a slice keep their own columns
+        for (li, vi), (_, (tl, pl), (tv, pv)) in zip(got, PAIRS, strict=True):
+            assert li == nearest(btf.light_dirs, tl, pl) and vi == nearest(btf.view_dirs, tv, pv)
+    fig = gallery_figure([a, b])
+    assert len(fig.axes) == 2 * len(PAIRS)
+    row2 = fig.axes[len(PAIRS) :]
+    assert "ramp.btf" in row2[0].get_ylabel() and "4x4 texels, 8 x 8 dirs" in row2[0].get_ylabel()
+    assert [ax.get_title() for ax in row2] == [""] * len(PAIRS)  # pair names on the top row
+    assert fig.axes[0].get_title().startswith("head-on\n(asked wi=0 wo=0)")
+    li, vi = gallery_slices(b)[2]  # the panel shows that slice, tiled 2x2, tonemapped
+    shown = row2[2].get_images()[0].get_array()
+    tile = np.tile(b.slice(li, vi), (2, 2, 1))
+    ex = float(row2[2].get_xlabel().rsplit(" x", 1)[1])
+    np.testing.assert_allclose(shown, tonemap(tile, ex), atol=2e-3 * max(1.0, ex))
+    plt.close(fig)
+
+    png = tmp_path / "gallery.png"
+    r = vrn_inproc("btf", "show", str(small_btf), str(other), "-o", str(png))
+    assert r.returncode == 0, r.stderr
+    img = iio.imread(png)
+    assert img.shape[1] > img.shape[0] and img.std() > 5
+    _one_line_error(vrn_inproc("btf", "show", str(small_btf), str(other), "-o", str(png)), "exists")
+    _one_line_error(
+        vrn_inproc(
+            "btf",
+            "show",
+            str(small_btf),
+            str(other),
+            "-o",
+            str(png),
+            "--force",
+            "--texel",
+            "1",
+            "1",
+        ),
+        "--texel 1 1",
+        "gallery of 2 files",
+    )
+    # every input is read before the output is touched: a missing second file names it
+    before = png.read_bytes()
+    _one_line_error(
+        vrn_inproc(
+            "btf", "show", str(small_btf), str(tmp_path / "no.btf"), "-o", str(png), "--force"
+        ),
+        "no.btf",
+    )
+    assert png.read_bytes() == before
+
+
 def _one_line_error(r, *needles):
     assert r.returncode == 2, (r.returncode, r.stderr)
     err = r.stderr.strip()
@@ -308,6 +376,22 @@ def test_help_shows_defaults(capsys):
         with pytest.raises(SystemExit):
             main(argv)
         assert needle in " ".join(capsys.readouterr().out.split()), argv
+
+
+def test_help_names_every_preset(capsys):
+    """`btf synth` and `btf render` list their presets from the configs' tuples, so a new
+    preset (berber was missing from render's help) cannot be left out."""
+    from vrneural.btf.config import PRESET_NAMES, PT_PRESET_NAMES
+    from vrneural.btf.pt_presets import PT_PRESETS
+
+    assert tuple(PT_PRESETS) == PT_PRESET_NAMES
+    for argv, names in ((["btf", "synth"], PRESET_NAMES), (["btf", "render"], PT_PRESET_NAMES)):
+        with pytest.raises(SystemExit):
+            main([*argv, "--help"])
+        text = " ".join(capsys.readouterr().out.split())
+        assert f"Presets: {', '.join(names)}" in text or f"presets: {', '.join(names)}" in text
+        if argv[1] == "render":  # the positional argument's help too
+            assert f"render ({', '.join(names)})" in text, text
 
 
 def test_unknown_argument_names_the_subcommand(capsys):

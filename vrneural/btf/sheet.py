@@ -8,6 +8,9 @@ like the papers' figures (log-tonemapped because it spans orders of magnitude).
 A BTF only has its own directions, so each panel shows the slice nearest to the pair asked for
 and its title gives both: the pair's name and asked angles, and the angles and indices of the
 slice shown. Pairs that resolve to the same slice (coarse direction sets) share one panel.
+
+A gallery (``vrneural btf show A.btf B.btf ...``) sets several BTFs side by side: one row per
+file, one column per pair, to compare materials at the same directions.
 """
 
 from __future__ import annotations
@@ -104,6 +107,11 @@ def tonemap(x: np.ndarray, exposure: float) -> np.ndarray:
     return np.where(y <= 0.0031308, 12.92 * y, 1.055 * np.power(y, 1 / 2.4) - 0.055)
 
 
+def exposure(img: np.ndarray) -> float:
+    """A panel's exposure: its 99th percentile (of the max over RGB) maps to 0.8."""
+    return 0.8 / max(float(np.percentile(img.max(-1), 99.0)), 1e-6)
+
+
 def summary(btf: Btf, max_slices: int = 256) -> dict:
     """Shape, directions, value range and metadata. The value range is exact for files up to
     ``max_slices`` slices, else taken over ``max_slices`` evenly spread slices (``sampled``);
@@ -152,7 +160,7 @@ def sheet_figure(btf: Btf, texel: tuple[int, int] | None = None):
     # one exposure per panel (its 99th percentile -> 0.8), printed in its title: glossy
     # materials span orders of magnitude between mirror and off-mirror pairs, so one global
     # exposure would show either the highlights or everything else
-    exposures = [0.8 / max(float(np.percentile(s.max(-1), 99.0)), 1e-6) for s in slices]
+    exposures = [exposure(s) for s in slices]
     x, y = texel if texel is not None else (W // 2, H // 2)
     unf = np.asarray(btf.values[:, :, y, x, :], np.float32)  # [L, V, 3]
     lum = np.log1p(unf / max(float(np.percentile(unf, 50)), 1e-6))
@@ -188,6 +196,62 @@ def sheet_figure(btf: Btf, texel: tuple[int, int] | None = None):
         axis.set_major_locator(MaxNLocator(integer=True))
     fig.tight_layout()
     return fig
+
+
+def gallery_slices(btf: Btf) -> list[tuple[int, int]]:
+    """``(light, view)`` of the slice nearest to each of :data:`PAIRS`, in their order (a
+    gallery keeps one column per pair, so pairs that share a slice are not merged here)."""
+    return [
+        (nearest(btf.light_dirs, tl, pl), nearest(btf.view_dirs, tv, pv))
+        for _, (tl, pl), (tv, pv) in PAIRS
+    ]
+
+
+def gallery_figure(btfs: list[Btf]):
+    """Several BTFs side by side: one row per BTF, one column per pair of :data:`PAIRS`, each
+    panel the nearest slice (tiled 2 x 2, its own exposure, as on the contact sheet), titled
+    with the slice's own angles where they differ from the pair asked for."""
+    plt = pyplot()
+    cols, rows = len(PAIRS), len(btfs)
+    fig, axes = plt.subplots(
+        rows, cols, figsize=(2.1 * cols, 2.35 * rows + 0.9), dpi=100, squeeze=False
+    )
+    fig.suptitle(
+        "slices at characteristic (wi, wo) pairs (angles theta@phi in degrees; each panel the "
+        "nearest slice the BTF has, tiled 2x2, with its own exposure x)",
+        fontsize=10,
+    )
+    for r, btf in enumerate(btfs):
+        name = btf.meta.get("name", "?")
+        label = f"{btf.path.name if btf.path else name}"
+        _, _, H, W = btf.shape
+        for c, ((pair, (tl, pl), (tv, pv)), (li, vi)) in enumerate(
+            zip(PAIRS, gallery_slices(btf), strict=True)
+        ):
+            img = np.tile(btf.slice(li, vi), (2, 2, 1))
+            ex = exposure(img)
+            ax = axes[r, c]
+            ax.imshow(tonemap(img, ex), interpolation="nearest")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            asked = f"wi={fmt_angle(tl, pl)} wo={fmt_angle(tv, pv)}"
+            wi = fmt_angle(*dir_angles(btf.light_dirs[li]))
+            wo = fmt_angle(*dir_angles(btf.view_dirs[vi]))
+            ax.set_xlabel(f"wi={wi} wo={wo}  x{ex:.3g}", fontsize=6.5)
+            if r == 0:
+                ax.set_title(f"{pair}\n(asked {asked})", fontsize=8)
+            if c == 0:
+                ax.set_ylabel(
+                    f"{label}\n{W}x{H} texels, {len(btf.light_dirs)} x {len(btf.view_dirs)} dirs",
+                    fontsize=8,
+                )
+    fig.tight_layout()
+    return fig
+
+
+def gallery(btfs: list[Btf], out) -> Path:
+    """Write :func:`gallery_figure` of ``btfs`` as a PNG to ``out``."""
+    return save_png(gallery_figure(btfs), Path(out), bbox=None)
 
 
 def contact_sheet(btf: Btf, out, texel: tuple[int, int] | None = None) -> Path:

@@ -4,6 +4,7 @@
     vrneural btf render weave --res 64 --dirs 24 --spp 64 -o weave.btf [--force] [--resume]
     vrneural btf info FILE [--json]
     vrneural btf show FILE -o sheet.png [--texel X Y] [--force]
+    vrneural btf show A.btf B.btf ... -o gallery.png [--force]
     vrneural btf import UBO.btf -o out.btf [--force] [--resume]
 
 Every input is validated before any output is touched; an existing output is never replaced
@@ -16,7 +17,7 @@ import json
 import sys
 from pathlib import Path
 
-from vrneural.btf.config import BtfConfig, RenderConfig
+from vrneural.btf.config import PRESET_NAMES, PT_PRESET_NAMES, BtfConfig, RenderConfig
 from vrneural.config import add_config_args, config_from_args, config_path, write_config
 from vrneural.errors import VrnError, check_range
 from vrneural.outputs import (
@@ -41,8 +42,8 @@ def register(sub) -> None:
     s = bsub.add_parser(
         "synth",
         help="render a synthetic preset into a .btf (streaming, resumable)",
-        description="Render a procedural heightfield material (presets: carpet, fabric, "
-        "leather, metal, stone, wood) into a .btf file, one view at a time.",
+        description="Render a procedural heightfield material (presets: "
+        f"{', '.join(PRESET_NAMES)}) into a .btf file, one view at a time.",
     )
     add_config_args(s, BtfConfig)
     s.add_argument("-o", "--output", required=True, help="output .btf file")
@@ -53,10 +54,10 @@ def register(sub) -> None:
         help="path-trace a microgeometry preset with Mitsuba 3 into a .btf (resumable)",
         description="Path-trace a preset's microgeometry (triangle meshes surrounded by copies "
         "of the tile, Mitsuba's own BSDFs, multiple bounces) into a .btf file, one view at a "
-        "time; rectified slices, cos(theta_i) inside. Presets: weave, pebbles, fur, bark, "
-        "mosaic. Needs the render extra: pip install 'vrneural[render]'.",
+        f"time; rectified slices, cos(theta_i) inside. Presets: {', '.join(PT_PRESET_NAMES)}. "
+        "Needs the render extra: pip install 'vrneural[render]'.",
     )
-    r.add_argument("preset", help="the preset to render (weave, pebbles, fur, bark, mosaic)")
+    r.add_argument("preset", help=f"the preset to render ({', '.join(PT_PRESET_NAMES)})")
     add_config_args(r, RenderConfig, skip=("preset",))
     r.add_argument("-o", "--output", required=True, help="output .btf file")
     _run_flags(r, run_render)
@@ -72,12 +73,13 @@ def register(sub) -> None:
 
     sh = bsub.add_parser(
         "show",
-        help="write a contact sheet PNG",
+        help="write a contact sheet PNG (several files: a gallery side by side)",
         description="write a contact sheet PNG: slices at characteristic (wi, wo) pairs, each "
         "panel titled with the pair asked for and the nearest slice the BTF has (angles, "
-        "indices), plus one texel's unfolded BRDF.",
+        "indices), plus one texel's unfolded BRDF. With several files, a gallery: one row "
+        "per file, one column per pair, to compare materials.",
     )
-    sh.add_argument("file", help="a .btf file")
+    sh.add_argument("file", nargs="+", help="a .btf file (several: a gallery)")
     sh.add_argument("-o", "--output", required=True, help="output .png")
     sh.add_argument(
         "--texel",
@@ -261,23 +263,35 @@ def run_info(args) -> int:
 
 def run_show(args) -> int:
     from vrneural.btf.format import read_btf
-    from vrneural.btf.sheet import contact_sheet, sheet_panels, summary
+    from vrneural.btf.sheet import contact_sheet, gallery, sheet_panels, summary
 
     check_suffix(args.output, ".png", "image", "sheet.png", ignore_case=True)
-    btf = read_btf(args.file)
+    if len(args.file) > 1 and args.texel:
+        raise VrnError(
+            f"--texel {args.texel[0]} {args.texel[1]}: picks the unfolded texel of one file's "
+            f"contact sheet; a gallery of {len(args.file)} files has none (give one file)"
+        )
+    btfs = [read_btf(f) for f in args.file]  # every input checked before the output
+    if len(btfs) > 1:
+        out = check_output(args.output, args.force)
+        for f, b in zip(args.file, btfs, strict=True):
+            _warn_nonfinite(f, summary(b))
+        print(gallery(btfs, out))
+        return 0
+    (file,), (btf,) = args.file, btfs
     if args.texel:
         _, _, H, W = btf.shape
         check_range("--texel X", args.texel[0], 0, W - 1)
         check_range("--texel Y", args.texel[1], 0, H - 1)
     out = check_output(args.output, args.force)
 
-    _warn_nonfinite(args.file, summary(btf))  # the sheet shows them as black or white
+    _warn_nonfinite(file, summary(btf))  # the sheet shows them as black or white
     print(contact_sheet(btf, out, tuple(args.texel) if args.texel else None))
     for p in sheet_panels(btf):  # say so when this BTF's directions cannot tell pairs apart
         if len(p.names) > 1:
             names = f"{', '.join(p.names[:-1])} and {p.names[-1]}"
             print(
-                f"{args.file}: {names} resolve to the same slice "
+                f"{file}: {names} resolve to the same slice "
                 f"(l{p.light} v{p.view}: {p.shown}) among this BTF's {len(btf.light_dirs)} "
                 f"lights x {len(btf.view_dirs)} views; one panel shows it, titled with "
                 f"{'both' if len(p.names) == 2 else 'all'}",
