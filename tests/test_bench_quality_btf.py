@@ -57,6 +57,10 @@ def _one_line(capsys, argv):
         (lambda d: [str(_btf(d / "a.btf")), str(_btf(d / "sub" / "a.btf"))], "two files called"),
         (lambda d: [str(_btf(d / "odd.btf", res=7))], "7x7 texels, odd"),
         (lambda d: [str((d / "x.txt").write_text("x") and d / "x.txt")], "expected a .btf file"),
+        (lambda d: [str(_btf(d / "a.btf"))] * 2, "gives " + "{d}/a.btf twice"),
+        # an empty --btf (an unset shell variable) benched the default presets without a word
+        (lambda d: [""], "--btf = '' has an empty item"),
+        (lambda d: [str(_btf(d / "a.btf")), ""], "has an empty item"),
     ],
 )
 def test_bad_btf_lists_are_one_line_errors(tmp_path, capsys, make, needle):
@@ -65,5 +69,5 @@ def test_bad_btf_lists_are_one_line_errors(tmp_path, capsys, make, needle):
     out = tmp_path / "bq"
     argv = ["bench", "quality", "--btf", ",".join(files), "--quick", "--out", str(out)]
     err = _one_line(capsys, argv)
-    assert needle in err, err
+    assert needle.format(d=tmp_path) in err, err
     assert not out.exists()

@@ -138,6 +138,19 @@ def _breakers():
     def no_table(d):
         (d / "directions.csv").unlink()
 
+    def json_field(value):  # one angle of the JSON table set to value
+        def f(d):
+            (d / "directions.csv").unlink()
+            rows = [
+                dict(file=f"l{li}_v{vi}.exr", theta_i=tl, phi_i=pl, theta_v=tv, phi_v=pv)
+                for li, (tl, pl) in enumerate(LIGHTS)
+                for vi, (tv, pv) in enumerate(VIEWS)
+            ]
+            rows[2]["theta_v"] = value
+            (d / "directions.json").write_text(json.dumps(rows))
+
+        return f
+
     return {
         "missing image": (move("l1_v0.exr"), ["l1_v0.exr", "missing image", "line 4"]),
         "extra image": (extra, ["1 image(s)", "stray.exr", "does not name"]),
@@ -151,6 +164,22 @@ def _breakers():
         "file twice": (twice, ["both name l0_v0.exr"]),
         "pair twice": (pair_twice, ["same (light, view) pair", "again.exr"]),
         "no table": (no_table, ["no direction table", "--table"]),
+        # a new user's finds: a traceback, blame on the wrong line, true taken as 1 degree
+        "extra field": (
+            csv_edit(",30.0,90.0,10.0,0.0\n", ",30.0,90.0,10.0,0.0,7\n"),
+            ["line 4", "1 more field than the header's 5 columns ('7')"],
+        ),
+        "header": (
+            csv_edit("file,theta_i,phi_i,theta_v,phi_v", "file,ti,pi,tv,pv"),
+            ["line 1", "the columns are file, ti, pi, tv, pv", "must be file, theta_i"],
+        ),
+        "empty cell": (
+            csv_edit(",30.0,90.0,10.0,0.0\n", ",30.0,,10.0,0.0\n"),
+            ["no value for phi_i"],
+        ),
+        "json true": (json_field(True), ["image 3", "theta_v = True is not a number"]),
+        "json null": (json_field(None), ["image 3", "no value for theta_v"]),
+        "json text": (json_field("ten"), ["image 3", "theta_v = 'ten' is not a number"]),
         "pair missing": (
             lambda d: (
                 move("l2_v1.exr")(d),
@@ -214,6 +243,11 @@ def test_nan_pixels_stop_the_import_and_leave_nothing(tmp_path, capsys):
     code, err = _err(capsys, ["btf", "import", str(tmp_path / "set"), "-o", str(out)])
     assert code == 2 and "l1_v1.exr: 1 non-finite values" in err.splitlines()[-1], err
     assert not out.exists() and not (tmp_path / "o.btf.partial").exists()
+    assert "nothing was written (no .partial; o.btf not created)" in err, err
+    out.write_bytes(b"an earlier import")  # --force: it is kept, and the line says so
+    code, err = _err(capsys, ["btf", "import", str(tmp_path / "set"), "-o", str(out), "--force"])
+    assert code == 2 and "(no .partial; o.btf left as it was)" in err, err
+    assert out.read_bytes() == b"an earlier import"
 
 
 def test_existing_output_kept_and_interrupted_import_resumes(tmp_path, capsys, monkeypatch):

@@ -244,7 +244,7 @@ def test_bad_values_odd_sizes_and_output_names(tmp_path, rng, capsys):
     assert _import(tmp_path / "nan_ubo.btf", tmp_path / "n.btf") == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "non-finite values at light" in err
-    assert "nothing was written (no n.btf, no .partial)" in err
+    assert "nothing was written (no .partial; n.btf not created)" in err
     assert sorted(p.name for p in tmp_path.glob("n.btf*")) == []
     with pytest.raises(VrnError, match=r"is a UBO2014 BTF .*`vrneural btf import UBO.btf"):
         read_btf(src)

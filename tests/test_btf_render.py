@@ -376,6 +376,52 @@ def test_render_stops_on_sigterm_and_resumes(tmp_path):
     assert out.read_bytes() == straight.read_bytes()
 
 
+def test_ctrl_c_inside_a_views_last_slice_keeps_no_part_rendered_slice(tmp_path, monkeypatch):
+    """SIGINT while Mitsuba renders a view's last slice: Mitsuba stops that render and returns
+    the image part-filled; the view must not be saved as done with it (it was, found by a
+    new user's Ctrl-C: --resume kept a slice with hundreds of black texels). A real SIGINT,
+    sent by a timer halfway through the real slice."""
+    import signal
+    import threading
+    import time
+
+    from vrneural.btf.pt_render import RenderConfig, render_btf
+
+    cfg = RenderConfig(preset="weave", res=16, dirs=2, spp=256)
+    real = pt.render_slice
+    seen = {}
+
+    def last_slice_interrupted(ps, cam, wi, spp, seed):
+        seen["n"] = seen.get("n", 0) + 1
+        if seen["n"] != 4:  # view 1's last light (two lights a view)
+            return real(ps, cam, wi, spp, seed)
+        t0 = time.perf_counter()
+        seen["clean"] = real(ps, cam, wi, spp, seed)
+        threading.Timer(
+            0.5 * (time.perf_counter() - t0), os.kill, (os.getpid(), signal.SIGINT)
+        ).start()
+        seen["cut"] = real(ps, cam, wi, spp, seed)
+        return seen["cut"]
+
+    for attempt in range(3):  # the timer must land inside the render; say so if it never did
+        out = tmp_path / f"w{attempt}.btf"
+        seen.clear()
+        monkeypatch.setattr(pt, "render_slice", last_slice_interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            render_btf(cfg, out, progress=False)
+        monkeypatch.setattr(pt, "render_slice", real)
+        cut_short = not np.array_equal(seen["cut"], seen["clean"])
+        done = out.with_name(out.name + ".partial.done").read_text().split()
+        assert done == ["0"], done  # view 1 is not done, whether or not its slice was whole
+        assert render_btf(cfg, out, resume=True, progress=False) == out
+        straight = tmp_path / f"s{attempt}.btf"
+        assert out.read_bytes() == render_btf(cfg, straight, progress=False).read_bytes()
+        if cut_short:
+            assert (seen["cut"].max(-1) == 0).sum() > (seen["clean"].max(-1) == 0).sum()
+            return
+    pytest.fail("the SIGINT never landed inside Mitsuba's render in three tries")
+
+
 def test_direct_light_matches_btf_synth_on_a_heightfield():
     """Both renderers on one smooth heightfield (Lambert, albedo 0.5, direct light only):
     `btf synth`'s ray marcher with shadow-height maps and Mitsuba on the triangulated tile

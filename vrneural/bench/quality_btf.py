@@ -18,6 +18,8 @@ def given_btfs(cfg) -> dict[str, Path]:
     out: dict[str, Path] = {}
     for item in cfg.btf or ():
         p = Path(item)
+        if p.name in out and Path(out[p.name]) == p:
+            raise VrnError(f"--btf gives {p} twice; give each file once")
         if p.name in out:
             raise VrnError(
                 f"--btf names two files called {p.name} ({out[p.name]} and {p}); the table "

@@ -39,7 +39,7 @@ class QualityConfig(QuickConfig, TrainBudget, StudentShape):
         (),
         "comma-separated .btf files to bench beside --presets, each labelled by its file name "
         "(--res and --dirs apply to the presets only)",
-        items=words,
+        items=listed(empty=False),
     )
     out: str = opt("bench-quality", "output directory", cli=False)
     res: int | None = unset(32, "BTF texels per side")

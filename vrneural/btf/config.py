@@ -91,7 +91,9 @@ class RenderConfig:
         choices=SAMPLERS,
     )
     bounces: int = opt(5, "surface interactions per light path (1 = direct light only)")
-    height_grid: int = opt(0, "height field size N stored in the file (0 = 2 x res, <= 512)")
+    height_grid: int = opt(
+        0, "height field size N stored in the file: 0 = auto (2 x res, at most 512), or 2 to 4096"
+    )
 
     def validate(self) -> None:
         """One-line :class:`VrnError` on a bad field, named by its flag."""

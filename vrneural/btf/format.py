@@ -321,8 +321,11 @@ class BtfWriter:
                     if not np.isfinite(rgb).all():  # --resume would stop here again
                         bar.close()
                         self.discard()
+                        out = self.partial.with_name(name)
+                        was = "left as it was" if out.exists() else "not created"
                         raise VrnError(
-                            f"{nonfinite(li, v, rgb)}; nothing was written (no {name}, no .partial)"
+                            f"{nonfinite(li, v, rgb)}; nothing was written (no .partial; "
+                            f"{name} {was})"
                         )
                     rgb = np.asarray(rgb, np.float32)
                     neg, huge = neg + int((rgb < 0).sum()), huge + int((rgb > F16_MAX).sum())

@@ -58,6 +58,8 @@ def find_table(folder: Path, table=None) -> Path:
 
 
 def _number(where: str, key: str, value) -> float:
+    if isinstance(value, bool):  # JSON true/false: float() would take them as 1 and 0
+        raise VrnError(f"{where}: {key} = {value!r} is not a number")
     try:
         x = float(value)
     except (TypeError, ValueError):
@@ -103,17 +105,23 @@ def _entry(where: str, row: str, rec: dict) -> Entry:
         raise VrnError(f"{where}: no file name (column 'file')")
     if Path(f).is_absolute() or ".." in Path(f).parts:
         raise VrnError(f"{where}: file {f!r} must be a path inside the folder")
-    if all(k in rec and rec[k] not in (None, "") for k in ANGLE_KEYS):
+
+    def given(keys):
+        return [k for k in keys if rec.get(k) not in (None, "")]
+
+    if len(given(ANGLE_KEYS)) == len(ANGLE_KEYS):
         a = {k: _number(where, k, rec[k]) for k in ANGLE_KEYS}
         wi = _direction(where, "i", a["theta_i"], a["phi_i"])
         wo = _direction(where, "v", a["theta_v"], a["phi_v"])
-    elif all(k in rec and rec[k] not in (None, "") for k in VECTOR_KEYS):
+    elif len(given(VECTOR_KEYS)) == len(VECTOR_KEYS):
         x = [_number(where, k, rec[k]) for k in VECTOR_KEYS]
         wi, wo = _vector(where, "wi", x[:3]), _vector(where, "wo", x[3:])
-    else:
+    else:  # name what is missing from the set the row started (angles when neither)
+        keys = max((ANGLE_KEYS, VECTOR_KEYS), key=lambda ks: (len(given(ks)), ks is ANGLE_KEYS))
+        missing = [k for k in keys if k not in given(keys)]
         raise VrnError(
-            f"{where}: needs {', '.join(ANGLE_KEYS)} (degrees) or {', '.join(VECTOR_KEYS)} "
-            "(unit vectors)"
+            f"{where}: no value for {', '.join(missing)}; each image needs "
+            f"{', '.join(ANGLE_KEYS)} (degrees) or {', '.join(VECTOR_KEYS)} (unit vectors)"
         )
     return Entry(f, wi, wo, row)
 
@@ -149,8 +157,22 @@ def read_table(path: Path) -> list[Entry]:
                 f"{path}: the first line must name the columns (file, theta_i, phi_i, theta_v, "
                 "phi_v or file, wi_x, ..., wo_z)"
             )
+        cols = [k.strip().lower() for k in reader.fieldnames]
+        if not (set(ANGLE_KEYS) <= set(cols) or set(VECTOR_KEYS) <= set(cols)):
+            raise VrnError(
+                f"{path}, line 1: the columns are {', '.join(cols)}; they must be file, "
+                f"{', '.join(ANGLE_KEYS)} (degrees) or file, {', '.join(VECTOR_KEYS)} "
+                "(unit vectors)"
+            )
         rows = []
         for rec in reader:
+            extra = [v for v in rec.pop(None, None) or () if v.strip()]  # past the header
+            if extra:
+                raise VrnError(
+                    f"{path}, line {reader.line_num}: {len(extra)} more field"
+                    f"{'s' if len(extra) > 1 else ''} than the header's {len(cols)} columns "
+                    f"({', '.join(repr(v) for v in extra)})"
+                )
             clean = {(k or "").strip().lower(): (v or "").strip() for k, v in rec.items()}
             if not any(clean.values()):
                 continue

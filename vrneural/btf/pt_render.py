@@ -3,9 +3,11 @@ resumable, seeded (`vrneural btf render`).
 
 As `btf synth` (:mod:`vrneural.btf.synth`): slices go straight into the memory-mapped
 ``<out>.partial`` through :class:`~vrneural.btf.format.BtfWriter`, each finished view (all its
-lights) is recorded in the sidecar, Ctrl-C or SIGTERM stops after the current slice (the
-unfinished view is rendered again by ``--resume``), and ``--resume`` with other settings is an
-error naming them. The file also carries the tile's height field (format version 2).
+lights) is recorded in the sidecar, Ctrl-C or SIGTERM stops at the current slice (the
+unfinished view is rendered again by ``--resume``; a slice during which the signal came is
+dropped, since Mitsuba stops its render on SIGINT and returns the image part-filled), and
+``--resume`` with other settings is an error naming them. The file also carries the tile's
+height field (format version 2).
 
 ``seed`` fixes the material (its geometry and colours); ``sample_seed`` fixes the Monte Carlo
 samples. Two renders that differ only in ``sample_seed`` differ only by noise: their L1
@@ -100,6 +102,8 @@ def render_btf(
                         raise KeyboardInterrupt
                     seed = pt.slice_seed(cfg.sample_seed, li, v)
                     view[li] = pt.render_slice(ps, cam, dirs[li], cfg.spp, seed)
+                    if stop.flag:  # Mitsuba cuts its render short on SIGINT and returns the
+                        raise KeyboardInterrupt  # image part-filled: drop the slice and view
                     bar.update(1)
                 w.put_view(v, view)
     return w.finalize()
