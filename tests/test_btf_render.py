@@ -240,6 +240,13 @@ def test_interrupted_render_resumes_to_the_same_bytes(tiny, tmp_path, monkeypatc
         (["weave", "--bounces", "0", "-o", "x.btf"], "--bounces = 0 is out of range"),
         (["weave", "--spp", "128", "-o", "x.btf"], "a = floor(sqrt(spp)); nearest 121 or 132, "),
         (["weave", "-o", "x.png"], ".btf"),
+        # a height field parallax cannot use (it box-averages the grid onto the texels)
+        (
+            ["weave", "--res", "8", "--height-grid", "12", "-o", "x.btf"],
+            "--height-grid = 12 does not nest in the 8x8 texels: parallax could not use it; "
+            "give 0 (auto) or a whole multiple of --res (8, 16, 24)",
+        ),
+        (["weave", "--height-grid", "5000", "-o", "x.btf"], "allowed 0 (auto) or [2, 4096]"),
     ],
 )
 def test_bad_options_are_one_line_errors(tmp_path, vrn_inproc, args, needle):
@@ -293,6 +300,17 @@ def test_noise_floor_refuses_another_material(tiny, monkeypatch):
     with pytest.raises(VrnError, match="not the material rendered there") as e:
         noise_floor(tiny, views=1, progress=False)
     assert rendered in str(e.value) and "\n" not in str(e.value)
+
+
+def test_the_auto_height_grid_always_nests_in_the_texels():
+    """0 = auto: 2 x res up to res 256 (the grids every render so far has, headers unchanged),
+    res itself above (it was min(512, 2 res): 512 at res 300, which parallax refuses)."""
+    from vrneural.btf.config import RenderConfig
+
+    for res in (2, 8, 64, 256, 258, 300, 1000, 4096):
+        n = RenderConfig(res=res).grid_size
+        assert n % res == 0 and n <= 4096 and n == (2 * res if res <= 256 else res), res
+    assert RenderConfig(res=8, height_grid=24).grid_size == 24
 
 
 def test_scene_fingerprint_follows_the_material():

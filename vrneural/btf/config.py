@@ -92,7 +92,9 @@ class RenderConfig:
     )
     bounces: int = opt(5, "surface interactions per light path (1 = direct light only)")
     height_grid: int = opt(
-        0, "height field size N stored in the file: 0 = auto (2 x res, at most 512), or 2 to 4096"
+        0,
+        "height field size N stored in the file, for parallax: 0 = auto (2 x res up to res "
+        "256, else res), or a whole multiple of --res up to 4096 (its cells nest in the texels)",
     )
 
     def validate(self) -> None:
@@ -118,7 +120,15 @@ class RenderConfig:
             raise VrnError(
                 f"--height-grid = {self.height_grid} is out of range; allowed 0 (auto) or [2, 4096]"
             )
+        if self.height_grid % self.res:  # parallax box-averages it onto the texels
+            raise VrnError(
+                f"--height-grid = {self.height_grid} does not nest in the {self.res}x{self.res} "
+                f"texels: parallax could not use it; give 0 (auto) or a whole multiple of --res "
+                f"({', '.join(str(k * self.res) for k in range(1, 4) if k * self.res <= 4096)})"
+            )
 
     @property
     def grid_size(self) -> int:
-        return self.height_grid or int(min(512, 2 * self.res))
+        """The height field's size: ``height_grid``, or 2 x res (up to res 256: at most 512,
+        as before) and res itself above that, so the grid always nests in the texels."""
+        return self.height_grid or (2 * self.res if self.res <= 256 else self.res)
