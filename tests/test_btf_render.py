@@ -573,6 +573,30 @@ def test_fur_knobs_of_its_variants():
     assert cut[~low] == pytest.approx(flat[~low], rel=1e-6)
 
 
+def test_weave_knobs_of_its_variants():
+    """The weave variants' knobs (``weave-variants-render.py``): ``gloss`` is every fibre's
+    GGX alpha, ``colours`` replaces the yarns' colours it names; the defaults build the preset
+    as it was (its scene fingerprint pinned: renders and partials made before still match)."""
+    from vrneural.btf.pt_presets import WEAVE_COLOURS, weave
+
+    def bsdfs(tile):
+        return {p.name: p.bsdf for p in tile.parts}
+
+    plain = weave(np.random.default_rng([0, 1]))
+    assert plain.fingerprint() == "4e8925106d4bfb0b"  # seed 0's render, before the knobs
+    glossy = bsdfs(weave(np.random.default_rng([0, 1]), gloss=0.08))
+    assert {n: b.get("alpha") for n, b in glossy.items() if n != "backing"} == dict.fromkeys(
+        WEAVE_COLOURS, 0.08
+    )
+    dark = (0.02, 0.02, 0.025)
+    two = bsdfs(weave(np.random.default_rng([0, 1]), colours={"warp_a": dark}))
+    base = bsdfs(plain)
+    assert two["warp_a"] != base["warp_a"] and two["weft_a"] == base["weft_a"]
+    assert weave(np.random.default_rng([0, 1]), colours={"warp_a": dark}).fingerprint() != (
+        plain.fingerprint()
+    )
+
+
 def test_a_partial_from_before_the_sampler_option_resumes_only_as_independent(tmp_path):
     """An interrupted render whose header has no `sampler` (written before the option) was
     drawn with independent samples: resuming it with them is allowed, with the new default

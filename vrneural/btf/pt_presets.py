@@ -65,10 +65,23 @@ def metal(material: str, alpha_u: float, alpha_v: float | None = None) -> dict:
     return {**d, "alpha_u": float(alpha_u), "alpha_v": float(alpha_v)}
 
 
-def weave(rng, threads: int = 4, fibres: int = 5) -> Tile:
+#: the weave's yarn colours (linear RGB): two blues along y (warp), two tans along x (weft)
+WEAVE_COLOURS = {
+    "warp_a": (0.04, 0.08, 0.32),
+    "warp_b": (0.05, 0.12, 0.40),
+    "weft_a": (0.62, 0.50, 0.30),
+    "weft_b": (0.70, 0.58, 0.36),
+}
+
+
+def weave(
+    rng, threads: int = 4, fibres: int = 5, gloss: float = 0.22, colours: dict | None = None
+) -> Tile:
     """Plain weave: ``threads`` warp yarns (along y) and weft yarns (along x) per tile, each a
     bundle of ``fibres`` fibre cylinders twisted around the yarn's centreline, going over and
-    under each other; gaps between the yarns show a dark backing."""
+    under each other; gaps between the yarns show a dark backing. The fibres are a rough
+    plastic of GGX ``gloss`` (alpha) in :data:`WEAVE_COLOURS`, or ``colours`` (any of its keys
+    replaced)."""
     pitch = 1.0 / threads
     R = 0.32 * pitch  # yarn radius: gaps of about a third of the pitch
     A = 0.95 * R  # undulation amplitude: crossing yarns just touch
@@ -91,13 +104,8 @@ def weave(rng, threads: int = 4, fibres: int = 5) -> Tile:
                 ref = [1.0, 0.0, 0.0] if kind == "warp" else [0.0, 1.0, 0.0]
                 m = tube(path, rf * (1.0 + 0.1 * rng.standard_normal()), sides=8, ref=ref)
                 parts[f"{kind}_{'ab'[j % 2]}"].append(m)
-    cols = {
-        "warp_a": (0.04, 0.08, 0.32),
-        "warp_b": (0.05, 0.12, 0.40),
-        "weft_a": (0.62, 0.50, 0.30),
-        "weft_b": (0.70, 0.58, 0.36),
-    }
-    out = [Part(merge(ms), plastic(cols[name], 0.22), name=name) for name, ms in parts.items()]
+    cols = WEAVE_COLOURS | (colours or {})
+    out = [Part(merge(ms), plastic(cols[name], gloss), name=name) for name, ms in parts.items()]
     back = heightfield(np.full((4, 4), -A - 1.6 * R))
     out.append(Part(back, diffuse((0.03, 0.03, 0.035)), name="backing"))
     return Tile(out, f"plain weave, {threads} yarns of {fibres} twisted fibres per tile")
