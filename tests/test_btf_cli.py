@@ -88,7 +88,7 @@ def test_show_several_files_writes_a_gallery(small_btf, tmp_path, vrn_inproc):
     import imageio.v3 as iio
     import matplotlib.pyplot as plt
 
-    from vrneural.btf.sheet import PAIRS, gallery_figure, gallery_slices, nearest, tonemap
+    from vrneural.btf.sheet import PAIRS, gallery_figure, nearest, pair_slices, tonemap
 
     d = direction_set(8)
     other = write_btf(
@@ -100,7 +100,7 @@ def test_show_several_files_writes_a_gallery(small_btf, tmp_path, vrn_inproc):
     )
     a, b = read_btf(small_btf), read_btf(other)
     for btf in (a, b):
-        got = gallery_slices(btf)
+        got = pair_slices(btf)
         assert len(got) == len(PAIRS)  # pairs sharing a slice keep their own columns
         for (li, vi), (_, (tl, pl), (tv, pv)) in zip(got, PAIRS, strict=True):
             assert li == nearest(btf.light_dirs, tl, pl) and vi == nearest(btf.view_dirs, tv, pv)
@@ -110,7 +110,7 @@ def test_show_several_files_writes_a_gallery(small_btf, tmp_path, vrn_inproc):
     assert "ramp.btf" in row2[0].get_ylabel() and "4x4 texels, 8 x 8 dirs" in row2[0].get_ylabel()
     assert [ax.get_title() for ax in row2] == [""] * len(PAIRS)  # pair names on the top row
     assert fig.axes[0].get_title().startswith("head-on\n(asked wi=0 wo=0)")
-    li, vi = gallery_slices(b)[2]  # the panel shows that slice, tiled 2x2, tonemapped
+    li, vi = pair_slices(b)[2]  # the panel shows that slice, tiled 2x2, tonemapped
     shown = row2[2].get_images()[0].get_array()
     tile = np.tile(b.slice(li, vi), (2, 2, 1))
     ex = float(row2[2].get_xlabel().rsplit(" x", 1)[1])

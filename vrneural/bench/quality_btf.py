@@ -18,7 +18,7 @@ def given_btfs(cfg) -> dict[str, Path]:
     out: dict[str, Path] = {}
     for item in cfg.btf or ():
         p = Path(item)
-        if p.name in out and Path(out[p.name]) == p:
+        if out.get(p.name) == p:
             raise VrnError(f"--btf gives {p} twice; give each file once")
         if p.name in out:
             raise VrnError(

@@ -106,19 +106,19 @@ def _entry(where: str, row: str, rec: dict) -> Entry:
     if Path(f).is_absolute() or ".." in Path(f).parts:
         raise VrnError(f"{where}: file {f!r} must be a path inside the folder")
 
-    def given(keys):
-        return [k for k in keys if rec.get(k) not in (None, "")]
+    def lacks(keys):  # the keys without a value in this row
+        return [k for k in keys if rec.get(k) in (None, "")]
 
-    if len(given(ANGLE_KEYS)) == len(ANGLE_KEYS):
+    if not lacks(ANGLE_KEYS):
         a = {k: _number(where, k, rec[k]) for k in ANGLE_KEYS}
         wi = _direction(where, "i", a["theta_i"], a["phi_i"])
         wo = _direction(where, "v", a["theta_v"], a["phi_v"])
-    elif len(given(VECTOR_KEYS)) == len(VECTOR_KEYS):
+    elif not lacks(VECTOR_KEYS):
         x = [_number(where, k, rec[k]) for k in VECTOR_KEYS]
         wi, wo = _vector(where, "wi", x[:3]), _vector(where, "wo", x[3:])
     else:  # name what is missing from the set the row started (angles when neither)
-        keys = max((ANGLE_KEYS, VECTOR_KEYS), key=lambda ks: (len(given(ks)), ks is ANGLE_KEYS))
-        missing = [k for k in keys if k not in given(keys)]
+        given = [len(ks) - len(lacks(ks)) for ks in (ANGLE_KEYS, VECTOR_KEYS)]
+        missing = lacks(VECTOR_KEYS if given[1] > given[0] else ANGLE_KEYS)
         raise VrnError(
             f"{where}: no value for {', '.join(missing)}; each image needs "
             f"{', '.join(ANGLE_KEYS)} (degrees) or {', '.join(VECTOR_KEYS)} (unit vectors)"

@@ -84,18 +84,35 @@ class Panel:
         return "\n".join([*lines, f"{to}: {self.shown}, l{self.light} v{self.view}"])
 
 
+def pair_slices(btf: Btf) -> list[tuple[int, int]]:
+    """``(light, view)`` of the slice of ``btf`` nearest to each of :data:`PAIRS`, in their
+    order (two pairs may give the same slice)."""
+    return [
+        (nearest(btf.light_dirs, tl, pl), nearest(btf.view_dirs, tv, pv))
+        for _, (tl, pl), (tv, pv) in PAIRS
+    ]
+
+
+def asked_angles(light: tuple[float, float], view: tuple[float, float]) -> str:
+    """A pair's angles as asked, ``"wi=45@0 wo=45@180"``."""
+    return f"wi={fmt_angle(*light)} wo={fmt_angle(*view)}"
+
+
+def slice_angles(btf: Btf, light: int, view: int) -> str:
+    """The angles of slice ``(light, view)`` of ``btf``, ``"wi=17.5@0 wo=54.3@190"``."""
+    wi = fmt_angle(*dir_angles(btf.light_dirs[light]))
+    return f"wi={wi} wo={fmt_angle(*dir_angles(btf.view_dirs[view]))}"
+
+
 def sheet_panels(btf: Btf) -> list[Panel]:
     """The panels of the contact sheet: for each of :data:`PAIRS` the nearest slice of ``btf``;
     pairs that resolve to the same slice share one panel (in the order of their first pair)."""
     panels: dict[tuple[int, int], Panel] = {}
-    for name, (tl, pl), (tv, pv) in PAIRS:
-        li, vi = nearest(btf.light_dirs, tl, pl), nearest(btf.view_dirs, tv, pv)
+    for (name, light, view), (li, vi) in zip(PAIRS, pair_slices(btf), strict=True):
         if (li, vi) not in panels:
-            wi = fmt_angle(*dir_angles(btf.light_dirs[li]))
-            wo = fmt_angle(*dir_angles(btf.view_dirs[vi]))
-            panels[li, vi] = Panel(li, vi, f"wi={wi} wo={wo}")
+            panels[li, vi] = Panel(li, vi, slice_angles(btf, li, vi))
         panels[li, vi].names.append(name)
-        panels[li, vi].asked.append(f"wi={fmt_angle(tl, pl)} wo={fmt_angle(tv, pv)}")
+        panels[li, vi].asked.append(asked_angles(light, view))
     return list(panels.values())
 
 
@@ -198,19 +215,11 @@ def sheet_figure(btf: Btf, texel: tuple[int, int] | None = None):
     return fig
 
 
-def gallery_slices(btf: Btf) -> list[tuple[int, int]]:
-    """``(light, view)`` of the slice nearest to each of :data:`PAIRS`, in their order (a
-    gallery keeps one column per pair, so pairs that share a slice are not merged here)."""
-    return [
-        (nearest(btf.light_dirs, tl, pl), nearest(btf.view_dirs, tv, pv))
-        for _, (tl, pl), (tv, pv) in PAIRS
-    ]
-
-
 def gallery_figure(btfs: list[Btf]):
-    """Several BTFs side by side: one row per BTF, one column per pair of :data:`PAIRS`, each
-    panel the nearest slice (tiled 2 x 2, its own exposure, as on the contact sheet), titled
-    with the slice's own angles where they differ from the pair asked for."""
+    """Several BTFs side by side: one row per BTF, one column per pair of :data:`PAIRS` (pairs
+    that share a slice keep their own columns), each panel the nearest slice (tiled 2 x 2, its
+    own exposure, as on the contact sheet); the columns are titled with the pairs asked for,
+    each panel labelled with its slice's own angles and exposure."""
     plt = pyplot()
     cols, rows = len(PAIRS), len(btfs)
     fig, axes = plt.subplots(
@@ -222,11 +231,10 @@ def gallery_figure(btfs: list[Btf]):
         fontsize=10,
     )
     for r, btf in enumerate(btfs):
-        name = btf.meta.get("name", "?")
-        label = f"{btf.path.name if btf.path else name}"
+        label = btf.path.name if btf.path else btf.meta.get("name", "?")
         _, _, H, W = btf.shape
-        for c, ((pair, (tl, pl), (tv, pv)), (li, vi)) in enumerate(
-            zip(PAIRS, gallery_slices(btf), strict=True)
+        for c, ((pair, light, view), (li, vi)) in enumerate(
+            zip(PAIRS, pair_slices(btf), strict=True)
         ):
             img = np.tile(btf.slice(li, vi), (2, 2, 1))
             ex = exposure(img)
@@ -234,12 +242,9 @@ def gallery_figure(btfs: list[Btf]):
             ax.imshow(tonemap(img, ex), interpolation="nearest")
             ax.set_xticks([])
             ax.set_yticks([])
-            asked = f"wi={fmt_angle(tl, pl)} wo={fmt_angle(tv, pv)}"
-            wi = fmt_angle(*dir_angles(btf.light_dirs[li]))
-            wo = fmt_angle(*dir_angles(btf.view_dirs[vi]))
-            ax.set_xlabel(f"wi={wi} wo={wo}  x{ex:.3g}", fontsize=6.5)
+            ax.set_xlabel(f"{slice_angles(btf, li, vi)}  x{ex:.3g}", fontsize=6.5)
             if r == 0:
-                ax.set_title(f"{pair}\n(asked {asked})", fontsize=8)
+                ax.set_title(f"{pair}\n(asked {asked_angles(light, view)})", fontsize=8)
             if c == 0:
                 ax.set_ylabel(
                     f"{label}\n{W}x{H} texels, {len(btf.light_dirs)} x {len(btf.view_dirs)} dirs",
